@@ -1,0 +1,204 @@
+/* ball_forces.h — all forces and torques on one ball: its listed neighbours,
+ * the shell, the end plates and the lifters, plus gravity. The forces kernel
+ * runs it for every ball; the CPU reference (src/sim/reference.cpp) loops
+ * over it, so a test of the reference tests the kernel's arithmetic.
+ *
+ * Every ball evaluates each of its contacts itself (full neighbour lists), so
+ * no atomics are needed and the result does not depend on thread order; each
+ * side books half of a pair's energies. Walls have infinite mass and turn
+ * with the mill: their velocity at the contact point is ω ẑ × r. */
+#ifndef MC_BALL_FORCES_H
+#define MC_BALL_FORCES_H
+
+typedef struct {
+  real mill_angle; /* rad, mill frame = world rotated by this about +z */
+  real mill_omega; /* rad/s */
+} MillState;
+
+/* One wall contact: updates the ball's slot for `key` (kept in the private
+ * arrays new_key/new_hist), adds force, torque and the observables. */
+MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel,
+                        real4 om, real radius, PairParams pp, MillState mill,
+                        real dt, int law, const int* old_key,
+                        const real4* old_hist, int* new_key, real4* new_hist,
+                        int* n_new, int* overflow, real3* f_sum, real3* t_sum,
+                        real* torque_axis, real* dissipated, real* elastic) {
+  real3 spring = make_real3(0, 0, 0);
+  real energy = R(0.0);
+  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+    if (old_key[s] == key) {
+      spring = xyz_of(old_hist[s]);
+      energy = old_hist[s].w;
+    }
+  }
+  const real arm = radius - overlap;
+  const real3 rc = p - arm * n; /* contact point, world frame */
+  const real3 w_mill = make_real3(0, 0, mill.mill_omega);
+  const real3 v_wall = cross(w_mill, rc);
+  const real3 w_ball = xyz_of(om);
+  ContactGeom g;
+  g.normal = n;
+  g.overlap = overlap;
+  g.v_rel = xyz_of(vel) + cross(w_ball, -arm * n) - v_wall;
+  g.w_rel = w_ball - w_mill;
+  g.arm = arm;
+  g.m_eff = R(1.0) / vel.w;
+  g.r_eff = radius;
+  g.inv_inertia_sum = om.w;
+  const ContactOut c = contact_force(pp, g, spring, dt, law);
+  *f_sum += c.force;
+  *t_sum += c.torque;
+  /* Torque of the wall on the ball about the mill axis: r_c × F plus the
+   * rolling couple. */
+  *torque_axis += rc.x * c.force.y - rc.y * c.force.x + c.rolling.z;
+  *dissipated += c.dissipated;
+  *elastic += c.elastic;
+  if (*n_new < MC_MAX_WALL_CONTACTS) {
+    new_key[*n_new] = key;
+    new_hist[*n_new] = make_real4(c.spring.x, c.spring.y, c.spring.z, energy + c.dissipated);
+    *n_new += 1;
+  } else {
+    *overflow = 1;
+  }
+}
+
+MC_FN void ball_forces(
+    int i, MC_GLOBAL const SimParams* sp, MC_GLOBAL const PairParams* pairs,
+    MC_GLOBAL const LifterPolygon* lifters, MillState mill,
+    MC_GLOBAL const real4* pos, MC_GLOBAL const real4* vel,
+    MC_GLOBAL const real4* omega, MC_GLOBAL const int2* info,
+    MC_GLOBAL const int* neigh_start, MC_GLOBAL const int* neigh_count,
+    MC_GLOBAL const int* neigh_index, MC_GLOBAL real4* neigh_hist,
+    MC_GLOBAL int* wall_key, MC_GLOBAL real4* wall_hist,
+    MC_GLOBAL real4* force, MC_GLOBAL real4* torque, MC_GLOBAL real4* accum,
+    MC_GLOBAL int* status) {
+  const int n = sp->n_balls;
+  const real dt = sp->dt;
+  const int law = sp->law;
+  const real4 pi4 = pos[i];
+  const real4 vi = vel[i];
+  const real4 wi = omega[i];
+  const real3 p = xyz_of(pi4);
+  const real ri = pi4.w;
+  const int mat_i = info[i].y;
+  const real mass_i = R(1.0) / vi.w;
+
+  real3 f_sum = mass_i * xyz_of(sp->gravity);
+  real3 t_sum = make_real3(0, 0, 0);
+  real torque_axis = R(0.0);
+  real dissipated = R(0.0);
+  real elastic = R(0.0);
+
+  /* ---- ball–ball ---- */
+  const int start = neigh_start[i];
+  const int count = neigh_count[i];
+  for (int k = start; k < start + count; ++k) {
+    const int j = neigh_index[k];
+    const real4 pj4 = pos[j];
+    const real3 dx = p - xyz_of(pj4);
+    const real dist = length(dx);
+    const real overlap = ri + pj4.w - dist;
+    if (overlap <= R(0.0) || dist <= R(0.0)) {
+      neigh_hist[k] = make_real4(0, 0, 0, 0);
+      continue;
+    }
+    const real4 vj = vel[j];
+    const real4 wj = omega[j];
+    const real3 nrm = dx / dist;
+    const real arm_i = ri - R(0.5) * overlap;
+    const real arm_j = pj4.w - R(0.5) * overlap;
+    ContactGeom g;
+    g.normal = nrm;
+    g.overlap = overlap;
+    g.v_rel = (xyz_of(vi) + cross(xyz_of(wi), -arm_i * nrm)) -
+              (xyz_of(vj) + cross(xyz_of(wj), arm_j * nrm));
+    g.w_rel = xyz_of(wi) - xyz_of(wj);
+    g.arm = arm_i;
+    g.m_eff = R(1.0) / (vi.w + vj.w);
+    g.r_eff = ri * pj4.w / (ri + pj4.w);
+    g.inv_inertia_sum = wi.w + wj.w;
+    const PairParams pp = pairs[MC_PAIR_INDEX(sp, mat_i, info[j].y)];
+    const real4 h = neigh_hist[k];
+    const ContactOut c = contact_force(pp, g, xyz_of(h), dt, law);
+    f_sum += c.force;
+    t_sum += c.torque;
+    dissipated += R(0.5) * c.dissipated;
+    elastic += R(0.5) * c.elastic;
+    neigh_hist[k] = make_real4(c.spring.x, c.spring.y, c.spring.z, h.w + c.dissipated);
+  }
+
+  /* ---- walls, in the mill frame ---- */
+  int old_key[MC_MAX_WALL_CONTACTS];
+  real4 old_hist[MC_MAX_WALL_CONTACTS];
+  int new_key[MC_MAX_WALL_CONTACTS];
+  real4 new_hist[MC_MAX_WALL_CONTACTS];
+  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+    old_key[s] = wall_key[s * n + i];
+    old_hist[s] = wall_hist[s * n + i];
+    new_key[s] = MC_WALL_NONE;
+    new_hist[s] = make_real4(0, 0, 0, 0);
+  }
+  int n_new = 0;
+  int overflow = 0;
+  const PairParams pw = pairs[MC_PAIR_INDEX(sp, mat_i, sp->n_materials)];
+
+  if (sp->shell_radius > R(0.0)) {
+    real3 nrm;
+    const real ov = shell_overlap(p, ri, sp->shell_radius, &nrm);
+    if (ov > R(0.0))
+      wall_contact(MC_WALL_SHELL, nrm, ov, p, vi, wi, ri, pw, mill, dt, law,
+                   old_key, old_hist, new_key, new_hist, &n_new, &overflow,
+                   &f_sum, &t_sum, &torque_axis, &dissipated, &elastic);
+  }
+  if (sp->length > R(0.0)) {
+    const real ov_low = ri - p.z;
+    if (ov_low > R(0.0))
+      wall_contact(MC_WALL_PLATE_LOW, make_real3(0, 0, 1), ov_low, p, vi, wi, ri,
+                   pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
+                   &n_new, &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
+                   &elastic);
+    const real ov_high = ri - (sp->length - p.z);
+    if (ov_high > R(0.0))
+      wall_contact(MC_WALL_PLATE_HIGH, make_real3(0, 0, -1), ov_high, p, vi, wi,
+                   ri, pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
+                   &n_new, &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
+                   &elastic);
+  }
+  const int nl = sp->n_lifters;
+  if (nl > 0 && p.x * p.x + p.y * p.y > sp->lifter_reach * sp->lifter_reach) {
+    const real c = cos(mill.mill_angle), s = sin(mill.mill_angle);
+    const real3 pm = rotate_z(p, c, -s); /* into the mill frame */
+    const int k0 = nearest_lifter(atan2(pm.y, pm.x), sp->lifter_first_angle,
+                                  sp->lifter_spacing, nl);
+    const int k_lo = (nl >= 3) ? -1 : 0;
+    const int k_hi = (nl >= 3) ? 1 : nl - 1;
+    for (int dk = k_lo; dk <= k_hi; ++dk) {
+      const int k = (nl >= 3) ? (k0 + dk + nl) % nl : dk;
+      real2 out2;
+      const real dist =
+          polygon_signed_distance(&lifters[k], make_real2(pm.x, pm.y), &out2);
+      const real ov = ri - dist;
+      if (ov > R(0.0)) {
+        const real3 nrm = rotate_z(make_real3(out2.x, out2.y, 0), c, s);
+        wall_contact(MC_WALL_LIFTER0 + k, nrm, ov, p, vi, wi, ri, pw, mill, dt,
+                     law, old_key, old_hist, new_key, new_hist, &n_new,
+                     &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
+                     &elastic);
+      }
+    }
+  }
+  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+    wall_key[s * n + i] = new_key[s];
+    wall_hist[s * n + i] = new_hist[s];
+  }
+  if (overflow) MC_ATOMIC_OR(status, MC_FLAG_WALL_OVERFLOW);
+
+  force[i] = make_real4(f_sum.x, f_sum.y, f_sum.z, R(0.0));
+  torque[i] = make_real4(t_sum.x, t_sum.y, t_sum.z, R(0.0));
+  const real4 a = accum[i];
+  accum[i] = make_real4(a.x + torque_axis * dt,
+                        a.y + torque_axis * mill.mill_omega * dt,
+                        a.z + dissipated, elastic);
+}
+
+#endif /* MC_BALL_FORCES_H */

@@ -1,0 +1,77 @@
+/* layout.h — every struct that crosses the host/kernel boundary. Included by
+ * the kernels and, through src/sim/layout.hpp, by C++ once per precision.
+ * Only `real`, `real2`, `real4` and `int` appear here, so the host mirrors
+ * have the device's sizes and alignment; a kernel (layout_sizes in
+ * motion.cl) reports the device's sizeof for a check at start-up. */
+#ifndef MC_LAYOUT_H
+#define MC_LAYOUT_H
+
+/* Contact-history slots for walls kept per ball: shell, one end plate and two
+ * lifters at once. A ball needing more is flagged (MC_FLAG_WALL_OVERFLOW). */
+#define MC_MAX_WALL_CONTACTS 4
+/* Vertices of one lifter cross-section (convex polygon, counter-clockwise). */
+#define MC_POLY_MAX_VERTS 8
+
+/* Keys of wall contacts in the history slots. */
+#define MC_WALL_NONE (-1)
+#define MC_WALL_SHELL 0
+#define MC_WALL_PLATE_LOW 1  /* z = 0 */
+#define MC_WALL_PLATE_HIGH 2 /* z = length */
+#define MC_WALL_LIFTER0 3    /* lifter k has key 3 + k */
+
+/* Bits of the status word the kernels raise. */
+#define MC_FLAG_REBUILD 1       /* a ball moved more than half the skin */
+#define MC_FLAG_WALL_OVERFLOW 2 /* more wall contacts than history slots */
+#define MC_FLAG_NOT_FINITE 4    /* NaN or Inf in a ball's state */
+
+#define MC_LAW_LINEAR 0
+#define MC_LAW_HERTZ 1
+
+/* Coefficients of one material pair (ball–ball, or ball–liner when one side
+ * is the wall material). Derived on the host from materials and the case. */
+typedef struct {
+  real kn;         /* linear law: normal stiffness, N/m */
+  real kt_over_kn; /* linear law: tangential / normal stiffness */
+  real e_star;     /* Hertz: effective Young's modulus, Pa */
+  real g_star;     /* Hertz: effective shear modulus, Pa */
+  real damping;    /* dimensionless damping, calibrated so that the
+                      rebound restitution equals the input e (see
+                      src/core/restitution.cpp) */
+  real mu_slide;   /* Coulomb sliding friction */
+  real mu_roll;    /* rolling resistance (constant directional torque) */
+  real restitution; /* input e, kept for reports */
+} PairParams;
+
+/* One lifter bar: a convex polygon in the mill's x–y cross-section,
+ * extruded along z over the whole length. */
+typedef struct {
+  real2 vertices[MC_POLY_MAX_VERTS];
+  int n_vertices;
+  int pad0, pad1, pad2;
+} LifterPolygon;
+
+/* Parameters fixed for a run (changed only at a step boundary by the host). */
+typedef struct {
+  real4 gravity;     /* xyz, m/s² */
+  real4 grid_origin; /* xyz of the lower grid corner; w = cell size, m */
+  real dt;           /* s */
+  real skin;         /* Verlet skin, m: pairs closer than r1+r2+skin are listed */
+  real shell_radius; /* inside radius of the shell, m; <= 0: no shell */
+  real length;       /* end plates at z = 0 and z = length; <= 0: none */
+  real lifter_reach; /* a ball centre farther than this from the axis may
+                        touch a lifter */
+  real lifter_first_angle; /* centre angle of lifter 0 in the mill frame, rad */
+  real lifter_spacing;     /* angle between lifter rows, rad */
+  real pad_real;
+  int grid_nx, grid_ny, grid_nz;
+  int n_balls;
+  int n_materials;   /* ball materials; the wall material has index n_materials */
+  int n_lifters;
+  int law;           /* MC_LAW_LINEAR or MC_LAW_HERTZ */
+  int pad_int;
+} SimParams;
+
+/* The pair table has (n_materials + 1)² entries, wall material last. */
+#define MC_PAIR_INDEX(params, a, b) ((a) * ((params)->n_materials + 1) + (b))
+
+#endif /* MC_LAYOUT_H */

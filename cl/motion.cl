@@ -1,0 +1,26 @@
+/* motion.cl — leapfrog (kick–drift) integration, translation and rotation:
+ * v(n+½) = v(n−½) + dt·F(n)/m, x(n+1) = x(n) + dt·v(n+½), likewise ω with the
+ * torque (spheres, isotropic inertia). Gravity is already in F. Raises the
+ * rebuild flag when a ball has moved more than half the skin since the
+ * neighbour lists were built, and the not-finite flag on NaN or Inf. */
+#include "mc_shim.h"
+#include "layout.h"
+#include "motion.h"
+
+__kernel void motion(__global const SimParams* sp, __global real4* pos,
+                     __global real4* vel, __global real4* omega,
+                     __global const real4* force, __global const real4* torque,
+                     __global const real4* pos_at_build, __global int* status) {
+  const int i = get_global_id(0);
+  if (i >= sp->n_balls) return;
+  const int flags = integrate_ball(i, sp, pos, vel, omega, force, torque, pos_at_build);
+  if (flags) MC_ATOMIC_OR(status, flags);
+}
+
+/* Reports the device's struct sizes so the host can check its mirrors. */
+__kernel void layout_sizes(__global int* out) {
+  out[0] = (int)sizeof(SimParams);
+  out[1] = (int)sizeof(PairParams);
+  out[2] = (int)sizeof(LifterPolygon);
+  out[3] = (int)sizeof(real4);
+}

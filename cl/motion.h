@@ -1,0 +1,36 @@
+/* motion.h — the leapfrog update of one ball, shared by motion.cl and the CPU
+ * reference. Returns the status flags it raises. */
+#ifndef MC_MOTION_H
+#define MC_MOTION_H
+
+MC_FN int integrate_ball(int i, MC_GLOBAL const SimParams* sp,
+                         MC_GLOBAL real4* pos, MC_GLOBAL real4* vel,
+                         MC_GLOBAL real4* omega, MC_GLOBAL const real4* force,
+                         MC_GLOBAL const real4* torque,
+                         MC_GLOBAL const real4* pos_at_build) {
+  const real dt = sp->dt;
+  real4 v = vel[i];
+  real4 p = pos[i];
+  real4 w = omega[i];
+  const real4 f = force[i];
+  const real4 t = torque[i];
+  v.x += dt * f.x * v.w; v.y += dt * f.y * v.w; v.z += dt * f.z * v.w;
+  p.x += dt * v.x; p.y += dt * v.y; p.z += dt * v.z;
+  w.x += dt * t.x * w.w; w.y += dt * t.y * w.w; w.z += dt * t.z * w.w;
+  vel[i] = v;
+  pos[i] = p;
+  omega[i] = w;
+  int flags = 0;
+  const real4 b = pos_at_build[i];
+  const real dx = p.x - b.x, dy = p.y - b.y, dz = p.z - b.z;
+  const real half_skin = R(0.5) * sp->skin;
+  if (dx * dx + dy * dy + dz * dz > half_skin * half_skin) flags |= MC_FLAG_REBUILD;
+  /* Comparisons with NaN are false, so this also catches NaN. */
+  const real big = R(1e30);
+  if (!(fabs(p.x) + fabs(p.y) + fabs(p.z) + fabs(v.x) + fabs(v.y) + fabs(v.z) +
+            fabs(w.x) + fabs(w.y) + fabs(w.z) < big))
+    flags |= MC_FLAG_NOT_FINITE;
+  return flags;
+}
+
+#endif /* MC_MOTION_H */

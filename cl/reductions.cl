@@ -1,0 +1,61 @@
+/* reductions.cl — the sums the mill observers need, one partial sum per
+ * work-group (the host adds the few partials in double):
+ *   0 Σ wall torque about the axis × dt since the last read (N·m·s)
+ *   1 Σ work done by the walls since the last read (J)
+ *   2 Σ energy dissipated in contacts since the last read (J)
+ *   3 elastic energy stored in contacts now (J)
+ *   4 translational kinetic energy at step n (J)
+ *   5 rotational kinetic energy at step n (J)
+ *   6 gravitational potential energy −m·g·x (J)
+ *   7 neighbour-list entries
+ * Velocities are stored half a step behind, so the kinetic energy uses
+ * v(n) = v(n−½) + ½·dt·F(n)/m, which keeps the energy check second order.
+ * With reset != 0 the accumulators 0–2 are zeroed for the next interval. */
+#include "mc_shim.h"
+#include "layout.h"
+
+#define MC_N_OBSERVABLES 8
+
+__kernel __attribute__((reqd_work_group_size(MC_REDUCE_WG, 1, 1)))
+void reduce_observables(__global const SimParams* sp,
+                        __global const real4* pos, __global const real4* vel,
+                        __global const real4* omega,
+                        __global const real4* force,
+                        __global const real4* torque, __global real4* accum,
+                        __global const int* neigh_count, int reset,
+                        __global real* partial) {
+  __local real tmp[MC_REDUCE_WG * MC_N_OBSERVABLES];
+  const int i = get_global_id(0);
+  const int lid = get_local_id(0);
+  real v[MC_N_OBSERVABLES];
+  for (int k = 0; k < MC_N_OBSERVABLES; ++k) v[k] = R(0.0);
+  if (i < sp->n_balls) {
+    const real half_dt = R(0.5) * sp->dt;
+    const real4 a = accum[i];
+    const real4 vh = vel[i];
+    const real4 wh = omega[i];
+    const real3 vn = xyz_of(vh) + half_dt * vh.w * xyz_of(force[i]);
+    const real3 wn = xyz_of(wh) + half_dt * wh.w * xyz_of(torque[i]);
+    const real mass = R(1.0) / vh.w;
+    v[0] = a.x;
+    v[1] = a.y;
+    v[2] = a.z;
+    v[3] = a.w;
+    v[4] = R(0.5) * mass * dot(vn, vn);
+    v[5] = R(0.5) * dot(wn, wn) / wh.w;
+    v[6] = -mass * dot(xyz_of(sp->gravity), xyz_of(pos[i]));
+    v[7] = (real)neigh_count[i];
+    if (reset) accum[i] = make_real4(0, 0, 0, a.w);
+  }
+  for (int k = 0; k < MC_N_OBSERVABLES; ++k) tmp[k * MC_REDUCE_WG + lid] = v[k];
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (int stride = MC_REDUCE_WG / 2; stride > 0; stride >>= 1) {
+    if (lid < stride)
+      for (int k = 0; k < MC_N_OBSERVABLES; ++k)
+        tmp[k * MC_REDUCE_WG + lid] += tmp[k * MC_REDUCE_WG + lid + stride];
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  if (lid == 0)
+    for (int k = 0; k < MC_N_OBSERVABLES; ++k)
+      partial[get_group_id(0) * MC_N_OBSERVABLES + k] = tmp[k * MC_REDUCE_WG];
+}

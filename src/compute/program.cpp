@@ -1,0 +1,139 @@
+#include "compute/program.h"
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+namespace mc::compute {
+
+std::string kernel_dir() {
+  if (const char* env = std::getenv("MILLCHARGE_KERNEL_DIR")) return env;
+  return MC_KERNEL_DIR;
+}
+
+BuildOptions& BuildOptions::define(const std::string& name, const std::string& value) {
+  defines_.emplace_back(name, value);
+  return *this;
+}
+
+BuildOptions& BuildOptions::define(const std::string& name, int value) {
+  return define(name, std::to_string(value));
+}
+
+std::string BuildOptions::str(const std::string& include_dir) const {
+  std::ostringstream s;
+  s << "-I " << include_dir;
+  for (const auto& [name, value] : defines_) {
+    s << " -D " << name;
+    if (!value.empty()) s << '=' << value;
+  }
+  return s.str();
+}
+
+namespace {
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw Error("cannot read kernel file " + path +
+                " (set MILLCHARGE_KERNEL_DIR to the folder holding the .cl files)");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+Program::Program(Context& ctx, const std::vector<std::string>& files,
+                 BuildOptions options, bool double_precision)
+    : ctx_(ctx), double_(double_precision) {
+  if (double_ && !ctx.info().fp64)
+    throw Error("--precision double needs a device with cl_khr_fp64; " + ctx.info().label() +
+                " has none: use --precision float");
+  const std::string dir = kernel_dir();
+  // One translation unit; #line keeps the file names in the build log.
+  std::string source;
+  for (const std::string& f : files)
+    source += "#line 1 \"" + f + "\"\n" + read_file(dir + "/" + f) + "\n";
+  if (double_) options.define("MC_DOUBLE");
+  const std::string opts = options.str(dir);
+  try {
+    program_ = cl::Program(ctx.context(), source);
+  } catch (const cl::Error& e) {
+    throw Error("cannot create OpenCL program: " + error_name(e.err()));
+  }
+  try {
+    program_.build({ctx.device()}, opts.c_str());
+  } catch (const cl::Error& e) {
+    std::string log;
+    try {
+      log = program_.getBuildInfo<CL_PROGRAM_BUILD_LOG>(ctx.device());
+    } catch (const cl::Error&) {
+    }
+    std::ostringstream msg;
+    msg << "kernel build failed on " << ctx.info().label() << " (options: " << opts << ")";
+    if (!log.empty()) msg << ":\n" << log;
+    throw Error(msg.str());
+  }
+}
+
+Kernel::Kernel(Program& program, const std::string& name) : program_(program), name_(name) {
+  try {
+    kernel_ = cl::Kernel(program.get(), name.c_str());
+  } catch (const cl::Error& e) {
+    throw Error("kernel '" + name + "' not found in the program: " + error_name(e.err()));
+  }
+}
+
+void Kernel::fail(const std::string& what, const cl::Error& e) const {
+  throw Error("kernel '" + name_ + "': " + what + ": " + error_name(e.err()));
+}
+
+void Kernel::set(cl_uint index, double value) {
+  try {
+    if (program_.double_precision())
+      kernel_.setArg(index, value);
+    else
+      kernel_.setArg(index, static_cast<float>(value));
+  } catch (const cl::Error& e) {
+    fail("argument " + std::to_string(index), e);
+  }
+}
+
+void Kernel::set(cl_uint index, int value) {
+  try {
+    kernel_.setArg(index, static_cast<cl_int>(value));
+  } catch (const cl::Error& e) {
+    fail("argument " + std::to_string(index), e);
+  }
+}
+
+void Kernel::set(cl_uint index, const LocalBytes& local) {
+  try {
+    kernel_.setArg(index, cl::Local(local.bytes));
+  } catch (const cl::Error& e) {
+    fail("argument " + std::to_string(index), e);
+  }
+}
+
+void Kernel::set_mem(cl_uint index, const cl::Buffer& mem) {
+  try {
+    kernel_.setArg(index, mem);
+  } catch (const cl::Error& e) {
+    fail("argument " + std::to_string(index), e);
+  }
+}
+
+void Kernel::launch(std::size_t global, std::size_t local) {
+  if (global == 0) return;
+  if (local > 0) global = (global + local - 1) / local * local;
+  try {
+    program_.ctx().queue().enqueueNDRangeKernel(
+        kernel_, cl::NullRange, cl::NDRange(global),
+        local > 0 ? cl::NDRange(local) : cl::NullRange);
+  } catch (const cl::Error& e) {
+    fail("launch of " + std::to_string(global) + " items failed", e);
+  }
+}
+
+}  // namespace mc::compute

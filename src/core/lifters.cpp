@@ -1,0 +1,35 @@
+#include "core/lifters.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace mc {
+
+std::vector<Vec2> lifter_polygon(double shell_radius, const LifterProfile& p, double angle) {
+  if (!(p.height > 0 && p.height < shell_radius))
+    throw std::invalid_argument("lifter height must be in (0, shell radius)");
+  if (!(p.top_width > 0)) throw std::invalid_argument("lifter top_width must be > 0");
+  if (!(p.face_angle_deg >= 0 && p.face_angle_deg < 60))
+    throw std::invalid_argument("lifter face_angle must be in [0, 60) degrees");
+  const double tan_face = std::tan(p.face_angle_deg * M_PI / 180.0);
+  const double r_top = shell_radius - p.height;
+  const double r_base = shell_radius + 0.25 * p.height;  // behind the shell
+  const double half_top = 0.5 * p.top_width;
+  const double half_base = half_top + (r_base - r_top) * tan_face;
+  const double c = std::cos(angle), s = std::sin(angle);
+  auto at = [&](double u, double t) { return Vec2{u * c - t * s, u * s + t * c}; };
+  return {at(r_top, -half_top), at(r_base, -half_base), at(r_base, half_base), at(r_top, half_top)};
+}
+
+std::vector<std::vector<Vec2>> lifter_rows(double shell_radius, int rows,
+                                           const std::vector<LifterProfile>& pattern,
+                                           double first) {
+  std::vector<std::vector<Vec2>> out;
+  if (rows <= 0 || pattern.empty()) return out;
+  for (int k = 0; k < rows; ++k)
+    out.push_back(lifter_polygon(shell_radius, pattern[k % pattern.size()],
+                                 first + 2.0 * M_PI * k / rows));
+  return out;
+}
+
+}  // namespace mc

@@ -1,0 +1,28 @@
+// Lifter bars from their profile: a trapezoid on the shell, extruded along
+// the mill (DESIGN.md, "World").
+#pragma once
+
+#include <vector>
+
+#include "core/vec.h"
+
+namespace mc {
+
+struct LifterProfile {
+  double height = 0.05;      // radial, m
+  double top_width = 0.05;   // m
+  double face_angle_deg = 0; // of both faces from the radial line
+};
+
+// The counter-clockwise cross-section of one bar centred at `angle` (rad) on a
+// shell of inside radius `shell_radius`. The base lies just outside the shell
+// so that no gap opens between bar and shell.
+std::vector<Vec2> lifter_polygon(double shell_radius, const LifterProfile& p, double angle);
+
+// `rows` bars evenly spaced from angle `first`, row k taking
+// pattern[k % pattern.size()] (high/low alternation).
+std::vector<std::vector<Vec2>> lifter_rows(double shell_radius, int rows,
+                                           const std::vector<LifterProfile>& pattern,
+                                           double first = 0.0);
+
+}  // namespace mc

@@ -1,0 +1,88 @@
+#include "core/scene.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace mc {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}
+
+void Scene::set_interaction(int a, int b, const Interaction& in) {
+  const int m = wall_index() + 1;
+  if (static_cast<int>(interactions.size()) != m * m) interactions.assign(m * m, Interaction{});
+  interactions[a * m + b] = in;
+  interactions[b * m + a] = in;
+}
+
+void Scene::set_all_interactions(const Interaction& in) {
+  const int m = wall_index() + 1;
+  interactions.assign(m * m, in);
+}
+
+const Interaction& Scene::interaction(int a, int b) const {
+  const int m = wall_index() + 1;
+  if (static_cast<int>(interactions.size()) != m * m)
+    throw std::invalid_argument("scene: interaction table has " + std::to_string(interactions.size()) +
+                                " entries, needs " + std::to_string(m * m));
+  return interactions[a * m + b];
+}
+
+PairCoefficients pair_coefficients(const Scene& scene, int a, int b) {
+  auto mat = [&](int k) -> const Material& {
+    return k == scene.wall_index() ? scene.wall_material : scene.materials.at(k);
+  };
+  const Material& ma = mat(a);
+  const Material& mb = mat(b);
+  const Interaction& in = scene.interaction(a, b);
+  PairCoefficients c{};
+  c.kn = in.kn;
+  c.kt_over_kn = in.kt_over_kn;
+  c.e_star = 1.0 / ((1 - ma.poisson_ratio * ma.poisson_ratio) / ma.youngs_modulus +
+                    (1 - mb.poisson_ratio * mb.poisson_ratio) / mb.youngs_modulus);
+  c.g_star = 1.0 / (2 * (2 - ma.poisson_ratio) * (1 + ma.poisson_ratio) / ma.youngs_modulus +
+                    2 * (2 - mb.poisson_ratio) * (1 + mb.poisson_ratio) / mb.youngs_modulus);
+  c.damping = damping_for_restitution(scene.numerics.law, in.restitution);
+  c.mu_slide = in.mu_slide;
+  c.mu_roll = in.mu_roll;
+  c.restitution = in.restitution;
+  return c;
+}
+
+double ball_mass(const Scene& scene, const Ball& b) {
+  return scene.materials.at(b.material).density * 4.0 / 3.0 * kPi * b.radius * b.radius * b.radius;
+}
+
+void validate(const Scene& scene) {
+  auto fail = [](const std::string& m) { throw std::invalid_argument(m); };
+  if (scene.materials.empty()) fail("scene: no ball material");
+  auto check_material = [&](const Material& m, const std::string& where) {
+    if (!(m.density > 0)) fail(where + ".density must be > 0");
+    if (!(m.youngs_modulus > 0)) fail(where + ".youngs_modulus must be > 0");
+    if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5)) fail(where + ".poisson_ratio must be in (-1, 0.5)");
+  };
+  for (std::size_t k = 0; k < scene.materials.size(); ++k)
+    check_material(scene.materials[k], "materials." + scene.materials[k].name);
+  check_material(scene.wall_material, "wall_material");
+  const int m = scene.wall_index() + 1;
+  if (static_cast<int>(scene.interactions.size()) != m * m) fail("scene: interaction table incomplete");
+  for (const Interaction& in : scene.interactions) {
+    if (!(in.restitution > 0 && in.restitution <= 1)) fail("interaction.restitution must be in (0, 1]");
+    if (!(in.mu_slide >= 0)) fail("interaction.mu_slide must be >= 0");
+    if (!(in.mu_roll >= 0)) fail("interaction.mu_roll must be >= 0");
+    if (scene.numerics.law == ContactLaw::linear && !(in.kn > 0)) fail("interaction.kn must be > 0");
+  }
+  if (!(scene.numerics.dt > 0)) fail("numerics.dt must be > 0");
+  for (const Ball& b : scene.balls) {
+    if (!(b.radius > 0)) fail("ball " + std::to_string(b.id) + ": radius must be > 0");
+    if (b.material < 0 || b.material >= scene.wall_index())
+      fail("ball " + std::to_string(b.id) + ": unknown material " + std::to_string(b.material));
+  }
+  for (const auto& poly : scene.walls.lifters) {
+    if (poly.size() < 3 || poly.size() > 8) fail("lifter polygon needs 3 to 8 vertices");
+  }
+}
+
+}  // namespace mc

@@ -1,0 +1,89 @@
+// What the solver simulates, in SI units: materials and their pairs, the
+// walls, the balls, and the numerical settings. Built by a case file, a test
+// or the viewer; the solver takes it as it is. No OpenCL here.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/restitution.h"
+#include "core/vec.h"
+
+namespace mc {
+
+enum class Precision { single, double_ };
+
+struct Material {
+  std::string name;
+  double density = 7800.0;        // kg/m³
+  double youngs_modulus = 2.0e11;  // Pa
+  double poisson_ratio = 0.3;
+};
+
+// How two materials meet. kn is used by the linear law only.
+struct Interaction {
+  double restitution = 0.5;
+  double mu_slide = 0.3;
+  double mu_roll = 0.0;
+  double kn = 1.0e6;               // N/m, linear law
+  double kt_over_kn = 2.0 / 7.0;   // linear law
+};
+
+// Derived coefficients of one material pair (mirrors cl/layout.h PairParams).
+struct PairCoefficients {
+  double kn, kt_over_kn, e_star, g_star, damping, mu_slide, mu_roll, restitution;
+};
+
+struct Ball {
+  int id = 0;
+  int material = 0;
+  double radius = 0.01;
+  Vec3 position, velocity, omega;
+};
+
+struct Walls {
+  double shell_radius = 0.0;  // inside radius of the shell; 0: no shell
+  double length = 0.0;        // end plates at z = 0 and z = length; 0: none
+  // Lifter cross-sections in the mill frame, counter-clockwise convex
+  // polygons, one per row, rows evenly spaced starting at lifter_first_angle.
+  std::vector<std::vector<Vec2>> lifters;
+  double lifter_first_angle = 0.0;  // rad
+};
+
+struct Numerics {
+  ContactLaw law = ContactLaw::hertz;
+  Precision precision = Precision::single;
+  double dt = 1e-5;      // s
+  double skin = 0.0;     // m; 0: 0.3 · smallest radius
+  Vec3 gravity{0.0, -9.81, 0.0};
+};
+
+struct Scene {
+  std::vector<Material> materials;  // ball materials
+  Material wall_material;           // liner
+  // (materials + 1)² interactions, row-major, the wall material last;
+  // use set_interaction to fill both (a, b) and (b, a).
+  std::vector<Interaction> interactions;
+  Walls walls;
+  std::vector<Ball> balls;
+  Numerics numerics;
+  double mill_omega = 0.0;  // rad/s, counter-clockwise about +z
+  double mill_angle = 0.0;  // rad at t = 0
+
+  int wall_index() const { return static_cast<int>(materials.size()); }
+  void set_interaction(int a, int b, const Interaction& in);
+  // Same interaction for every pair (sizes the table to the materials).
+  void set_all_interactions(const Interaction& in);
+  const Interaction& interaction(int a, int b) const;
+};
+
+// E*, G*, calibrated damping, friction of pair (a, b); b may be the wall.
+PairCoefficients pair_coefficients(const Scene& scene, int a, int b);
+
+double ball_mass(const Scene& scene, const Ball& b);
+
+// Checks the scene for what would make the solver fail or lie: throws
+// std::invalid_argument naming the field.
+void validate(const Scene& scene);
+
+}  // namespace mc

@@ -1,0 +1,60 @@
+// Host mirrors of the structs in cl/layout.h, one set per precision: the
+// header is included once with real = float (mc::f32) and once with
+// real = double (mc::f64). mc::f64 also holds the physics functions of the
+// shared headers, which the CPU reference runs.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+namespace mc::f32 {
+using real = float;
+#include "../../cl/mc_shim.h"
+#include "../../cl/layout.h"
+}  // namespace mc::f32
+
+#undef MC_SHIM_H
+#undef MC_LAYOUT_H
+
+namespace mc::f64 {
+using real = double;
+#include "../../cl/mc_shim.h"
+#include "../../cl/layout.h"
+#include "../../cl/contact_law.h"
+#include "../../cl/walls.h"
+#include "../../cl/ball_forces.h"
+#include "../../cl/motion.h"
+}  // namespace mc::f64
+
+namespace mc {
+
+static_assert(sizeof(f32::real4) == 16 && alignof(f32::real4) == 16);
+static_assert(sizeof(f64::real4) == 32 && alignof(f64::real4) == 32);
+static_assert(sizeof(f32::PairParams) == 8 * 4 && sizeof(f64::PairParams) == 8 * 8);
+static_assert(sizeof(f32::SimParams) == 2 * 16 + 8 * 4 + 8 * 4);
+static_assert(sizeof(f64::SimParams) == 2 * 32 + 8 * 8 + 8 * 4);
+
+// The types of one precision, for code templated on it.
+template <class Real>
+struct Layout;
+template <>
+struct Layout<float> {
+  using real4 = f32::real4;
+  using real2 = f32::real2;
+  using int2 = f32::int2;
+  using SimParams = f32::SimParams;
+  using PairParams = f32::PairParams;
+  using LifterPolygon = f32::LifterPolygon;
+};
+template <>
+struct Layout<double> {
+  using real4 = f64::real4;
+  using real2 = f64::real2;
+  using int2 = f64::int2;
+  using SimParams = f64::SimParams;
+  using PairParams = f64::PairParams;
+  using LifterPolygon = f64::LifterPolygon;
+};
+
+}  // namespace mc

@@ -1,0 +1,512 @@
+#include "sim/solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "compute/program.h"
+#include "sim/layout.hpp"
+
+namespace mc {
+
+using compute::Buffer;
+using compute::Kernel;
+using compute::LocalBytes;
+
+namespace {
+
+constexpr int kScanWG = 256;
+constexpr int kReduceWG = 64;
+constexpr int kObservables = 8;
+
+// Exclusive prefix sum on the device (cl/scan.cl).
+class Scan {
+ public:
+  Scan(compute::Program& prog, compute::Context& ctx, std::size_t max_n)
+      : blocks_(prog, "scan_blocks"),
+        block_sums_k_(prog, "scan_block_sums"),
+        add_(prog, "scan_add"),
+        block_sums_(ctx, max_n / kScanWG + 1, "scan block sums"),
+        total_(ctx, 1, "scan total") {}
+
+  void run(const Buffer<int>& in, Buffer<int>& out, int n) {
+    const int n_blocks = (n + kScanWG - 1) / kScanWG;
+    if (static_cast<std::size_t>(n_blocks) > block_sums_.size())
+      block_sums_.resize(n_blocks);
+    blocks_.args(in, out, block_sums_, n).launch(static_cast<std::size_t>(n_blocks) * kScanWG, kScanWG);
+    block_sums_k_.args(block_sums_, n_blocks, total_).launch(kScanWG, kScanWG);
+    add_.args(out, block_sums_, n).launch(n);
+  }
+  int read_total() {
+    total_.read_from_device();
+    return total_.host[0];
+  }
+  std::size_t bytes() const { return block_sums_.bytes() + total_.bytes(); }
+
+ private:
+  Kernel blocks_, block_sums_k_, add_;
+  Buffer<int> block_sums_, total_;
+};
+
+template <class Real>
+class SolverImpl final : public Solver {
+  using L = Layout<Real>;
+  using real4 = typename L::real4;
+  using int2 = typename L::int2;
+
+ public:
+  SolverImpl(compute::Context& ctx, const Scene& scene);
+
+  void advance(long steps) override;
+  std::vector<BallState> balls() override;
+  Observables observe(bool reset) override;
+  std::vector<std::pair<int, int>> neighbour_pairs() override;
+  void set_mill_omega(double w) override { mill_omega_ = w; }
+
+  double time_s() const override { return time_; }
+  long steps() const override { return steps_; }
+  long rebuilds() const override { return rebuilds_; }
+  double mill_angle() const override { return mill_angle_; }
+  double dt() const override { return dt_; }
+  std::size_t device_bytes() const override;
+  const compute::DeviceInfo& device() const override { return ctx_.info(); }
+
+ private:
+  static compute::BuildOptions options(const Scene& scene);
+  void setup_params(const Scene& scene);
+  void rebuild();
+  void forces();
+  void motion();
+  void check_status();
+
+  compute::Context& ctx_;
+  compute::Program program_;
+  int n_;
+  double dt_;
+  double time_ = 0;
+  long steps_ = 0;
+  long rebuilds_ = 0;
+  double mill_angle_;
+  double mill_omega_;
+  double observed_since_ = 0;
+  int n_cells_ = 1;
+
+  // parameters
+  Buffer<typename L::SimParams> params_;
+  Buffer<typename L::PairParams> pairs_;
+  Buffer<typename L::LifterPolygon> lifters_;
+  // ball state, in cell order after each rebuild
+  Buffer<real4> pos_, vel_, omega_, force_, torque_, accum_, pos_at_build_;
+  Buffer<int2> info_;  // (id, material)
+  Buffer<int> wall_key_;
+  Buffer<real4> wall_hist_;
+  // spares the gathers write into before a swap
+  Buffer<real4> spare4_;
+  Buffer<int2> spare2_;
+  Buffer<int> spare_key_;
+  Buffer<real4> spare_hist_;
+  // binning
+  Buffer<int> cell_count_, cell_start_, ball_cell_, ball_rank_, sorted_index_;
+  // neighbour lists, current and previous (for the history carry-over)
+  Buffer<int> neigh_start_, neigh_count_, neigh_index_;
+  Buffer<real4> neigh_hist_;
+  Buffer<int> old_start_, old_count_, old_index_;
+  Buffer<real4> old_hist_;
+  // status word and reduction partials
+  Buffer<int> status_;
+  Buffer<Real> partial_;
+
+  Scan scan_;
+  Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
+      k_gather_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
+      k_layout_;
+};
+
+template <class Real>
+compute::BuildOptions SolverImpl<Real>::options(const Scene&) {
+  compute::BuildOptions o;
+  o.define("MC_SCAN_WG", kScanWG).define("MC_REDUCE_WG", kReduceWG);
+  return o;
+}
+
+template <class Real>
+SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
+    : ctx_(ctx),
+      program_(ctx,
+               {"scan.cl", "binning.cl", "contacts.cl", "forces.cl", "motion.cl", "reductions.cl"},
+               options(scene), std::is_same_v<Real, double>),
+      n_(static_cast<int>(scene.balls.size())),
+      dt_(scene.numerics.dt),
+      mill_angle_(scene.mill_angle),
+      mill_omega_(scene.mill_omega),
+      params_(ctx, 1, "params"),
+      pairs_(ctx, 1, "pairs"),
+      lifters_(ctx, 1, "lifters"),
+      pos_(ctx, n_, "positions"),
+      vel_(ctx, n_, "velocities"),
+      omega_(ctx, n_, "angular velocities"),
+      force_(ctx, n_, "forces"),
+      torque_(ctx, n_, "torques"),
+      accum_(ctx, n_, "accumulators"),
+      pos_at_build_(ctx, n_, "positions at list build"),
+      info_(ctx, n_, "ids and materials"),
+      wall_key_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "wall contact keys"),
+      wall_hist_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "wall contact history"),
+      spare4_(ctx, n_, "spare real4"),
+      spare2_(ctx, n_, "spare int2"),
+      spare_key_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "spare wall keys"),
+      spare_hist_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "spare wall history"),
+      ball_cell_(ctx, n_, "ball cell"),
+      ball_rank_(ctx, n_, "ball rank in cell"),
+      sorted_index_(ctx, n_, "sorted index"),
+      neigh_start_(ctx, n_, "neighbour start"),
+      neigh_count_(ctx, n_, "neighbour count"),
+      neigh_index_(ctx, static_cast<std::size_t>(n_) * 8 + 64, "neighbour index"),
+      neigh_hist_(ctx, static_cast<std::size_t>(n_) * 8 + 64, "neighbour history"),
+      old_start_(ctx, n_, "previous neighbour start"),
+      old_count_(ctx, n_, "previous neighbour count"),
+      old_index_(ctx, 1, "previous neighbour index"),
+      old_hist_(ctx, 1, "previous neighbour history"),
+      status_(ctx, 1, "status"),
+      partial_(ctx, (static_cast<std::size_t>(n_) / kReduceWG + 1) * kObservables, "reduction partials"),
+      scan_(program_, ctx, std::max<std::size_t>(n_, 1)),
+      k_bin_clear_(program_, "bin_clear"),
+      k_bin_count_(program_, "bin_count"),
+      k_bin_scatter_(program_, "bin_scatter"),
+      k_bin_sort_(program_, "bin_sort_cells"),
+      k_gather4_(program_, "gather_real4"),
+      k_gather2_(program_, "gather_int2"),
+      k_gather_wall_(program_, "gather_wall_slots"),
+      k_contacts_count_(program_, "contacts_count"),
+      k_contacts_fill_(program_, "contacts_fill"),
+      k_forces_(program_, "forces"),
+      k_motion_(program_, "motion"),
+      k_reduce_(program_, "reduce_observables"),
+      k_layout_(program_, "layout_sizes") {
+  if (n_ == 0) throw std::invalid_argument("scene: no balls");
+
+  // The device's struct sizes must equal the host mirrors'.
+  Buffer<int> sizes(ctx, 4, "layout sizes");
+  k_layout_.args(sizes).launch(1);
+  sizes.read_from_device();
+  if (sizes.host[0] != static_cast<int>(sizeof(typename L::SimParams)) ||
+      sizes.host[1] != static_cast<int>(sizeof(typename L::PairParams)) ||
+      sizes.host[2] != static_cast<int>(sizeof(typename L::LifterPolygon)) ||
+      sizes.host[3] != static_cast<int>(sizeof(real4)))
+    throw compute::Error("struct layouts differ between host and device (cl/layout.h)");
+
+  setup_params(scene);
+
+  std::vector<Ball> balls = scene.balls;
+  std::sort(balls.begin(), balls.end(), [](const Ball& a, const Ball& b) { return a.id < b.id; });
+  for (int i = 0; i < n_; ++i) {
+    const Ball& b = balls[i];
+    const double m = ball_mass(scene, b);
+    const double inertia = 0.4 * m * b.radius * b.radius;
+    pos_.host[i] = {Real(b.position.x), Real(b.position.y), Real(b.position.z), Real(b.radius)};
+    vel_.host[i] = {Real(b.velocity.x), Real(b.velocity.y), Real(b.velocity.z), Real(1.0 / m)};
+    omega_.host[i] = {Real(b.omega.x), Real(b.omega.y), Real(b.omega.z), Real(1.0 / inertia)};
+    info_.host[i] = {b.id, b.material};
+  }
+  std::fill(wall_key_.host.begin(), wall_key_.host.end(), MC_WALL_NONE);
+  for (auto* b : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &wall_hist_}) b->write_to_device();
+  info_.write_to_device();
+  wall_key_.write_to_device();
+  // Empty lists: the first rebuild takes these as the previous lists.
+  for (auto* b : {&neigh_start_, &neigh_count_, &old_start_, &old_count_}) b->write_to_device();
+  status_.write_to_device();
+
+  rebuild();
+  forces();
+  // Leapfrog keeps v half a step behind x: v(−½) = v(0) − ½·dt·F(0)/m.
+  for (auto* b : {&vel_, &omega_, &force_, &torque_}) b->read_from_device();
+  for (int i = 0; i < n_; ++i) {
+    auto& v = vel_.host[i];
+    const auto& f = force_.host[i];
+    v.x -= Real(0.5) * Real(dt_) * f.x * v.w;
+    v.y -= Real(0.5) * Real(dt_) * f.y * v.w;
+    v.z -= Real(0.5) * Real(dt_) * f.z * v.w;
+    auto& w = omega_.host[i];
+    const auto& t = torque_.host[i];
+    w.x -= Real(0.5) * Real(dt_) * t.x * w.w;
+    w.y -= Real(0.5) * Real(dt_) * t.y * w.w;
+    w.z -= Real(0.5) * Real(dt_) * t.z * w.w;
+  }
+  vel_.write_to_device();
+  omega_.write_to_device();
+  observe(true);  // start the first interval here
+}
+
+template <class Real>
+void SolverImpl<Real>::setup_params(const Scene& scene) {
+  validate(scene);
+  const int nm = scene.wall_index();
+  pairs_.resize(static_cast<std::size_t>(nm + 1) * (nm + 1));
+  for (int a = 0; a <= nm; ++a)
+    for (int b = 0; b <= nm; ++b) {
+      const PairCoefficients c = pair_coefficients(scene, a, b);
+      pairs_.host[a * (nm + 1) + b] = {Real(c.kn),     Real(c.kt_over_kn), Real(c.e_star),
+                                       Real(c.g_star), Real(c.damping),    Real(c.mu_slide),
+                                       Real(c.mu_roll), Real(c.restitution)};
+    }
+  pairs_.write_to_device();
+
+  double r_min = std::numeric_limits<double>::max(), r_max = 0;
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (const Ball& b : scene.balls) {
+    r_min = std::min(r_min, b.radius);
+    r_max = std::max(r_max, b.radius);
+    lo = {std::min(lo.x, b.position.x), std::min(lo.y, b.position.y), std::min(lo.z, b.position.z)};
+    hi = {std::max(hi.x, b.position.x), std::max(hi.y, b.position.y), std::max(hi.z, b.position.z)};
+  }
+  const Walls& w = scene.walls;
+  const int nl = static_cast<int>(w.lifters.size());
+  lifters_.resize(std::max(nl, 1));
+  double reach = w.shell_radius;
+  for (int k = 0; k < nl; ++k) {
+    auto& poly = lifters_.host[k];
+    poly.n_vertices = static_cast<int>(w.lifters[k].size());
+    for (std::size_t v = 0; v < w.lifters[k].size(); ++v) {
+      poly.vertices[v] = {Real(w.lifters[k][v].x), Real(w.lifters[k][v].y)};
+      reach = std::min(reach, std::hypot(w.lifters[k][v].x, w.lifters[k][v].y));
+    }
+  }
+  lifters_.write_to_device();
+
+  auto& sp = params_.host[0];
+  sp = {};
+  const Vec3 g = scene.numerics.gravity;
+  sp.gravity = {Real(g.x), Real(g.y), Real(g.z), Real(0)};
+  sp.dt = Real(scene.numerics.dt);
+  const double skin = scene.numerics.skin > 0 ? scene.numerics.skin : default_skin(scene);
+  sp.skin = Real(skin);
+  sp.shell_radius = Real(w.shell_radius);
+  sp.length = Real(w.length);
+  sp.lifter_reach = Real(std::max(0.0, reach - 1.01 * r_max));
+  sp.lifter_first_angle = Real(w.lifter_first_angle);
+  sp.lifter_spacing = Real(nl > 0 ? 2.0 * M_PI / nl : 1.0);
+  sp.n_balls = n_;
+  sp.n_materials = nm;
+  sp.n_lifters = nl;
+  sp.law = scene.numerics.law == ContactLaw::hertz ? MC_LAW_HERTZ : MC_LAW_LINEAR;
+
+  // Grid over the mill (or the balls when there is no mill), one cell of
+  // margin; cells at least 2·r_max + skin wide. A cap on the cell count keeps
+  // memory bounded for balls spread far apart (clamping stays correct).
+  if (w.shell_radius > 0) {
+    lo.x = std::min(lo.x, -w.shell_radius);
+    lo.y = std::min(lo.y, -w.shell_radius);
+    hi.x = std::max(hi.x, w.shell_radius);
+    hi.y = std::max(hi.y, w.shell_radius);
+  }
+  if (w.length > 0) {
+    lo.z = std::min(lo.z, 0.0);
+    hi.z = std::max(hi.z, w.length);
+  }
+  double cell = 2.0 * r_max + skin;
+  auto dims = [&](double c) {
+    return std::array<long, 3>{static_cast<long>(std::ceil((hi.x - lo.x) / c)) + 3,
+                               static_cast<long>(std::ceil((hi.y - lo.y) / c)) + 3,
+                               static_cast<long>(std::ceil((hi.z - lo.z) / c)) + 3};
+  };
+  const long max_cells = std::max<long>(4L * n_, 1L << 16);
+  auto d = dims(cell);
+  while (d[0] * d[1] * d[2] > max_cells) {
+    cell *= 1.25;
+    d = dims(cell);
+  }
+  sp.grid_origin = {Real(lo.x - cell), Real(lo.y - cell), Real(lo.z - cell), Real(cell)};
+  sp.grid_nx = static_cast<int>(d[0]);
+  sp.grid_ny = static_cast<int>(d[1]);
+  sp.grid_nz = static_cast<int>(d[2]);
+  n_cells_ = static_cast<int>(d[0] * d[1] * d[2]);
+  params_.write_to_device();
+
+  cell_count_ = Buffer<int>(ctx_, n_cells_, "cell count");
+  cell_start_ = Buffer<int>(ctx_, n_cells_, "cell start");
+}
+
+template <class Real>
+void SolverImpl<Real>::rebuild() {
+  const int n = n_;
+  k_bin_clear_.args(cell_count_, n_cells_).launch(n_cells_);
+  k_bin_count_.args(params_, pos_, cell_count_, ball_cell_, ball_rank_).launch(n);
+  scan_.run(cell_count_, cell_start_, n_cells_);
+  k_bin_scatter_.args(n, ball_cell_, ball_rank_, cell_start_, sorted_index_).launch(n);
+  k_bin_sort_.args(n_cells_, cell_start_, cell_count_, sorted_index_, info_).launch(n_cells_);
+
+  // Put the ball arrays in cell order.
+  for (Buffer<real4>* b : {&pos_, &vel_, &omega_, &accum_}) {
+    k_gather4_.args(n, sorted_index_, *b, spare4_).launch(n);
+    std::swap(*b, spare4_);
+  }
+  k_gather2_.args(n, sorted_index_, info_, spare2_).launch(n);
+  std::swap(info_, spare2_);
+  k_gather_wall_.args(n, sorted_index_, wall_key_, wall_hist_, spare_key_, spare_hist_).launch(n);
+  std::swap(wall_key_, spare_key_);
+  std::swap(wall_hist_, spare_hist_);
+  pos_at_build_.copy_from(pos_, n);
+
+  // New lists; the previous ones (in the previous order) feed the carry-over.
+  std::swap(neigh_start_, old_start_);
+  std::swap(neigh_count_, old_count_);
+  std::swap(neigh_index_, old_index_);
+  std::swap(neigh_hist_, old_hist_);
+  k_contacts_count_.args(params_, pos_, cell_start_, cell_count_, neigh_count_).launch(n);
+  scan_.run(neigh_count_, neigh_start_, n);
+  const int total = scan_.read_total();
+  if (static_cast<std::size_t>(total) > neigh_index_.size()) {
+    // The lists grow as needed: no contact is ever dropped.
+    const std::size_t cap = static_cast<std::size_t>(total) + total / 4 + 64;
+    neigh_index_.resize(cap);
+    neigh_hist_.resize(cap);
+  }
+  k_contacts_fill_.args(params_, pos_, cell_start_, cell_count_, neigh_start_, neigh_index_,
+                        neigh_hist_, sorted_index_, old_start_, old_count_, old_index_, old_hist_)
+      .launch(n);
+  ++rebuilds_;
+}
+
+template <class Real>
+void SolverImpl<Real>::forces() {
+  k_forces_
+      .args(params_, pairs_, lifters_, mill_angle_, mill_omega_, pos_, vel_, omega_, info_,
+            neigh_start_, neigh_count_, neigh_index_, neigh_hist_, wall_key_, wall_hist_, force_,
+            torque_, accum_, status_)
+      .launch(n_);
+}
+
+template <class Real>
+void SolverImpl<Real>::motion() {
+  k_motion_.args(params_, pos_, vel_, omega_, force_, torque_, pos_at_build_, status_).launch(n_);
+}
+
+template <class Real>
+void SolverImpl<Real>::check_status() {
+  status_.read_from_device();
+  const int flags = status_.host[0];
+  if (flags == 0) return;
+  if (flags & MC_FLAG_NOT_FINITE) {
+    std::ostringstream m;
+    m << "blow-up at t = " << time_ << " s (step " << steps_
+      << "): a ball's position or velocity is NaN or Inf. Likely causes: dt (" << dt_
+      << " s) too large for the contact stiffness, or balls overlapping at the start";
+    throw std::runtime_error(m.str());
+  }
+  if (flags & MC_FLAG_WALL_OVERFLOW)
+    throw std::runtime_error("a ball touches more than " + std::to_string(MC_MAX_WALL_CONTACTS) +
+                             " walls at once (MC_MAX_WALL_CONTACTS in cl/layout.h): lifters too close together?");
+  status_.host[0] = 0;
+  status_.write_to_device();
+  if (flags & MC_FLAG_REBUILD) rebuild();
+}
+
+template <class Real>
+void SolverImpl<Real>::advance(long steps) {
+  for (long s = 0; s < steps; ++s) {
+    motion();
+    check_status();
+    ++steps_;
+    time_ += dt_;
+    mill_angle_ = std::fmod(mill_angle_ + mill_omega_ * dt_, 2.0 * M_PI);
+    forces();
+  }
+}
+
+template <class Real>
+Observables SolverImpl<Real>::observe(bool reset) {
+  const int groups = (n_ + kReduceWG - 1) / kReduceWG;
+  k_reduce_.args(params_, pos_, vel_, omega_, force_, torque_, accum_, neigh_count_, reset ? 1 : 0, partial_)
+      .launch(static_cast<std::size_t>(groups) * kReduceWG, kReduceWG);
+  partial_.read_from_device();
+  double s[kObservables] = {};
+  for (int g = 0; g < groups; ++g)
+    for (int k = 0; k < kObservables; ++k) s[k] += partial_.host[g * kObservables + k];
+  Observables o;
+  o.interval_s = time_ - observed_since_;
+  const double span = o.interval_s > 0 ? o.interval_s : 1.0;
+  o.wall_torque_Nm = s[0] / span;
+  o.wall_work_J = s[1];
+  o.dissipated_J = s[2];
+  o.torque_power_W = s[1] / span;
+  o.dissipation_power_W = s[2] / span;
+  o.elastic_J = s[3];
+  o.kinetic_J = s[4];
+  o.rotational_J = s[5];
+  o.potential_J = s[6];
+  o.neighbours_per_ball = s[7] / n_;
+  if (reset) observed_since_ = time_;
+  return o;
+}
+
+template <class Real>
+std::vector<BallState> SolverImpl<Real>::balls() {
+  for (auto* b : {&pos_, &vel_, &omega_, &force_, &torque_}) b->read_from_device();
+  info_.read_from_device();
+  std::vector<BallState> out(n_);
+  const double h = 0.5 * dt_;
+  for (int i = 0; i < n_; ++i) {
+    const auto& p = pos_.host[i];
+    const auto& v = vel_.host[i];
+    const auto& w = omega_.host[i];
+    const auto& f = force_.host[i];
+    const auto& t = torque_.host[i];
+    BallState& b = out[i];
+    b.id = info_.host[i].x;
+    b.material = info_.host[i].y;
+    b.radius = p.w;
+    b.position = {p.x, p.y, p.z};
+    b.velocity = {v.x + h * f.x * v.w, v.y + h * f.y * v.w, v.z + h * f.z * v.w};
+    b.omega = {w.x + h * t.x * w.w, w.y + h * t.y * w.w, w.z + h * t.z * w.w};
+    b.force = {f.x, f.y, f.z};
+    b.torque = {t.x, t.y, t.z};
+  }
+  std::sort(out.begin(), out.end(), [](const BallState& a, const BallState& b) { return a.id < b.id; });
+  return out;
+}
+
+template <class Real>
+std::vector<std::pair<int, int>> SolverImpl<Real>::neighbour_pairs() {
+  neigh_start_.read_from_device();
+  neigh_count_.read_from_device();
+  neigh_index_.read_from_device();
+  info_.read_from_device();
+  std::vector<std::pair<int, int>> out;
+  for (int i = 0; i < n_; ++i)
+    for (int k = neigh_start_.host[i]; k < neigh_start_.host[i] + neigh_count_.host[i]; ++k)
+      out.emplace_back(info_.host[i].x, info_.host[neigh_index_.host[k]].x);
+  return out;
+}
+
+template <class Real>
+std::size_t SolverImpl<Real>::device_bytes() const {
+  std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() +
+                  partial_.bytes() + scan_.bytes();
+  for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_,
+                        &wall_hist_, &spare4_, &spare_hist_, &neigh_hist_, &old_hist_})
+    b += x->bytes();
+  for (const auto* x : {&wall_key_, &spare_key_, &cell_count_, &cell_start_, &ball_cell_,
+                        &ball_rank_, &sorted_index_, &neigh_start_, &neigh_count_, &neigh_index_,
+                        &old_start_, &old_count_, &old_index_})
+    b += x->bytes();
+  return b + info_.bytes() + spare2_.bytes();
+}
+
+}  // namespace
+
+double default_skin(const Scene& scene) {
+  double r_min = std::numeric_limits<double>::max();
+  for (const Ball& b : scene.balls) r_min = std::min(r_min, b.radius);
+  return scene.balls.empty() ? 0.0 : 0.3 * r_min;
+}
+
+std::unique_ptr<Solver> make_solver(compute::Context& ctx, const Scene& scene) {
+  validate(scene);
+  if (scene.numerics.precision == Precision::double_)
+    return std::make_unique<SolverImpl<double>>(ctx, scene);
+  return std::make_unique<SolverImpl<float>>(ctx, scene);
+}
+
+}  // namespace mc
