@@ -1,0 +1,41 @@
+// Shared set-up for the tests: one OpenCL context per process, and scenes of
+// a few balls with or without walls.
+#pragma once
+
+#include <cmath>
+#include <memory>
+
+#include "compute/context.h"
+#include "core/scene.h"
+#include "sim/solver.h"
+
+namespace mc::test {
+
+inline compute::Context& context() {
+  static compute::Context ctx;  // MILLCHARGE_DEVICE picks the device
+  return ctx;
+}
+
+inline constexpr double kPi = 3.14159265358979323846;
+
+inline double sphere_mass(double density, double r) { return density * 4.0 / 3.0 * kPi * r * r * r; }
+
+// One ball material and a wall material, all pairs alike, no gravity.
+inline Scene bare_scene(const Material& ball, const Material& wall, const Interaction& in,
+                        ContactLaw law, Precision precision = Precision::single) {
+  Scene s;
+  s.materials = {ball};
+  s.wall_material = wall;
+  s.set_all_interactions(in);
+  s.numerics.law = law;
+  s.numerics.precision = precision;
+  s.numerics.gravity = {0, 0, 0};
+  return s;
+}
+
+// A rigid wall for the impact tests: stiff enough that E* is the ball's own.
+inline Material rigid_wall() { return Material{"rigid", 1.0, 1.0e30, 0.0}; }
+
+inline double rel_err(double a, double b) { return std::fabs(a - b) / std::fabs(b); }
+
+}  // namespace mc::test
