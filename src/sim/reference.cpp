@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "sim/layout.hpp"
+#include "sim/tables.h"
 
 namespace mc {
 
@@ -64,44 +65,13 @@ struct ReferenceSolver::State {
 };
 
 ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State>()) {
-  validate(scene);
   State& s = *s_;
+  SceneTables tables = scene_tables(scene);
   s.n = static_cast<int>(scene.balls.size());
-  const int nm = scene.wall_index();
-  for (int a = 0; a <= nm; ++a)
-    for (int b = 0; b <= nm; ++b) {
-      const PairCoefficients c = pair_coefficients(scene, a, b);
-      s.pairs.push_back({c.kn, c.kt_over_kn, c.e_star, c.g_star, c.damping, c.mu_slide, c.mu_roll,
-                         c.restitution});
-    }
-  const Walls& w = scene.walls;
-  double r_max = 0;
-  for (const Ball& b : scene.balls) r_max = std::max(r_max, b.radius);
-  double reach = w.shell_radius;
-  for (const auto& poly : w.lifters) {
-    LifterPolygon p{};
-    p.n_vertices = static_cast<int>(poly.size());
-    for (std::size_t v = 0; v < poly.size(); ++v) {
-      p.vertices[v] = {poly[v].x, poly[v].y};
-      reach = std::min(reach, std::hypot(poly[v].x, poly[v].y));
-    }
-    s.lifters.push_back(p);
-  }
-  if (s.lifters.empty()) s.lifters.push_back(LifterPolygon{});
-  const int nl = static_cast<int>(w.lifters.size());
-  SimParams& sp = s.sp;
-  sp.gravity = {scene.numerics.gravity.x, scene.numerics.gravity.y, scene.numerics.gravity.z, 0};
-  sp.dt = scene.numerics.dt;
-  sp.skin = scene.numerics.skin > 0 ? scene.numerics.skin : default_skin(scene);
-  sp.shell_radius = w.shell_radius;
-  sp.length = w.length;
-  sp.lifter_reach = std::max(0.0, reach - 1.01 * r_max);
-  sp.lifter_first_angle = w.lifter_first_angle;
-  sp.lifter_spacing = nl > 0 ? 2.0 * M_PI / nl : 1.0;
-  sp.n_balls = s.n;
-  sp.n_materials = nm;
-  sp.n_lifters = nl;
-  sp.law = scene.numerics.law == ContactLaw::hertz ? MC_LAW_HERTZ : MC_LAW_LINEAR;
+  s.sp = tables.params;
+  s.pairs = std::move(tables.pairs);
+  s.lifters = std::move(tables.lifters);
+  const SimParams& sp = s.sp;
 
   std::vector<Ball> balls = scene.balls;
   std::sort(balls.begin(), balls.end(), [](const Ball& a, const Ball& b) { return a.id < b.id; });
@@ -153,19 +123,8 @@ void ReferenceSolver::advance(long steps) {
 std::vector<BallState> ReferenceSolver::balls() const {
   const State& s = *s_;
   std::vector<BallState> out(s.n);
-  const double h = 0.5 * s.sp.dt;
-  for (int i = 0; i < s.n; ++i) {
-    const real4 &p = s.pos[i], &v = s.vel[i], &w = s.omega[i], &f = s.force[i], &t = s.torque[i];
-    BallState& b = out[i];
-    b.id = s.info[i].x;
-    b.material = s.info[i].y;
-    b.radius = p.w;
-    b.position = {p.x, p.y, p.z};
-    b.velocity = {v.x + h * f.x * v.w, v.y + h * f.y * v.w, v.z + h * f.z * v.w};
-    b.omega = {w.x + h * t.x * w.w, w.y + h * t.y * w.w, w.z + h * t.z * w.w};
-    b.force = {f.x, f.y, f.z};
-    b.torque = {t.x, t.y, t.z};
-  }
+  for (int i = 0; i < s.n; ++i)
+    out[i] = ball_state(s.info[i].x, s.info[i].y, s.pos[i], s.vel[i], s.omega[i], s.force[i], s.torque[i], s.sp.dt);
   std::sort(out.begin(), out.end(), [](const BallState& a, const BallState& b) { return a.id < b.id; });
   return out;
 }

@@ -8,6 +8,7 @@
 
 #include "compute/program.h"
 #include "sim/layout.hpp"
+#include "sim/tables.h"
 
 namespace mc {
 
@@ -241,56 +242,47 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
 
 template <class Real>
 void SolverImpl<Real>::setup_params(const Scene& scene) {
-  validate(scene);
-  const int nm = scene.wall_index();
-  pairs_.resize(static_cast<std::size_t>(nm + 1) * (nm + 1));
-  for (int a = 0; a <= nm; ++a)
-    for (int b = 0; b <= nm; ++b) {
-      const PairCoefficients c = pair_coefficients(scene, a, b);
-      pairs_.host[a * (nm + 1) + b] = {Real(c.kn),     Real(c.kt_over_kn), Real(c.e_star),
-                                       Real(c.g_star), Real(c.damping),    Real(c.mu_slide),
-                                       Real(c.mu_roll), Real(c.restitution)};
-    }
+  const SceneTables t = scene_tables(scene);
+  pairs_.resize(t.pairs.size());
+  for (std::size_t k = 0; k < t.pairs.size(); ++k) {
+    const f64::PairParams& c = t.pairs[k];
+    pairs_.host[k] = {Real(c.kn),      Real(c.kt_over_kn), Real(c.e_star),  Real(c.g_star),
+                      Real(c.damping), Real(c.mu_slide),   Real(c.mu_roll), Real(c.restitution)};
+  }
   pairs_.write_to_device();
+  lifters_.resize(t.lifters.size());
+  for (std::size_t k = 0; k < t.lifters.size(); ++k) {
+    lifters_.host[k].n_vertices = t.lifters[k].n_vertices;
+    for (int v = 0; v < MC_POLY_MAX_VERTS; ++v)
+      lifters_.host[k].vertices[v] = {Real(t.lifters[k].vertices[v].x), Real(t.lifters[k].vertices[v].y)};
+  }
+  lifters_.write_to_device();
 
-  double r_min = std::numeric_limits<double>::max(), r_max = 0;
+  const f64::SimParams& tp = t.params;
+  auto& sp = params_.host[0];
+  sp = {};
+  sp.gravity = {Real(tp.gravity.x), Real(tp.gravity.y), Real(tp.gravity.z), Real(0)};
+  sp.dt = Real(tp.dt);
+  sp.skin = Real(tp.skin);
+  sp.shell_radius = Real(tp.shell_radius);
+  sp.length = Real(tp.length);
+  sp.lifter_reach = Real(tp.lifter_reach);
+  sp.lifter_first_angle = Real(tp.lifter_first_angle);
+  sp.lifter_spacing = Real(tp.lifter_spacing);
+  sp.n_balls = tp.n_balls;
+  sp.n_materials = tp.n_materials;
+  sp.n_lifters = tp.n_lifters;
+  sp.law = tp.law;
+
+  double r_max = 0;
   Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
   for (const Ball& b : scene.balls) {
-    r_min = std::min(r_min, b.radius);
     r_max = std::max(r_max, b.radius);
     lo = {std::min(lo.x, b.position.x), std::min(lo.y, b.position.y), std::min(lo.z, b.position.z)};
     hi = {std::max(hi.x, b.position.x), std::max(hi.y, b.position.y), std::max(hi.z, b.position.z)};
   }
   const Walls& w = scene.walls;
-  const int nl = static_cast<int>(w.lifters.size());
-  lifters_.resize(std::max(nl, 1));
-  double reach = w.shell_radius;
-  for (int k = 0; k < nl; ++k) {
-    auto& poly = lifters_.host[k];
-    poly.n_vertices = static_cast<int>(w.lifters[k].size());
-    for (std::size_t v = 0; v < w.lifters[k].size(); ++v) {
-      poly.vertices[v] = {Real(w.lifters[k][v].x), Real(w.lifters[k][v].y)};
-      reach = std::min(reach, std::hypot(w.lifters[k][v].x, w.lifters[k][v].y));
-    }
-  }
-  lifters_.write_to_device();
-
-  auto& sp = params_.host[0];
-  sp = {};
-  const Vec3 g = scene.numerics.gravity;
-  sp.gravity = {Real(g.x), Real(g.y), Real(g.z), Real(0)};
-  sp.dt = Real(scene.numerics.dt);
-  const double skin = scene.numerics.skin > 0 ? scene.numerics.skin : default_skin(scene);
-  sp.skin = Real(skin);
-  sp.shell_radius = Real(w.shell_radius);
-  sp.length = Real(w.length);
-  sp.lifter_reach = Real(std::max(0.0, reach - 1.01 * r_max));
-  sp.lifter_first_angle = Real(w.lifter_first_angle);
-  sp.lifter_spacing = Real(nl > 0 ? 2.0 * M_PI / nl : 1.0);
-  sp.n_balls = n_;
-  sp.n_materials = nm;
-  sp.n_lifters = nl;
-  sp.law = scene.numerics.law == ContactLaw::hertz ? MC_LAW_HERTZ : MC_LAW_LINEAR;
+  const double skin = tp.skin;
 
   // Grid over the mill (or the balls when there is no mill), one cell of
   // margin; cells at least 2·r_max + skin wide. A cap on the cell count keeps
@@ -446,23 +438,9 @@ std::vector<BallState> SolverImpl<Real>::balls() {
   for (auto* b : {&pos_, &vel_, &omega_, &force_, &torque_}) b->read_from_device();
   info_.read_from_device();
   std::vector<BallState> out(n_);
-  const double h = 0.5 * dt_;
-  for (int i = 0; i < n_; ++i) {
-    const auto& p = pos_.host[i];
-    const auto& v = vel_.host[i];
-    const auto& w = omega_.host[i];
-    const auto& f = force_.host[i];
-    const auto& t = torque_.host[i];
-    BallState& b = out[i];
-    b.id = info_.host[i].x;
-    b.material = info_.host[i].y;
-    b.radius = p.w;
-    b.position = {p.x, p.y, p.z};
-    b.velocity = {v.x + h * f.x * v.w, v.y + h * f.y * v.w, v.z + h * f.z * v.w};
-    b.omega = {w.x + h * t.x * w.w, w.y + h * t.y * w.w, w.z + h * t.z * w.w};
-    b.force = {f.x, f.y, f.z};
-    b.torque = {t.x, t.y, t.z};
-  }
+  for (int i = 0; i < n_; ++i)
+    out[i] = ball_state(info_.host[i].x, info_.host[i].y, pos_.host[i], vel_.host[i], omega_.host[i],
+                        force_.host[i], torque_.host[i], dt_);
   std::sort(out.begin(), out.end(), [](const BallState& a, const BallState& b) { return a.id < b.id; });
   return out;
 }

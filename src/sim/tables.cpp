@@ -1,0 +1,51 @@
+#include "sim/tables.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mc {
+
+SceneTables scene_tables(const Scene& scene) {
+  validate(scene);
+  SceneTables t;
+  const int nm = scene.wall_index();
+  for (int a = 0; a <= nm; ++a)
+    for (int b = 0; b <= nm; ++b) {
+      const PairCoefficients c = pair_coefficients(scene, a, b);
+      t.pairs.push_back({c.kn, c.kt_over_kn, c.e_star, c.g_star, c.damping, c.mu_slide, c.mu_roll,
+                         c.restitution});
+    }
+  const Walls& w = scene.walls;
+  double r_max = 0;
+  for (const Ball& b : scene.balls) r_max = std::max(r_max, b.radius);
+  double reach = w.shell_radius;
+  for (const auto& poly : w.lifters) {
+    f64::LifterPolygon p{};
+    p.n_vertices = static_cast<int>(poly.size());
+    for (std::size_t v = 0; v < poly.size(); ++v) {
+      p.vertices[v] = {poly[v].x, poly[v].y};
+      reach = std::min(reach, std::hypot(poly[v].x, poly[v].y));
+    }
+    t.lifters.push_back(p);
+  }
+  if (t.lifters.empty()) t.lifters.push_back(f64::LifterPolygon{});
+  const int nl = static_cast<int>(w.lifters.size());
+  f64::SimParams& sp = t.params;
+  const Vec3 g = scene.numerics.gravity;
+  sp.gravity = {g.x, g.y, g.z, 0};
+  sp.dt = scene.numerics.dt;
+  sp.skin = scene.numerics.skin > 0 ? scene.numerics.skin : default_skin(scene);
+  sp.shell_radius = w.shell_radius;
+  sp.length = w.length;
+  // A ball centre farther than this from the axis may touch a lifter.
+  sp.lifter_reach = std::max(0.0, reach - 1.01 * r_max);
+  sp.lifter_first_angle = w.lifter_first_angle;
+  sp.lifter_spacing = nl > 0 ? 2.0 * M_PI / nl : 1.0;
+  sp.n_balls = static_cast<int>(scene.balls.size());
+  sp.n_materials = nm;
+  sp.n_lifters = nl;
+  sp.law = scene.numerics.law == ContactLaw::hertz ? MC_LAW_HERTZ : MC_LAW_LINEAR;
+  return t;
+}
+
+}  // namespace mc
