@@ -31,7 +31,6 @@ double restitution_for_damping(ContactLaw law, double d) {
     v += h / 6.0 * (k1v + 2 * k2v + 2 * k3v + k4v);
     if (x <= 0.0) return -v;                                   // overlap gone
     if (v < 0.0 && accel(law, d, x, v) >= 0.0) return -v;     // force reached zero
-    if (v >= 0.0 && step > 0 && accel(law, d, x, v) >= 0.0 && x < 1e-12) return 0.0;
   }
   return 0.0;  // overdamped: the ball stays
 }
