@@ -9,7 +9,7 @@
  * Tangential: incremental spring ξ with dashpot and Coulomb limit (Mindlin
  * no-slip stiffness for Hertz, kt = ratio·kn for linear); ξ is projected onto
  * the current tangent plane each step keeping its length, and truncated when
- * sliding (as LAMMPS granular "history" does).
+ * sliding so that the spring alone carries the Coulomb force.
  * Rolling: constant directional torque (Ai et al. 2011, model A),
  * M = −μr·R*·Fn·ω̂_roll, capped so one step cannot reverse the relative spin.
  * Energy: dissipation is the work done on the contact minus the change of the
@@ -79,16 +79,28 @@ MC_FN ContactOut contact_force(PairParams pp, ContactGeom g, real3 spring_old,
   const real new_len2 = dot(s, s);
   if (new_len2 > R(0.0)) s = s * sqrt(old_len2 / new_len2);
   const real u_t_old = R(0.5) * kt * dot(s, s);
+  const real3 s_rot = s;
   s += vt * dt;
   real3 ft = -kt * s - gamma_t * vt;
   const real ft_len = length(ft);
   const real ft_max = pp.mu_slide * fn;
   if (ft_len > ft_max) {
+    /* Sliding: the force is the Coulomb force, and the spring alone is set to
+     * carry it. (Setting spring + dashpot to it, as LAMMPS' history model
+     * does, loads the spring with the dashpot's force: at a fast slip it then
+     * stores energy that no physical spring holds, and that energy vanishes
+     * uncounted when the contact opens.) As Fn → 0 at separation the spring
+     * goes to zero, so an opening contact takes no energy with it. */
     ft = (ft_len > R(0.0)) ? ft * (ft_max / ft_len) : ft;
-    s = (kt > R(0.0)) ? (-R(1.0) / kt) * (ft + gamma_t * vt) : make_real3(0, 0, 0);
+    s = (kt > R(0.0)) ? (-R(1.0) / kt) * ft : make_real3(0, 0, 0);
   }
   const real u_t_new = R(0.5) * kt * dot(s, s);
-  dissipated += -dot(ft, vt) * dt - (u_t_new - u_t_old);
+  /* Work on the contact over the step minus the change of stored energy. The
+   * spring's work is taken at the step's midpoint spring force: with the end
+   * force a sticking spring would show ½·kt·|vt·dt|² of dissipation every
+   * step that no contact loses. */
+  const real3 slip = vt * dt;
+  dissipated += -dot(ft, slip) - R(0.5) * kt * dot(s - s_rot, slip) - (u_t_new - u_t_old);
 
   /* Rolling resistance on the rolling part of the relative spin. */
   real3 w_roll = g.w_rel - dot(g.w_rel, n) * n;
