@@ -8,13 +8,15 @@
  *   5 rotational kinetic energy at step n (J)
  *   6 gravitational potential energy −m·g·x (J)
  *   7 neighbour-list entries
+ *   8 Σ m·x and 9 Σ m·y: the charge's centre of mass, for its angle and
+ *     for the torque-arm power M·g·x̄·ω
  * Velocities are stored half a step behind, so the kinetic energy uses
  * v(n) = v(n−½) + ½·dt·F(n)/m, which keeps the energy check second order.
  * With reset != 0 the accumulators 0–2 are zeroed for the next interval. */
 #include "mc_shim.h"
 #include "layout.h"
 
-#define MC_N_OBSERVABLES 8
+#define MC_N_OBSERVABLES 10
 
 __kernel __attribute__((reqd_work_group_size(MC_REDUCE_WG, 1, 1)))
 void reduce_observables(__global const SimParams* sp,
@@ -45,6 +47,8 @@ void reduce_observables(__global const SimParams* sp,
     v[5] = R(0.5) * dot(wn, wn) / wh.w;
     v[6] = -mass * dot(xyz_of(sp->gravity), xyz_of(pos[i]));
     v[7] = (real)neigh_count[i];
+    v[8] = mass * pos[i].x;
+    v[9] = mass * pos[i].y;
     if (reset) accum[i] = make_real4(0, 0, 0, a.w);
   }
   for (int k = 0; k < MC_N_OBSERVABLES; ++k) tmp[k * MC_REDUCE_WG + lid] = v[k];

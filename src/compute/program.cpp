@@ -1,6 +1,5 @@
 #include "compute/program.h"
 
-#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -126,6 +125,10 @@ void Kernel::set_mem(cl_uint index, const cl::Buffer& mem) {
 
 void Kernel::launch(std::size_t global, std::size_t local) {
   if (global == 0) return;
+  // Left to itself, PoCL runs a launch of a few thousand items as one
+  // work-group on one core; 64 spreads it over all cores and suits GPUs.
+  // (Every kernel checks its index against its count.)
+  if (local == 0 && global >= 256) local = 64;
   if (local > 0) global = (global + local - 1) / local * local;
   try {
     program_.ctx().queue().enqueueNDRangeKernel(

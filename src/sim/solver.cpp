@@ -20,7 +20,7 @@ namespace {
 
 constexpr int kScanWG = 256;
 constexpr int kReduceWG = 64;
-constexpr int kObservables = 8;
+constexpr int kObservables = 10;
 
 // Exclusive prefix sum on the device (cl/scan.cl).
 class Scan {
@@ -65,6 +65,9 @@ class SolverImpl final : public Solver {
   Observables observe(bool reset) override;
   std::vector<std::pair<int, int>> neighbour_pairs() override;
   void set_mill_omega(double w) override { mill_omega_ = w; }
+  double mill_omega() const override { return mill_omega_; }
+  void sample_contact_profile() override;
+  std::vector<long> take_contact_profile() override;
 
   double time_s() const override { return time_; }
   long steps() const override { return steps_; }
@@ -118,11 +121,13 @@ class SolverImpl final : public Solver {
   // status word and reduction partials
   Buffer<int> status_;
   Buffer<Real> partial_;
+  Buffer<int> profile_;
+  double total_mass_ = 0;
 
   Scan scan_;
   Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
       k_gather_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
-      k_layout_;
+      k_layout_, k_profile_;
 };
 
 template <class Real>
@@ -136,7 +141,7 @@ template <class Real>
 SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
     : ctx_(ctx),
       program_(ctx,
-               {"scan.cl", "binning.cl", "contacts.cl", "forces.cl", "motion.cl", "reductions.cl"},
+               {"scan.cl", "binning.cl", "contacts.cl", "forces.cl", "motion.cl", "reductions.cl", "profile.cl"},
                options(scene), std::is_same_v<Real, double>),
       n_(static_cast<int>(scene.balls.size())),
       dt_(scene.numerics.dt),
@@ -172,6 +177,7 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       old_hist_(ctx, 1, "previous neighbour history"),
       status_(ctx, 1, "status"),
       partial_(ctx, (static_cast<std::size_t>(n_) / kReduceWG + 1) * kObservables, "reduction partials"),
+      profile_(ctx, kProfileBins, "contact profile"),
       scan_(program_, ctx, std::max<std::size_t>(n_, 1)),
       k_bin_clear_(program_, "bin_clear"),
       k_bin_count_(program_, "bin_count"),
@@ -185,7 +191,8 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_forces_(program_, "forces"),
       k_motion_(program_, "motion"),
       k_reduce_(program_, "reduce_observables"),
-      k_layout_(program_, "layout_sizes") {
+      k_layout_(program_, "layout_sizes"),
+      k_profile_(program_, "profile_contacts") {
   if (n_ == 0) throw std::invalid_argument("scene: no balls");
 
   // The device's struct sizes must equal the host mirrors'.
@@ -206,6 +213,7 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
     const Ball& b = balls[i];
     const double m = ball_mass(scene, b);
     const double inertia = 0.4 * m * b.radius * b.radius;
+    total_mass_ += m;
     pos_.host[i] = {Real(b.position.x), Real(b.position.y), Real(b.position.z), Real(b.radius)};
     vel_.host[i] = {Real(b.velocity.x), Real(b.velocity.y), Real(b.velocity.z), Real(1.0 / m)};
     omega_.host[i] = {Real(b.omega.x), Real(b.omega.y), Real(b.omega.z), Real(1.0 / inertia)};
@@ -218,6 +226,7 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
   // Empty lists: the first rebuild takes these as the previous lists.
   for (auto* b : {&neigh_start_, &neigh_count_, &old_start_, &old_count_}) b->write_to_device();
   status_.write_to_device();
+  profile_.write_to_device();
 
   rebuild();
   forces();
@@ -429,8 +438,25 @@ Observables SolverImpl<Real>::observe(bool reset) {
   o.rotational_J = s[5];
   o.potential_J = s[6];
   o.neighbours_per_ball = s[7] / n_;
+  o.charge_mass_kg = total_mass_;
+  o.com_x_m = s[8] / total_mass_;
+  o.com_y_m = s[9] / total_mass_;
   if (reset) observed_since_ = time_;
   return o;
+}
+
+template <class Real>
+void SolverImpl<Real>::sample_contact_profile() {
+  k_profile_.args(params_, pos_, wall_key_, kProfileBins, profile_).launch(n_);
+}
+
+template <class Real>
+std::vector<long> SolverImpl<Real>::take_contact_profile() {
+  profile_.read_from_device();
+  std::vector<long> out(profile_.host.begin(), profile_.host.end());
+  std::fill(profile_.host.begin(), profile_.host.end(), 0);
+  profile_.write_to_device();
+  return out;
 }
 
 template <class Real>
@@ -460,7 +486,7 @@ std::vector<std::pair<int, int>> SolverImpl<Real>::neighbour_pairs() {
 
 template <class Real>
 std::size_t SolverImpl<Real>::device_bytes() const {
-  std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() +
+  std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() + profile_.bytes() +
                   partial_.bytes() + scan_.bytes();
   for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_,
                         &wall_hist_, &spare4_, &spare_hist_, &neigh_hist_, &old_hist_})

@@ -35,8 +35,12 @@ struct Observables {
   double potential_J = 0;          // gravity, zero at the mill axis
   double elastic_J = 0;            // stored in contacts
   double neighbours_per_ball = 0;  // list entries per ball
+  double charge_mass_kg = 0;
+  double com_x_m = 0, com_y_m = 0; // centre of mass in the lab frame now
   double total_energy() const { return kinetic_J + rotational_J + potential_J + elastic_J; }
 };
+
+inline constexpr int kProfileBins = 360;
 
 class Solver {
  public:
@@ -47,6 +51,14 @@ class Solver {
   // Each listed pair as (id, neighbour id), both directions, for tests.
   virtual std::vector<std::pair<int, int>> neighbour_pairs() = 0;
   virtual void set_mill_omega(double omega_rad_s) = 0;
+  virtual double mill_omega() const = 0;
+
+  // Where the charge touches the mill: each call adds, for every ball now
+  // touching the shell or a lifter, one count to the bin of its lab-frame
+  // angle (kProfileBins bins from 3 o'clock, counter-clockwise).
+  virtual void sample_contact_profile() = 0;
+  // The counts since the last take; resets them.
+  virtual std::vector<long> take_contact_profile() = 0;
 
   virtual double time_s() const = 0;
   virtual long steps() const = 0;
