@@ -1,0 +1,55 @@
+// PNG pictures of a run, drawn in software (no GL needed): a line plot of
+// series against time, and an end view of the charge with toe and shoulder.
+// Text is drawn with stb_easy_font; files are written with stb_image_write
+// through io/atomic_file.h.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/vec.h"
+
+namespace mc::io {
+
+struct PlotSeries {
+  std::string label;
+  std::vector<double> x, y;
+  std::uint32_t rgb = 0x1f77b4;  // 0xRRGGBB
+};
+
+struct LinePlot {
+  std::string title, x_label, y_label;
+  std::vector<PlotSeries> series;
+  // Optional shaded span on the x axis (the averaging window), with a label.
+  double span_from = 0, span_to = 0;
+  std::string span_label;
+};
+
+// Throws std::runtime_error when the file cannot be written.
+void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot, int width = 960,
+                         int height = 560);
+
+struct EndViewBall {
+  double x = 0, y = 0, z = 0;  // lab frame, m
+  double radius = 0;           // m
+  double speed = 0;            // m/s, sets the colour
+};
+
+// Looking along −z at the mill's cross-section: x to the right, y up. Angles
+// in degrees counter-clockwise from 3 o'clock (Morrell's convention).
+struct EndView {
+  std::string title;
+  double shell_radius = 0;                    // m
+  std::vector<std::vector<Vec2>> lifters;     // lab-frame polygons
+  std::vector<EndViewBall> balls;
+  double toe_deg = -1, shoulder_deg = -1;     // < 0: not marked
+  bool has_com = false;
+  double com_x = 0, com_y = 0;                // centre of mass, m
+  double max_speed = 0;                       // colour scale top; 0: from the balls
+};
+
+void write_end_view_png(const std::filesystem::path& path, const EndView& view, int size = 800);
+
+}  // namespace mc::io

@@ -1,0 +1,256 @@
+// PNG pictures: written, read back with stb_image, and checked pixel by pixel
+// where the geometry is known.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "io/png_plot.h"
+
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
+
+namespace fs = std::filesystem;
+using namespace mc::io;
+
+namespace {
+
+// A fresh folder under the system temporary one, removed at the end.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    std::random_device rd;
+    const auto t = std::chrono::steady_clock::now().time_since_epoch().count();
+    path = fs::temp_directory_path() /
+           ("millcharge_png_" + std::to_string(t) + "_" + std::to_string(rd()));
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+struct Rgb {
+  int r = 0, g = 0, b = 0;
+};
+
+struct Image {
+  int w = 0, h = 0;
+  std::vector<unsigned char> px;
+  Rgb at(int x, int y) const {
+    const unsigned char* p = &px[(static_cast<std::size_t>(y) * w + x) * 3];
+    return {p[0], p[1], p[2]};
+  }
+};
+
+Image load(const fs::path& p) {
+  int w = 0, h = 0, n = 0;
+  unsigned char* data = stbi_load(p.string().c_str(), &w, &h, &n, 3);
+  REQUIRE(data != nullptr);
+  Image im{w, h, std::vector<unsigned char>(data, data + static_cast<std::size_t>(w) * h * 3)};
+  stbi_image_free(data);
+  return im;
+}
+
+bool near(Rgb c, std::uint32_t rgb, int tol) {
+  return std::abs(c.r - int((rgb >> 16) & 0xff)) <= tol && std::abs(c.g - int((rgb >> 8) & 0xff)) <= tol &&
+         std::abs(c.b - int(rgb & 0xff)) <= tol;
+}
+bool white(Rgb c) { return c.r >= 250 && c.g >= 250 && c.b >= 250; }
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+}  // namespace
+
+TEST_CASE("line plot: size, content in the plot area, series colours", "[png]") {
+  TempDir dir;
+  LinePlot plot;
+  plot.title = "Power draw";
+  plot.x_label = "time (s)";
+  plot.y_label = "power (kW)";
+  PlotSeries a{"shell", {}, {}, 0xd62728}, b{"lifters", {}, {}, 0x1f77b4};
+  for (int i = 0; i <= 200; ++i) {
+    const double t = 0.05 * i;
+    a.x.push_back(t), a.y.push_back(3 + std::sin(t));
+    b.x.push_back(t), b.y.push_back(1 + 0.5 * std::cos(2 * t));
+  }
+  plot.series = {a, b};
+  plot.span_from = 4, plot.span_to = 8, plot.span_label = "average";
+  const fs::path file = dir.path / "power.png";
+  write_line_plot_png(file, plot, 640, 360);
+
+  const Image im = load(file);
+  REQUIRE(im.w == 640);
+  REQUIRE(im.h == 360);
+  int non_white = 0, red = 0, blue = 0, total = 0;
+  for (int y = im.h * 15 / 100; y < im.h * 85 / 100; ++y)
+    for (int x = im.w * 15 / 100; x < im.w * 85 / 100; ++x, ++total) {
+      const Rgb c = im.at(x, y);
+      non_white += !white(c);
+      red += near(c, 0xd62728, 30);
+      blue += near(c, 0x1f77b4, 30);
+    }
+  CHECK(non_white > total / 100);  // lines, grid and span are there …
+  CHECK(non_white < total * 6 / 10);  // … but it is not a filled block
+  CHECK(red > 400);  // ~450 px of 2 px line in the central box, at least
+  CHECK(blue > 400);
+  // The title is drawn in the top margin, dark, around the middle.
+  int dark_top = 0;
+  for (int y = 0; y < 40; ++y)
+    for (int x = im.w / 4; x < im.w * 3 / 4; ++x) dark_top += im.at(x, y).r < 100;
+  CHECK(dark_top > 50);
+}
+
+TEST_CASE("line plot: NaN breaks the line, and constant data gets a range", "[png]") {
+  TempDir dir;
+  LinePlot plot;
+  PlotSeries s{"", {}, {}, 0x00a000};  // no label: no legend in the way
+  for (int i = 0; i <= 100; ++i) {
+    s.x.push_back(i);
+    s.y.push_back(i > 40 && i < 60 ? kNaN : 2.0);
+  }
+  plot.series = {s};
+  const fs::path file = dir.path / "constant.png";
+  write_line_plot_png(file, plot, 500, 300);
+  const Image im = load(file);
+  REQUIRE(im.w == 500);
+  REQUIRE(im.h == 300);
+
+  std::set<int> cols, rows;
+  for (int y = 0; y < im.h; ++y)
+    for (int x = 0; x < im.w; ++x)
+      if (near(im.at(x, y), 0x00a000, 40)) cols.insert(x), rows.insert(y);
+  REQUIRE(cols.size() > 100);
+  // A horizontal line, 2 px thick, well inside the picture (a zero y range
+  // would have put it on the frame or nowhere).
+  CHECK(*rows.rbegin() - *rows.begin() <= 3);
+  CHECK(*rows.begin() > im.h / 5);
+  CHECK(*rows.rbegin() < im.h * 4 / 5);
+  // It spans most of the width, with a gap of about a fifth of it where the
+  // values are NaN.
+  const int first = *cols.begin(), last = *cols.rbegin();
+  CHECK(last - first > im.w / 2);
+  int gap = 0, prev = first;
+  for (int c : cols) gap = std::max(gap, c - prev), prev = c;
+  CHECK(gap > (last - first) * 15 / 100);
+  CHECK(gap < (last - first) * 25 / 100);
+}
+
+TEST_CASE("line plot: empty series, all-NaN series and a single point", "[png]") {
+  TempDir dir;
+  LinePlot plot;
+  plot.title = "odd data";
+  plot.series = {PlotSeries{"empty", {}, {}, 0x1f77b4}, PlotSeries{"nan", {1, 2}, {kNaN, kNaN}, 0xff7f0e},
+                 PlotSeries{"", {3.0}, {7.0}, 0x00a000}};
+  const fs::path file = dir.path / "odd.png";
+  REQUIRE_NOTHROW(write_line_plot_png(file, plot, 320, 240));
+  const Image im = load(file);
+  CHECK(im.w == 320);
+  CHECK(im.h == 240);
+  int green = 0;
+  for (int y = 0; y < im.h; ++y)
+    for (int x = 0; x < im.w; ++x) green += near(im.at(x, y), 0x00a000, 40);
+  CHECK(green >= 9);  // the lone point is a dot
+  CHECK(green < 60);
+
+  LinePlot none;
+  const fs::path blank = dir.path / "none.png";
+  REQUIRE_NOTHROW(write_line_plot_png(blank, none, 200, 150));
+  CHECK(load(blank).w == 200);
+}
+
+TEST_CASE("end view: balls, painter's order, toe and shoulder, lifters", "[png]") {
+  TempDir dir;
+  const int size = 400;
+  EndView view;
+  view.shell_radius = 1.0;
+
+  // The shell alone: its outline fixes the centre and scale in pixels.
+  const fs::path shell_file = dir.path / "shell.png";
+  write_end_view_png(shell_file, view, size);
+  const Image shell = load(shell_file);
+  REQUIRE(shell.w == size);
+  REQUIRE(shell.h == size);
+  int x0 = size, x1 = -1, y0 = size, y1 = -1;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x)
+      if (shell.at(x, y).r < 128) x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+  REQUIRE(x1 > x0);
+  const double cx = (x0 + x1 + 1) / 2.0, cy = (y0 + y1 + 1) / 2.0;
+  const double rpx = (x1 - x0 + 1) / 2.0;
+  CHECK(std::abs((y1 - y0) - (x1 - x0)) <= 1);  // a circle
+  CHECK(rpx > size / 4);
+  auto px = [&](double x, double y) {  // lab frame (m) to a pixel, y up
+    return std::pair<int, int>{int(std::floor(cx + x * rpx)), int(std::floor(cy - y * rpx))};
+  };
+
+  // Two balls at the same place: the near one (larger z) is fast (yellow)
+  // and comes first in the list, the far one is at rest (dark purple).
+  view.balls = {EndViewBall{0.5, -0.5, 0.1, 0.08, 2.0}, EndViewBall{0.5, -0.5, -0.1, 0.08, 0.0}};
+  view.max_speed = 2.0;
+  view.lifters = {{{-0.1, -0.98}, {0.1, -0.98}, {0.1, -0.8}, {-0.1, -0.8}}};
+  view.toe_deg = 180;
+  view.shoulder_deg = 90;
+  const fs::path file = dir.path / "view.png";
+  write_end_view_png(file, view, size);
+  const Image im = load(file);
+  REQUIRE(im.w == size);
+  REQUIRE(im.h == size);
+
+  auto [bx, by] = px(0.5, -0.5);
+  CHECK(near(im.at(bx, by), 0xfde725, 12));  // viridis at the top of the scale
+  auto [ex, ey] = px(-0.5, 0.5);
+  CHECK(white(im.at(ex, ey)));  // nothing there
+  auto [rx, ry] = px(0.5, 0.0);
+  CHECK(white(im.at(rx, ry)));  // no marker at 0°
+  auto [tx, ty] = px(-0.5, 0.0);  // toe at 180°: left of the centre
+  const Rgb toe = im.at(tx, ty);
+  CHECK(toe.r > 150);
+  CHECK(toe.g < 110);
+  auto [sx, sy] = px(0.0, 0.5);  // shoulder at 90°: above the centre
+  CHECK(!white(im.at(sx, sy)));
+  auto [dx, dy] = px(0.0, -0.5);
+  CHECK(white(im.at(dx, dy)));  // and not below it
+  auto [lx, ly] = px(0.0, -0.89);  // inside the lifter: grey
+  const Rgb lifter = im.at(lx, ly);
+  CHECK(std::abs(lifter.r - lifter.g) < 8);
+  CHECK(std::abs(lifter.g - lifter.b) < 8);
+  CHECK(lifter.r > 110);
+  CHECK(lifter.r < 200);
+
+  // The far ball on its own shows the bottom of the scale; with max_speed 0
+  // the scale comes from the balls (max 0 here), so speed 0 is still purple.
+  view.balls = {EndViewBall{0.5, -0.5, -0.1, 0.08, 0.0}};
+  view.max_speed = 0;
+  view.toe_deg = view.shoulder_deg = -1;
+  view.has_com = true, view.com_x = 0.0, view.com_y = -0.5;
+  write_end_view_png(file, view, size);
+  const Image far = load(file);
+  CHECK(near(far.at(bx, by), 0x440154, 12));
+  CHECK(white(far.at(tx, ty)));  // toe not marked any more
+  auto [mx, my] = px(0.0, -0.25);  // on the line to the centre of mass
+  CHECK(far.at(mx, my).r < 100);
+}
+
+TEST_CASE("pictures into a missing folder throw", "[png]") {
+  TempDir dir;
+  const fs::path missing = dir.path / "no" / "such" / "folder";
+  LinePlot plot;
+  plot.series = {PlotSeries{"a", {0, 1}, {0, 1}}};
+  CHECK_THROWS_AS(write_line_plot_png(missing / "plot.png", plot), std::runtime_error);
+  EndView view;
+  view.shell_radius = 1;
+  CHECK_THROWS_AS(write_end_view_png(missing / "view.png", view), std::runtime_error);
+  CHECK_FALSE(fs::exists(missing));
+}
