@@ -1,0 +1,459 @@
+#include "core/mill_case.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <queue>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/drum.h"
+
+namespace mc {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kG = 9.81;
+
+[[noreturn]] void fail(const std::string& key, const std::string& what) {
+  throw std::invalid_argument(key + ": " + what);
+}
+
+std::string num(double v) {
+  std::ostringstream s;
+  s.precision(6);
+  s << v;
+  return s.str();
+}
+
+// Mean of d³ for diameters uniform on [a, b].
+double mean_cube(double a, double b) {
+  if (b - a < 1e-12 * b) return a * a * a;
+  return (b * b * b * b - a * a * a * a) / (4.0 * (b - a));
+}
+
+double sphere_volume(double d) { return kPi / 6.0 * d * d * d; }
+
+// Signed distance from (x, y) to a convex counter-clockwise polygon.
+double polygon_distance(const std::vector<Vec2>& poly, double x, double y) {
+  bool inside = true;
+  double best = 1e300;
+  const std::size_t n = poly.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec2 a = poly[k], b = poly[(k + 1) % n];
+    const double ex = b.x - a.x, ey = b.y - a.y;
+    if ((x - a.x) * ey - (y - a.y) * ex > 0) inside = false;
+    const double t = std::clamp(((x - a.x) * ex + (y - a.y) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
+    best = std::min(best, std::hypot(x - (a.x + t * ex), y - (a.y + t * ey)));
+  }
+  return inside ? -best : best;
+}
+
+}  // namespace
+
+int material_index(const MillCase& c, const std::string& name) {
+  for (std::size_t k = 0; k < c.materials.size(); ++k)
+    if (c.materials[k].name == name) return static_cast<int>(k);
+  return -1;
+}
+
+MillDerived derive(const MillCase& c) {
+  MillDerived d;
+  const double R = 0.5 * c.diameter;
+  if (!(c.diameter > 0)) fail("mill.diameter", "must be > 0 m (got " + num(c.diameter) + ")");
+  if (!(c.length > 0)) fail("mill.length", "must be > 0 m (got " + num(c.length) + ")");
+  if (material_index(c, c.liner) < 0) fail("mill.liner", "unknown material \"" + c.liner + "\"");
+  if (c.sizes.empty()) fail("charge.size", "the charge needs at least one size class");
+
+  // Size classes.
+  double d_min = 1e300, fsum = 0;
+  for (std::size_t k = 0; k < c.sizes.size(); ++k) {
+    const SizeClass& s = c.sizes[k];
+    const std::string key = "charge.size[" + std::to_string(k) + "]";
+    if (!(s.diameter_min > 0)) fail(key + ".diameter", "must be > 0 m (got " + num(s.diameter_min) + ")");
+    if (!(s.diameter_max >= s.diameter_min))
+      fail(key + ".diameter_max", "must be >= diameter_min (" + num(s.diameter_min) + " m)");
+    if (material_index(c, s.material) < 0) fail(key + ".material", "unknown material \"" + s.material + "\"");
+    if (!(s.fraction > 0 && s.fraction <= 1)) fail(key + ".fraction", "must be in (0, 1] (got " + num(s.fraction) + ")");
+    d.largest_ball_diameter = std::max(d.largest_ball_diameter, s.diameter_max);
+    d_min = std::min(d_min, s.diameter_min);
+    fsum += s.fraction;
+  }
+  if (std::abs(fsum - 1.0) > 1e-6)
+    fail("charge.size", "the fractions sum to " + num(fsum) + ", not 1");
+  const double dmax = d.largest_ball_diameter;
+  if (dmax > 0.25 * c.diameter)
+    fail("charge.size", "the largest ball (" + num(dmax) + " m) is more than a quarter of the mill diameter");
+  if (dmax * 1.05 > c.length)
+    fail("mill.length", "the mill (" + num(c.length) + " m) is shorter than the largest ball (" + num(dmax) + " m)");
+
+  // Speed.
+  d.critical_rpm = 42.3 / std::sqrt(c.diameter - dmax);
+  if (c.speed_rpm > 0) {
+    d.speed_rpm = c.speed_rpm;
+    d.speed_fraction = c.speed_rpm / d.critical_rpm;
+  } else {
+    d.speed_fraction = c.speed_fraction;
+    d.speed_rpm = c.speed_fraction * d.critical_rpm;
+  }
+  if (!(d.speed_fraction > 0 && d.speed_fraction <= 2.0))
+    fail(c.speed_rpm > 0 ? "mill.speed_rpm" : "mill.speed_fraction",
+         "the speed must be between 0 and 200 % of critical (" + num(d.critical_rpm) + " rpm); got " +
+             num(100 * d.speed_fraction) + " %");
+  d.omega = d.speed_rpm * 2 * kPi / 60.0;
+  d.revolution_s = 60.0 / d.speed_rpm;
+  d.tip_speed = d.omega * R;
+
+  // Lifters: inside the shell, clear of each other, room for a ball above.
+  double lifter_area = 0;
+  if (c.lifter_rows < 0) fail("lifters.rows", "must be >= 0");
+  if (c.lifter_rows > 0) {
+    if (c.lifter_pattern.empty()) fail("lifters.profile", "rows > 0 needs at least one profile");
+    const double spacing = 2 * kPi / c.lifter_rows;
+    std::vector<double> half_angle;
+    for (std::size_t k = 0; k < c.lifter_pattern.size(); ++k) {
+      const LifterProfile& p = c.lifter_pattern[k];
+      const std::string key = "lifters.profile[" + std::to_string(k) + "]";
+      if (!(p.height > 0)) fail(key + ".height", "must be > 0 m (got " + num(p.height) + ")");
+      if (!(p.height < R - dmax))
+        fail(key + ".height", num(p.height) + " m leaves no room for a ball between the lifter and the axis "
+                                             "(shell radius " + num(R) + " m)");
+      if (!(p.top_width > 0)) fail(key + ".top_width", "must be > 0 m (got " + num(p.top_width) + ")");
+      if (!(p.face_angle_deg >= 0 && p.face_angle_deg < 60))
+        fail(key + ".face_angle", "must be in [0, 60) degrees (got " + num(p.face_angle_deg) + ")");
+      const double base_half = 0.5 * p.top_width + p.height * std::tan(p.face_angle_deg * kPi / 180.0);
+      if (base_half >= R) fail(key + ".top_width", "the lifter is wider than the mill");
+      half_angle.push_back(std::asin(std::min(1.0, base_half / R)));
+    }
+    for (int k = 0; k < c.lifter_rows; ++k) {
+      const std::size_t a = k % c.lifter_pattern.size(), b = (k + 1) % c.lifter_pattern.size();
+      if (half_angle[a] + half_angle[b] >= spacing)
+        fail("lifters.rows", std::to_string(c.lifter_rows) + " rows of these profiles overlap at the shell: use fewer "
+                             "rows or narrower lifters");
+      const LifterProfile& p = c.lifter_pattern[a];
+      lifter_area += p.height * (p.top_width + p.height * std::tan(p.face_angle_deg * kPi / 180.0));
+    }
+  }
+  d.lifter_volume = lifter_area * c.length;
+  d.mill_volume = kPi * R * R * c.length - d.lifter_volume;
+
+  // Charge.
+  if (!(c.filling > 0 && c.filling <= 0.5))
+    fail("charge.filling", "must be in (0, 0.5]: above half full the charge cannot tumble (got " + num(c.filling) + ")");
+  if (!(c.porosity >= 0.2 && c.porosity <= 0.7))
+    fail("charge.porosity", "must be in [0.2, 0.7] (got " + num(c.porosity) + ")");
+  d.charge_solid_volume = c.filling * d.mill_volume * (1 - c.porosity);
+  std::vector<double> mean_volume(c.sizes.size());
+  for (std::size_t k = 0; k < c.sizes.size(); ++k)
+    mean_volume[k] = kPi / 6.0 * mean_cube(c.sizes[k].diameter_min, c.sizes[k].diameter_max);
+  d.class_counts.assign(c.sizes.size(), 0);
+  if (c.number_fractions) {
+    double per_ball = 0;
+    for (std::size_t k = 0; k < c.sizes.size(); ++k) per_ball += c.sizes[k].fraction * mean_volume[k];
+    const double n_total = d.charge_solid_volume / per_ball;
+    for (std::size_t k = 0; k < c.sizes.size(); ++k)
+      d.class_counts[k] = std::max(1L, std::lround(n_total * c.sizes[k].fraction));
+  } else {
+    double vol_weight = 0;
+    for (const SizeClass& s : c.sizes) vol_weight += s.fraction / c.materials[material_index(c, s.material)].density;
+    for (std::size_t k = 0; k < c.sizes.size(); ++k) {
+      const SizeClass& s = c.sizes[k];
+      const double share = s.fraction / c.materials[material_index(c, s.material)].density / vol_weight;
+      d.class_counts[k] = std::max(1L, std::lround(share * d.charge_solid_volume / mean_volume[k]));
+    }
+  }
+  double solid = 0;
+  for (std::size_t k = 0; k < c.sizes.size(); ++k) {
+    d.n_balls += d.class_counts[k];
+    solid += d.class_counts[k] * mean_volume[k];
+    d.charge_mass += d.class_counts[k] * mean_volume[k] * c.materials[material_index(c, c.sizes[k].material)].density;
+  }
+  d.filling_from_counts = solid / (1 - c.porosity) / d.mill_volume;
+  if (d.n_balls > 50'000'000) fail("charge", std::to_string(d.n_balls) + " balls is more than the 50 million supported");
+
+  // Contact pairs and the shortest contact.
+  for (const Material& m : c.materials) {
+    const std::string key = "materials." + m.name;
+    if (!(m.density > 0)) fail(key + ".density", "must be > 0 kg/m³ (got " + num(m.density) + ")");
+    if (!(m.youngs_modulus > 0)) fail(key + ".youngs_modulus", "must be > 0 Pa (got " + num(m.youngs_modulus) + ")");
+    if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5))
+      fail(key + ".poisson_ratio", "must be in (-1, 0.5) (got " + num(m.poisson_ratio) + ")");
+  }
+  auto check_interaction = [&](const Interaction& in, const std::string& key) {
+    if (!(in.restitution > 0 && in.restitution <= 1))
+      fail(key + ".restitution", "must be in (0, 1] (got " + num(in.restitution) + ")");
+    if (!(in.mu_slide >= 0 && in.mu_slide <= 10)) fail(key + ".friction", "must be in [0, 10] (got " + num(in.mu_slide) + ")");
+    if (!(in.mu_roll >= 0 && in.mu_roll <= 1))
+      fail(key + ".rolling_friction", "must be in [0, 1] (got " + num(in.mu_roll) + ")");
+    if (!(in.kn > 0)) fail(key + ".stiffness", "must be > 0 N/m (got " + num(in.kn) + ")");
+    if (!(in.kt_over_kn > 0 && in.kt_over_kn <= 1))
+      fail(key + ".tangential_stiffness_ratio", "must be in (0, 1] (got " + num(in.kt_over_kn) + ")");
+  };
+  check_interaction(c.contact, "contact");
+  for (std::size_t k = 0; k < c.pairs.size(); ++k) {
+    const std::string key = "contact.pair[" + std::to_string(k) + "]";
+    if (material_index(c, c.pairs[k].a) < 0) fail(key + ".materials", "unknown material \"" + c.pairs[k].a + "\"");
+    if (material_index(c, c.pairs[k].b) < 0) fail(key + ".materials", "unknown material \"" + c.pairs[k].b + "\"");
+    check_interaction(c.pairs[k].interaction, key);
+  }
+  auto pair_of = [&](const std::string& a, const std::string& b) -> const Interaction& {
+    for (const PairOverride& p : c.pairs)
+      if ((p.a == a && p.b == b) || (p.a == b && p.b == a)) return p.interaction;
+    return c.contact;
+  };
+  d.contact_time = 1e300;
+  const double v_impact = std::max(d.tip_speed, 1.0);
+  for (const SizeClass& si : c.sizes)
+    for (const SizeClass& sj : c.sizes) {
+      const Material& mi = c.materials[material_index(c, si.material)];
+      const Material& mj = c.materials[material_index(c, sj.material)];
+      const double m1 = mi.density * sphere_volume(si.diameter_min);
+      const double m2 = mj.density * sphere_volume(sj.diameter_min);
+      const double m_eff = m1 * m2 / (m1 + m2);
+      double tc;
+      if (c.law == ContactLaw::linear) {
+        tc = contact_time_linear(pair_of(si.material, sj.material).kn, m_eff);
+      } else {
+        const double e_star = 1.0 / ((1 - mi.poisson_ratio * mi.poisson_ratio) / mi.youngs_modulus +
+                                     (1 - mj.poisson_ratio * mj.poisson_ratio) / mj.youngs_modulus);
+        const double r1 = 0.5 * si.diameter_min, r2 = 0.5 * sj.diameter_min;
+        tc = contact_time_hertz(e_star, r1 * r2 / (r1 + r2), m_eff, v_impact);
+      }
+      d.contact_time = std::min(d.contact_time, tc);
+    }
+
+  // Time step and run times.
+  if (!(c.steps_per_contact >= 8 && c.steps_per_contact <= 1000))
+    fail("run.steps_per_contact", "must be in [8, 1000] (got " + num(c.steps_per_contact) + ")");
+  d.dt_auto = !(c.dt > 0);
+  if (c.dt < 0) fail("run.dt", "must be > 0 s or \"auto\" (got " + num(c.dt) + ")");
+  d.dt = d.dt_auto ? d.contact_time / c.steps_per_contact : c.dt;
+  if (!d.dt_auto && d.dt > d.contact_time / 8)
+    fail("run.dt", num(c.dt) + " s is too large for the contact stiffness: the shortest contact lasts " +
+                       num(d.contact_time) + " s and needs at least 8 steps (dt <= " + num(d.contact_time / 8) +
+                       " s); use dt = \"auto\" or a softer contact");
+  if (!(c.duration > 0)) fail("run.duration", "must be > 0 s (got " + num(c.duration) + ")");
+  if (!(c.warmup >= 0 && c.warmup < c.duration))
+    fail("run.warmup", "must be in [0, duration = " + num(c.duration) + " s) (got " + num(c.warmup) + ")");
+  if (!(c.output_interval >= d.dt)) fail("run.output_interval", "must be at least one step (" + num(d.dt) + " s)");
+  if (c.snapshot_interval < 0) fail("run.snapshot_interval", "must be >= 0 s (0: no snapshots)");
+  if (c.settle > 60) fail("run.settle", "must be at most 60 s or \"auto\"");
+  return d;
+}
+
+Scene build_scene(const MillCase& c, const MillDerived& d) {
+  Scene s;
+  // Ball materials are the case's materials; the liner is the wall material.
+  s.materials = c.materials;
+  s.wall_material = c.materials[material_index(c, c.liner)];
+  const int nm = static_cast<int>(c.materials.size());
+  s.set_all_interactions(c.contact);
+  auto name_of = [&](int k) { return k == nm ? c.liner : c.materials[k].name; };
+  for (int a = 0; a <= nm; ++a)
+    for (int b = a; b <= nm; ++b)
+      for (const PairOverride& p : c.pairs)
+        if ((p.a == name_of(a) && p.b == name_of(b)) || (p.a == name_of(b) && p.b == name_of(a)))
+          s.set_interaction(a, b, p.interaction);
+
+  const double R = 0.5 * c.diameter;
+  s.walls.shell_radius = R;
+  s.walls.length = c.length;
+  s.walls.lifter_first_angle = c.lifter_first_angle_deg * kPi / 180.0;
+  s.walls.lifters = lifter_rows(R, c.lifter_rows, c.lifter_pattern, s.walls.lifter_first_angle);
+  s.numerics.law = c.law;
+  s.numerics.precision = c.precision;
+  s.numerics.dt = d.dt;
+  s.mill_omega = d.omega;
+
+  // The balls, shuffled so the sizes mix, are dropped one by one onto the
+  // lowest of a grid of columns in x–z (pitch just over the smallest
+  // diameter) and rest where they first touch nothing: above the balls already
+  // placed (checked exactly through a cell grid), inside the shell, clear of
+  // the lifters and the end plates. The charge fills the mill from the bottom.
+  std::mt19937_64 rng(c.seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  struct Pending {
+    double radius;
+    int material;
+  };
+  std::vector<Pending> pending;
+  pending.reserve(d.n_balls);
+  double rmin = 1e300;
+  for (std::size_t k = 0; k < c.sizes.size(); ++k) {
+    const SizeClass& sc = c.sizes[k];
+    const int mat = material_index(c, sc.material);
+    rmin = std::min(rmin, 0.5 * sc.diameter_min);
+    for (long i = 0; i < d.class_counts[k]; ++i)
+      pending.push_back({0.5 * (sc.diameter_min + (sc.diameter_max - sc.diameter_min) * unit(rng)), mat});
+  }
+  std::shuffle(pending.begin(), pending.end(), rng);
+
+  const double rmax = 0.5 * d.largest_ball_diameter;
+  const double gap = 0.02 * rmin;
+  // Columns.
+  const double pitch = 2 * rmin + 2 * gap;
+  struct Column {
+    double x, z, top;
+  };
+  std::vector<Column> columns;
+  const int nx = static_cast<int>(std::floor((2 * R - 2 * gap) / pitch));
+  const int nz = std::max(1, static_cast<int>(std::floor((c.length - 2 * gap) / pitch)));
+  const double z0 = 0.5 * (c.length - (nz - 1) * pitch);
+  for (int ix = 0; ix < nx; ++ix) {
+    const double x = -0.5 * (nx - 1) * pitch + ix * pitch;
+    if (std::abs(x) + rmin + gap >= R) continue;
+    for (int iz = 0; iz < nz; ++iz) columns.push_back({x, z0 + iz * pitch, -R});
+  }
+  // The lowest column first; stale heap entries are skipped.
+  using Entry = std::pair<double, int>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> lowest;
+  for (int k = 0; k < static_cast<int>(columns.size()); ++k) lowest.push({columns[k].top, k});
+  std::vector<char> closed(columns.size(), 0);
+
+  // Placed balls in a cell grid (cells 2·rmax wide) for the exact overlap test.
+  const double cell = 2 * rmax + 2 * gap;
+  const int gx = static_cast<int>(std::ceil(2 * R / cell)) + 1;
+  const int gz = static_cast<int>(std::ceil(c.length / cell)) + 1;
+  std::vector<std::vector<int>> grid(static_cast<std::size_t>(gx) * gx * gz);
+  auto cell_of = [&](double v, double lo, int n) { return std::clamp(static_cast<int>((v - lo) / cell), 0, n - 1); };
+  auto grid_at = [&](int ix, int iy, int iz) -> std::vector<int>& {
+    return grid[(static_cast<std::size_t>(iz) * gx + iy) * gx + ix];
+  };
+
+  struct Bound {
+    double cx, cy, r;
+  };
+  std::vector<Bound> bounds;
+  for (const auto& poly : s.walls.lifters) {
+    double cx = 0, cy = 0;
+    for (const Vec2& v : poly) cx += v.x / poly.size(), cy += v.y / poly.size();
+    double r = 0;
+    for (const Vec2& v : poly) r = std::max(r, std::hypot(v.x - cx, v.y - cy));
+    bounds.push_back({cx, cy, r});
+  }
+  auto clear_of_lifters = [&](double x, double y, double r) {
+    for (std::size_t k = 0; k < bounds.size(); ++k) {
+      if (std::hypot(x - bounds[k].cx, y - bounds[k].cy) > bounds[k].r + r + gap) continue;
+      if (polygon_distance(s.walls.lifters[k], x, y) < r + gap) return false;
+    }
+    return true;
+  };
+  // The lowest y >= y0 at (x, z) where a ball of radius r overlaps no placed
+  // ball; each overlap lifts it onto that ball.
+  auto rest_height = [&](double x, double y0, double z, double r) {
+    double y = y0;
+    for (bool moved = true; moved;) {
+      moved = false;
+      const int ix = cell_of(x, -R, gx), iy = cell_of(y, -R, gx), iz = cell_of(z, 0.0, gz);
+      for (int cz = std::max(0, iz - 1); cz <= std::min(gz - 1, iz + 1); ++cz)
+        for (int cy = std::max(0, iy - 1); cy <= std::min(gx - 1, iy + 1); ++cy)
+          for (int cx = std::max(0, ix - 1); cx <= std::min(gx - 1, ix + 1); ++cx)
+            for (int j : grid_at(cx, cy, cz)) {
+              const Ball& b = s.balls[j];
+              const double reach = r + b.radius + gap;
+              const double dx = x - b.position.x, dz = z - b.position.z, dy = y - b.position.y;
+              if (dx * dx + dy * dy + dz * dz >= reach * reach) continue;
+              const double h2 = reach * reach - dx * dx - dz * dz;
+              y = b.position.y + std::sqrt(std::max(0.0, h2)) + 1e-9 * R;
+              moved = true;
+            }
+    }
+    return y;
+  };
+
+  s.balls.reserve(pending.size());
+  for (const Pending& p : pending) {
+    bool placed = false;
+    while (!lowest.empty() && !placed) {
+      const auto [top, k] = lowest.top();
+      lowest.pop();
+      if (closed[k] || top != columns[k].top) continue;  // closed, or a stale entry
+      const Column& col = columns[k];
+      const double ring = R - p.radius - gap;  // centre circle clear of the shell
+      const double x = col.x + 0.1 * pitch * (2 * unit(rng) - 1);
+      const double z = std::clamp(col.z + 0.1 * pitch * (2 * unit(rng) - 1), p.radius + gap,
+                                  c.length - p.radius - gap);
+      if (std::abs(x) >= ring) {
+        closed[k] = 1;
+        continue;
+      }
+      const double ceil_y = std::sqrt(ring * ring - x * x);
+      double y = std::max(-ceil_y, col.top + p.radius + gap);
+      for (;;) {
+        y = rest_height(x, y, z, p.radius);
+        if (y > ceil_y || clear_of_lifters(x, y, p.radius)) break;
+        y += 0.25 * p.radius;
+      }
+      if (y > ceil_y) {
+        closed[k] = 1;  // this column is full
+        continue;
+      }
+      Ball b;
+      b.id = static_cast<int>(s.balls.size());
+      b.material = p.material;
+      b.radius = p.radius;
+      b.position = {x, y, z};
+      grid_at(cell_of(x, -R, gx), cell_of(y, -R, gx), cell_of(z, 0.0, gz)).push_back(b.id);
+      s.balls.push_back(b);
+      columns[k].top = y + p.radius;
+      lowest.push({columns[k].top, k});
+      placed = true;
+    }
+    if (!placed) {
+      std::ostringstream m;
+      m << "charge.filling: only " << s.balls.size() << " of " << d.n_balls
+        << " balls fit in the mill before settling; lower the filling or use fewer, larger size classes";
+      throw std::invalid_argument(m.str());
+    }
+  }
+  return s;
+}
+
+double settled_filling(const Scene& scene, const std::vector<Vec3>& xyr) {
+  const double R = scene.walls.shell_radius;
+  if (xyr.empty() || !(R > 0)) return 0;
+  // The free surface: the top of the highest ball in columns across the
+  // middle half of the mill's width, averaged.
+  double rmax = 0;
+  for (const Vec3& b : xyr) rmax = std::max(rmax, b.z);
+  const double width = 4 * rmax;
+  const int n_cols = std::max(1, static_cast<int>(R / width));
+  std::vector<double> top(n_cols, -1e300);
+  for (const Vec3& b : xyr) {
+    const int k = static_cast<int>(std::floor((b.x + 0.5 * R) / width));
+    if (k >= 0 && k < n_cols) top[k] = std::max(top[k], b.y + b.z);
+  }
+  double level = 0;
+  int used = 0;
+  for (double t : top)
+    if (t > -1e299) level += t, ++used;
+  if (used == 0) return 0;
+  level = std::clamp(level / used, -R, R);
+  // Segment of the circle below y = level.
+  const double h = level + R;  // depth of the segment
+  const double segment = R * R * std::acos((R - h) / R) - (R - h) * std::sqrt(std::max(0.0, 2 * R * h - h * h));
+  double lifter_area = 0, free_area = kPi * R * R;
+  for (const auto& poly : scene.walls.lifters) {
+    // Area of the part of the polygon inside the shell and below the level,
+    // by sampling (the polygons are small): a 24×24 grid on their box.
+    double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+    for (const Vec2& v : poly) x0 = std::min(x0, v.x), x1 = std::max(x1, v.x), y0 = std::min(y0, v.y), y1 = std::max(y1, v.y);
+    const int n = 24;
+    double inside = 0, below = 0;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const double x = x0 + (i + 0.5) * (x1 - x0) / n, y = y0 + (j + 0.5) * (y1 - y0) / n;
+        if (polygon_distance(poly, x, y) > 0 || std::hypot(x, y) > R) continue;
+        inside += 1;
+        if (y < level) below += 1;
+      }
+    const double cell = (x1 - x0) * (y1 - y0) / (n * n);
+    free_area -= inside * cell;
+    lifter_area += below * cell;
+  }
+  return (segment - lifter_area) / free_area;
+}
+
+}  // namespace mc

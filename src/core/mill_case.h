@@ -1,0 +1,103 @@
+// A mill case in SI units, as a case file describes it (src/io/case_file.cpp
+// reads it; assets/cases/*.toml document every key), and the values derived
+// from it in one place: speeds, volumes, the charge's size classes and counts,
+// contact times and the time step. No OpenCL, no file reading here.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/lifters.h"
+#include "core/scene.h"
+
+namespace mc {
+
+struct SizeClass {
+  double diameter_min = 0;  // m; equal to diameter_max for one size
+  double diameter_max = 0;  // m; within a range diameters are uniform by number
+  std::string material;
+  double fraction = 1.0;    // of the charge's mass or number (MillCase::number_fractions)
+};
+
+struct PairOverride {
+  std::string a, b;         // material names
+  Interaction interaction;  // complete: the case's defaults with this pair's keys applied
+};
+
+struct MillCase {
+  std::string name;          // the case file's stem
+  std::string title;
+  // [mill]
+  double diameter = 0;       // m, inside the liners
+  double length = 0;         // m, between the end plates
+  double speed_fraction = 0; // of critical; 0 when the case gives rpm
+  double speed_rpm = 0;      // 0 when the case gives the fraction
+  std::string liner;         // material of shell, end plates and lifters
+  // [lifters]
+  int lifter_rows = 0;
+  std::vector<LifterProfile> lifter_pattern;  // row k has pattern[k % size]
+  double lifter_first_angle_deg = 0;
+  // [charge]
+  double filling = 0;        // J: bulk charge volume / free mill volume
+  double porosity = 0.4;     // of the bulk charge
+  bool number_fractions = false;
+  std::vector<SizeClass> sizes;
+  std::uint32_t seed = 1;
+  // [materials]
+  std::vector<Material> materials;
+  // [contact]
+  ContactLaw law = ContactLaw::linear;
+  Interaction contact;       // defaults for every pair
+  std::vector<PairOverride> pairs;
+  // [run]
+  double duration = 0;       // s of the turning mill, after settling
+  double warmup = 0;         // s excluded from the averages
+  double settle = -1;        // s before the mill turns; < 0: until the charge is at rest
+  double dt = 0;             // s; 0: auto
+  double steps_per_contact = 25;  // auto dt = shortest contact time / this
+  double output_interval = 0.01;  // s between timeseries rows
+  double snapshot_interval = 0;   // s between .vtp snapshots; 0: none
+  Precision precision = Precision::single;
+};
+
+// Everything derived from a case, computed in one place.
+struct MillDerived {
+  double largest_ball_diameter = 0;  // m
+  double critical_rpm = 0;           // 42.3 / sqrt(D − d), d the largest ball
+  double speed_rpm = 0;
+  double speed_fraction = 0;
+  double omega = 0;                  // rad/s
+  double revolution_s = 0;
+  double tip_speed = 0;              // m/s at the shell
+  double mill_volume = 0;            // m³ inside the shell, lifters excluded
+  double lifter_volume = 0;          // m³
+  double charge_solid_volume = 0;    // m³ the filling asks for
+  std::vector<long> class_counts;    // balls per size class
+  long n_balls = 0;
+  double charge_mass = 0;            // kg of the balls the counts give
+  double filling_from_counts = 0;    // J the integer counts give
+  double contact_time = 0;           // s, shortest ball–ball contact
+  double dt = 0;                     // s, used
+  bool dt_auto = true;
+};
+
+// Checks what the case reader cannot check key by key (cross-key rules) and
+// derives the values; throws std::invalid_argument naming the key.
+MillDerived derive(const MillCase& c);
+
+// The solver's scene: materials, pair table, walls and the charge placed
+// without overlaps in the lower part of the mill, at rest (not yet settled).
+// The mill turns at the case's speed (the run may hold it still to settle).
+// Throws std::invalid_argument when the charge does not fit.
+Scene build_scene(const MillCase& c, const MillDerived& d);
+
+// The index of a material name in c.materials, or −1.
+int material_index(const MillCase& c, const std::string& name);
+
+// The filling a settled charge reaches, from the level of its free surface:
+// the circular segment below the level (lifters excluded) over the mill's
+// free cross-section. Balls are (x, y, radius) in the lab frame.
+double settled_filling(const Scene& scene, const std::vector<Vec3>& xyr);
+
+}  // namespace mc

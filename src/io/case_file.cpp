@@ -1,0 +1,543 @@
+#include "io/case_file.h"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace mc::io {
+
+namespace {
+
+// Edit distance, for "did you mean" on unknown keys.
+std::size_t distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string type_name(const toml::node& n) {
+  switch (n.type()) {
+    case toml::node_type::table: return "a table";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a number";
+    case toml::node_type::boolean: return "a boolean";
+    default: return "a date or time";
+  }
+}
+
+// Reads one case: remembers where each key came from (file:line or the
+// --set argument) so that every message can name it.
+class Reader {
+ public:
+  Reader(std::string source, std::map<std::string, std::string> overridden)
+      : source_(std::move(source)), overridden_(std::move(overridden)) {}
+
+  std::string where(const std::string& key, const toml::node* n) const {
+    auto it = overridden_.find(key);
+    if (it != overridden_.end()) return "--set " + it->second;
+    if (n && n->source().begin.line > 0) return source_ + ":" + std::to_string(n->source().begin.line);
+    return source_;
+  }
+  [[noreturn]] void fail(const std::string& key, const toml::node* n, const std::string& what) const {
+    throw CaseError(where(key, n) + ": " + key + ": " + what);
+  }
+  void remember(const std::string& key, const toml::node* n) { located_[key] = where(key, n); }
+  std::string located(const std::string& key) const {
+    // The key itself, else its nearest enclosing table that was read.
+    std::string k = key;
+    while (!k.empty()) {
+      auto it = located_.find(k);
+      if (it != located_.end()) return it->second;
+      const std::size_t cut = k.find_last_of(".[");
+      if (cut == std::string::npos) break;
+      k = k.substr(0, cut);
+    }
+    return source_;
+  }
+
+ private:
+  std::string source_;
+  std::map<std::string, std::string> overridden_;
+  std::map<std::string, std::string> located_;
+};
+
+// One table of the case: typed getters that mark keys as used; done()
+// rejects the keys nobody asked for.
+class Section {
+ public:
+  Section(Reader& r, const toml::table& t, std::string path) : r_(r), t_(t), path_(std::move(path)) {}
+
+  std::string key(const std::string& k) const { return path_.empty() ? k : path_ + "." + k; }
+  bool has(const std::string& k) const { return t_.contains(k); }
+
+  const toml::node* node(const std::string& k) {
+    used_.insert(k);
+    const toml::node* n = t_.get(k);
+    if (n) r_.remember(key(k), n);
+    return n;
+  }
+
+  double number(const std::string& k, std::optional<double> fallback = std::nullopt) {
+    const toml::node* n = node(k);
+    if (!n) {
+      if (fallback) return *fallback;
+      r_.fail(key(k), &t_, "missing (a number is required)");
+    }
+    if (auto v = n->value<double>(); v && (n->is_floating_point() || n->is_integer())) {
+      if (!std::isfinite(*v)) r_.fail(key(k), n, "must be a finite number");
+      return *v;
+    }
+    r_.fail(key(k), n, "expected a number, got " + type_name(*n));
+  }
+  // A number or the string "auto" (returned as −1).
+  double number_or_auto(const std::string& k, double fallback) {
+    const toml::node* n = node(k);
+    if (!n) return fallback;
+    if (auto s = n->value<std::string>()) {
+      if (*s == "auto") return -1;
+      r_.fail(key(k), n, "expected a number or \"auto\", got \"" + *s + "\"");
+    }
+    used_.erase(k);
+    const double v = number(k);
+    used_.insert(k);
+    if (!(v >= 0)) r_.fail(key(k), n, "must be >= 0 or \"auto\"");
+    return v;
+  }
+  long integer(const std::string& k, std::optional<long> fallback = std::nullopt) {
+    const toml::node* n = node(k);
+    if (!n) {
+      if (fallback) return *fallback;
+      r_.fail(key(k), &t_, "missing (an integer is required)");
+    }
+    if (auto v = n->value<int64_t>(); v && n->is_integer()) return static_cast<long>(*v);
+    r_.fail(key(k), n, "expected an integer, got " + type_name(*n));
+  }
+  std::string string(const std::string& k, std::optional<std::string> fallback = std::nullopt,
+                     const std::vector<std::string>& choices = {}) {
+    const toml::node* n = node(k);
+    if (!n) {
+      if (fallback) return *fallback;
+      r_.fail(key(k), &t_, "missing (a string is required)");
+    }
+    auto v = n->value<std::string>();
+    if (!v) r_.fail(key(k), n, "expected a string, got " + type_name(*n));
+    if (!choices.empty() && std::find(choices.begin(), choices.end(), *v) == choices.end()) {
+      std::string list;
+      for (const auto& c : choices) list += (list.empty() ? "\"" : ", \"") + c + "\"";
+      r_.fail(key(k), n, "\"" + *v + "\" is not one of " + list);
+    }
+    return *v;
+  }
+  const toml::table* table(const std::string& k, bool required) {
+    const toml::node* n = node(k);
+    if (!n) {
+      if (required) r_.fail(key(k), &t_, "missing table [" + key(k) + "]");
+      return nullptr;
+    }
+    if (!n->is_table()) r_.fail(key(k), n, "expected a table, got " + type_name(*n));
+    return n->as_table();
+  }
+  // An array of tables ([[k]]); empty when absent.
+  std::vector<const toml::table*> tables(const std::string& k) {
+    std::vector<const toml::table*> out;
+    const toml::node* n = node(k);
+    if (!n) return out;
+    if (const toml::table* t = n->as_table()) {  // a single [k] table is one entry
+      out.push_back(t);
+      return out;
+    }
+    const toml::array* a = n->as_array();
+    if (!a) r_.fail(key(k), n, "expected an array of tables [[" + key(k) + "]], got " + type_name(*n));
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const toml::node* e = a->get(i);
+      if (!e->is_table())
+        r_.fail(key(k) + "[" + std::to_string(i) + "]", e, "expected a table, got " + type_name(*e));
+      out.push_back(e->as_table());
+    }
+    return out;
+  }
+  std::string path() const { return path_; }
+  const toml::node* self_node() const { return &t_; }
+
+  // Sections that declared their keys (knows) checked them up front.
+  void done() const {
+    if (!known_.empty()) return;
+    for (auto&& [k, v] : t_)
+      if (!used_.count(std::string(k.str()))) r_.fail(key(std::string(k.str())), &v, "unknown key");
+  }
+  // Keys this section understands: any other key is an error now, before a
+  // missing required key is reported (a typo names itself, with a hint).
+  Section& knows(std::initializer_list<const char*> keys) {
+    for (const char* k : keys) known_.insert(k);
+    for (auto&& [k, v] : t_) {
+      const std::string name(k.str());
+      if (known_.count(name)) continue;
+      std::string best;
+      std::size_t best_d = 3;
+      for (const auto& u : known_)
+        if (std::size_t dd = distance(name, u); dd < best_d) best_d = dd, best = u;
+      r_.fail(key(name), &v, "unknown key" + (best.empty() ? std::string() : " (did you mean \"" + best + "\"?)"));
+    }
+    return *this;
+  }
+
+ private:
+  Reader& r_;
+  const toml::table& t_;
+  std::string path_;
+  std::set<std::string> used_;
+  std::set<std::string> known_;
+};
+
+// "charge.size.0.fraction" or "charge.size[0].fraction" → segments.
+std::vector<std::string> split_key(const std::string& key) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char ch : key) {
+    if (ch == '.' || ch == '[' || ch == ']') {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += ch;
+    }
+  }
+  if (!cur.empty()) out.push_back(cur);
+  return out;
+}
+
+bool is_index(const std::string& s) {
+  return !s.empty() && s.size() < 7 && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+// Applies one --set to the parsed document; returns the canonical key.
+std::string apply_override(toml::table& root, const std::string& arg) {
+  const std::size_t eq = arg.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw CaseError("--set " + arg + ": expected KEY=VALUE, e.g. --set mill.speed_fraction=0.8");
+  const std::string key = arg.substr(0, eq), text = arg.substr(eq + 1);
+  const auto parts = split_key(key);
+  if (parts.empty()) throw CaseError("--set " + arg + ": empty key");
+
+  toml::table value_doc;
+  try {
+    value_doc = toml::parse(std::string_view("v = " + text), std::string_view("--set"));
+  } catch (const toml::parse_error&) {
+    value_doc = toml::table{{"v", text}};  // not TOML: a bare string
+  }
+  toml::node& value = *value_doc.get("v");
+
+  std::string canonical;
+  toml::node* at = &root;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const std::string& p = parts[i];
+    const bool last = i + 1 == parts.size();
+    if (toml::table* t = at->as_table()) {
+      if (is_index(p)) throw CaseError("--set " + arg + ": " + canonical + " is a table, not an array");
+      canonical += (canonical.empty() ? "" : ".") + p;
+      if (last) {
+        t->insert_or_assign(p, std::move(value));
+        return canonical;
+      }
+      if (!t->contains(p)) t->insert(p, toml::table{});
+      at = t->get(p);
+    } else if (toml::array* a = at->as_array()) {
+      if (!is_index(p)) throw CaseError("--set " + arg + ": " + canonical + " is an array: give an index, e.g. " + canonical + ".0");
+      const std::size_t idx = std::stoul(p);
+      if (idx >= a->size())
+        throw CaseError("--set " + arg + ": " + canonical + " has " + std::to_string(a->size()) + " entries");
+      canonical += "[" + p + "]";
+      if (last) {
+        a->replace(a->cbegin() + idx, std::move(value));
+        return canonical;
+      }
+      at = a->get(idx);
+    } else {
+      throw CaseError("--set " + arg + ": " + canonical + " is a value, not a table");
+    }
+  }
+  return canonical;
+}
+
+MillCase read_document(const toml::table& root, Reader& r, const std::string& name) {
+  MillCase c;
+  c.name = name;
+  Section top(r, root, "");
+  top.knows({"title", "mill", "lifters", "charge", "materials", "contact", "run"});
+  c.title = top.string("title", std::string());
+
+  // [contact] first: the law decides which material keys are needed.
+  {
+    Section s(r, *top.table("contact", true), "contact");
+    s.knows({"law", "restitution", "friction", "rolling_friction", "stiffness", "tangential_stiffness_ratio", "pair"});
+    c.law = s.string("law", std::nullopt, {"linear", "hertz"}) == "hertz" ? ContactLaw::hertz : ContactLaw::linear;
+    c.contact.restitution = s.number("restitution");
+    c.contact.mu_slide = s.number("friction");
+    c.contact.mu_roll = s.number("rolling_friction", 0.0);
+    c.contact.kn = c.law == ContactLaw::linear ? s.number("stiffness") : s.number("stiffness", 1.0);
+    c.contact.kt_over_kn = s.number("tangential_stiffness_ratio", 2.0 / 7.0);
+    const auto pairs = s.tables("pair");
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      Section p(r, *pairs[k], "contact.pair[" + std::to_string(k) + "]");
+      p.knows({"materials", "restitution", "friction", "rolling_friction", "stiffness", "tangential_stiffness_ratio"});
+      PairOverride po;
+      const toml::node* m = p.node("materials");
+      const toml::array* ma = m ? m->as_array() : nullptr;
+      if (!ma || ma->size() != 2 || !(*ma)[0].is_string() || !(*ma)[1].is_string())
+        r.fail(p.key("materials"), m ? m : p.self_node(), "expected two material names, e.g. [\"steel\", \"ore\"]");
+      po.a = *(*ma)[0].value<std::string>();
+      po.b = *(*ma)[1].value<std::string>();
+      po.interaction = c.contact;
+      po.interaction.restitution = p.number("restitution", c.contact.restitution);
+      po.interaction.mu_slide = p.number("friction", c.contact.mu_slide);
+      po.interaction.mu_roll = p.number("rolling_friction", c.contact.mu_roll);
+      po.interaction.kn = p.number("stiffness", c.contact.kn);
+      po.interaction.kt_over_kn = p.number("tangential_stiffness_ratio", c.contact.kt_over_kn);
+      p.done();
+      c.pairs.push_back(po);
+    }
+    s.done();
+  }
+  {
+    const toml::table* mt = top.table("materials", true);
+    Section s(r, *mt, "materials");
+    for (auto&& [k, v] : *mt) {
+      const std::string mname(k.str());
+      const toml::table* t = s.table(mname, true);
+      Section m(r, *t, "materials." + mname);
+      m.knows({"density", "youngs_modulus", "poisson_ratio"});
+      Material mat;
+      mat.name = mname;
+      mat.density = m.number("density");
+      const bool hertz = c.law == ContactLaw::hertz;
+      mat.youngs_modulus = hertz ? m.number("youngs_modulus") : m.number("youngs_modulus", 2.0e11);
+      mat.poisson_ratio = hertz ? m.number("poisson_ratio") : m.number("poisson_ratio", 0.3);
+      m.done();
+      c.materials.push_back(mat);
+    }
+    if (c.materials.empty()) r.fail("materials", mt, "define at least one material, e.g. [materials.steel]");
+    s.done();
+  }
+  {
+    Section s(r, *top.table("mill", true), "mill");
+    s.knows({"diameter", "length", "speed_fraction", "speed_rpm", "liner"});
+    c.diameter = s.number("diameter");
+    c.length = s.number("length");
+    const bool frac = s.has("speed_fraction"), rpm = s.has("speed_rpm");
+    if (frac == rpm)
+      r.fail(frac ? "mill.speed_rpm" : "mill.speed_fraction", frac ? s.node("speed_rpm") : s.self_node(),
+             "give exactly one of speed_fraction (of critical) and speed_rpm");
+    if (frac) {
+      c.speed_fraction = s.number("speed_fraction");
+      if (!(c.speed_fraction > 0)) r.fail("mill.speed_fraction", s.node("speed_fraction"), "must be > 0");
+    } else {
+      c.speed_rpm = s.number("speed_rpm");
+      if (!(c.speed_rpm > 0)) r.fail("mill.speed_rpm", s.node("speed_rpm"), "must be > 0 rpm");
+    }
+    c.liner = s.string("liner");
+    s.done();
+  }
+  if (const toml::table* lt = top.table("lifters", false)) {
+    Section s(r, *lt, "lifters");
+    s.knows({"rows", "first_angle", "profile"});
+    c.lifter_rows = static_cast<int>(s.integer("rows"));
+    if (c.lifter_rows < 0 || c.lifter_rows > 400) r.fail("lifters.rows", s.node("rows"), "must be in [0, 400]");
+    c.lifter_first_angle_deg = s.number("first_angle", 0.0);
+    const auto profiles = s.tables("profile");
+    for (std::size_t k = 0; k < profiles.size(); ++k) {
+      Section p(r, *profiles[k], "lifters.profile[" + std::to_string(k) + "]");
+      p.knows({"height", "top_width", "face_angle"});
+      LifterProfile lp;
+      lp.height = p.number("height");
+      lp.top_width = p.number("top_width");
+      lp.face_angle_deg = p.number("face_angle");
+      p.done();
+      c.lifter_pattern.push_back(lp);
+    }
+    s.done();
+  }
+  {
+    Section s(r, *top.table("charge", true), "charge");
+    s.knows({"filling", "porosity", "fractions", "seed", "size"});
+    c.filling = s.number("filling");
+    c.porosity = s.number("porosity", 0.4);
+    c.number_fractions = s.string("fractions", std::string("mass"), {"mass", "number"}) == "number";
+    const long seed = s.integer("seed", 1);
+    if (seed < 0 || seed > 0xffffffffL) r.fail("charge.seed", s.node("seed"), "must be in [0, 2^32)");
+    c.seed = static_cast<std::uint32_t>(seed);
+    const auto sizes = s.tables("size");
+    if (sizes.empty()) r.fail("charge.size", s.self_node(), "the charge needs at least one [[charge.size]] class");
+    for (std::size_t k = 0; k < sizes.size(); ++k) {
+      Section z(r, *sizes[k], "charge.size[" + std::to_string(k) + "]");
+      z.knows({"diameter", "diameter_min", "diameter_max", "material", "fraction"});
+      SizeClass sc;
+      const bool one = z.has("diameter"), range = z.has("diameter_min") || z.has("diameter_max");
+      if (one == range)
+        r.fail(z.key("diameter"), z.self_node(), "give either diameter or diameter_min and diameter_max");
+      if (one) {
+        sc.diameter_min = sc.diameter_max = z.number("diameter");
+      } else {
+        sc.diameter_min = z.number("diameter_min");
+        sc.diameter_max = z.number("diameter_max");
+      }
+      sc.material = z.string("material");
+      sc.fraction = z.number("fraction", sizes.size() == 1 ? std::optional<double>(1.0) : std::nullopt);
+      z.done();
+      c.sizes.push_back(sc);
+    }
+    s.done();
+  }
+  {
+    Section s(r, *top.table("run", true), "run");
+    s.knows({"duration", "warmup", "settle", "dt", "steps_per_contact", "output_interval", "snapshot_interval",
+             "precision"});
+    c.duration = s.number("duration");
+    c.warmup = s.number("warmup", 0.0);
+    c.settle = s.number_or_auto("settle", -1);
+    const double dt = s.number_or_auto("dt", -1);
+    if (dt == 0) r.fail("run.dt", s.node("dt"), "must be > 0 s or \"auto\"");
+    c.dt = dt < 0 ? 0 : dt;
+    c.steps_per_contact = s.number("steps_per_contact", 25.0);
+    c.output_interval = s.number("output_interval", 0.01);
+    c.snapshot_interval = s.number("snapshot_interval", 0.0);
+    c.precision =
+        s.string("precision", std::string("float"), {"float", "double"}) == "double" ? Precision::double_ : Precision::single;
+    s.done();
+  }
+  top.done();
+  return c;
+}
+
+}  // namespace
+
+MillCase parse_case(std::string_view text, const std::string& source, const std::vector<std::string>& overrides) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream m;
+    m << source << ":" << e.source().begin.line << ":" << e.source().begin.column << ": not valid TOML: "
+      << e.description();
+    throw CaseError(m.str());
+  }
+  if (root.empty())
+    throw CaseError(source + ": empty: a case needs the tables [mill], [charge], [materials], [contact] and [run] "
+                             "(see assets/cases/lab.toml)");
+  std::map<std::string, std::string> overridden;
+  for (const std::string& o : overrides) overridden[apply_override(root, o)] = o;
+  Reader r(source, overridden);
+  std::string name = std::filesystem::path(source).stem().string();
+  MillCase c = read_document(root, r, name);
+  try {
+    derive(c);
+  } catch (const std::invalid_argument& e) {
+    // derive() names the key first ("mill.diameter: ..."); add where it is.
+    const std::string msg = e.what();
+    const std::size_t colon = msg.find(": ");
+    const std::string key = colon == std::string::npos ? "" : msg.substr(0, colon);
+    throw CaseError(r.located(key) + ": " + msg);
+  }
+  return c;
+}
+
+MillCase read_case(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec))
+    throw CaseError(file.string() + ": no such case file (cases are in " + case_dir().string() + ")");
+  if (std::filesystem::is_directory(file, ec)) throw CaseError(file.string() + ": is a folder, not a case file");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw CaseError(file.string() + ": cannot be read");
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  const std::string text = buf.str();
+  if (text.size() > (1u << 20)) throw CaseError(file.string() + ": larger than 1 MiB; not a case file");
+  return parse_case(text, file.string(), overrides);
+}
+
+std::string case_to_toml(const MillCase& c) {
+  auto interaction = [](const Interaction& in, toml::table t) {
+    t.insert("restitution", in.restitution);
+    t.insert("friction", in.mu_slide);
+    t.insert("rolling_friction", in.mu_roll);
+    t.insert("stiffness", in.kn);
+    t.insert("tangential_stiffness_ratio", in.kt_over_kn);
+    return t;
+  };
+  toml::table root;
+  if (!c.title.empty()) root.insert("title", c.title);
+  toml::table mill{{"diameter", c.diameter}, {"length", c.length}, {"liner", c.liner}};
+  if (c.speed_rpm > 0) mill.insert("speed_rpm", c.speed_rpm);
+  else mill.insert("speed_fraction", c.speed_fraction);
+  root.insert("mill", mill);
+  toml::array profiles;
+  for (const LifterProfile& p : c.lifter_pattern)
+    profiles.push_back(toml::table{{"height", p.height}, {"top_width", p.top_width}, {"face_angle", p.face_angle_deg}});
+  root.insert("lifters", toml::table{{"rows", c.lifter_rows}, {"first_angle", c.lifter_first_angle_deg}, {"profile", profiles}});
+  toml::array sizes;
+  for (const SizeClass& s : c.sizes) {
+    toml::table t{{"material", s.material}, {"fraction", s.fraction}};
+    if (s.diameter_min == s.diameter_max) {
+      t.insert("diameter", s.diameter_min);
+    } else {
+      t.insert("diameter_min", s.diameter_min);
+      t.insert("diameter_max", s.diameter_max);
+    }
+    sizes.push_back(t);
+  }
+  root.insert("charge", toml::table{{"filling", c.filling},
+                                    {"porosity", c.porosity},
+                                    {"fractions", c.number_fractions ? "number" : "mass"},
+                                    {"seed", static_cast<int64_t>(c.seed)},
+                                    {"size", sizes}});
+  toml::table materials;
+  for (const Material& m : c.materials)
+    materials.insert(m.name, toml::table{{"density", m.density},
+                                         {"youngs_modulus", m.youngs_modulus},
+                                         {"poisson_ratio", m.poisson_ratio}});
+  root.insert("materials", materials);
+  toml::table contact = interaction(c.contact, toml::table{{"law", c.law == ContactLaw::hertz ? "hertz" : "linear"}});
+  toml::array pairs;
+  for (const PairOverride& p : c.pairs)
+    pairs.push_back(interaction(p.interaction, toml::table{{"materials", toml::array{p.a, p.b}}}));
+  if (!pairs.empty()) contact.insert("pair", pairs);
+  root.insert("contact", contact);
+  toml::table run{{"duration", c.duration},
+                  {"warmup", c.warmup},
+                  {"steps_per_contact", c.steps_per_contact},
+                  {"output_interval", c.output_interval},
+                  {"snapshot_interval", c.snapshot_interval},
+                  {"precision", c.precision == Precision::double_ ? "double" : "float"}};
+  if (c.settle >= 0) run.insert("settle", c.settle);
+  else run.insert("settle", "auto");
+  if (c.dt > 0) run.insert("dt", c.dt);
+  else run.insert("dt", "auto");
+  root.insert("run", run);
+  std::ostringstream out;
+  out << "# The resolved case of this run (every key, defaults and --set applied).\n" << root << "\n";
+  return out.str();
+}
+
+std::filesystem::path case_dir() {
+  if (const char* env = std::getenv("MILLCHARGE_ASSET_DIR"); env && *env)
+    return std::filesystem::path(env) / "cases";
+  return std::filesystem::path(MC_ASSET_DIR) / "cases";
+}
+
+std::filesystem::path default_case() { return case_dir() / "lab.toml"; }
+
+}  // namespace mc::io

@@ -1,0 +1,215 @@
+#include "sim/mill_run.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace mc {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kG = 9.81;
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+double angle_deg(double x, double y) {
+  double a = std::atan2(y, x) * 180.0 / kPi;
+  return a < 0 ? a + 360.0 : a;
+}
+
+// Steps per second over the last few reports, for progress and time left.
+class Rate {
+ public:
+  void add(long steps, double wall) {
+    if (has_) {
+      const double dt = wall - last_wall_;
+      if (dt > 0) rate_ = rate_ > 0 ? 0.7 * rate_ + 0.3 * (steps - last_steps_) / dt : (steps - last_steps_) / dt;
+    }
+    has_ = true;
+    last_steps_ = steps;
+    last_wall_ = wall;
+  }
+  double per_s() const { return rate_; }
+
+ private:
+  bool has_ = false;
+  long last_steps_ = 0;
+  double last_wall_ = 0, rate_ = 0;
+};
+
+}  // namespace
+
+RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const MillDerived& d,
+                    const RunHooks& hooks) {
+  RunSummary sum;
+  const double dt = solver.dt();
+  const long n = static_cast<long>(scene.balls.size());
+  const auto wall0 = Clock::now();
+  Rate rate;
+  double last_report = -1e9;
+  const long turn_steps = std::max(1L, std::lround(c.duration / dt));
+
+  auto report = [&](const char* phase, double sim, double revs, double done, bool force) {
+    const double wall = seconds_since(wall0);
+    if (!hooks.on_progress || (!force && wall - last_report < 0.5)) return;
+    rate.add(solver.steps(), wall);
+    last_report = wall;
+    RunProgress p;
+    p.phase = phase;
+    p.simulated_s = sim;
+    p.revolutions = revs;
+    p.steps = solver.steps();
+    p.steps_per_s = rate.per_s();
+    p.updates_per_s = rate.per_s() * n;
+    p.done = done;
+    const long left = std::max(0L, static_cast<long>((1 - done) * turn_steps));
+    p.eta_s = rate.per_s() > 0 ? left / rate.per_s() : 0;
+    hooks.on_progress(p);
+  };
+
+  // ---- settle: the mill at rest until the charge is still ----
+  const double omega = d.omega;
+  solver.set_mill_omega(0.0);
+  const double rest_speed = 0.01 * std::sqrt(kG * c.diameter);
+  const bool auto_settle = c.settle < 0;
+  const double max_settle = auto_settle ? 2.0 + 4.0 * std::sqrt(c.diameter / kG) : c.settle;
+  const long chunk = std::max(1L, std::lround(0.02 / dt));
+  const double t_start = solver.time_s();
+  solver.observe(true);
+  while (solver.time_s() - t_start < max_settle - 0.5 * dt) {
+    const long left = std::lround((max_settle - (solver.time_s() - t_start)) / dt);
+    solver.advance(std::min(chunk, std::max(1L, left)));
+    const Observables o = solver.observe(true);
+    const double v_rms = std::sqrt(2 * (o.kinetic_J) / o.charge_mass_kg);
+    report("settle", solver.time_s() - t_start, 0, 0, false);
+    if (auto_settle && solver.time_s() - t_start > 0.1 && v_rms < rest_speed) {
+      sum.settled = true;
+      break;
+    }
+  }
+  sum.settle_s = solver.time_s() - t_start;
+  if (!auto_settle) sum.settled = true;
+  {  // the filling the settled bed reaches
+    const auto balls = solver.balls();
+    std::vector<Vec3> xyr;
+    xyr.reserve(balls.size());
+    for (const BallState& b : balls) xyr.push_back({b.position.x, b.position.y, b.radius});
+    sum.settled_filling = settled_filling(scene, xyr);
+  }
+
+  // ---- turn ----
+  solver.set_mill_omega(omega);
+  const long out_steps = std::max(1L, std::lround(c.output_interval / dt));
+  const long warm_steps = std::min(turn_steps, static_cast<long>(std::ceil(c.warmup / dt)));
+  const double rev_steps = d.revolution_s / dt;
+  const long whole = static_cast<long>(std::floor((turn_steps - warm_steps) / rev_steps));
+  long window_start;
+  if (whole >= 1) {
+    window_start = turn_steps - std::lround(whole * rev_steps);
+    sum.whole_revolutions = true;
+  } else {
+    window_start = warm_steps;
+  }
+  const long profile_every = std::max(1L, out_steps / 10);
+  const long snap_steps = c.snapshot_interval > 0 ? std::max(1L, std::lround(c.snapshot_interval / dt)) : 0;
+  // Row boundaries fall on window_start + k·out_steps, so the window starts
+  // exactly at a row boundary.
+  auto next_boundary = [&](long s) {
+    long k = (s - window_start) / out_steps;
+    long b = window_start + k * out_steps;
+    while (b <= s) b += out_steps;
+    return std::min(b, turn_steps);
+  };
+
+  const double time0 = solver.time_s();
+  solver.observe(true);
+  solver.take_contact_profile();
+  if (hooks.on_snapshot && snap_steps > 0) hooks.on_snapshot(0.0);
+
+  std::vector<long> window_profile(kProfileBins, 0);
+  double e_window_start = 0, e_end = 0;
+  double work = 0, diss = 0, torque_time = 0, arm_time = 0, span = 0, comx = 0, comy = 0, neigh = 0;
+  long rows_in_window = 0;
+  {
+    const Observables o = solver.observe(false);
+    e_window_start = o.total_energy();
+  }
+  long s = 0;
+  while (s < turn_steps) {
+    const long row_end = next_boundary(s);
+    long next = row_end;
+    const long next_profile = (s / profile_every + 1) * profile_every;
+    next = std::min(next, next_profile);
+    if (snap_steps > 0) next = std::min(next, (s / snap_steps + 1) * snap_steps);
+    solver.advance(next - s);
+    s = next;
+    if (s % profile_every == 0) solver.sample_contact_profile();
+    if (s == row_end) {
+      const Observables o = solver.observe(true);
+      const std::vector<long> prof = solver.take_contact_profile();
+      TimeRow r;
+      r.time_s = solver.time_s() - time0;
+      r.revolutions = r.time_s / d.revolution_s;
+      r.interval_s = o.interval_s;
+      r.torque_Nm = o.wall_torque_Nm;
+      r.torque_power_W = o.torque_power_W;
+      r.dissipation_power_W = o.dissipation_power_W;
+      r.kinetic_J = o.kinetic_J;
+      r.rotational_J = o.rotational_J;
+      r.potential_J = o.potential_J;
+      r.elastic_J = o.elastic_J;
+      r.angles = toe_and_shoulder(prof);
+      r.com_angle_deg = angle_deg(o.com_x_m, o.com_y_m);
+      r.torque_arm_power_W = omega * o.charge_mass_kg * kG * o.com_x_m;
+      r.neighbours_per_ball = o.neighbours_per_ball;
+      r.averaged = s > window_start;
+      if (s == window_start) e_window_start = o.total_energy();
+      if (r.averaged) {
+        for (int k = 0; k < kProfileBins; ++k) window_profile[k] += prof[k];
+        work += o.wall_work_J;
+        diss += o.dissipated_J;
+        torque_time += o.wall_torque_Nm * o.interval_s;
+        arm_time += r.torque_arm_power_W * o.interval_s;
+        span += o.interval_s;
+        comx += o.com_x_m;
+        comy += o.com_y_m;
+        neigh += o.neighbours_per_ball;
+        ++rows_in_window;
+      }
+      e_end = o.total_energy();
+      if (hooks.on_row) hooks.on_row(r);
+    }
+    if (hooks.on_snapshot && snap_steps > 0 && (s % snap_steps == 0 || s == turn_steps))
+      hooks.on_snapshot(solver.time_s() - time0);
+    const double turned = solver.time_s() - time0;
+    report("turn", turned, turned / d.revolution_s, static_cast<double>(s) / turn_steps, s == turn_steps);
+  }
+
+  sum.turning_s = solver.time_s() - time0;
+  sum.revolutions = sum.turning_s / d.revolution_s;
+  sum.steps = solver.steps();
+  sum.simulated_s = sum.settle_s + sum.turning_s;
+  sum.window_from_s = window_start * dt;
+  sum.window_to_s = sum.turning_s;
+  sum.window_revolutions = span / d.revolution_s;
+  if (span > 0) {
+    sum.torque_power_W = work / span;
+    sum.dissipation_power_W = diss / span;
+    sum.torque_Nm = torque_time / span;
+    sum.torque_arm_power_W = arm_time / span;
+    sum.energy_change_W = (e_end - e_window_start) / span;
+    sum.com_angle_deg = angle_deg(comx / rows_in_window, comy / rows_in_window);
+    sum.neighbours_per_ball = neigh / rows_in_window;
+  }
+  sum.imbalance = sum.torque_power_W != 0 ? (sum.torque_power_W - sum.dissipation_power_W) / sum.torque_power_W : 0;
+  sum.profile = window_profile;
+  sum.angles = toe_and_shoulder(window_profile);
+  sum.wall_s = seconds_since(wall0);
+  sum.updates_per_s = sum.wall_s > 0 ? static_cast<double>(n) * sum.steps / sum.wall_s : 0;
+  return sum;
+}
+
+}  // namespace mc

@@ -1,0 +1,82 @@
+// A mill run: settle the charge with the mill at rest, turn it for the case's
+// duration, and measure. Rows of observables at the output interval, the
+// contact profile for toe and shoulder, snapshots through a hook; averages
+// over the largest whole number of revolutions after the warm-up.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/mill_case.h"
+#include "sim/charge_profile.h"
+#include "sim/solver.h"
+
+namespace mc {
+
+// One row of timeseries.csv: means over the row's interval, energies and the
+// centre of mass at its end. Times count from when the mill starts turning.
+struct TimeRow {
+  double time_s = 0;
+  double revolutions = 0;
+  double interval_s = 0;
+  double torque_Nm = 0;
+  double torque_power_W = 0;
+  double dissipation_power_W = 0;
+  double kinetic_J = 0, rotational_J = 0, potential_J = 0, elastic_J = 0;
+  ChargeAngles angles;       // from this row's contact samples
+  double com_angle_deg = 0;  // centre of mass, counter-clockwise from 3 o'clock
+  double torque_arm_power_W = 0;  // ω·M·g·x̄
+  double neighbours_per_ball = 0;
+  bool averaged = false;     // inside the averaging window
+};
+
+struct RunProgress {
+  std::string phase;         // "settle" or "turn"
+  double simulated_s = 0;    // in this phase
+  double revolutions = 0;
+  long steps = 0;            // all steps so far
+  double steps_per_s = 0;    // recent
+  double updates_per_s = 0;  // balls × steps per wall second, recent
+  double done = 0;           // fraction of the run's steps
+  double eta_s = 0;          // wall seconds left, estimated
+};
+
+struct RunSummary {
+  double settle_s = 0;              // simulated settling time
+  bool settled = false;             // the charge came to rest
+  double settled_filling = 0;       // J of the settled bed's surface level
+  double turning_s = 0;             // simulated time with the mill turning
+  double revolutions = 0;
+  long steps = 0;                   // all steps, settling included
+  double simulated_s = 0;           // settling + turning
+  // averaging window
+  double window_from_s = 0, window_to_s = 0;
+  double window_revolutions = 0;
+  bool whole_revolutions = false;   // false: less than one revolution after the warm-up
+  double torque_Nm = 0;
+  double torque_power_W = 0;
+  double dissipation_power_W = 0;
+  double energy_change_W = 0;       // d(kinetic + rotational + potential + elastic)/dt
+  double torque_arm_power_W = 0;    // ω·M·g·x̄, the Hogg–Fuerstenau torque arm
+  double imbalance = 0;             // (torque − dissipation) / torque power
+  ChargeAngles angles;              // from the window's contact profile
+  double com_angle_deg = 0;
+  double neighbours_per_ball = 0;
+  std::vector<long> profile;        // the window's contact counts per bin
+  double wall_s = 0;                // wall time of settling and turning
+  double updates_per_s = 0;         // balls × steps / wall_s
+};
+
+struct RunHooks {
+  std::function<void(const TimeRow&)> on_row;
+  std::function<void(double turning_s)> on_snapshot;  // read the solver's balls there
+  std::function<void(const RunProgress&)> on_progress;
+};
+
+// Runs the case on a solver made from build_scene(c, d). Throws what the
+// solver throws (blow-ups, device errors).
+RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const MillDerived& d,
+                    const RunHooks& hooks);
+
+}  // namespace mc
