@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Sets up, builds and runs the default job headless: the laboratory drum.
+# Sets up, builds and runs the default job headless: the lab mill
+# (assets/cases/lab.toml), writing runs/lab-DATE-TIME/
 # Extra arguments go to `millcharge run`.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,0 +1,402 @@
+#include "app/commands.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "compute/context.h"
+#include "core/mill_case.h"
+#include "core/morrell.h"
+#include "io/atomic_file.h"
+#include "io/case_file.h"
+#include "io/png_plot.h"
+#include "io/vtk.h"
+#include "sim/mill_run.h"
+#include "sim/solver.h"
+
+namespace mc::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct Prepared {
+  fs::path path;
+  MillCase c;
+  MillDerived d;
+  Scene scene;
+};
+
+Prepared prepare(const CaseOptions& o) {
+  Prepared p;
+  p.path = o.case_path.empty() ? io::default_case() : fs::path(o.case_path);
+  std::vector<std::string> overrides = o.overrides;
+  if (o.duration > 0) {
+    std::ostringstream s;
+    s.precision(17);
+    s << "run.duration=" << o.duration;
+    overrides.push_back(s.str());
+  }
+  if (!o.precision.empty()) overrides.push_back("run.precision=\"" + o.precision + "\"");
+  p.c = io::read_case(p.path, overrides);
+  p.d = derive(p.c);
+  try {
+    p.scene = build_scene(p.c, p.d);
+  } catch (const std::invalid_argument& e) {
+    throw io::CaseError(p.path.string() + ": " + e.what());
+  }
+  return p;
+}
+
+MorrellInput morrell_input(const MillCase& c, const MillDerived& d) {
+  MorrellInput m;
+  m.diameter = c.diameter;
+  m.length = c.length;
+  m.filling = d.filling_from_counts;
+  m.speed_fraction = d.speed_fraction;
+  m.speed_rpm = d.speed_rpm;
+  m.charge_density = d.charge_mass / (d.filling_from_counts * d.mill_volume);
+  return m;
+}
+
+std::string thousands(long v) {
+  std::string s = std::to_string(v);
+  for (int i = static_cast<int>(s.size()) - 3; i > (v < 0 ? 1 : 0); i -= 3) s.insert(i, ",");
+  return s;
+}
+
+std::string duration_text(double s) {
+  if (!(s >= 0) || s > 1e7) return "?";
+  char buf[32];
+  if (s < 60) std::snprintf(buf, sizeof buf, "%.0fs", s);
+  else if (s < 3600) std::snprintf(buf, sizeof buf, "%dm%02ds", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
+  else std::snprintf(buf, sizeof buf, "%dh%02dm", static_cast<int>(s) / 3600, static_cast<int>(s) / 60 % 60);
+  return buf;
+}
+
+// Progress on stderr: one line rewritten in place on a terminal; plain lines
+// at every tenth of the run (or every 30 s) otherwise.
+class ProgressPrinter {
+ public:
+  explicit ProgressPrinter(bool quiet) : quiet_(quiet), tty_(::isatty(2) == 1) {}
+  void operator()(const RunProgress& p) {
+    if (quiet_) return;
+    char line[256];
+    if (p.phase == "settle")
+      std::snprintf(line, sizeof line, "settling  t %.3f s  %s steps  %.3g steps/s  %.3g updates/s", p.simulated_s,
+                    thousands(p.steps).c_str(), p.steps_per_s, p.updates_per_s);
+    else
+      std::snprintf(line, sizeof line, "turning   t %.3f s  rev %.2f  %3.0f %%  %.3g steps/s  %.3g updates/s  %s left",
+                    p.simulated_s, p.revolutions, 100 * p.done, p.steps_per_s, p.updates_per_s,
+                    duration_text(p.eta_s).c_str());
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    if (tty_) {
+      std::fprintf(stderr, "\r\033[K%s", line);
+      if (p.done >= 1) std::fprintf(stderr, "\n");
+    } else {
+      const int tenth = static_cast<int>(p.done * 10);
+      if (p.phase != phase_ || tenth > tenth_ || wall - last_ > 30 || p.done >= 1) {
+        std::fprintf(stderr, "%s\n", line);
+        tenth_ = tenth;
+        last_ = wall;
+      }
+    }
+    phase_ = p.phase;
+    std::fflush(stderr);
+  }
+  void finish_line() {
+    if (tty_ && !quiet_) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  bool quiet_, tty_;
+  std::string phase_;
+  int tenth_ = -1;
+  double last_ = 0;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+fs::path default_out(const MillCase& c) {
+  const std::time_t t = std::time(nullptr);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%d-%H%M%S", std::localtime(&t));
+  return fs::path("runs") / (c.name + "-" + stamp);
+}
+
+// The run folder: refuses one that holds an earlier run unless --force.
+void make_run_dir(const fs::path& out, bool force) {
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw std::invalid_argument("--out " + out.string() + ": exists and is not a folder");
+  for (const char* f : {"summary.json", "timeseries.csv", "charge.pvd", "case.toml"})
+    if (fs::exists(out / f, ec) && !force)
+      throw std::invalid_argument("--out " + out.string() + ": already holds a run (" + f +
+                                  "); choose another folder or add --force to replace it");
+  if (force) {
+    for (const char* f : {"summary.json", "timeseries.csv", "charge.pvd", "power.png", "charge.png"})
+      fs::remove(out / f, ec);
+    fs::remove_all(out / "snapshots", ec);
+  }
+  fs::create_directories(out / "snapshots", ec);
+  if (ec) throw std::runtime_error("cannot create " + (out / "snapshots").string() + ": " + ec.message());
+}
+
+io::Snapshot snapshot_of(const std::vector<BallState>& balls, double t) {
+  io::Snapshot s;
+  s.time_s = t;
+  const std::size_t n = balls.size();
+  s.position.resize(n);
+  s.velocity.resize(n);
+  s.radius.resize(n);
+  s.material.resize(n);
+  s.id.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const BallState& b = balls[i];
+    s.position[i] = {float(b.position.x), float(b.position.y), float(b.position.z)};
+    s.velocity[i] = {float(b.velocity.x), float(b.velocity.y), float(b.velocity.z)};
+    s.radius[i] = float(b.radius);
+    s.material[i] = b.material;
+    s.id[i] = b.id;
+  }
+  return s;
+}
+
+// Lifter polygons turned from the mill frame into the lab frame.
+std::vector<std::vector<Vec2>> lab_lifters(const Scene& scene, double mill_angle) {
+  std::vector<std::vector<Vec2>> out = scene.walls.lifters;
+  const double c = std::cos(mill_angle), s = std::sin(mill_angle);
+  for (auto& poly : out)
+    for (Vec2& v : poly) v = {c * v.x - s * v.y, s * v.x + c * v.y};
+  return out;
+}
+
+double finite_or_nan(bool ok, double v) { return ok ? v : std::nan(""); }
+
+nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+}  // namespace
+
+int cmd_devices() {
+  const auto devices = compute::list_devices();
+  if (devices.empty()) {
+    std::cerr << "millcharge: no OpenCL platform found: install an OpenCL driver "
+                 "(scripts/setup.sh installs PoCL for the CPU)\n";
+    return 1;
+  }
+  for (const auto& d : devices)
+    std::printf("%s\n    %s, %d compute units, %.1f GiB, fp64 %s, gl sharing %s\n", d.label().c_str(),
+                d.version.c_str(), d.compute_units, d.global_mem_bytes / 1073741824.0, d.fp64 ? "yes" : "no",
+                d.gl_sharing ? "yes" : "no");
+  return 0;
+}
+
+int cmd_check(const CaseOptions& o) {
+  const Prepared p = prepare(o);
+  const MillCase& c = p.c;
+  const MillDerived& d = p.d;
+  std::printf("case            %s%s%s\n", p.path.string().c_str(), c.title.empty() ? "" : ": ", c.title.c_str());
+  std::printf("mill            D %.4g m x L %.4g m, %d lifter rows, liner \"%s\"\n", c.diameter, c.length,
+              c.lifter_rows, c.liner.c_str());
+  std::printf("critical speed  %.2f rpm  (42.3/sqrt(D - d), d = largest ball %.4g mm)\n", d.critical_rpm,
+              1000 * d.largest_ball_diameter);
+  std::printf("speed           %.2f rpm = %.1f %% of critical  (%.4g rad/s, %.4g s per revolution, tip %.3g m/s)\n",
+              d.speed_rpm, 100 * d.speed_fraction, d.omega, d.revolution_s, d.tip_speed);
+  std::printf("volume          %.4g m^3 inside the shell, lifters excluded (lifters %.3g m^3)\n", d.mill_volume,
+              d.lifter_volume);
+  std::printf("charge          J %.3f requested: %s balls, %.4g kg; J %.4f from the whole ball counts\n", c.filling,
+              thousands(d.n_balls).c_str(), d.charge_mass, d.filling_from_counts);
+  for (std::size_t k = 0; k < c.sizes.size(); ++k) {
+    const SizeClass& s = c.sizes[k];
+    char dia[64];
+    if (s.diameter_min == s.diameter_max) std::snprintf(dia, sizeof dia, "%.4g mm", 1000 * s.diameter_min);
+    else std::snprintf(dia, sizeof dia, "%.4g-%.4g mm", 1000 * s.diameter_min, 1000 * s.diameter_max);
+    std::printf("  size %-9zu %s %s: %s balls, %s fraction %.3f\n", k, dia, s.material.c_str(),
+                thousands(d.class_counts[k]).c_str(), c.number_fractions ? "number" : "mass", s.fraction);
+  }
+  std::ostringstream stiffness;
+  if (c.law == ContactLaw::linear) stiffness << ", kn " << c.contact.kn << " N/m";
+  std::printf("contact         %s, e %.3g, friction %.3g, rolling %.3g%s (defaults; %zu pair overrides)\n",
+              c.law == ContactLaw::linear ? "linear spring-dashpot" : "Hertz-Mindlin", c.contact.restitution,
+              c.contact.mu_slide, c.contact.mu_roll, stiffness.str().c_str(), c.pairs.size());
+  std::printf("contact time    %.4g s, shortest ball-ball contact%s\n", d.contact_time,
+              c.law == ContactLaw::hertz ? " (impact at the tip speed)" : "");
+  std::printf("dt              %.4g s (%s; %.1f steps per contact)\n", d.dt,
+              d.dt_auto ? "auto" : "from the case", d.contact_time / d.dt);
+  const long steps = std::lround(c.duration / d.dt);
+  std::printf("run             settle %s, turn %.4g s = %.3g revolutions (%s steps), warm-up %.4g s, %s\n",
+              c.settle < 0 ? "auto" : (std::to_string(c.settle) + " s").c_str(), c.duration,
+              c.duration / d.revolution_s, thousands(steps).c_str(), c.warmup,
+              c.precision == Precision::double_ ? "double" : "float");
+  const MorrellResult m = morrell_c_model(morrell_input(c, d));
+  std::printf("morrell c-model power %.4g W (k %.2f x net %.4g W), toe %.1f deg, shoulder %.1f deg\n",
+              m.charge_power_W, kMorrellK, m.net_power_W, m.toe_deg, m.shoulder_deg);
+  std::printf("packing         %s balls placed without overlaps\n", thousands(static_cast<long>(p.scene.balls.size())).c_str());
+  return 0;
+}
+
+int cmd_run(const RunOptions& o) {
+  Prepared p = prepare(o.c);
+  const MillCase& c = p.c;
+  const MillDerived& d = p.d;
+  // Device and kernels before any file is written.
+  compute::Context ctx(o.c.device);
+  auto solver = make_solver(ctx, p.scene);
+  const fs::path out = o.out.empty() ? default_out(c) : fs::path(o.out);
+  make_run_dir(out, o.force);
+  io::write_file_atomic(out / "case.toml", io::case_to_toml(c));
+
+  std::printf("millcharge: %s: D %.3g m x L %.3g m, %s balls, %.1f %% of critical (%.2f rpm), J %.3f, dt %.3g s, %s\n",
+              c.name.c_str(), c.diameter, c.length, thousands(d.n_balls).c_str(), 100 * d.speed_fraction, d.speed_rpm,
+              d.filling_from_counts, d.dt, c.precision == Precision::double_ ? "double" : "float");
+  std::printf("millcharge: device %s; output in %s\n", ctx.info().label().c_str(), out.string().c_str());
+  std::fflush(stdout);
+
+  std::ofstream csv(out / "timeseries.csv");
+  if (!csv) throw std::runtime_error("cannot write " + (out / "timeseries.csv").string());
+  csv << "time_s,revolutions,torque_Nm,torque_power_W,dissipation_power_W,torque_arm_power_W,kinetic_J,"
+         "rotational_J,potential_J,elastic_J,toe_deg,shoulder_deg,com_angle_deg,neighbours_per_ball,averaged\n";
+  csv.flush();
+  std::vector<double> t_series, p_torque, p_diss;
+  io::PvdIndex pvd(out / "charge.pvd");
+  int n_snap = 0;
+  RunHooks hooks;
+  hooks.on_row = [&](const TimeRow& r) {
+    char line[512];
+    std::snprintf(line, sizeof line, "%.6f,%.6f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%s,%s,%.3f,%.4g,%d\n",
+                  r.time_s, r.revolutions, r.torque_Nm, r.torque_power_W, r.dissipation_power_W,
+                  r.torque_arm_power_W, r.kinetic_J, r.rotational_J, r.potential_J, r.elastic_J,
+                  r.angles.found ? std::to_string(r.angles.toe_deg).c_str() : "",
+                  r.angles.found ? std::to_string(r.angles.shoulder_deg).c_str() : "", r.com_angle_deg,
+                  r.neighbours_per_ball, r.averaged ? 1 : 0);
+    csv << line;
+    csv.flush();
+    if (r.time_s >= 0.05 * d.revolution_s) {  // the start-up jolt would flatten the plot
+      t_series.push_back(r.time_s);
+      p_torque.push_back(r.torque_power_W);
+      p_diss.push_back(r.dissipation_power_W);
+    }
+  };
+  hooks.on_snapshot = [&](double t) {
+    char name[64];
+    std::snprintf(name, sizeof name, "snapshots/charge_%06d.vtp", n_snap++);
+    io::write_vtp(out / name, snapshot_of(solver->balls(), t));
+    pvd.add(t, name);
+  };
+  ProgressPrinter progress(o.quiet);
+  hooks.on_progress = [&](const RunProgress& pr) { progress(pr); };
+
+  const RunSummary s = run_mill(*solver, p.scene, c, d, hooks);
+  csv.close();
+
+  const MorrellInput mi = morrell_input(c, d);
+  const MorrellResult m = morrell_c_model(mi);
+  const double toe = finite_or_nan(s.angles.found, s.angles.toe_deg);
+  const double shoulder = finite_or_nan(s.angles.found, s.angles.shoulder_deg);
+  const double m_with_dem = s.angles.found ? morrell_net_power(mi, toe * kPi / 180, shoulder * kPi / 180) : std::nan("");
+
+  nlohmann::ordered_json j;
+  j["case"] = c.name;
+  j["title"] = c.title;
+  j["n_particles"] = d.n_balls;
+  j["speed_rpm"] = d.speed_rpm;
+  j["critical_speed_rpm"] = d.critical_rpm;
+  j["speed_fraction"] = d.speed_fraction;
+  j["filling"] = d.filling_from_counts;
+  j["filling_requested"] = c.filling;
+  j["filling_settled"] = s.settled_filling;
+  j["charge_mass_kg"] = d.charge_mass;
+  j["law"] = c.law == ContactLaw::linear ? "linear" : "hertz";
+  j["dt_s"] = d.dt;
+  j["steps"] = s.steps;
+  j["simulated_s"] = s.simulated_s;
+  j["settle_s"] = s.settle_s;
+  j["settled"] = s.settled;
+  j["turning_s"] = s.turning_s;
+  j["revolutions"] = s.revolutions;
+  j["average"] = {{"from_s", s.window_from_s},
+                  {"to_s", s.window_to_s},
+                  {"revolutions", s.window_revolutions},
+                  {"whole_revolutions", s.whole_revolutions}};
+  j["power_W"] = {{"torque", s.torque_power_W},
+                  {"dissipation", s.dissipation_power_W},
+                  {"imbalance", s.imbalance},
+                  {"energy_change", s.energy_change_W},
+                  {"torque_arm", s.torque_arm_power_W}};
+  j["torque_Nm"] = s.torque_Nm;
+  j["toe_deg"] = number_or_null(toe);
+  j["shoulder_deg"] = number_or_null(shoulder);
+  j["com_angle_deg"] = s.com_angle_deg;
+  j["neighbours_per_ball"] = s.neighbours_per_ball;
+  j["morrell"] = {{"power_W", m.charge_power_W},
+                  {"k", kMorrellK},
+                  {"net_power_W", m.net_power_W},
+                  {"toe_deg", m.toe_deg},
+                  {"shoulder_deg", m.shoulder_deg},
+                  {"net_power_with_dem_angles_W", number_or_null(m_with_dem)},
+                  {"charge_density_kg_m3", mi.charge_density}};
+  j["wall_s"] = s.wall_s;
+  j["particle_updates_per_s"] = s.updates_per_s;
+  j["device"] = ctx.info().label();
+  j["device_bytes"] = solver->device_bytes();
+  j["precision"] = c.precision == Precision::double_ ? "double" : "float";
+
+  // Pictures: power against time, and the end view with toe and shoulder.
+  io::LinePlot plot;
+  plot.title = c.name + ": power draw, " + std::to_string(static_cast<int>(std::lround(100 * d.speed_fraction))) +
+               "% of critical";
+  plot.x_label = "time since the mill started (s)";
+  plot.y_label = "power (W)";
+  plot.series = {{"torque power", t_series, p_torque, 0x1f77b4}, {"dissipation", t_series, p_diss, 0xd62728}};
+  plot.span_from = s.window_from_s;
+  plot.span_to = s.window_to_s;
+  plot.span_label = "averaged";
+  io::write_line_plot_png(out / "power.png", plot);
+  io::EndView view;
+  view.title = c.name + " at t = " + std::to_string(s.turning_s).substr(0, 5) + " s";
+  view.shell_radius = 0.5 * c.diameter;
+  view.lifters = lab_lifters(p.scene, solver->mill_angle());
+  for (const BallState& b : solver->balls())
+    view.balls.push_back({b.position.x, b.position.y, b.position.z, b.radius, b.velocity.norm()});
+  view.toe_deg = s.angles.found ? s.angles.toe_deg : -1;
+  view.shoulder_deg = s.angles.found ? s.angles.shoulder_deg : -1;
+  view.has_com = true;
+  {
+    // Centre of mass at the end, from the balls drawn.
+    double mx = 0, my = 0, mm = 0;
+    for (const io::EndViewBall& b : view.balls) {
+      const double w = b.radius * b.radius * b.radius;
+      mx += w * b.x, my += w * b.y, mm += w;
+    }
+    view.com_x = mm > 0 ? mx / mm : 0;
+    view.com_y = mm > 0 ? my / mm : 0;
+  }
+  io::write_end_view_png(out / "charge.png", view);
+  io::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+
+  std::printf("power draw      torque %.4g W, dissipation %.4g W (imbalance %+.2f %%), torque arm %.4g W\n",
+              s.torque_power_W, s.dissipation_power_W, 100 * s.imbalance, s.torque_arm_power_W);
+  std::printf("                averaged over %.2f revolutions from t = %.3f s to %.3f s\n", s.window_revolutions,
+              s.window_from_s, s.window_to_s);
+  if (s.angles.found)
+    std::printf("charge angles   toe %.1f deg, shoulder %.1f deg, centre of mass %.1f deg\n", s.angles.toe_deg,
+                s.angles.shoulder_deg, s.com_angle_deg);
+  std::printf("morrell         power %.4g W (k %.2f x net %.4g W), toe %.1f deg, shoulder %.1f deg; DEM/model %.3f\n",
+              m.charge_power_W, kMorrellK, m.net_power_W, m.toe_deg, m.shoulder_deg, s.torque_power_W / m.charge_power_W);
+  std::printf("speed           %s steps in %.1f s wall, %.3g particle-updates/s\n", thousands(s.steps).c_str(),
+              s.wall_s, s.updates_per_s);
+  std::printf("wrote           %s/{summary.json, timeseries.csv, charge.pvd, power.png, charge.png}\n",
+              out.string().c_str());
+  return 0;
+}
+
+}  // namespace mc::app

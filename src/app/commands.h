@@ -1,0 +1,30 @@
+// The subcommands of `millcharge` (DESIGN.md, "Command line"). Each returns
+// the process's exit status: 0 done, 2 bad input (nothing written), 1 other
+// failures. They throw; main() turns exceptions into messages and statuses.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace mc::app {
+
+struct CaseOptions {
+  std::string case_path;              // empty: the default lab mill
+  std::vector<std::string> overrides; // --set KEY=VALUE
+  std::string device;                 // --device
+  std::string precision;              // --precision, empty: the case's
+  double duration = 0;                // --duration, 0: the case's
+};
+
+struct RunOptions {
+  CaseOptions c;
+  std::string out;     // --out; empty: runs/<case>-<time>
+  bool force = false;  // --force: replace an earlier run in --out
+  bool quiet = false;  // --quiet: no progress lines
+};
+
+int cmd_devices();
+int cmd_check(const CaseOptions& o);
+int cmd_run(const RunOptions& o);
+
+}  // namespace mc::app

@@ -1,0 +1,102 @@
+// A short run through the command's own code path: every output file is
+// there and says what it should.
+#include <catch2/catch.hpp>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "app/commands.h"
+#include "core/mill_case.h"
+#include "io/case_file.h"
+#include "io/vtk.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<std::string> lines_of(const fs::path& p) {
+  std::ifstream in(p);
+  std::vector<std::string> out;
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("run writes summary.json, timeseries.csv, snapshots with charge.pvd and pictures", "[outputs]") {
+  const fs::path out = fs::temp_directory_path() / ("millcharge_test_outputs_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  mc::app::RunOptions o;
+  o.c.overrides = {"mill.length=0.06",        "run.settle=0.05",          "run.warmup=0.1",
+                   "run.output_interval=0.01", "run.snapshot_interval=0.1"};
+  o.c.duration = 0.3;
+  o.out = out.string();
+  o.quiet = true;
+  REQUIRE(mc::app::cmd_run(o) == 0);
+
+  std::ifstream js(out / "summary.json");
+  const nlohmann::json j = nlohmann::json::parse(js);
+  for (const char* k : {"n_particles", "speed_rpm", "critical_speed_rpm", "speed_fraction", "filling", "dt_s", "steps",
+                        "simulated_s", "revolutions", "power_W", "torque_Nm", "toe_deg", "shoulder_deg",
+                        "com_angle_deg", "wall_s", "particle_updates_per_s", "device", "precision"}) {
+    INFO(k);
+    CHECK(j.contains(k));
+  }
+  for (const char* k : {"torque", "dissipation", "imbalance"}) CHECK(j["power_W"].contains(k));
+  const mc::MillCase c = mc::io::read_case(mc::io::default_case(), o.c.overrides);
+  const mc::MillDerived d = mc::derive(c);
+  CHECK(j["n_particles"].get<long>() == d.n_balls);
+  CHECK(j["critical_speed_rpm"].get<double>() == Approx(d.critical_rpm));
+  CHECK(j["speed_fraction"].get<double>() == Approx(0.75));
+  CHECK(j["dt_s"].get<double>() == Approx(d.dt));
+  CHECK(j["precision"] == "float");
+  CHECK(j["revolutions"].get<double>() == Approx(0.3 / d.revolution_s).epsilon(0.01));
+  CHECK(j["simulated_s"].get<double>() == Approx(0.35).epsilon(0.01));
+  CHECK(j["steps"].get<long>() == std::lround(0.05 / d.dt) + std::lround(0.3 / d.dt));
+  CHECK(j["power_W"]["torque"].get<double>() > 0);
+  CHECK(j["particle_updates_per_s"].get<double>() > 0);
+
+  // timeseries: a header, one row per output interval (rows align on the
+  // averaging window's start, so a short row may come before it and at the
+  // end), times increasing.
+  const auto rows = lines_of(out / "timeseries.csv");
+  REQUIRE(rows.size() >= 2);
+  CHECK(rows[0].rfind("time_s,revolutions,torque_Nm,torque_power_W,dissipation_power_W", 0) == 0);
+  CHECK(rows.size() - 1 >= 30);
+  CHECK(rows.size() - 1 <= 32);
+  double last = -1;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    const double t = std::stod(rows[i]);
+    CHECK(t > last);
+    last = t;
+  }
+  CHECK(last == Approx(0.3).margin(d.dt));
+
+  // Snapshots at 0, 0.1, 0.2, 0.3 s, listed in charge.pvd, read back whole.
+  const auto pvd = lines_of(out / "charge.pvd");
+  int listed = 0;
+  for (const auto& l : pvd) listed += l.find("<DataSet") != std::string::npos;
+  CHECK(listed == 4);
+  const mc::io::Snapshot last_snap = mc::io::read_vtp(out / "snapshots" / "charge_000003.vtp");
+  CHECK(last_snap.time_s == Approx(0.3).margin(d.dt));
+  REQUIRE(static_cast<long>(last_snap.size()) == d.n_balls);
+  for (std::size_t i = 0; i < last_snap.size(); ++i) {
+    CHECK(last_snap.radius[i] >= 0.010f * 0.999999f);
+    CHECK(last_snap.radius[i] <= 0.0127f * 1.000001f);
+    const auto& p = last_snap.position[i];
+    CHECK(std::hypot(p[0], p[1]) < 0.45);
+  }
+
+  for (const char* f : {"power.png", "charge.png", "case.toml"}) {
+    INFO(f);
+    CHECK(fs::file_size(out / f) > 1000);
+  }
+  // The folder holds a run now: a second run there is refused unless forced.
+  CHECK_THROWS_WITH(mc::app::cmd_run(o), Catch::Contains("already holds a run"));
+  fs::remove_all(out);
+}
