@@ -5,26 +5,13 @@
 #include <cmath>
 #include <map>
 
+#include "core/lifters.h"
 #include "core/mill_case.h"
 #include "core/morrell.h"
 #include "io/case_file.h"
 #include "sim/charge_profile.h"
 
 namespace {
-
-double polygon_distance(const std::vector<mc::Vec2>& poly, double x, double y) {
-  bool inside = true;
-  double best = 1e300;
-  for (std::size_t k = 0; k < poly.size(); ++k) {
-    const mc::Vec2 a = poly[k], b = poly[(k + 1) % poly.size()];
-    const double ex = b.x - a.x, ey = b.y - a.y;
-    if ((x - a.x) * ey - (y - a.y) * ex > 0) inside = false;
-    double t = ((x - a.x) * ex + (y - a.y) * ey) / (ex * ex + ey * ey);
-    t = std::fmax(0.0, std::fmin(1.0, t));
-    best = std::fmin(best, std::hypot(x - (a.x + t * ex), y - (a.y + t * ey)));
-  }
-  return inside ? -best : best;
-}
 
 // Checks a placed charge: count, sizes, inside the mill, clear of lifters and
 // of each other (cell grid, exact pair test).
@@ -40,7 +27,7 @@ void check_placement(const mc::MillCase& c) {
     REQUIRE(std::hypot(b.position.x, b.position.y) + b.radius <= R);
     REQUIRE(b.position.z - b.radius >= 0);
     REQUIRE(b.position.z + b.radius <= c.length);
-    for (const auto& poly : s.walls.lifters) REQUIRE(polygon_distance(poly, b.position.x, b.position.y) >= b.radius);
+    for (const auto& poly : s.walls.lifters) REQUIRE(mc::polygon_signed_distance(poly, b.position.x, b.position.y) >= b.radius);
   }
   CHECK(y_mean < -0.2 * R);  // in the lower part of the mill
   std::map<std::tuple<long, long, long>, std::vector<int>> cells;

@@ -302,7 +302,8 @@ int cmd_run(const RunOptions& o) {
   const MorrellResult m = morrell_c_model(mi);
   const double toe = finite_or_nan(s.angles.found, s.angles.toe_deg);
   const double shoulder = finite_or_nan(s.angles.found, s.angles.shoulder_deg);
-  const double m_with_dem = s.angles.found ? morrell_net_power(mi, toe * kPi / 180, shoulder * kPi / 180) : std::nan("");
+  const double m_with_dem =
+      s.angles.found ? kMorrellK * morrell_net_power(mi, toe * kPi / 180, shoulder * kPi / 180) : std::nan("");
 
   nlohmann::ordered_json j;
   j["case"] = c.name;
@@ -342,7 +343,7 @@ int cmd_run(const RunOptions& o) {
                   {"net_power_W", m.net_power_W},
                   {"toe_deg", m.toe_deg},
                   {"shoulder_deg", m.shoulder_deg},
-                  {"net_power_with_dem_angles_W", number_or_null(m_with_dem)},
+                  {"power_with_dem_angles_W", number_or_null(m_with_dem)},
                   {"charge_density_kg_m3", mi.charge_density}};
   j["wall_s"] = s.wall_s;
   j["particle_updates_per_s"] = s.updates_per_s;

@@ -19,26 +19,6 @@ double contact_time_hertz(double e_star, double r_eff, double m_eff, double v) {
   return 2.868 * std::pow(m_eff * m_eff / (r_eff * e_star * e_star * v), 0.2);
 }
 
-namespace {
-
-double distance_to_polygon(const std::vector<Vec2>& poly, double x, double y) {
-  bool inside = true;
-  double best = 1e300;
-  const std::size_t n = poly.size();
-  for (std::size_t k = 0; k < n; ++k) {
-    const Vec2 a = poly[k], b = poly[(k + 1) % n];
-    const double ex = b.x - a.x, ey = b.y - a.y;
-    const double side = (x - a.x) * ey - (y - a.y) * ex;  // > 0 outside for CCW
-    if (side > 0) inside = false;
-    double t = ((x - a.x) * ex + (y - a.y) * ey) / (ex * ex + ey * ey);
-    t = std::clamp(t, 0.0, 1.0);
-    best = std::min(best, std::hypot(x - (a.x + t * ex), y - (a.y + t * ey)));
-  }
-  return inside ? -best : best;
-}
-
-}  // namespace
-
 Scene make_drum(const DrumSpec& spec) {
   if (!(spec.radius_min > 0 && spec.radius_max >= spec.radius_min))
     throw std::invalid_argument("drum: need 0 < radius_min <= radius_max");
@@ -73,7 +53,7 @@ Scene make_drum(const DrumSpec& spec) {
         if (std::hypot(x, y) > R - spec.radius_max * 1.1) continue;
         bool clear = true;
         for (const auto& poly : s.walls.lifters)
-          if (distance_to_polygon(poly, x, y) < spec.radius_max * 1.1) clear = false;
+          if (polygon_signed_distance(poly, x, y) < spec.radius_max * 1.1) clear = false;
         if (clear) sites.push_back({x, y, z});
       }
   if (static_cast<int>(sites.size()) < spec.n_balls)

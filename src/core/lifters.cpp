@@ -1,5 +1,6 @@
 #include "core/lifters.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -30,6 +31,20 @@ std::vector<std::vector<Vec2>> lifter_rows(double shell_radius, int rows,
     out.push_back(lifter_polygon(shell_radius, pattern[k % pattern.size()],
                                  first + 2.0 * M_PI * k / rows));
   return out;
+}
+
+double polygon_signed_distance(const std::vector<Vec2>& poly, double x, double y) {
+  bool inside = true;
+  double best = 1e300;
+  const std::size_t n = poly.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec2 a = poly[k], b = poly[(k + 1) % n];
+    const double ex = b.x - a.x, ey = b.y - a.y;
+    if ((x - a.x) * ey - (y - a.y) * ex > 0) inside = false;  // outside this edge (CCW)
+    const double t = std::clamp(((x - a.x) * ex + (y - a.y) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
+    best = std::min(best, std::hypot(x - (a.x + t * ex), y - (a.y + t * ey)));
+  }
+  return inside ? -best : best;
 }
 
 }  // namespace mc

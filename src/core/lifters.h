@@ -25,4 +25,8 @@ std::vector<std::vector<Vec2>> lifter_rows(double shell_radius, int rows,
                                            const std::vector<LifterProfile>& pattern,
                                            double first = 0.0);
 
+// Signed distance from (x, y) to a convex counter-clockwise polygon: negative
+// inside. For packing and checks on the host (the kernels use cl/walls.h).
+double polygon_signed_distance(const std::vector<Vec2>& poly, double x, double y);
+
 }  // namespace mc

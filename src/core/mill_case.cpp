@@ -36,21 +36,6 @@ double mean_cube(double a, double b) {
 
 double sphere_volume(double d) { return kPi / 6.0 * d * d * d; }
 
-// Signed distance from (x, y) to a convex counter-clockwise polygon.
-double polygon_distance(const std::vector<Vec2>& poly, double x, double y) {
-  bool inside = true;
-  double best = 1e300;
-  const std::size_t n = poly.size();
-  for (std::size_t k = 0; k < n; ++k) {
-    const Vec2 a = poly[k], b = poly[(k + 1) % n];
-    const double ex = b.x - a.x, ey = b.y - a.y;
-    if ((x - a.x) * ey - (y - a.y) * ex > 0) inside = false;
-    const double t = std::clamp(((x - a.x) * ex + (y - a.y) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
-    best = std::min(best, std::hypot(x - (a.x + t * ex), y - (a.y + t * ey)));
-  }
-  return inside ? -best : best;
-}
-
 }  // namespace
 
 int material_index(const MillCase& c, const std::string& name) {
@@ -336,7 +321,7 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
   auto clear_of_lifters = [&](double x, double y, double r) {
     for (std::size_t k = 0; k < bounds.size(); ++k) {
       if (std::hypot(x - bounds[k].cx, y - bounds[k].cy) > bounds[k].r + r + gap) continue;
-      if (polygon_distance(s.walls.lifters[k], x, y) < r + gap) return false;
+      if (polygon_signed_distance(s.walls.lifters[k], x, y) < r + gap) return false;
     }
     return true;
   };
@@ -445,7 +430,7 @@ double settled_filling(const Scene& scene, const std::vector<Vec3>& xyr) {
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) {
         const double x = x0 + (i + 0.5) * (x1 - x0) / n, y = y0 + (j + 0.5) * (y1 - y0) / n;
-        if (polygon_distance(poly, x, y) > 0 || std::hypot(x, y) > R) continue;
+        if (polygon_signed_distance(poly, x, y) > 0 || std::hypot(x, y) > R) continue;
         inside += 1;
         if (y < level) below += 1;
       }
