@@ -218,13 +218,16 @@ double nice_num(double x, bool round) {
   return (f <= 1 ? 1 : f <= 2 ? 2 : f <= 5 ? 5 : 10) * e;
 }
 
+// Axis limits and ticks at multiples of a nice step. `pad` > 0 widens the
+// data range by that fraction each side (so no data lies on the frame);
+// pad = 0 rounds the limits out to whole steps.
 struct Axis {
-  double lo = 0, hi = 1, step = 0.2;
-  int ticks() const { return static_cast<int>(std::lround((hi - lo) / step)); }
-  double tick(int i) const { return lo + i * step; }
+  double lo = 0, hi = 1, step = 0.2, first = 0;
+  int ticks() const { return static_cast<int>(std::floor((hi - first) / step + 1e-9)) + 1; }
+  double tick(int i) const { return first + i * step; }
 };
 
-Axis nice_axis(double lo, double hi) {
+Axis nice_axis(double lo, double hi, double pad) {
   if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi) lo = 0, hi = 1;
   if (hi - lo <= 1e-12 * std::max(std::abs(lo), std::abs(hi))) {  // constant: give it a range
     const double d = lo != 0 ? 0.1 * std::abs(lo) : 1;
@@ -232,9 +235,15 @@ Axis nice_axis(double lo, double hi) {
   }
   Axis a;
   a.step = nice_num(nice_num(hi - lo, false) / 5, true);
-  a.lo = std::floor(lo / a.step + 1e-9) * a.step;
-  a.hi = std::ceil(hi / a.step - 1e-9) * a.step;
-  if (!(a.hi > a.lo) || a.ticks() > 40) a = Axis{lo, hi, hi - lo};
+  if (pad > 0) {
+    const double d = pad * (hi - lo);
+    a.lo = lo - d, a.hi = hi + d;
+  } else {
+    a.lo = std::floor(lo / a.step + 1e-9) * a.step;
+    a.hi = std::ceil(hi / a.step - 1e-9) * a.step;
+  }
+  a.first = std::ceil(a.lo / a.step - 1e-9) * a.step;
+  if (!(a.hi > a.lo) || !(a.step > 0) || a.ticks() > 40) a = Axis{lo, hi, hi - lo, lo};
   return a;
 }
 
@@ -267,11 +276,11 @@ void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot
   if (span) x0 = std::min(x0, plot.span_from), x1 = std::max(x1, plot.span_to);
   if (!(x0 <= x1)) x0 = 0, x1 = 1;
   if (!(y0 <= y1)) y0 = 0, y1 = 1;
-  const Axis ax = nice_axis(x0, x1), ay = nice_axis(y0, y1);
+  const Axis ax = nice_axis(x0, x1, 0), ay = nice_axis(y0, y1, 0.05);
 
   // Layout: title on top, y tick labels and y label left, x ones below.
   int ytick_w = 0;
-  for (int i = 0; i <= ay.ticks(); ++i)
+  for (int i = 0; i < ay.ticks(); ++i)
     ytick_w = std::max(ytick_w, Canvas::text_width(tick_label(ay.tick(i), ay.step)));
   const int left = 12 + (plot.y_label.empty() ? 0 : 16) + ytick_w + 8;
   const int top = plot.title.empty() ? 16 : 44;
@@ -293,8 +302,8 @@ void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot
       cv.text(tx, T + 6, plot.span_label, 0x8a5a00);
     }
   }
-  for (int i = 0; i <= ax.ticks(); ++i) cv.fill_rect(std::floor(X(ax.tick(i))), T, std::floor(X(ax.tick(i))) + 1, B, kGrid);
-  for (int i = 0; i <= ay.ticks(); ++i) cv.fill_rect(L, std::floor(Y(ay.tick(i))), R, std::floor(Y(ay.tick(i))) + 1, kGrid);
+  for (int i = 0; i < ax.ticks(); ++i) cv.fill_rect(std::floor(X(ax.tick(i))), T, std::floor(X(ax.tick(i))) + 1, B, kGrid);
+  for (int i = 0; i < ay.ticks(); ++i) cv.fill_rect(L, std::floor(Y(ay.tick(i))), R, std::floor(Y(ay.tick(i))) + 1, kGrid);
 
   // Series: NaN (in x or y) breaks the line; a lone point becomes a dot.
   for (const PlotSeries& s : plot.series) {
@@ -314,13 +323,13 @@ void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot
   // Frame, ticks and their labels.
   cv.fill_rect(L, T, R, T + 1, kFrame), cv.fill_rect(L, B - 1, R, B, kFrame);
   cv.fill_rect(L, T, L + 1, B, kFrame), cv.fill_rect(R - 1, T, R, B, kFrame);
-  for (int i = 0; i <= ax.ticks(); ++i) {
+  for (int i = 0; i < ax.ticks(); ++i) {
     const double x = std::floor(X(ax.tick(i)));
     const std::string s = tick_label(ax.tick(i), ax.step);
     cv.fill_rect(x, B, x + 1, B + 5, kFrame);
     cv.text(x + 0.5 - Canvas::text_width(s) / 2.0, B + 9, s, kInk);
   }
-  for (int i = 0; i <= ay.ticks(); ++i) {
+  for (int i = 0; i < ay.ticks(); ++i) {
     const double y = std::floor(Y(ay.tick(i)));
     const std::string s = tick_label(ay.tick(i), ay.step);
     cv.fill_rect(L - 5, y, L, y + 1, kFrame);
