@@ -40,17 +40,6 @@ LabResult run_lab(double speed_fraction, double duration, double warmup, double 
   return r;
 }
 
-mc::MorrellInput morrell_of(const LabResult& r) {
-  mc::MorrellInput m;
-  m.diameter = r.c.diameter;
-  m.length = r.c.length;
-  m.filling = r.d.filling_from_counts;
-  m.speed_fraction = r.d.speed_fraction;
-  m.speed_rpm = r.d.speed_rpm;
-  m.charge_density = r.d.charge_mass / (r.d.filling_from_counts * r.d.mill_volume);
-  return m;
-}
-
 }  // namespace
 
 TEST_CASE("lab mill at 75 % of critical: power books close and Morrell's band holds", "[mill][slow]") {
@@ -76,7 +65,7 @@ TEST_CASE("lab mill at 75 % of critical: power books close and Morrell's band ho
   CHECK(s.com_angle_deg > 290);
   CHECK(s.com_angle_deg < 340);
   // Morrell's C-model (k · net power): within ±30 %.
-  const mc::MorrellResult m = mc::morrell_c_model(morrell_of(r));
+  const mc::MorrellResult m = mc::morrell_c_model(mc::morrell_input(r.c, r.d));
   std::printf("Morrell C-model: power %.2f W (k x net %.2f W), toe %.1f, shoulder %.1f deg; DEM / Morrell = %.3f\n",
               m.charge_power_W, m.net_power_W, m.toe_deg, m.shoulder_deg, s.torque_power_W / m.charge_power_W);
   CHECK(s.torque_power_W == Approx(m.charge_power_W).epsilon(0.30));

@@ -58,17 +58,6 @@ Prepared prepare(const CaseOptions& o) {
   return p;
 }
 
-MorrellInput morrell_input(const MillCase& c, const MillDerived& d) {
-  MorrellInput m;
-  m.diameter = c.diameter;
-  m.length = c.length;
-  m.filling = d.filling_from_counts;
-  m.speed_fraction = d.speed_fraction;
-  m.speed_rpm = d.speed_rpm;
-  m.charge_density = d.charge_mass / (d.filling_from_counts * d.mill_volume);
-  return m;
-}
-
 std::string thousands(long v) {
   std::string s = std::to_string(v);
   for (int i = static_cast<int>(s.size()) - 3; i > (v < 0 ? 1 : 0); i -= 3) s.insert(i, ",");
@@ -371,16 +360,9 @@ int cmd_run(const RunOptions& o) {
   view.toe_deg = s.angles.found ? s.angles.toe_deg : -1;
   view.shoulder_deg = s.angles.found ? s.angles.shoulder_deg : -1;
   view.has_com = true;
-  {
-    // Centre of mass at the end, from the balls drawn.
-    double mx = 0, my = 0, mm = 0;
-    for (const io::EndViewBall& b : view.balls) {
-      const double w = b.radius * b.radius * b.radius;
-      mx += w * b.x, my += w * b.y, mm += w;
-    }
-    view.com_x = mm > 0 ? mx / mm : 0;
-    view.com_y = mm > 0 ? my / mm : 0;
-  }
+  const Observables now = solver->observe(false);
+  view.com_x = now.com_x_m;
+  view.com_y = now.com_y_m;
   io::write_end_view_png(out / "charge.png", view);
   io::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
 

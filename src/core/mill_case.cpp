@@ -9,13 +9,13 @@
 #include <stdexcept>
 
 #include "core/drum.h"
+#include "core/morrell.h"
 
 namespace mc {
 
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kG = 9.81;
 
 [[noreturn]] void fail(const std::string& key, const std::string& what) {
   throw std::invalid_argument(key + ": " + what);
@@ -439,6 +439,17 @@ double settled_filling(const Scene& scene, const std::vector<Vec3>& xyr) {
     lifter_area += below * cell;
   }
   return (segment - lifter_area) / free_area;
+}
+
+MorrellInput morrell_input(const MillCase& c, const MillDerived& d) {
+  MorrellInput m;
+  m.diameter = c.diameter;
+  m.length = c.length;
+  m.filling = d.filling_from_counts;
+  m.speed_fraction = d.speed_fraction;
+  m.speed_rpm = d.speed_rpm;
+  m.charge_density = d.charge_mass / (d.filling_from_counts * d.mill_volume);
+  return m;
 }
 
 }  // namespace mc

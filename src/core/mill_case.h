@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/lifters.h"
+#include "core/morrell.h"
 #include "core/scene.h"
 
 namespace mc {
@@ -99,5 +100,9 @@ int material_index(const MillCase& c, const std::string& name);
 // the circular segment below the level (lifters excluded) over the mill's
 // free cross-section. Balls are (x, y, radius) in the lab frame.
 double settled_filling(const Scene& scene, const std::vector<Vec3>& xyr);
+
+// Morrell's C-model inputs for the case: the filling of the whole ball counts
+// and the bulk density of that charge.
+MorrellInput morrell_input(const MillCase& c, const MillDerived& d);
 
 }  // namespace mc

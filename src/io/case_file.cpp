@@ -77,8 +77,8 @@ class Reader {
   std::map<std::string, std::string> located_;
 };
 
-// One table of the case: typed getters that mark keys as used; done()
-// rejects the keys nobody asked for.
+// One table of the case: typed getters that remember where each key is;
+// knows() rejects the keys the table may not have.
 class Section {
  public:
   Section(Reader& r, const toml::table& t, std::string path) : r_(r), t_(t), path_(std::move(path)) {}
@@ -87,7 +87,6 @@ class Section {
   bool has(const std::string& k) const { return t_.contains(k); }
 
   const toml::node* node(const std::string& k) {
-    used_.insert(k);
     const toml::node* n = t_.get(k);
     if (n) r_.remember(key(k), n);
     return n;
@@ -113,9 +112,7 @@ class Section {
       if (*s == "auto") return -1;
       r_.fail(key(k), n, "expected a number or \"auto\", got \"" + *s + "\"");
     }
-    used_.erase(k);
     const double v = number(k);
-    used_.insert(k);
     if (!(v >= 0)) r_.fail(key(k), n, "must be >= 0 or \"auto\"");
     return v;
   }
@@ -175,22 +172,16 @@ class Section {
   std::string path() const { return path_; }
   const toml::node* self_node() const { return &t_; }
 
-  // Sections that declared their keys (knows) checked them up front.
-  void done() const {
-    if (!known_.empty()) return;
-    for (auto&& [k, v] : t_)
-      if (!used_.count(std::string(k.str()))) r_.fail(key(std::string(k.str())), &v, "unknown key");
-  }
   // Keys this section understands: any other key is an error now, before a
   // missing required key is reported (a typo names itself, with a hint).
   Section& knows(std::initializer_list<const char*> keys) {
-    for (const char* k : keys) known_.insert(k);
+    const std::set<std::string> known(keys.begin(), keys.end());
     for (auto&& [k, v] : t_) {
       const std::string name(k.str());
-      if (known_.count(name)) continue;
+      if (known.count(name)) continue;
       std::string best;
       std::size_t best_d = 3;
-      for (const auto& u : known_)
+      for (const auto& u : known)
         if (std::size_t dd = distance(name, u); dd < best_d) best_d = dd, best = u;
       r_.fail(key(name), &v, "unknown key" + (best.empty() ? std::string() : " (did you mean \"" + best + "\"?)"));
     }
@@ -201,8 +192,6 @@ class Section {
   Reader& r_;
   const toml::table& t_;
   std::string path_;
-  std::set<std::string> used_;
-  std::set<std::string> known_;
 };
 
 // "charge.size.0.fraction" or "charge.size[0].fraction" → segments.
@@ -308,10 +297,8 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       po.interaction.mu_roll = p.number("rolling_friction", c.contact.mu_roll);
       po.interaction.kn = p.number("stiffness", c.contact.kn);
       po.interaction.kt_over_kn = p.number("tangential_stiffness_ratio", c.contact.kt_over_kn);
-      p.done();
       c.pairs.push_back(po);
     }
-    s.done();
   }
   {
     const toml::table* mt = top.table("materials", true);
@@ -327,11 +314,9 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       const bool hertz = c.law == ContactLaw::hertz;
       mat.youngs_modulus = hertz ? m.number("youngs_modulus") : m.number("youngs_modulus", 2.0e11);
       mat.poisson_ratio = hertz ? m.number("poisson_ratio") : m.number("poisson_ratio", 0.3);
-      m.done();
       c.materials.push_back(mat);
     }
     if (c.materials.empty()) r.fail("materials", mt, "define at least one material, e.g. [materials.steel]");
-    s.done();
   }
   {
     Section s(r, *top.table("mill", true), "mill");
@@ -350,7 +335,6 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       if (!(c.speed_rpm > 0)) r.fail("mill.speed_rpm", s.node("speed_rpm"), "must be > 0 rpm");
     }
     c.liner = s.string("liner");
-    s.done();
   }
   if (const toml::table* lt = top.table("lifters", false)) {
     Section s(r, *lt, "lifters");
@@ -366,10 +350,8 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       lp.height = p.number("height");
       lp.top_width = p.number("top_width");
       lp.face_angle_deg = p.number("face_angle");
-      p.done();
       c.lifter_pattern.push_back(lp);
     }
-    s.done();
   }
   {
     Section s(r, *top.table("charge", true), "charge");
@@ -397,10 +379,8 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       }
       sc.material = z.string("material");
       sc.fraction = z.number("fraction", sizes.size() == 1 ? std::optional<double>(1.0) : std::nullopt);
-      z.done();
       c.sizes.push_back(sc);
     }
-    s.done();
   }
   {
     Section s(r, *top.table("run", true), "run");
@@ -417,9 +397,7 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
     c.snapshot_interval = s.number("snapshot_interval", 0.0);
     c.precision =
         s.string("precision", std::string("float"), {"float", "double"}) == "double" ? Precision::double_ : Precision::single;
-    s.done();
   }
-  top.done();
   return c;
 }
 

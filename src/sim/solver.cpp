@@ -65,7 +65,6 @@ class SolverImpl final : public Solver {
   Observables observe(bool reset) override;
   std::vector<std::pair<int, int>> neighbour_pairs() override;
   void set_mill_omega(double w) override { mill_omega_ = w; }
-  double mill_omega() const override { return mill_omega_; }
   void sample_contact_profile() override;
   std::vector<long> take_contact_profile() override;
 

@@ -51,7 +51,6 @@ class Solver {
   // Each listed pair as (id, neighbour id), both directions, for tests.
   virtual std::vector<std::pair<int, int>> neighbour_pairs() = 0;
   virtual void set_mill_omega(double omega_rad_s) = 0;
-  virtual double mill_omega() const = 0;
 
   // Where the charge touches the mill: each call adds, for every ball now
   // touching the shell or a lifter, one count to the bin of its lab-frame
