@@ -37,9 +37,9 @@ struct Prepared {
   Scene scene;
 };
 
-Prepared prepare(const CaseOptions& o) {
+Prepared prepare(const CaseOptions& o, const fs::path& default_path = io::default_case()) {
   Prepared p;
-  p.path = o.case_path.empty() ? io::default_case() : fs::path(o.case_path);
+  p.path = o.case_path.empty() ? default_path : fs::path(o.case_path);
   std::vector<std::string> overrides = o.overrides;
   if (o.duration > 0) {
     std::ostringstream s;
@@ -379,6 +379,102 @@ int cmd_run(const RunOptions& o) {
               s.wall_s, s.updates_per_s);
   std::printf("wrote           %s/{summary.json, timeseries.csv, charge.pvd, power.png, charge.png}\n",
               out.string().c_str());
+  return 0;
+}
+
+// The benchmark: the case's charge packed and turning for a warm-up, then
+// timed steps with the observers a run has (a row of observables every output
+// interval, ten contact-profile samples per row), then a shorter pass with
+// stage timing for the shares. One JSON line on stdout.
+int cmd_bench(const BenchOptions& o) {
+  using clock = std::chrono::steady_clock;
+  const Prepared p = prepare(o.c, io::case_dir() / "bench_100k.toml");
+  const MillCase& c = p.c;
+  const MillDerived& d = p.d;
+  compute::Context ctx(o.c.device);
+  auto note = [&](const std::string& s) {
+    if (!o.quiet) std::fprintf(stderr, "bench: %s\n", s.c_str());
+  };
+  note(c.name + ": " + thousands(d.n_balls) + " balls on " + ctx.info().label());
+  const auto t_build = clock::now();
+  auto solver = make_solver(ctx, p.scene);
+  solver->set_mill_omega(d.omega);
+  const long n = d.n_balls;
+  const long out_steps = std::max(1L, std::lround(c.output_interval / d.dt));
+  const long profile_every = std::max(1L, out_steps / 10);
+  long since_row = 0;
+  // Steps in chunks between the observers' calls, as run_mill makes them.
+  auto steps = [&](long count) {
+    for (long done = 0; done < count;) {
+      const long chunk = std::min(count - done, profile_every - since_row % profile_every);
+      solver->advance(chunk);
+      done += chunk;
+      since_row += chunk;
+      if (since_row % profile_every == 0) solver->sample_contact_profile();
+      if (since_row >= out_steps) {
+        solver->observe(true);
+        (void)solver->take_contact_profile();
+        since_row = 0;
+      }
+    }
+    ctx.finish();
+  };
+  const auto t_warm = clock::now();
+  note("kernels built and charge uploaded in " + duration_text(std::chrono::duration<double>(t_warm - t_build).count()) +
+       "; warm-up " + thousands(o.warmup) + " steps");
+  steps(o.warmup);
+  const double warm_s = std::chrono::duration<double>(clock::now() - t_warm).count();
+  long n_steps = o.steps;
+  if (n_steps <= 0) {
+    const double rate = o.warmup > 0 && warm_s > 0 ? o.warmup / warm_s : 100.0;
+    n_steps = std::clamp(std::lround(10.0 * rate), 100L, 100000L);
+  }
+  note("timing " + thousands(n_steps) + " steps");
+  const long rebuilds0 = solver->rebuilds();
+  const auto t0 = clock::now();
+  steps(n_steps);
+  const double wall = std::chrono::duration<double>(clock::now() - t0).count();
+  const long rebuilds = solver->rebuilds() - rebuilds0;
+  const ContactStats cs = solver->contact_stats();
+
+  // The shares: a shorter pass with the queue drained after every stage.
+  const long stage_steps = std::max(20L, n_steps / 4);
+  note("stage timing over " + thousands(stage_steps) + " steps");
+  solver->set_stage_timing(true);
+  steps(stage_steps);
+  const StageTimes st = solver->stage_times();
+  solver->set_stage_timing(false);
+
+  const double total = st.total() > 0 ? st.total() : 1.0;
+  nlohmann::ordered_json j;
+  j["case"] = c.name;
+  j["n_particles"] = n;
+  j["steps"] = n_steps;
+  j["wall_s"] = wall;
+  j["particle_updates_per_s"] = static_cast<double>(n) * n_steps / wall;
+  j["steps_per_s"] = n_steps / wall;
+  j["contacts_per_ball"] = cs.ball_contacts_per_ball;
+  j["wall_contacts_per_ball"] = cs.wall_contacts_per_ball;
+  j["list_entries_per_ball"] = cs.list_entries_per_ball;
+  j["rebuild_every_steps"] = number_or_null(rebuilds > 0 ? static_cast<double>(n_steps) / rebuilds : std::nan(""));
+  j["device"] = ctx.info().name;
+  j["device_type"] = ctx.info().type;
+  j["platform"] = ctx.info().platform_name;
+  j["compute_units"] = ctx.info().compute_units;
+  j["precision"] = c.precision == Precision::double_ ? "double" : "float";
+  j["law"] = c.law == ContactLaw::hertz ? "hertz" : "linear";
+  j["dt_s"] = d.dt;
+  j["device_bytes"] = solver->device_bytes();
+  j["bytes_per_ball"] = static_cast<double>(solver->device_bytes()) / n;
+  j["warmup_steps"] = o.warmup;
+  j["stage_steps"] = stage_steps;
+  j["stage_timed_updates_per_s"] = static_cast<double>(n) * stage_steps / total;
+  j["stages"] = {{"binning", st.binning_s / total},
+                 {"contacts", st.contacts_s / total},
+                 {"forces", st.forces_s / total},
+                 {"motion", st.motion_s / total},
+                 {"reductions", st.reductions_s / total}};
+  std::printf("%s\n", j.dump().c_str());
   return 0;
 }
 

@@ -23,8 +23,16 @@ struct RunOptions {
   bool quiet = false;  // --quiet: no progress lines
 };
 
+struct BenchOptions {
+  CaseOptions c;       // empty case_path: the 100,000-ball benchmark mill
+  long steps = 0;      // timed steps; 0: about 10 wall seconds' worth
+  long warmup = 2000;  // steps of the turning mill before the timing
+  bool quiet = false;  // no progress lines on stderr
+};
+
 int cmd_devices();
 int cmd_check(const CaseOptions& o);
 int cmd_run(const RunOptions& o);
+int cmd_bench(const BenchOptions& o);
 
 }  // namespace mc::app

@@ -2,6 +2,8 @@
 //   millcharge run   [CASE] [--out DIR] [--duration S] [--device SPEC]
 //                    [--precision float|double] [--set KEY=VALUE]... [--force] [--quiet]
 //   millcharge check CASE [--set KEY=VALUE]...
+//   millcharge bench [CASE] [--steps N] [--warmup N] [--device SPEC]
+//                    [--precision float|double] [--set KEY=VALUE]... [--quiet]
 //   millcharge devices
 // Exit status: 0 done; 2 bad input (a message names the key; nothing written);
 // 1 any other failure (device, blow-up, disk).
@@ -46,6 +48,14 @@ int main(int argc, char** argv) {
   auto* check = app.add_subcommand("check", "validate a case and print its derived values");
   add_case_options(check, co, false);
 
+  mc::app::BenchOptions bo;
+  auto* bench = app.add_subcommand("bench", "time the solver on a turning charge; prints one JSON line");
+  add_case_options(bench, bo.c, true);
+  bench->add_option("--steps", bo.steps, "timed steps (default: about 10 s worth)")->check(CLI::PositiveNumber);
+  bench->add_option("--warmup", bo.warmup, "steps of the turning mill before the timing (default 2000)")
+      ->check(CLI::NonNegativeNumber);
+  bench->add_flag("--quiet", bo.quiet, "no progress lines");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -55,6 +65,7 @@ int main(int argc, char** argv) {
     if (*devices) return mc::app::cmd_devices();
     if (*check) return mc::app::cmd_check(co);
     if (*run) return mc::app::cmd_run(ro);
+    if (*bench) return mc::app::cmd_bench(bo);
   } catch (const std::invalid_argument& e) {
     std::cerr << "millcharge: " << e.what() << '\n';
     return 2;

@@ -1,6 +1,7 @@
 #include "sim/solver.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -67,6 +68,9 @@ class SolverImpl final : public Solver {
   void set_mill_omega(double w) override { mill_omega_ = w; }
   void sample_contact_profile() override;
   std::vector<long> take_contact_profile() override;
+  void set_stage_timing(bool on) override;
+  StageTimes stage_times() const override { return stages_; }
+  ContactStats contact_stats() override;
 
   double time_s() const override { return time_; }
   long steps() const override { return steps_; }
@@ -82,7 +86,9 @@ class SolverImpl final : public Solver {
   void rebuild();
   void forces();
   void motion();
-  void check_status();
+  void read_status();
+  void wait_status();
+  void lap(double StageTimes::*stage);
 
   compute::Context& ctx_;
   compute::Program program_;
@@ -121,12 +127,25 @@ class SolverImpl final : public Solver {
   Buffer<int> status_;
   Buffer<Real> partial_;
   Buffer<int> profile_;
+  Buffer<int> counts_;
   double total_mass_ = 0;
+
+  // The status word of step s is read without waiting and acted on at step
+  // s + 1, so the host never stalls the queue inside a step (the motion
+  // kernel flags a rebuild one step early to allow for this).
+  int status_host_ = 0;
+  cl::Event status_event_;
+  bool status_in_flight_ = false;
+  int pending_flags_ = 0;  // read, not yet acted on
+
+  bool timing_ = false;
+  StageTimes stages_;
+  std::chrono::steady_clock::time_point lap_start_;
 
   Scan scan_;
   Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
       k_gather_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
-      k_layout_, k_profile_;
+      k_layout_, k_profile_, k_count_contacts_, k_clear_flag_;
 };
 
 template <class Real>
@@ -177,6 +196,7 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       status_(ctx, 1, "status"),
       partial_(ctx, (static_cast<std::size_t>(n_) / kReduceWG + 1) * kObservables, "reduction partials"),
       profile_(ctx, kProfileBins, "contact profile"),
+      counts_(ctx, 3, "contact counts"),
       scan_(program_, ctx, std::max<std::size_t>(n_, 1)),
       k_bin_clear_(program_, "bin_clear"),
       k_bin_count_(program_, "bin_count"),
@@ -191,7 +211,9 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_motion_(program_, "motion"),
       k_reduce_(program_, "reduce_observables"),
       k_layout_(program_, "layout_sizes"),
-      k_profile_(program_, "profile_contacts") {
+      k_profile_(program_, "profile_contacts"),
+      k_count_contacts_(program_, "count_contacts"),
+      k_clear_flag_(program_, "clear_status_flag") {
   if (n_ == 0) throw std::invalid_argument("scene: no balls");
 
   // The device's struct sizes must equal the host mirrors'.
@@ -348,6 +370,7 @@ void SolverImpl<Real>::rebuild() {
   std::swap(wall_key_, spare_key_);
   std::swap(wall_hist_, spare_hist_);
   pos_at_build_.copy_from(pos_, n);
+  lap(&StageTimes::binning_s);
 
   // New lists; the previous ones (in the previous order) feed the carry-over.
   std::swap(neigh_start_, old_start_);
@@ -367,6 +390,7 @@ void SolverImpl<Real>::rebuild() {
                         neigh_hist_, sorted_index_, old_start_, old_count_, old_index_, old_hist_)
       .launch(n);
   ++rebuilds_;
+  lap(&StageTimes::contacts_s);
 }
 
 template <class Real>
@@ -376,6 +400,7 @@ void SolverImpl<Real>::forces() {
             neigh_start_, neigh_count_, neigh_index_, neigh_hist_, wall_key_, wall_hist_, force_,
             torque_, accum_, status_)
       .launch(n_);
+  lap(&StageTimes::forces_s);
 }
 
 template <class Real>
@@ -384,10 +409,45 @@ void SolverImpl<Real>::motion() {
 }
 
 template <class Real>
-void SolverImpl<Real>::check_status() {
-  status_.read_from_device();
-  const int flags = status_.host[0];
-  if (flags == 0) return;
+void SolverImpl<Real>::lap(double StageTimes::*stage) {
+  if (!timing_) return;
+  ctx_.finish();
+  const auto now = std::chrono::steady_clock::now();
+  stages_.*stage += std::chrono::duration<double>(now - lap_start_).count();
+  lap_start_ = now;
+}
+
+template <class Real>
+void SolverImpl<Real>::set_stage_timing(bool on) {
+  timing_ = on;
+  stages_ = {};
+  if (on) {
+    ctx_.finish();
+    lap_start_ = std::chrono::steady_clock::now();
+  }
+}
+
+// Enqueues a read of the status word without waiting for it.
+template <class Real>
+void SolverImpl<Real>::read_status() {
+  try {
+    ctx_.queue().enqueueReadBuffer(status_.device(), CL_FALSE, 0, sizeof(int), &status_host_, nullptr,
+                                   &status_event_);
+  } catch (const cl::Error& e) {
+    throw compute::Error("reading the status word failed: " + compute::error_name(e.err()));
+  }
+  status_in_flight_ = true;
+}
+
+// Waits for the status read in flight, if any; throws on a blow-up or a wall
+// overflow, and leaves the flags for the next step's rebuild decision.
+template <class Real>
+void SolverImpl<Real>::wait_status() {
+  if (!status_in_flight_) return;
+  status_event_.wait();
+  status_in_flight_ = false;
+  pending_flags_ |= status_host_;
+  const int flags = pending_flags_;
   if (flags & MC_FLAG_NOT_FINITE) {
     std::ostringstream m;
     m << "blow-up at t = " << time_ << " s (step " << steps_
@@ -398,21 +458,28 @@ void SolverImpl<Real>::check_status() {
   if (flags & MC_FLAG_WALL_OVERFLOW)
     throw std::runtime_error("a ball touches more than " + std::to_string(MC_MAX_WALL_CONTACTS) +
                              " walls at once (MC_MAX_WALL_CONTACTS in cl/layout.h): lifters too close together?");
-  status_.host[0] = 0;
-  status_.write_to_device();
-  if (flags & MC_FLAG_REBUILD) rebuild();
 }
 
 template <class Real>
 void SolverImpl<Real>::advance(long steps) {
   for (long s = 0; s < steps; ++s) {
     motion();
-    check_status();
+    // The previous step's flags, read while this step's motion runs: a
+    // rebuild they ask for comes now, before this step's forces.
+    wait_status();
+    if (pending_flags_ & MC_FLAG_REBUILD) {
+      rebuild();
+      k_clear_flag_.args(status_, MC_FLAG_REBUILD).launch(1);
+    }
+    pending_flags_ = 0;
+    read_status();
+    lap(&StageTimes::motion_s);
     ++steps_;
     time_ += dt_;
     mill_angle_ = std::fmod(mill_angle_ + mill_omega_ * dt_, 2.0 * M_PI);
     forces();
   }
+  wait_status();  // report a blow-up from the last step now, not later
 }
 
 template <class Real>
@@ -421,6 +488,7 @@ Observables SolverImpl<Real>::observe(bool reset) {
   k_reduce_.args(params_, pos_, vel_, omega_, force_, torque_, accum_, neigh_count_, reset ? 1 : 0, partial_)
       .launch(static_cast<std::size_t>(groups) * kReduceWG, kReduceWG);
   partial_.read_from_device();
+  lap(&StageTimes::reductions_s);
   double s[kObservables] = {};
   for (int g = 0; g < groups; ++g)
     for (int k = 0; k < kObservables; ++k) s[k] += partial_.host[g * kObservables + k];
@@ -447,6 +515,20 @@ Observables SolverImpl<Real>::observe(bool reset) {
 template <class Real>
 void SolverImpl<Real>::sample_contact_profile() {
   k_profile_.args(params_, pos_, wall_key_, kProfileBins, profile_).launch(n_);
+  lap(&StageTimes::reductions_s);
+}
+
+template <class Real>
+ContactStats SolverImpl<Real>::contact_stats() {
+  std::fill(counts_.host.begin(), counts_.host.end(), 0);
+  counts_.write_to_device();
+  k_count_contacts_.args(params_, pos_, neigh_start_, neigh_count_, neigh_index_, wall_key_, counts_).launch(n_);
+  counts_.read_from_device();
+  ContactStats c;
+  c.ball_contacts_per_ball = static_cast<double>(counts_.host[0]) / n_;
+  c.wall_contacts_per_ball = static_cast<double>(counts_.host[1]) / n_;
+  c.list_entries_per_ball = static_cast<double>(counts_.host[2]) / n_;
+  return c;
 }
 
 template <class Real>
@@ -485,7 +567,7 @@ std::vector<std::pair<int, int>> SolverImpl<Real>::neighbour_pairs() {
 
 template <class Real>
 std::size_t SolverImpl<Real>::device_bytes() const {
-  std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() + profile_.bytes() +
+  std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() + profile_.bytes() + counts_.bytes() +
                   partial_.bytes() + scan_.bytes();
   for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_,
                         &wall_hist_, &spare4_, &spare_hist_, &neigh_hist_, &old_hist_})

@@ -42,6 +42,26 @@ struct Observables {
 
 inline constexpr int kProfileBins = 360;
 
+// Where a step's time goes, for the benchmark: wall seconds per stage, taken
+// with the queue drained after each stage (so only while timing is on).
+struct StageTimes {
+  double binning_s = 0;     // cell of each ball, sort, reorder of the state
+  double contacts_s = 0;    // neighbour lists and the history carry-over
+  double forces_s = 0;      // contact and wall forces
+  double motion_s = 0;      // integration and the status word
+  double reductions_s = 0;  // observables and the contact profile
+  double total() const { return binning_s + contacts_s + forces_s + motion_s + reductions_s; }
+};
+
+// Contacts now, for reports: ball-ball contacts per ball (each pair counted
+// by both balls, the coordination number), wall contacts per ball, and
+// neighbour-list entries per ball.
+struct ContactStats {
+  double ball_contacts_per_ball = 0;
+  double wall_contacts_per_ball = 0;
+  double list_entries_per_ball = 0;
+};
+
 class Solver {
  public:
   virtual ~Solver() = default;
@@ -58,6 +78,12 @@ class Solver {
   virtual void sample_contact_profile() = 0;
   // The counts since the last take; resets them.
   virtual std::vector<long> take_contact_profile() = 0;
+
+  // Stage timing (off by default): turning it on drains the queue after
+  // every stage, which costs a little; reset by turning it on again.
+  virtual void set_stage_timing(bool on) = 0;
+  virtual StageTimes stage_times() const = 0;
+  virtual ContactStats contact_stats() = 0;
 
   virtual double time_s() const = 0;
   virtual long steps() const = 0;
