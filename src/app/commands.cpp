@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -17,6 +18,7 @@
 #include "core/morrell.h"
 #include "io/atomic_file.h"
 #include "io/case_file.h"
+#include "io/checkpoint.h"
 #include "io/png_plot.h"
 #include "io/vtk.h"
 #include "sim/mill_run.h"
@@ -233,31 +235,133 @@ int cmd_check(const CaseOptions& o) {
   return 0;
 }
 
+namespace {
+
+volatile std::sig_atomic_t g_signal = 0;
+extern "C" void on_stop_signal(int sig) { g_signal = sig; }
+
+// SIGINT and SIGTERM ask the run to stop at the next chunk with a checkpoint;
+// the previous handlers come back when the run ends.
+class StopSignals {
+ public:
+  StopSignals() {
+    g_signal = 0;
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~StopSignals() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  int signal() const { return g_signal; }
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+// The first `rows` data rows of an earlier timeseries.csv, and the file cut
+// back to them (atomically), for a resumed run.
+std::vector<std::string> keep_rows(const fs::path& csv, long rows) {
+  std::ifstream in(csv);
+  if (!in) throw std::invalid_argument(csv.string() + ": missing; the run folder is incomplete");
+  std::vector<std::string> lines;
+  std::string line;
+  while (static_cast<long>(lines.size()) < rows + 1 && std::getline(in, line)) lines.push_back(line);
+  if (static_cast<long>(lines.size()) < rows + 1)
+    throw std::invalid_argument(csv.string() + ": holds " + std::to_string(lines.size() ? lines.size() - 1 : 0) +
+                                " rows, the checkpoint " + std::to_string(rows));
+  std::string text;
+  for (const std::string& l : lines) text += l + "\n";
+  io::write_file_atomic(csv, text);
+  lines.erase(lines.begin());
+  return lines;
+}
+
+}  // namespace
+
 int cmd_run(const RunOptions& o) {
-  Prepared p = prepare(o.c);
+  const bool resume = !o.resume.empty();
+  Prepared p;
+  io::Checkpoint cp;
+  if (resume) {
+    if (!o.c.case_path.empty() || !o.c.overrides.empty() || o.c.duration > 0 || !o.c.precision.empty())
+      throw std::invalid_argument("--resume " + o.resume +
+                                  ": continues the run with its own case; a CASE, --set, --duration or --precision "
+                                  "cannot be given with it");
+    const fs::path dir(o.resume);
+    try {
+      cp = io::read_checkpoint(dir / io::kCheckpointFile);
+    } catch (const io::CheckpointError& e) {
+      throw std::invalid_argument(std::string(e.what()) + "; the run cannot be resumed from it");
+    }
+    std::error_code ec;
+    if (cp.run.phase == 3 && fs::exists(dir / "summary.json", ec))
+      throw std::invalid_argument("--resume " + o.resume + ": the run there is complete (summary.json); nothing to do");
+    p.path = dir / "case.toml";
+    p.c = io::parse_case(cp.case_toml, (dir / io::kCheckpointFile).string() + " (case)");
+    p.c.name = cp.case_name;
+    p.d = derive(p.c);
+    p.scene = build_scene(p.c, p.d);
+  } else {
+    p = prepare(o.c);
+  }
   const MillCase& c = p.c;
   const MillDerived& d = p.d;
   // Device and kernels before any file is written.
   compute::Context ctx(o.c.device);
   auto solver = make_solver(ctx, p.scene);
-  const fs::path out = o.out.empty() ? default_out(c) : fs::path(o.out);
-  make_run_dir(out, o.force);
-  io::write_file_atomic(out / "case.toml", io::case_to_toml(c));
+  if (resume) {
+    try {
+      solver->restore_state(cp.solver);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(o.resume + "/" + io::kCheckpointFile + ": " + e.what());
+    }
+  }
+  const fs::path out = resume ? fs::path(o.resume) : o.out.empty() ? default_out(c) : fs::path(o.out);
+  const std::string case_text = resume ? cp.case_toml : io::case_to_toml(c);
+  std::vector<std::string> kept_rows;
+  if (resume) {
+    kept_rows = keep_rows(out / "timeseries.csv", cp.run.rows);
+  } else {
+    make_run_dir(out, o.force);
+    io::write_file_atomic(out / "case.toml", case_text);
+  }
 
   std::printf("millcharge: %s: D %.3g m x L %.3g m, %s balls, %.1f %% of critical (%.2f rpm), J %.3f, dt %.3g s, %s\n",
               c.name.c_str(), c.diameter, c.length, thousands(d.n_balls).c_str(), 100 * d.speed_fraction, d.speed_rpm,
               d.filling_from_counts, d.dt, c.precision == Precision::double_ ? "double" : "float");
   std::printf("millcharge: device %s; output in %s\n", ctx.info().label().c_str(), out.string().c_str());
+  if (resume)
+    std::printf("millcharge: resuming at t = %.4f s (step %s, %ld rows written)\n", solver->time_s(),
+                thousands(solver->steps()).c_str(), cp.run.rows);
   std::fflush(stdout);
 
-  std::ofstream csv(out / "timeseries.csv");
+  std::ofstream csv;
+  if (resume) {
+    csv.open(out / "timeseries.csv", std::ios::app);
+  } else {
+    csv.open(out / "timeseries.csv");
+    csv << "time_s,revolutions,torque_Nm,torque_power_W,dissipation_power_W,torque_arm_power_W,kinetic_J,"
+           "rotational_J,potential_J,elastic_J,toe_deg,shoulder_deg,com_angle_deg,neighbours_per_ball,averaged\n";
+  }
   if (!csv) throw std::runtime_error("cannot write " + (out / "timeseries.csv").string());
-  csv << "time_s,revolutions,torque_Nm,torque_power_W,dissipation_power_W,torque_arm_power_W,kinetic_J,"
-         "rotational_J,potential_J,elastic_J,toe_deg,shoulder_deg,com_angle_deg,neighbours_per_ball,averaged\n";
   csv.flush();
   std::vector<double> t_series, p_torque, p_diss;
+  for (const std::string& row : kept_rows) {  // the plot's points from the rows kept
+    double v[5];
+    if (std::sscanf(row.c_str(), "%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4]) == 5 &&
+        v[0] >= 0.05 * d.revolution_s) {
+      t_series.push_back(v[0]);
+      p_torque.push_back(v[3]);
+      p_diss.push_back(v[4]);
+    }
+  }
   io::PvdIndex pvd(out / "charge.pvd");
-  int n_snap = 0;
+  if (resume) pvd.keep_existing(static_cast<std::size_t>(cp.run.snapshots));
+  int n_snap = resume ? static_cast<int>(cp.run.snapshots) : 0;
   RunHooks hooks;
   hooks.on_row = [&](const TimeRow& r) {
     char line[512];
@@ -283,9 +387,45 @@ int cmd_run(const RunOptions& o) {
   };
   ProgressPrinter progress(o.quiet);
   hooks.on_progress = [&](const RunProgress& pr) { progress(pr); };
+  // Checkpoints: the rows and snapshots are on disk before the checkpoint
+  // that counts them, so a resumed run cuts the files back to it.
+  double checkpoint_t = resume ? solver->time_s() : -1;
+  hooks.checkpoint_interval_s = c.checkpoint_interval;
+  hooks.on_checkpoint = [&](const RunState& rs) {
+    csv.flush();
+    io::write_checkpoint(out / io::kCheckpointFile, io::Checkpoint{c.name, case_text, rs, solver->save_state()});
+    checkpoint_t = solver->time_s();
+  };
+  StopSignals signals;
+  hooks.stop_requested = [&] { return signals.signal() != 0; };
+  hooks.poison_at_s = o.poison_at_s;
 
-  const RunSummary s = run_mill(*solver, p.scene, c, d, hooks);
+  RunSummary s;
+  try {
+    s = run_mill(*solver, p.scene, c, d, hooks, resume ? cp.run : RunState{});
+  } catch (const compute::Error&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    std::string m = e.what();
+    if (checkpoint_t >= 0)
+      m += ". The last good checkpoint (t = " + std::to_string(checkpoint_t) + " s) is " +
+           (out / io::kCheckpointFile).string() + "; after a fix that keeps the case, resume with: millcharge run --resume " +
+           out.string();
+    else
+      m += ". No checkpoint was written before it";
+    throw std::runtime_error(m);
+  }
   csv.close();
+  if (s.interrupted) {
+    progress.finish_line();
+    const int sig = signals.signal();
+    std::fprintf(stderr,
+                 "millcharge: stopped by %s at t = %.4f s; checkpoint %s written; continue with: millcharge run "
+                 "--resume %s\n",
+                 sig == SIGTERM ? "SIGTERM" : "SIGINT", solver->time_s(), (out / io::kCheckpointFile).string().c_str(),
+                 out.string().c_str());
+    return 128 + sig;
+  }
 
   const MorrellInput mi = morrell_input(c, d);
   const MorrellResult m = morrell_c_model(mi);

@@ -21,6 +21,8 @@ struct RunOptions {
   std::string out;     // --out; empty: runs/<case>-<time>
   bool force = false;  // --force: replace an earlier run in --out
   bool quiet = false;  // --quiet: no progress lines
+  std::string resume;  // --resume DIR: continue the run in DIR from its checkpoint
+  double poison_at_s = -1;  // fault injection for tests: NaN in a ball at this time
 };
 
 struct BenchOptions {

@@ -1,6 +1,7 @@
 // millcharge — the command line (DESIGN.md, "Command line"):
 //   millcharge run   [CASE] [--out DIR] [--duration S] [--device SPEC]
 //                    [--precision float|double] [--set KEY=VALUE]... [--force] [--quiet]
+//   millcharge run   --resume DIR [--device SPEC] [--quiet]
 //   millcharge check CASE [--set KEY=VALUE]...
 //   millcharge bench [CASE] [--steps N] [--warmup N] [--device SPEC]
 //                    [--precision float|double] [--set KEY=VALUE]... [--quiet]
@@ -43,6 +44,10 @@ int main(int argc, char** argv) {
   run->add_option("--out", ro.out, "output folder (default runs/CASE-DATE-TIME)");
   run->add_flag("--force", ro.force, "replace an earlier run in --out");
   run->add_flag("--quiet", ro.quiet, "no progress lines");
+  run->add_option("--resume", ro.resume, "continue the run in DIR from its checkpoint (checkpoint.bin)")
+      ->type_name("DIR");
+  // Fault injection for the failure tests; not for users.
+  run->add_option("--inject-nan-at", ro.poison_at_s, "")->group("");
 
   mc::app::CaseOptions co;
   auto* check = app.add_subcommand("check", "validate a case and print its derived values");

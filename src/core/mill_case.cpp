@@ -224,6 +224,8 @@ MillDerived derive(const MillCase& c) {
     fail("run.warmup", "must be in [0, duration = " + num(c.duration) + " s) (got " + num(c.warmup) + ")");
   if (!(c.output_interval >= d.dt)) fail("run.output_interval", "must be at least one step (" + num(d.dt) + " s)");
   if (c.snapshot_interval < 0) fail("run.snapshot_interval", "must be >= 0 s (0: no snapshots)");
+  if (!(c.checkpoint_interval >= 0))
+    fail("run.checkpoint_interval", "must be >= 0 s (0: checkpoints only on a signal and at the end)");
   if (c.settle > 60) fail("run.settle", "must be at most 60 s or \"auto\"");
   return d;
 }

@@ -385,7 +385,7 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
   {
     Section s(r, *top.table("run", true), "run");
     s.knows({"duration", "warmup", "settle", "dt", "steps_per_contact", "output_interval", "snapshot_interval",
-             "precision"});
+             "checkpoint_interval", "precision"});
     c.duration = s.number("duration");
     c.warmup = s.number("warmup", 0.0);
     c.settle = s.number_or_auto("settle", -1);
@@ -395,6 +395,7 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
     c.steps_per_contact = s.number("steps_per_contact", 25.0);
     c.output_interval = s.number("output_interval", 0.01);
     c.snapshot_interval = s.number("snapshot_interval", 0.0);
+    c.checkpoint_interval = s.number("checkpoint_interval", 0.5);
     c.precision =
         s.string("precision", std::string("float"), {"float", "double"}) == "double" ? Precision::double_ : Precision::single;
   }
@@ -499,6 +500,7 @@ std::string case_to_toml(const MillCase& c) {
                   {"steps_per_contact", c.steps_per_contact},
                   {"output_interval", c.output_interval},
                   {"snapshot_interval", c.snapshot_interval},
+                  {"checkpoint_interval", c.checkpoint_interval},
                   {"precision", c.precision == Precision::double_ ? "double" : "float"}};
   if (c.settle >= 0) run.insert("settle", c.settle);
   else run.insert("settle", "auto");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -71,6 +72,9 @@ class SolverImpl final : public Solver {
   void set_stage_timing(bool on) override;
   StageTimes stage_times() const override { return stages_; }
   ContactStats contact_stats() override;
+  SolverState save_state() override;
+  void restore_state(const SolverState& state) override;
+  void poison_ball(int id) override;
 
   double time_s() const override { return time_; }
   long steps() const override { return steps_; }
@@ -455,6 +459,23 @@ void SolverImpl<Real>::wait_status() {
       << " s) too large for the contact stiffness, or balls overlapping at the start";
     throw std::runtime_error(m.str());
   }
+  if (flags & MC_FLAG_ESCAPED) {
+    std::ostringstream m;
+    m << "a ball left the mill at t = " << time_ << " s (step " << steps_ << ")";
+    pos_.read_from_device();
+    info_.read_from_device();
+    const auto& sp = params_.host[0];
+    for (int i = 0; i < n_; ++i) {
+      const auto& p = pos_.host[i];
+      if (std::hypot(p.x, p.y) > sp.shell_radius + p.w || p.z < -p.w || (sp.length > 0 && p.z > sp.length + p.w)) {
+        m << ": ball " << info_.host[i].x << " is at (" << p.x << ", " << p.y << ", " << p.z << ") m";
+        break;
+      }
+    }
+    m << ". It went through a wall: dt (" << dt_
+      << " s) is too large for the contact stiffness, or the charge started overlapping a lifter or the shell";
+    throw std::runtime_error(m.str());
+  }
   if (flags & MC_FLAG_WALL_OVERFLOW)
     throw std::runtime_error("a ball touches more than " + std::to_string(MC_MAX_WALL_CONTACTS) +
                              " walls at once (MC_MAX_WALL_CONTACTS in cl/layout.h): lifters too close together?");
@@ -538,6 +559,118 @@ std::vector<long> SolverImpl<Real>::take_contact_profile() {
   std::fill(profile_.host.begin(), profile_.host.end(), 0);
   profile_.write_to_device();
   return out;
+}
+
+namespace {
+
+template <class T>
+void put_array(SolverState& st, const char* name, compute::Buffer<T>& b, std::size_t count) {
+  b.read_from_device();
+  const auto* p = reinterpret_cast<const unsigned char*>(b.host.data());
+  st.arrays.emplace_back(name, std::vector<unsigned char>(p, p + count * sizeof(T)));
+}
+
+template <class T>
+void get_array(const SolverState& st, const char* name, compute::Buffer<T>& b, bool resize) {
+  for (const auto& [key, bytes] : st.arrays) {
+    if (key != name) continue;
+    if (bytes.size() % sizeof(T) != 0)
+      throw std::invalid_argument(std::string("state array ") + name + ": size is not a whole number of elements");
+    const std::size_t count = bytes.size() / sizeof(T);
+    if (resize) {
+      if (count > b.size()) b.resize(count);
+    } else if (count != b.size()) {
+      throw std::invalid_argument(std::string("state array ") + name + " holds " + std::to_string(count) +
+                                  " elements, the solver " + std::to_string(b.size()));
+    }
+    std::memcpy(b.host.data(), bytes.data(), bytes.size());
+    b.write_to_device();
+    return;
+  }
+  throw std::invalid_argument(std::string("state array ") + name + " is missing");
+}
+
+}  // namespace
+
+template <class Real>
+SolverState SolverImpl<Real>::save_state() {
+  wait_status();
+  SolverState st;
+  st.real_bytes = sizeof(Real);
+  st.n_balls = n_;
+  st.time_s = time_;
+  st.steps = steps_;
+  st.rebuilds = rebuilds_;
+  st.mill_angle = mill_angle_;
+  st.mill_omega = mill_omega_;
+  st.observed_since = observed_since_;
+  st.pending_flags = pending_flags_;
+  const std::size_t n = n_;
+  const std::size_t slots = n * MC_MAX_WALL_CONTACTS;
+  put_array(st, "pos", pos_, n);
+  put_array(st, "vel", vel_, n);
+  put_array(st, "omega", omega_, n);
+  put_array(st, "force", force_, n);
+  put_array(st, "torque", torque_, n);
+  put_array(st, "accum", accum_, n);
+  put_array(st, "pos_at_build", pos_at_build_, n);
+  put_array(st, "info", info_, n);
+  put_array(st, "wall_key", wall_key_, slots);
+  put_array(st, "wall_hist", wall_hist_, slots);
+  put_array(st, "neigh_start", neigh_start_, n);
+  put_array(st, "neigh_count", neigh_count_, n);
+  const std::size_t entries = static_cast<std::size_t>(neigh_start_.host[n - 1]) + neigh_count_.host[n - 1];
+  put_array(st, "neigh_index", neigh_index_, entries);
+  put_array(st, "neigh_hist", neigh_hist_, entries);
+  put_array(st, "status", status_, 1);
+  put_array(st, "profile", profile_, kProfileBins);
+  return st;
+}
+
+template <class Real>
+void SolverImpl<Real>::restore_state(const SolverState& st) {
+  if (st.real_bytes != static_cast<int>(sizeof(Real)))
+    throw std::invalid_argument("the state was saved in " + std::string(st.real_bytes == 8 ? "double" : "float") +
+                                " precision, this solver runs in " + (sizeof(Real) == 8 ? "double" : "float"));
+  if (st.n_balls != n_)
+    throw std::invalid_argument("the state holds " + std::to_string(st.n_balls) + " balls, the scene " +
+                                std::to_string(n_));
+  ctx_.finish();
+  status_in_flight_ = false;
+  get_array(st, "pos", pos_, false);
+  get_array(st, "vel", vel_, false);
+  get_array(st, "omega", omega_, false);
+  get_array(st, "force", force_, false);
+  get_array(st, "torque", torque_, false);
+  get_array(st, "accum", accum_, false);
+  get_array(st, "pos_at_build", pos_at_build_, false);
+  get_array(st, "info", info_, false);
+  get_array(st, "wall_key", wall_key_, false);
+  get_array(st, "wall_hist", wall_hist_, false);
+  get_array(st, "neigh_start", neigh_start_, false);
+  get_array(st, "neigh_count", neigh_count_, false);
+  get_array(st, "neigh_index", neigh_index_, true);
+  get_array(st, "neigh_hist", neigh_hist_, true);
+  get_array(st, "status", status_, false);
+  get_array(st, "profile", profile_, false);
+  time_ = st.time_s;
+  steps_ = st.steps;
+  rebuilds_ = st.rebuilds;
+  mill_angle_ = st.mill_angle;
+  mill_omega_ = st.mill_omega;
+  observed_since_ = st.observed_since;
+  pending_flags_ = st.pending_flags;
+  ctx_.finish();
+}
+
+template <class Real>
+void SolverImpl<Real>::poison_ball(int id) {
+  wait_status();
+  info_.read_from_device();
+  vel_.read_from_device();
+  for (int i = 0; i < n_; ++i)
+    if (info_.host[i].x == id) vel_.host[i].x = std::numeric_limits<Real>::quiet_NaN();
+  vel_.write_to_device();
 }
 
 template <class Real>

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -62,6 +63,23 @@ struct ContactStats {
   double list_entries_per_ball = 0;
 };
 
+// The whole state a solver continues from, for checkpoints: host scalars and
+// the device arrays that live across steps, byte for byte in the device's
+// layout (scratch arrays are left out). Restoring it into a solver built for
+// the same scene, precision and device continues the run bit for bit.
+struct SolverState {
+  int real_bytes = 0;  // 4 float, 8 double
+  long n_balls = 0;
+  double time_s = 0;
+  long steps = 0;
+  long rebuilds = 0;
+  double mill_angle = 0;
+  double mill_omega = 0;
+  double observed_since = 0;
+  int pending_flags = 0;  // the last step's status, not yet acted on
+  std::vector<std::pair<std::string, std::vector<unsigned char>>> arrays;  // name → bytes
+};
+
 class Solver {
  public:
   virtual ~Solver() = default;
@@ -84,6 +102,13 @@ class Solver {
   virtual void set_stage_timing(bool on) = 0;
   virtual StageTimes stage_times() const = 0;
   virtual ContactStats contact_stats() = 0;
+
+  virtual SolverState save_state() = 0;
+  // Throws std::invalid_argument when the state does not fit this solver.
+  virtual void restore_state(const SolverState& state) = 0;
+  // Fault injection for the failure tests: the ball with this id gets a NaN
+  // velocity.
+  virtual void poison_ball(int id) = 0;
 
   virtual double time_s() const = 0;
   virtual long steps() const = 0;
