@@ -528,7 +528,26 @@ int cmd_run(const RunOptions& o) {
 // stage timing for the shares. One JSON line on stdout.
 int cmd_bench(const BenchOptions& o) {
   using clock = std::chrono::steady_clock;
-  const Prepared p = prepare(o.c, io::case_dir() / "bench_100k.toml");
+  Prepared p;
+  io::Checkpoint cp;
+  if (!o.from.empty()) {
+    if (!o.c.case_path.empty() || !o.c.overrides.empty())
+      throw std::invalid_argument("--from " + o.from + ": the case is the run's own; a CASE or --set cannot be given with it");
+    try {
+      cp = io::read_checkpoint(fs::path(o.from) / io::kCheckpointFile);
+    } catch (const io::CheckpointError& e) {
+      throw std::invalid_argument(e.what());
+    }
+    p.c = io::parse_case(cp.case_toml, o.from + "/" + io::kCheckpointFile + " (case)");
+    p.c.name = cp.case_name;
+    if (!o.c.precision.empty() && (o.c.precision == "double") != (p.c.precision == Precision::double_))
+      throw std::invalid_argument("--from " + o.from + ": the checkpoint holds " +
+                                  (p.c.precision == Precision::double_ ? "double" : "float") + " state");
+    p.d = derive(p.c);
+    p.scene = build_scene(p.c, p.d);
+  } else {
+    p = prepare(o.c, io::case_dir() / "bench_100k.toml");
+  }
   const MillCase& c = p.c;
   const MillDerived& d = p.d;
   compute::Context ctx(o.c.device);
@@ -538,8 +557,11 @@ int cmd_bench(const BenchOptions& o) {
   note(c.name + ": " + thousands(d.n_balls) + " balls on " + ctx.info().label());
   const auto t_build = clock::now();
   auto solver = make_solver(ctx, p.scene);
+  if (!o.from.empty()) solver->restore_state(cp.solver);
   solver->set_mill_omega(d.omega);
   const long n = d.n_balls;
+  const double warmup_s = o.warmup >= 0 ? o.warmup : o.from.empty() ? 0.25 : 0.0;
+  const long warmup = std::lround(warmup_s / d.dt);
   const long out_steps = std::max(1L, std::lround(c.output_interval / d.dt));
   const long profile_every = std::max(1L, out_steps / 10);
   long since_row = 0;
@@ -561,12 +583,12 @@ int cmd_bench(const BenchOptions& o) {
   };
   const auto t_warm = clock::now();
   note("kernels built and charge uploaded in " + duration_text(std::chrono::duration<double>(t_warm - t_build).count()) +
-       "; warm-up " + thousands(o.warmup) + " steps");
-  steps(o.warmup);
+       "; warm-up " + thousands(warmup) + " steps");
+  steps(warmup);
   const double warm_s = std::chrono::duration<double>(clock::now() - t_warm).count();
   long n_steps = o.steps;
   if (n_steps <= 0) {
-    const double rate = o.warmup > 0 && warm_s > 0 ? o.warmup / warm_s : 100.0;
+    const double rate = warmup > 0 && warm_s > 0 ? warmup / warm_s : 100.0;
     n_steps = std::clamp(std::lround(10.0 * rate), 100L, 100000L);
   }
   note("timing " + thousands(n_steps) + " steps");
@@ -606,7 +628,8 @@ int cmd_bench(const BenchOptions& o) {
   j["dt_s"] = d.dt;
   j["device_bytes"] = solver->device_bytes();
   j["bytes_per_ball"] = static_cast<double>(solver->device_bytes()) / n;
-  j["warmup_steps"] = o.warmup;
+  j["warmup_steps"] = warmup;
+  j["from"] = o.from.empty() ? nlohmann::json() : nlohmann::json(o.from);
   j["stage_steps"] = stage_steps;
   j["stage_timed_updates_per_s"] = static_cast<double>(n) * stage_steps / total;
   j["stages"] = {{"binning", st.binning_s / total},

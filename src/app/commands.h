@@ -28,7 +28,10 @@ struct RunOptions {
 struct BenchOptions {
   CaseOptions c;       // empty case_path: the 100,000-ball benchmark mill
   long steps = 0;      // timed steps; 0: about 10 wall seconds' worth
-  long warmup = 2000;  // steps of the turning mill before the timing
+  double warmup = -1;  // simulated s of the turning mill before the timing;
+                       // < 0: 0.25 s from a packed charge (it collapses into
+                       // a dense bed), 0 from a checkpoint
+  std::string from;    // --from DIR: start from the checkpoint of a run in DIR
   bool quiet = false;  // no progress lines on stderr
 };
 

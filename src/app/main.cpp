@@ -57,8 +57,11 @@ int main(int argc, char** argv) {
   auto* bench = app.add_subcommand("bench", "time the solver on a turning charge; prints one JSON line");
   add_case_options(bench, bo.c, true);
   bench->add_option("--steps", bo.steps, "timed steps (default: about 10 s worth)")->check(CLI::PositiveNumber);
-  bench->add_option("--warmup", bo.warmup, "steps of the turning mill before the timing (default 2000)")
+  bench->add_option("--warmup", bo.warmup,
+                    "simulated seconds of the turning mill before the timing (default 0.25; 0 with --from)")
       ->check(CLI::NonNegativeNumber);
+  bench->add_option("--from", bo.from, "start from the checkpoint of a run in DIR (a settled, turning charge)")
+      ->type_name("DIR");
   bench->add_flag("--quiet", bo.quiet, "no progress lines");
 
   try {
