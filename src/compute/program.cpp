@@ -1,6 +1,7 @@
 #include "compute/program.h"
 
 #include <fstream>
+#include <set>
 #include <sstream>
 
 namespace mc::compute {
@@ -41,7 +42,47 @@ std::string read_file(const std::string& path) {
   return s.str();
 }
 
+bool has_error(const std::string& line) {
+  return line.find("error:") != std::string::npos || line.find("error :") != std::string::npos;
+}
+
 }  // namespace
+
+std::string build_failure_message(const std::string& device, const std::string& dir,
+                                  const std::vector<std::string>& files, const std::string& log) {
+  // The log's error lines (file:line:col: error: ...), the first few of them,
+  // and the files they name; the whole log when it has no such line.
+  std::vector<std::string> errors, lines;
+  std::set<std::string> named;
+  std::istringstream in(log);
+  for (std::string line; std::getline(in, line);) {
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+    if (line.empty()) continue;
+    lines.push_back(line);
+    if (!has_error(line)) continue;
+    errors.push_back(line);
+    for (const std::string& f : files)
+      if (line.find(f + ":") != std::string::npos) named.insert(f);
+  }
+  constexpr std::size_t kShown = 8;
+  const std::vector<std::string>& shown = errors.empty() ? lines : errors;
+  std::string which;
+  for (const std::string& f : named.empty() ? std::set<std::string>(files.begin(), files.end()) : named)
+    which += (which.empty() ? "" : ", ") + f;
+  std::ostringstream m;
+  m << "kernel build failed: " << which << " (in " << dir << ") did not compile on " << device;
+  if (shown.empty()) {
+    m << " (the driver gave no build log)";
+  } else {
+    m << (errors.empty() ? "; build log:" : "; first errors:");
+    for (std::size_t k = 0; k < shown.size() && k < kShown; ++k) m << "\n  " << shown[k];
+    if (shown.size() > kShown) m << "\n  ... and " << shown.size() - kShown << " more";
+  }
+  m << "\nfix: if you edited the kernels, correct the lines above; otherwise make sure " << dir
+    << " holds this build's cl/ folder (unset MILLCHARGE_KERNEL_DIR or point it there), update the OpenCL "
+       "driver, or try another --device (see `millcharge devices`)";
+  return m.str();
+}
 
 Program::Program(Context& ctx, const std::vector<std::string>& files,
                  BuildOptions options, bool double_precision)
@@ -69,10 +110,9 @@ Program::Program(Context& ctx, const std::vector<std::string>& files,
       log = program_.getBuildInfo<CL_PROGRAM_BUILD_LOG>(ctx.device());
     } catch (const cl::Error&) {
     }
-    std::ostringstream msg;
-    msg << "kernel build failed on " << ctx.info().label() << " (options: " << opts << ")";
-    if (!log.empty()) msg << ":\n" << log;
-    throw Error(msg.str());
+    if (e.err() != CL_BUILD_PROGRAM_FAILURE && log.empty())
+      throw ctx.error("building the kernels in " + dir + " on " + ctx.info().label(), e.err());
+    throw Error(build_failure_message(ctx.info().label(), dir, files, log));
   }
 }
 
@@ -85,7 +125,7 @@ Kernel::Kernel(Program& program, const std::string& name) : program_(program), n
 }
 
 void Kernel::fail(const std::string& what, const cl::Error& e) const {
-  throw Error("kernel '" + name_ + "': " + what + ": " + error_name(e.err()));
+  throw program_.ctx().error("kernel '" + name_ + "': " + what, e.err());
 }
 
 void Kernel::set(cl_uint index, double value) {
