@@ -68,6 +68,8 @@ MillDerived derive(const MillCase& c) {
   const double R = 0.5 * c.diameter;
   if (!(c.diameter > 0)) fail("mill.diameter", "must be > 0 m (got " + num(c.diameter) + ")");
   if (!(c.length > 0)) fail("mill.length", "must be > 0 m (got " + num(c.length) + ")");
+  if (!(c.diameter <= 1000)) fail("mill.diameter", "must be at most 1000 m (got " + num(c.diameter) + ")");
+  if (!(c.length <= 1000)) fail("mill.length", "must be at most 1000 m (got " + num(c.length) + ")");
   if (material_index(c, c.liner) < 0) fail("mill.liner", "unknown material \"" + c.liner + "\"");
   if (c.sizes.empty()) fail("charge.size", "the charge needs at least one size class");
   // Materials first: the ball counts divide by the densities.

@@ -222,7 +222,7 @@ bool is_index(const std::string& s) {
 // TOML allows non-ASCII text only inside strings and comments, and never right
 // after a backslash, so such a byte is refused here, before toml++ sees it.
 void refuse_stray_non_ascii(std::string_view t, const std::string& source) {
-  auto fail_at = [&](std::size_t i) {
+  auto fail_at = [&](std::size_t i, const char* where) {
     std::size_t line = 1, line_start = 0;
     for (std::size_t k = 0; k < i; ++k)
       if (t[k] == '\n') ++line, line_start = k + 1;
@@ -247,7 +247,7 @@ void refuse_stray_non_ascii(std::string_view t, const std::string& source) {
     if (len > 0) std::snprintf(what, sizeof what, "character U+%04X", cp);
     else std::snprintf(what, sizeof what, "byte 0x%02X (not UTF-8)", b(i));
     throw CaseError(source + ":" + std::to_string(line) + ":" + std::to_string(col) + ": not valid TOML: " + what +
-                    " outside a string or comment");
+                    " " + where);
   };
   enum { code, comment, basic, literal, ml_basic, ml_literal } st = code;
   const std::size_t n = t.size();
@@ -263,7 +263,7 @@ void refuse_stray_non_ascii(std::string_view t, const std::string& source) {
     const unsigned char ch = static_cast<unsigned char>(t[i]);
     switch (st) {
       case code:
-        if (ch >= 0x80) fail_at(i);
+        if (ch >= 0x80) fail_at(i, "outside a string or comment");
         if (ch == '#') st = comment;
         else if (at(i, "\"\"\"")) st = ml_basic, i += 2;
         else if (at(i, "'''")) st = ml_literal, i += 2;
@@ -279,7 +279,7 @@ void refuse_stray_non_ascii(std::string_view t, const std::string& source) {
           std::size_t j = i + 1;
           if (st == ml_basic)
             while (j < n && (t[j] == ' ' || t[j] == '\t')) ++j;
-          if (j < n && static_cast<unsigned char>(t[j]) >= 0x80) fail_at(j);
+          if (j < n && static_cast<unsigned char>(t[j]) >= 0x80) fail_at(j, "after a backslash");
           if (j < n && t[j] != '\n' && t[j] != '\r') i = j;  // skip the escaped character
         } else if (st == basic && (ch == '"' || ch == '\n')) {
           st = code;
@@ -430,8 +430,9 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
   if (const toml::table* lt = top.table("lifters", false)) {
     Section s(r, *lt, "lifters");
     s.knows({"rows", "first_angle", "profile"});
-    c.lifter_rows = static_cast<int>(s.integer("rows"));
-    if (c.lifter_rows < 0 || c.lifter_rows > 400) r.fail("lifters.rows", s.node("rows"), "must be in [0, 400]");
+    const long rows = s.integer("rows");  // checked before the cast: 2^32 rows is not 0 rows
+    if (rows < 0 || rows > 400) r.fail("lifters.rows", s.node("rows"), "must be in [0, 400]");
+    c.lifter_rows = static_cast<int>(rows);
     c.lifter_first_angle_deg = s.number("first_angle", 0.0);
     const auto profiles = s.tables("profile");
     for (std::size_t k = 0; k < profiles.size(); ++k) {
