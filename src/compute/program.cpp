@@ -1,5 +1,8 @@
 #include "compute/program.h"
 
+#include <unistd.h>
+
+#include <cstdio>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -41,6 +44,45 @@ std::string read_file(const std::string& path) {
   s << in.rdbuf();
   return s.str();
 }
+
+// Some drivers (PoCL's clang) also print a failed build's diagnostics on
+// stderr ("1 error generated."): while the kernels build, stderr goes to a
+// temporary file; release() puts it back and returns what was written.
+class StderrCapture {
+ public:
+  StderrCapture() {
+    std::fflush(stderr);
+    tmp_ = std::tmpfile();
+    if (!tmp_) return;
+    saved_ = ::dup(2);
+    if (saved_ < 0 || ::dup2(::fileno(tmp_), 2) < 0) {
+      if (saved_ >= 0) ::close(saved_);
+      saved_ = -1;
+    }
+  }
+  std::string release() {
+    std::string text;
+    if (saved_ >= 0) {
+      std::fflush(stderr);
+      ::dup2(saved_, 2);
+      ::close(saved_);
+      saved_ = -1;
+      std::rewind(tmp_);
+      char buf[4096];
+      for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, tmp_)) > 0;) text.append(buf, n);
+    }
+    if (tmp_) std::fclose(tmp_);
+    tmp_ = nullptr;
+    return text;
+  }
+  ~StderrCapture() { release(); }
+  StderrCapture(const StderrCapture&) = delete;
+  StderrCapture& operator=(const StderrCapture&) = delete;
+
+ private:
+  std::FILE* tmp_ = nullptr;
+  int saved_ = -1;
+};
 
 bool has_error(const std::string& line) {
   return line.find("error:") != std::string::npos || line.find("error :") != std::string::npos;
@@ -102,14 +144,20 @@ Program::Program(Context& ctx, const std::vector<std::string>& files,
   } catch (const cl::Error& e) {
     throw Error("cannot create OpenCL program: " + error_name(e.err()));
   }
+  StderrCapture driver_output;
   try {
     program_.build({ctx.device()}, opts.c_str());
+    // A good build: whatever the driver printed goes out as before.
+    const std::string printed = driver_output.release();
+    if (!printed.empty()) std::fputs(printed.c_str(), stderr);
   } catch (const cl::Error& e) {
+    const std::string printed = driver_output.release();  // the build log has it too
     std::string log;
     try {
       log = program_.getBuildInfo<CL_PROGRAM_BUILD_LOG>(ctx.device());
     } catch (const cl::Error&) {
     }
+    if (log.find_first_not_of(" \n\r\t") == std::string::npos) log = printed;
     if (e.err() != CL_BUILD_PROGRAM_FAILURE && log.empty())
       throw ctx.error("building the kernels in " + dir + " on " + ctx.info().label(), e.err());
     throw Error(build_failure_message(ctx.info().label(), dir, files, log));
