@@ -180,8 +180,7 @@ nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::js
 int cmd_devices() {
   const auto devices = compute::list_devices();
   if (devices.empty()) {
-    std::cerr << "millcharge: no OpenCL platform found: install an OpenCL driver "
-                 "(scripts/setup.sh installs PoCL for the CPU)\n";
+    std::cerr << "millcharge: OpenCL: " << compute::no_device_message() << '\n';
     return 1;
   }
   for (const auto& d : devices)
