@@ -214,12 +214,12 @@ TEST_CASE("a run that does not fit the device stops with the bytes and the fix, 
           "[device][cli]") {
   const fs::path work = temp_dir("oom_cli");
   const fs::path out = work / "run";
-  const Outcome o = run_binary("MILLCHARGE_DEVICE_MEMORY=1M",
+  const Outcome o = run_binary("MILLCHARGE_DEVICE_MEMORY=512K",
                                "run --quiet --duration 0.01 --set run.warmup=0 --out '" + out.string() + "'", work);
   INFO(o.err);
   CHECK(o.status == 1);
   CHECK_THAT(o.err, Catch::StartsWith("millcharge: OpenCL: device out of memory: the run needs at least "));
-  CHECK_THAT(o.err, Catch::Contains(" has 1.0 MiB (1048576 bytes) (set by MILLCHARGE_DEVICE_MEMORY); buffer '"));
+  CHECK_THAT(o.err, Catch::Contains(" has 512.0 KiB (524288 bytes) (set by MILLCHARGE_DEVICE_MEMORY); buffer '"));
   CHECK_THAT(o.err, Catch::Contains("; fix: fewer balls"));
   CHECK(std::count(o.err.begin(), o.err.end(), '\n') == 1);
   CHECK_FALSE(fs::exists(out));

@@ -114,19 +114,18 @@ class SolverImpl final : public Solver {
   Buffer<real4> pos_, vel_, omega_, force_, torque_, accum_, pos_at_build_;
   Buffer<int2> info_;  // (id, material)
   Buffer<int> wall_key_;
-  Buffer<real4> wall_hist_;
-  // spares the gathers write into before a swap
+  Buffer<Real> wall_hist_;  // packed springs, 3 per slot
+  // the spare the gathers write into before a swap (and the scratch of the
+  // info and wall-slot gathers)
   Buffer<real4> spare4_;
-  Buffer<int2> spare2_;
-  Buffer<int> spare_key_;
-  Buffer<real4> spare_hist_;
   // binning
   Buffer<int> cell_count_, cell_start_, ball_cell_, ball_rank_, sorted_index_;
-  // neighbour lists, current and previous (for the history carry-over)
+  // neighbour lists, and the springs carried over a rebuild (compact: only
+  // pairs in contact; partner index in the old order)
   Buffer<int> neigh_start_, neigh_count_, neigh_index_;
-  Buffer<real4> neigh_hist_;
-  Buffer<int> old_start_, old_count_, old_index_;
-  Buffer<real4> old_hist_;
+  Buffer<Real> neigh_hist_;  // packed springs, 3 per entry
+  Buffer<int> carry_start_, carry_count_, carry_index_;
+  Buffer<Real> carry_hist_;
   // status word and reduction partials
   Buffer<int> status_;
   Buffer<Real> partial_;
@@ -148,8 +147,8 @@ class SolverImpl final : public Solver {
 
   Scan scan_;
   Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
-      k_gather_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
-      k_layout_, k_profile_, k_count_contacts_, k_clear_flag_;
+      k_gather_wall_, k_put_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
+      k_layout_, k_profile_, k_count_contacts_, k_clear_flag_, k_carry_count_, k_carry_fill_;
 };
 
 template <class Real>
@@ -181,22 +180,19 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       pos_at_build_(ctx, n_, "positions at list build"),
       info_(ctx, n_, "ids and materials"),
       wall_key_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "wall contact keys"),
-      wall_hist_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "wall contact history"),
+      wall_hist_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS * 3, "wall contact history"),
       spare4_(ctx, n_, "spare real4"),
-      spare2_(ctx, n_, "spare int2"),
-      spare_key_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "spare wall keys"),
-      spare_hist_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "spare wall history"),
       ball_cell_(ctx, n_, "ball cell"),
       ball_rank_(ctx, n_, "ball rank in cell"),
       sorted_index_(ctx, n_, "sorted index"),
       neigh_start_(ctx, n_, "neighbour start"),
       neigh_count_(ctx, n_, "neighbour count"),
-      neigh_index_(ctx, static_cast<std::size_t>(n_) * 8 + 64, "neighbour index"),
-      neigh_hist_(ctx, static_cast<std::size_t>(n_) * 8 + 64, "neighbour history"),
-      old_start_(ctx, n_, "previous neighbour start"),
-      old_count_(ctx, n_, "previous neighbour count"),
-      old_index_(ctx, 1, "previous neighbour index"),
-      old_hist_(ctx, 1, "previous neighbour history"),
+      neigh_index_(ctx, static_cast<std::size_t>(n_) + 64, "neighbour index"),
+      neigh_hist_(ctx, (static_cast<std::size_t>(n_) + 64) * 3, "neighbour history"),
+      carry_start_(ctx, n_, "carried spring start"),
+      carry_count_(ctx, n_, "carried spring count"),
+      carry_index_(ctx, 1, "carried spring partner"),
+      carry_hist_(ctx, 3, "carried springs"),
       status_(ctx, 1, "status"),
       partial_(ctx, (static_cast<std::size_t>(n_) / kReduceWG + 1) * kObservables, "reduction partials"),
       profile_(ctx, kProfileBins, "contact profile"),
@@ -208,7 +204,8 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_bin_sort_(program_, "bin_sort_cells"),
       k_gather4_(program_, "gather_real4"),
       k_gather2_(program_, "gather_int2"),
-      k_gather_wall_(program_, "gather_wall_slots"),
+      k_gather_wall_(program_, "gather_wall_slot"),
+      k_put_wall_(program_, "put_wall_slot"),
       k_contacts_count_(program_, "contacts_count"),
       k_contacts_fill_(program_, "contacts_fill"),
       k_forces_(program_, "forces"),
@@ -217,7 +214,9 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_layout_(program_, "layout_sizes"),
       k_profile_(program_, "profile_contacts"),
       k_count_contacts_(program_, "count_contacts"),
-      k_clear_flag_(program_, "clear_status_flag") {
+      k_clear_flag_(program_, "clear_status_flag"),
+      k_carry_count_(program_, "carry_count"),
+      k_carry_fill_(program_, "carry_fill") {
   if (n_ == 0) throw std::invalid_argument("scene: no balls");
 
   // The device's struct sizes must equal the host mirrors'.
@@ -245,11 +244,12 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
     info_.host[i] = {b.id, b.material};
   }
   std::fill(wall_key_.host.begin(), wall_key_.host.end(), MC_WALL_NONE);
-  for (auto* b : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &wall_hist_}) b->write_to_device();
+  for (auto* b : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_}) b->write_to_device();
+  wall_hist_.write_to_device();
   info_.write_to_device();
   wall_key_.write_to_device();
   // Empty lists: the first rebuild takes these as the previous lists.
-  for (auto* b : {&neigh_start_, &neigh_count_, &old_start_, &old_count_}) b->write_to_device();
+  for (auto* b : {&neigh_start_, &neigh_count_}) b->write_to_device();
   status_.write_to_device();
   profile_.write_to_device();
 
@@ -368,30 +368,41 @@ void SolverImpl<Real>::rebuild() {
     k_gather4_.args(n, sorted_index_, *b, spare4_).launch(n);
     std::swap(*b, spare4_);
   }
-  k_gather2_.args(n, sorted_index_, info_, spare2_).launch(n);
-  std::swap(info_, spare2_);
-  k_gather_wall_.args(n, sorted_index_, wall_key_, wall_hist_, spare_key_, spare_hist_).launch(n);
-  std::swap(wall_key_, spare_key_);
-  std::swap(wall_hist_, spare_hist_);
+  // The ids and the wall slots go through the spare (and ball_cell_, free
+  // once the balls are scattered) and back.
+  k_gather2_.args(n, sorted_index_, info_, spare4_).launch(n);
+  ctx_.queue().enqueueCopyBuffer(spare4_.device(), info_.device(), 0, 0, info_.bytes());
+  for (int slot = 0; slot < MC_MAX_WALL_CONTACTS; ++slot) {
+    k_gather_wall_.args(n, slot, sorted_index_, wall_key_, wall_hist_, ball_cell_, spare4_).launch(n);
+    k_put_wall_.args(n, slot, ball_cell_, spare4_, wall_key_, wall_hist_).launch(n);
+  }
   pos_at_build_.copy_from(pos_, n);
   lap(&StageTimes::binning_s);
 
-  // New lists; the previous ones (in the previous order) feed the carry-over.
-  std::swap(neigh_start_, old_start_);
-  std::swap(neigh_count_, old_count_);
-  std::swap(neigh_index_, old_index_);
-  std::swap(neigh_hist_, old_hist_);
+  // The springs of pairs in contact, out of the lists (in the old order).
+  k_carry_count_.args(n, neigh_start_, neigh_count_, neigh_hist_, carry_count_).launch(n);
+  scan_.run(carry_count_, carry_start_, n);
+  const int carried = scan_.read_total();
+  if (static_cast<std::size_t>(carried) > carry_index_.size()) {
+    const std::size_t cap = static_cast<std::size_t>(carried) + carried / 8 + 64;
+    carry_index_.resize(cap);
+    carry_hist_.resize(cap * 3);
+  }
+  k_carry_fill_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_hist_, carry_start_, carry_index_, carry_hist_)
+      .launch(n);
+  // New lists in their place.
   k_contacts_count_.args(params_, pos_, cell_start_, cell_count_, neigh_count_).launch(n);
   scan_.run(neigh_count_, neigh_start_, n);
   const int total = scan_.read_total();
   if (static_cast<std::size_t>(total) > neigh_index_.size()) {
-    // The lists grow as needed: no contact is ever dropped.
-    const std::size_t cap = static_cast<std::size_t>(total) + total / 4 + 64;
+    // The lists grow as needed (with an eighth to spare): no contact is
+    // ever dropped.
+    const std::size_t cap = static_cast<std::size_t>(total) + total / 8 + 64;
     neigh_index_.resize(cap);
-    neigh_hist_.resize(cap);
+    neigh_hist_.resize(cap * 3);
   }
   k_contacts_fill_.args(params_, pos_, cell_start_, cell_count_, neigh_start_, neigh_index_,
-                        neigh_hist_, sorted_index_, old_start_, old_count_, old_index_, old_hist_)
+                        neigh_hist_, sorted_index_, carry_start_, carry_count_, carry_index_, carry_hist_)
       .launch(n);
   ++rebuilds_;
   lap(&StageTimes::contacts_s);
@@ -400,7 +411,8 @@ void SolverImpl<Real>::rebuild() {
 template <class Real>
 void SolverImpl<Real>::forces() {
   k_forces_
-      .args(params_, pairs_, lifters_, mill_angle_, mill_omega_, pos_, vel_, omega_, info_,
+      .args(params_, pairs_, lifters_, std::cos(mill_angle_), std::sin(mill_angle_), mill_omega_, pos_, vel_,
+            omega_, info_,
             neigh_start_, neigh_count_, neigh_index_, neigh_hist_, wall_key_, wall_hist_, force_,
             torque_, accum_, status_)
       .launch(n_);
@@ -616,12 +628,12 @@ SolverState SolverImpl<Real>::save_state() {
   put_array(st, "pos_at_build", pos_at_build_, n);
   put_array(st, "info", info_, n);
   put_array(st, "wall_key", wall_key_, slots);
-  put_array(st, "wall_hist", wall_hist_, slots);
+  put_array(st, "wall_hist", wall_hist_, slots * 3);
   put_array(st, "neigh_start", neigh_start_, n);
   put_array(st, "neigh_count", neigh_count_, n);
   const std::size_t entries = static_cast<std::size_t>(neigh_start_.host[n - 1]) + neigh_count_.host[n - 1];
   put_array(st, "neigh_index", neigh_index_, entries);
-  put_array(st, "neigh_hist", neigh_hist_, entries);
+  put_array(st, "neigh_hist", neigh_hist_, entries * 3);
   put_array(st, "status", status_, 1);
   put_array(st, "profile", profile_, kProfileBins);
   return st;
@@ -702,14 +714,14 @@ template <class Real>
 std::size_t SolverImpl<Real>::device_bytes() const {
   std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() + profile_.bytes() + counts_.bytes() +
                   partial_.bytes() + scan_.bytes();
-  for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_,
-                        &wall_hist_, &spare4_, &spare_hist_, &neigh_hist_, &old_hist_})
+  for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_, &spare4_})
     b += x->bytes();
-  for (const auto* x : {&wall_key_, &spare_key_, &cell_count_, &cell_start_, &ball_cell_,
+  for (const auto* x : {&wall_hist_, &neigh_hist_, &carry_hist_}) b += x->bytes();
+  for (const auto* x : {&wall_key_, &cell_count_, &cell_start_, &ball_cell_,
                         &ball_rank_, &sorted_index_, &neigh_start_, &neigh_count_, &neigh_index_,
-                        &old_start_, &old_count_, &old_index_})
+                        &carry_start_, &carry_count_, &carry_index_})
     b += x->bytes();
-  return b + info_.bytes() + spare2_.bytes();
+  return b + info_.bytes();
 }
 
 }  // namespace
