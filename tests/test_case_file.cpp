@@ -193,6 +193,11 @@ TEST_CASE("non-ASCII text outside strings and comments is refused before toml++ 
              Catch::Contains("case.toml:19:15: not valid TOML: character U+00B5 outside a string or comment"));
   CHECK_THAT(error_of(with("diameter = 0.9 ", "diameter = 0.9\xa5 ")),
              Catch::Contains("not valid TOML: byte 0xA5 (not UTF-8) outside a string or comment"));
+  // The second finding: a quote where no string may start ("8n'Ǎ") opens none.
+  CHECK_THAT(error_of("title = 8n'\xc7\x8d" "8889tfraction\n"),
+             Catch::Contains("case.toml:1:12: not valid TOML: character U+01CD outside a string or comment"));
+  // A UTF-8 byte order mark at the start is allowed.
+  CHECK(mc::io::parse_case("\xEF\xBB\xBF" + lab, "case.toml").diameter == 0.9);
   // After a backslash in a string (never valid TOML) too.
   CHECK_THAT(error_of(with("title = \"Laboratory", "title = \"\\\xc2\xb5 Laboratory")),
              Catch::Contains("case.toml:16:11: not valid TOML: character U+00B5 after a backslash"));

@@ -259,19 +259,29 @@ void refuse_stray_non_ascii(std::string_view t, const std::string& source) {
     while (j < n && t[j] == q && j - i < 5) ++j;
     return j - 1;
   };
-  for (std::size_t i = 0; i < n; ++i) {
+  // A quote opens a string only where TOML allows one: a key at the start of
+  // a line or after '.', '{' or ',', a value after '=', '[' or ','. Anywhere
+  // else ("8n'...") the document is invalid anyway, and toml++ may read on
+  // past the quote, so what follows is checked as outside a string.
+  char prev = '\n';
+  std::size_t i = 0;
+  if (at(0, "\xEF\xBB\xBF")) i = 3;  // a UTF-8 byte order mark
+  for (; i < n; ++i) {
     const unsigned char ch = static_cast<unsigned char>(t[i]);
     switch (st) {
-      case code:
+      case code: {
         if (ch >= 0x80) fail_at(i, "outside a string or comment");
+        const bool may_open = prev == '=' || prev == '[' || prev == ',' || prev == '{' || prev == '.' || prev == '\n';
         if (ch == '#') st = comment;
-        else if (at(i, "\"\"\"")) st = ml_basic, i += 2;
-        else if (at(i, "'''")) st = ml_literal, i += 2;
-        else if (ch == '"') st = basic;
-        else if (ch == '\'') st = literal;
+        else if (may_open && at(i, "\"\"\"")) st = ml_basic, i += 2;
+        else if (may_open && at(i, "'''")) st = ml_literal, i += 2;
+        else if (may_open && ch == '"') st = basic;
+        else if (may_open && ch == '\'') st = literal;
+        if (ch != ' ' && ch != '\t' && ch != '\r') prev = static_cast<char>(ch);
         break;
+      }
       case comment:
-        if (ch == '\n') st = code;
+        if (ch == '\n') st = code, prev = '\n';
         break;
       case basic:
       case ml_basic:
@@ -282,19 +292,19 @@ void refuse_stray_non_ascii(std::string_view t, const std::string& source) {
           if (j < n && static_cast<unsigned char>(t[j]) >= 0x80) fail_at(j, "after a backslash");
           if (j < n && t[j] != '\n' && t[j] != '\r') i = j;  // skip the escaped character
         } else if (st == basic && (ch == '"' || ch == '\n')) {
-          st = code;
+          st = code, prev = static_cast<char>(ch);
         } else if (st == ml_basic && at(i, "\"\"\"")) {
           i = close_run(i, '"');
-          st = code;
+          st = code, prev = '"';
         }
         break;
       case literal:
-        if (ch == '\'' || ch == '\n') st = code;
+        if (ch == '\'' || ch == '\n') st = code, prev = static_cast<char>(ch);
         break;
       case ml_literal:
         if (at(i, "'''")) {
           i = close_run(i, '\'');
-          st = code;
+          st = code, prev = '\'';
         }
         break;
     }
