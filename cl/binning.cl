@@ -32,13 +32,12 @@ __kernel void bin_scatter(int n, __global const int* ball_cell,
 
 /* Insertion sort of each cell's few entries by ball id. */
 __kernel void bin_sort_cells(int n_cells, __global const int* cell_start,
-                             __global const int* cell_count,
                              __global int* sorted_index,
                              __global const int2* info) {
   const int c = get_global_id(0);
   if (c >= n_cells) return;
   const int b = cell_start[c];
-  const int m = cell_count[c];
+  const int m = cell_start[c + 1] - b;
   for (int a = b + 1; a < b + m; ++a) {
     const int idx = sorted_index[a];
     const int key = info[idx].x;

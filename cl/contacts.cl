@@ -1,6 +1,7 @@
 /* contacts.cl — the neighbour lists (the "collision links"): for each ball,
  * the balls within r_i + r_j + skin, stored compactly (CSR: a start and a
- * count per ball). Built in two passes, count then fill, after binning has
+ * count per ball). Cell c holds the balls cell_start[c] .. cell_start[c + 1].
+ * Built in two passes, count then fill, after binning has
  * put the balls in cell order. The fill pass carries each persisting pair's
  * tangential spring over from the previous list, which was written in the
  * previous ball order: `perm` maps a new index to the old one. Only the
@@ -21,7 +22,6 @@ inline int is_neighbour(__global const SimParams* sp, real4 a, real4 b) {
 __kernel void contacts_count(__global const SimParams* sp,
                              __global const real4* pos,
                              __global const int* cell_start,
-                             __global const int* cell_count,
                              __global int* neigh_count) {
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
@@ -33,7 +33,7 @@ __kernel void contacts_count(__global const SimParams* sp,
       for (int x = max(c.x - 1, 0); x <= min(c.x + 1, sp->grid_nx - 1); ++x) {
         const int cell = (z * sp->grid_ny + y) * sp->grid_nx + x;
         const int b = cell_start[cell];
-        const int e = b + cell_count[cell];
+        const int e = cell_start[cell + 1];
         for (int j = b; j < e; ++j)
           if (j != i && is_neighbour(sp, pi, pos[j])) ++count;
       }
@@ -43,7 +43,6 @@ __kernel void contacts_count(__global const SimParams* sp,
 __kernel void contacts_fill(__global const SimParams* sp,
                             __global const real4* pos,
                             __global const int* cell_start,
-                            __global const int* cell_count,
                             __global const int* neigh_start,
                             __global int* neigh_index,
                             __global real* neigh_hist,
@@ -65,7 +64,7 @@ __kernel void contacts_fill(__global const SimParams* sp,
       for (int x = max(c.x - 1, 0); x <= min(c.x + 1, sp->grid_nx - 1); ++x) {
         const int cell = (z * sp->grid_ny + y) * sp->grid_nx + x;
         const int b = cell_start[cell];
-        const int e = b + cell_count[cell];
+        const int e = cell_start[cell + 1];
         for (int j = b; j < e; ++j) {
           if (j == i || !is_neighbour(sp, pi, pos[j])) continue;
           const int oj = perm[j];

@@ -34,7 +34,8 @@ class Scan {
         block_sums_(ctx, max_n / kScanWG + 1, "scan block sums"),
         total_(ctx, 1, "scan total") {}
 
-  void run(const Buffer<int>& in, Buffer<int>& out, int n) {
+  template <class In>
+  void run(const In& in, Buffer<int>& out, int n) {
     const int n_blocks = (n + kScanWG - 1) / kScanWG;
     if (static_cast<std::size_t>(n_blocks) > block_sums_.size())
       block_sums_.resize(n_blocks);
@@ -119,7 +120,10 @@ class SolverImpl final : public Solver {
   // info and wall-slot gathers)
   Buffer<real4> spare4_;
   // binning
-  Buffer<int> cell_count_, cell_start_, ball_cell_, ball_rank_, sorted_index_;
+  // cell_start_ has n_cells + 1 entries (the last is the number of balls).
+  // The counts live only while binning, in the carried springs' buffer,
+  // which is free then (see rebuild).
+  Buffer<int> cell_start_, ball_cell_, ball_rank_, sorted_index_;
   // neighbour lists, and the springs carried over a rebuild (compact: only
   // pairs in contact; partner index in the old order)
   Buffer<int> neigh_start_, neigh_count_, neigh_index_;
@@ -350,18 +354,22 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   n_cells_ = static_cast<int>(d[0] * d[1] * d[2]);
   params_.write_to_device();
 
-  cell_count_ = Buffer<int>(ctx_, n_cells_, "cell count");
-  cell_start_ = Buffer<int>(ctx_, n_cells_, "cell start");
+  cell_start_ = Buffer<int>(ctx_, static_cast<std::size_t>(n_cells_) + 1, "cell start");
 }
 
 template <class Real>
 void SolverImpl<Real>::rebuild() {
   const int n = n_;
-  k_bin_clear_.args(cell_count_, n_cells_).launch(n_cells_);
-  k_bin_count_.args(params_, pos_, cell_count_, ball_cell_, ball_rank_).launch(n);
-  scan_.run(cell_count_, cell_start_, n_cells_);
+  // The counts per cell go in the carried springs' buffer: it is refilled
+  // only after binning.
+  const std::size_t count_reals = ((static_cast<std::size_t>(n_cells_) + 1) * sizeof(int) + sizeof(Real) - 1) / sizeof(Real);
+  if (carry_hist_.size() < count_reals) carry_hist_.resize(count_reals);
+  Buffer<Real>& cell_count = carry_hist_;
+  k_bin_clear_.args(cell_count, n_cells_ + 1).launch(n_cells_ + 1);
+  k_bin_count_.args(params_, pos_, cell_count, ball_cell_, ball_rank_).launch(n);
+  scan_.run(cell_count, cell_start_, n_cells_ + 1);
   k_bin_scatter_.args(n, ball_cell_, ball_rank_, cell_start_, sorted_index_).launch(n);
-  k_bin_sort_.args(n_cells_, cell_start_, cell_count_, sorted_index_, info_).launch(n_cells_);
+  k_bin_sort_.args(n_cells_, cell_start_, sorted_index_, info_).launch(n_cells_);
 
   // Put the ball arrays in cell order.
   for (Buffer<real4>* b : {&pos_, &vel_, &omega_, &accum_}) {
@@ -383,25 +391,24 @@ void SolverImpl<Real>::rebuild() {
   k_carry_count_.args(n, neigh_start_, neigh_count_, neigh_hist_, carry_count_).launch(n);
   scan_.run(carry_count_, carry_start_, n);
   const int carried = scan_.read_total();
-  if (static_cast<std::size_t>(carried) > carry_index_.size()) {
-    const std::size_t cap = static_cast<std::size_t>(carried) + carried / 8 + 64;
-    carry_index_.resize(cap);
-    carry_hist_.resize(cap * 3);
-  }
+  if (static_cast<std::size_t>(carried) > carry_index_.size())
+    carry_index_.resize(static_cast<std::size_t>(carried) + carried / 16 + 64);
+  if (static_cast<std::size_t>(carried) * 3 > carry_hist_.size())
+    carry_hist_.resize(std::max(carry_index_.size() * 3, count_reals));
   k_carry_fill_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_hist_, carry_start_, carry_index_, carry_hist_)
       .launch(n);
   // New lists in their place.
-  k_contacts_count_.args(params_, pos_, cell_start_, cell_count_, neigh_count_).launch(n);
+  k_contacts_count_.args(params_, pos_, cell_start_, neigh_count_).launch(n);
   scan_.run(neigh_count_, neigh_start_, n);
   const int total = scan_.read_total();
   if (static_cast<std::size_t>(total) > neigh_index_.size()) {
-    // The lists grow as needed (with an eighth to spare): no contact is
+    // The lists grow as needed (with a sixteenth to spare): no contact is
     // ever dropped.
-    const std::size_t cap = static_cast<std::size_t>(total) + total / 8 + 64;
+    const std::size_t cap = static_cast<std::size_t>(total) + total / 16 + 64;
     neigh_index_.resize(cap);
     neigh_hist_.resize(cap * 3);
   }
-  k_contacts_fill_.args(params_, pos_, cell_start_, cell_count_, neigh_start_, neigh_index_,
+  k_contacts_fill_.args(params_, pos_, cell_start_, neigh_start_, neigh_index_,
                         neigh_hist_, sorted_index_, carry_start_, carry_count_, carry_index_, carry_hist_)
       .launch(n);
   ++rebuilds_;
@@ -717,7 +724,7 @@ std::size_t SolverImpl<Real>::device_bytes() const {
   for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_, &spare4_})
     b += x->bytes();
   for (const auto* x : {&wall_hist_, &neigh_hist_, &carry_hist_}) b += x->bytes();
-  for (const auto* x : {&wall_key_, &cell_count_, &cell_start_, &ball_cell_,
+  for (const auto* x : {&wall_key_, &cell_start_, &ball_cell_,
                         &ball_rank_, &sorted_index_, &neigh_start_, &neigh_count_, &neigh_index_,
                         &carry_start_, &carry_count_, &carry_index_})
     b += x->bytes();
@@ -729,7 +736,7 @@ std::size_t SolverImpl<Real>::device_bytes() const {
 double default_skin(const Scene& scene) {
   double r_min = std::numeric_limits<double>::max();
   for (const Ball& b : scene.balls) r_min = std::min(r_min, b.radius);
-  return scene.balls.empty() ? 0.0 : 0.3 * r_min;
+  return scene.balls.empty() ? 0.0 : 0.2 * r_min;
 }
 
 std::unique_ptr<Solver> make_solver(compute::Context& ctx, const Scene& scene) {
