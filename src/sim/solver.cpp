@@ -67,6 +67,7 @@ class SolverImpl final : public Solver {
   void set_mill_omega(double w) override { mill_omega_ = w; }
   void sample_contact_profile() override;
   std::vector<long> take_contact_profile() override;
+  void write_instances(const cl::Buffer& out) override;
 
   double time_s() const override { return time_; }
   long steps() const override { return steps_; }
@@ -127,6 +128,9 @@ class SolverImpl final : public Solver {
   Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
       k_gather_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
       k_layout_, k_profile_;
+  // The viewer's kernel, built on first use so that headless runs skip it.
+  std::unique_ptr<compute::Program> view_program_;
+  std::unique_ptr<Kernel> k_instances_;
 };
 
 template <class Real>
@@ -459,6 +463,16 @@ std::vector<long> SolverImpl<Real>::take_contact_profile() {
 }
 
 template <class Real>
+void SolverImpl<Real>::write_instances(const cl::Buffer& out) {
+  if (!k_instances_) {
+    view_program_ = std::make_unique<compute::Program>(ctx_, std::vector<std::string>{"instances.cl"},
+                                                       compute::BuildOptions(), std::is_same_v<Real, double>);
+    k_instances_ = std::make_unique<Kernel>(*view_program_, "write_instances");
+  }
+  k_instances_->args(params_, pos_, vel_, force_, info_, accum_, time_ - observed_since_, out).launch(n_);
+}
+
+template <class Real>
 std::vector<BallState> SolverImpl<Real>::balls() {
   for (auto* b : {&pos_, &vel_, &omega_, &force_, &torque_}) b->read_from_device();
   info_.read_from_device();
@@ -498,6 +512,10 @@ std::size_t SolverImpl<Real>::device_bytes() const {
 }
 
 }  // namespace
+
+void Solver::write_instances(const cl::Buffer&) {
+  throw std::logic_error("this solver cannot feed the viewer (write_instances)");
+}
 
 double default_skin(const Scene& scene) {
   double r_min = std::numeric_limits<double>::max();

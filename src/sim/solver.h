@@ -59,6 +59,14 @@ class Solver {
   // The counts since the last take; resets them.
   virtual std::vector<long> take_contact_profile() = 0;
 
+  // The viewer's data for every ball (cl/instances.h: centre, radius, speed,
+  // material, dissipation power since the last observe(true), id) written
+  // into `out`, which holds at least balls × MC_INSTANCE_FLOATS floats: a
+  // device buffer, or an OpenCL view of a GL buffer that the caller has
+  // acquired. The kernel is built on the first call. Enqueued only: the
+  // caller finishes the queue before reading or drawing.
+  virtual void write_instances(const cl::Buffer& out);
+
   virtual double time_s() const = 0;
   virtual long steps() const = 0;
   virtual long rebuilds() const = 0;
