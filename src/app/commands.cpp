@@ -21,6 +21,7 @@
 #include "io/vtk.h"
 #include "sim/mill_run.h"
 #include "sim/solver.h"
+#include "viewer/viewer.h"
 
 namespace mc::app {
 
@@ -380,6 +381,23 @@ int cmd_run(const RunOptions& o) {
   std::printf("wrote           %s/{summary.json, timeseries.csv, charge.pvd, power.png, charge.png}\n",
               out.string().c_str());
   return 0;
+}
+
+int cmd_view(const ViewOptions& o) {
+  Prepared p = prepare(o.c);
+  viewer::ViewOptions v;
+  v.device = o.c.device;
+  v.frames = o.frames;
+  v.screenshot = o.screenshot;
+  v.steps_per_frame = o.steps_per_frame;
+  v.camera = o.camera;
+  v.colour = o.colour;
+  v.width = o.width;
+  v.height = o.height;
+  v.panel = !o.no_panel;
+  if (!o.screenshot.empty() && o.frames <= 0)
+    throw std::invalid_argument("--screenshot needs --frames N (the picture is taken after the last frame)");
+  return viewer::run(p.c, p.d, std::move(p.scene), v);
 }
 
 }  // namespace mc::app

@@ -23,8 +23,20 @@ struct RunOptions {
   bool quiet = false;  // --quiet: no progress lines
 };
 
+struct ViewOptions {
+  CaseOptions c;
+  int frames = 0;              // --frames: draw this many, then exit
+  std::string screenshot;      // --screenshot FILE.png after the last frame
+  int steps_per_frame = 0;     // --steps-per-frame; 0: adaptive (40 with --frames)
+  std::string camera = "end";  // --camera end|iso
+  std::string colour = "speed";  // --colour speed|size|material|impact
+  int width = 1280, height = 800;  // --size WxH
+  bool no_panel = false;       // --no-panel
+};
+
 int cmd_devices();
 int cmd_check(const CaseOptions& o);
 int cmd_run(const RunOptions& o);
+int cmd_view(const ViewOptions& o);
 
 }  // namespace mc::app

@@ -1,12 +1,15 @@
 // millcharge — the command line (DESIGN.md, "Command line"):
 //   millcharge run   [CASE] [--out DIR] [--duration S] [--device SPEC]
 //                    [--precision float|double] [--set KEY=VALUE]... [--force] [--quiet]
+//   millcharge view  [CASE] [same options] [--frames N --screenshot FILE.png]
+//                    [--steps-per-frame N] [--camera end|iso] [--colour MODE] [--size WxH]
 //   millcharge check CASE [--set KEY=VALUE]...
 //   millcharge devices
 // Exit status: 0 done; 2 bad input (a message names the key; nothing written);
 // 1 any other failure (device, blow-up, disk).
 #include <CLI/CLI.hpp>
 
+#include <cstdio>
 #include <iostream>
 #include <stdexcept>
 
@@ -42,6 +45,22 @@ int main(int argc, char** argv) {
   run->add_flag("--force", ro.force, "replace an earlier run in --out");
   run->add_flag("--quiet", ro.quiet, "no progress lines");
 
+  mc::app::ViewOptions vo;
+  auto* view = app.add_subcommand("view", "watch the charge in a window and change the mill while it turns");
+  add_case_options(view, vo.c, true);
+  view->add_option("--frames", vo.frames, "draw N frames, then exit (scripted: fixed steps per frame)")
+      ->check(CLI::PositiveNumber);
+  view->add_option("--screenshot", vo.screenshot, "write the last frame to FILE.png (with --frames)")
+      ->type_name("FILE.png");
+  view->add_option("--steps-per-frame", vo.steps_per_frame, "simulation steps per drawn frame (default: adapt)")
+      ->check(CLI::PositiveNumber);
+  view->add_option("--camera", vo.camera, "end (axial, default) or iso")->check(CLI::IsMember({"end", "iso"}));
+  view->add_option("--colour", vo.colour, "colour the balls by speed, size, material or impact")
+      ->check(CLI::IsMember({"speed", "size", "material", "impact"}));
+  std::string size;
+  view->add_option("--size", size, "window size in pixels (default 1280x800)")->type_name("WxH");
+  view->add_flag("--no-panel", vo.no_panel, "draw the mill only, without the ImGui panel");
+
   mc::app::CaseOptions co;
   auto* check = app.add_subcommand("check", "validate a case and print its derived values");
   add_case_options(check, co, false);
@@ -55,6 +74,12 @@ int main(int argc, char** argv) {
     if (*devices) return mc::app::cmd_devices();
     if (*check) return mc::app::cmd_check(co);
     if (*run) return mc::app::cmd_run(ro);
+    if (*view) {
+      if (!size.empty() && (std::sscanf(size.c_str(), "%dx%d", &vo.width, &vo.height) != 2 || vo.width < 320 ||
+                            vo.height < 240 || vo.width > 8192 || vo.height > 8192))
+        throw std::invalid_argument("--size " + size + ": expected WxH in pixels, e.g. 1280x800");
+      return mc::app::cmd_view(vo);
+    }
   } catch (const std::invalid_argument& e) {
     std::cerr << "millcharge: " << e.what() << '\n';
     return 2;
