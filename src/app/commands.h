@@ -32,6 +32,7 @@ struct ViewOptions {
   std::string colour = "speed";  // --colour speed|size|material|impact
   int width = 1280, height = 800;  // --size WxH
   bool no_panel = false;       // --no-panel
+  std::vector<std::string> edits;  // --edit FRAME:KEY=VALUE
 };
 
 int cmd_devices();

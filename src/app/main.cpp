@@ -3,6 +3,7 @@
 //                    [--precision float|double] [--set KEY=VALUE]... [--force] [--quiet]
 //   millcharge view  [CASE] [same options] [--frames N --screenshot FILE.png]
 //                    [--steps-per-frame N] [--camera end|iso] [--colour MODE] [--size WxH]
+//                    [--no-panel] [--edit FRAME:KEY=VALUE]...
 //   millcharge check CASE [--set KEY=VALUE]...
 //   millcharge devices
 // Exit status: 0 done; 2 bad input (a message names the key; nothing written);
@@ -60,6 +61,10 @@ int main(int argc, char** argv) {
   std::string size;
   view->add_option("--size", size, "window size in pixels (default 1280x800)")->type_name("WxH");
   view->add_flag("--no-panel", vo.no_panel, "draw the mill only, without the ImGui panel");
+  view->add_option("--edit", vo.edits,
+                   "before frame FRAME, change a case key as the panel does (repeatable), "
+                   "e.g. --edit 50:lifters.profile.0.height=0.04")
+      ->type_name("FRAME:KEY=VALUE");
 
   mc::app::CaseOptions co;
   auto* check = app.add_subcommand("check", "validate a case and print its derived values");

@@ -38,15 +38,8 @@ class Window {
   bool imgui_ = false;
 };
 
-// What a change in the panel asks of the charge.
-enum class Edit {
-  none,
-  contact,  // friction, restitution: same balls, new pair table
-  lifters,  // new walls: balls in the way are moved out
-  filling,  // balls added above the charge or taken from the top
-  repack,   // ball size: a new charge, settled again
-  reset     // the current case from a fresh packing
-};
+// What the panel (or a scripted --edit) asks for after the frame.
+enum class Edit { none, apply, reset };
 
 class App {
  public:
@@ -59,7 +52,9 @@ class App {
   void make_context();
   void install_solver(Scene scene, bool settle);
   void step_frame();
-  void apply_edit(Edit kind);
+  void apply_case(const MillCase& next);  // the panel's or a script's new case
+  void reset();                           // the current case from a fresh packing
+  void scripted_edits();
   void set_speed_fraction(double fraction);
   void render();
   void handle_input();

@@ -70,18 +70,21 @@ void MillRenderer::set_walls(const Walls& w) {
   }
   shell_.upload(shell);
 
-  // Back end plate at z = 0, facing +z.
+  // Back end plate just behind z = 0, facing +z (behind the lifters' end
+  // caps, which would fight it for depth at z = 0).
+  const float behind = -0.004f * R;
   std::vector<Vertex> plate;
   const glm::vec3 up_z{0, 0, 1};
   for (int k = 0; k < kSegments; ++k) {
     const float a0 = 2 * kPi * k / kSegments, a1 = 2 * kPi * (k + 1) / kSegments;
-    plate.insert(plate.end(), {{glm::vec3(0), up_z}, {at(R, a0, 0), up_z}, {at(R, a1, 0), up_z}});
+    plate.insert(plate.end(), {{glm::vec3(0, 0, behind), up_z}, {at(R, a0, behind), up_z}, {at(R, a1, behind), up_z}});
   }
   plate_.upload(plate);
 
-  // Rims: rings from R to 1.06 R at both ends, facing out of the mill.
+  // Rims: rings from R to 1.06 R just outside both ends, facing out of the
+  // mill (in front of the lifters' end caps).
   std::vector<Vertex> rims;
-  for (float z : {0.0f, L}) {
+  for (float z : {behind, L - behind}) {
     const glm::vec3 n{0, 0, z > 0 ? 1.0f : -1.0f};
     for (int k = 0; k < kSegments; ++k) {
       const float a0 = 2 * kPi * k / kSegments, a1 = 2 * kPi * (k + 1) / kSegments;
@@ -133,6 +136,27 @@ void MillRenderer::draw(const glm::mat4& view, const glm::mat4& projection, bool
   glDisable(GL_CULL_FACE);
   shader_.set("base_colour", glm::vec4(0.62f, 0.63f, 0.65f, 1.0f));
   lifters_.draw();
+}
+
+void MillRenderer::draw_near_shell(const glm::mat4& view, const glm::mat4& projection, bool orthographic,
+                                   double mill_angle) {
+  shader_.use();
+  shader_.set("view", view);
+  shader_.set("projection", projection);
+  shader_.set("orthographic", orthographic ? 1 : 0);
+  shader_.set("lit", 1);
+  shader_.set("model", glm::rotate(glm::mat4(1.0f), static_cast<float>(mill_angle), glm::vec3(0, 0, 1)));
+  shader_.set("base_colour", glm::vec4(0.70f, 0.72f, 0.76f, 0.22f));
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_FRONT);  // the outside of the near half
+  glEnable(GL_BLEND);
+  glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+  glDepthMask(GL_FALSE);
+  shell_.draw();
+  glDepthMask(GL_TRUE);
+  glDisable(GL_BLEND);
+  glCullFace(GL_BACK);
+  glDisable(GL_CULL_FACE);
 }
 
 void MillRenderer::draw_marks(const glm::mat4& view, const glm::mat4& projection, const MillMarks& marks) {

@@ -1,5 +1,6 @@
 // The mill, cut away so that the charge shows: the far half of the shell
-// (back faces culled: only the inside facing the eye is drawn), the back end
+// (back faces culled: only the inside facing the eye is drawn; the near half
+// translucent over the balls), the back end
 // plate (the front one is left out), the lifter bars as extruded polygons,
 // dark rims at both ends that outline the shell in the end view, and marks
 // for the toe and the shoulder just outside the shell.
@@ -32,6 +33,8 @@ class MillRenderer {
   // Opaque parts, before the balls.
   void draw(const glm::mat4& view, const glm::mat4& projection, bool orthographic, double mill_angle,
             bool show_shell);
+  // The near half of the shell, translucent: after the balls.
+  void draw_near_shell(const glm::mat4& view, const glm::mat4& projection, bool orthographic, double mill_angle);
   // Marks on top of everything, after the balls.
   void draw_marks(const glm::mat4& view, const glm::mat4& projection, const MillMarks& marks);
 

@@ -113,7 +113,7 @@ void App::panel_mill() {
   float j = static_cast<float>(edit_.filling);
   ImGui::SliderFloat("filling J", &j, 0.05f, 0.5f, "%.3f");
   if (ImGui::IsItemEdited()) edit_.filling = j;
-  if (released()) pending_ = Edit::filling;
+  if (released()) pending_ = Edit::apply;
 
   ImGui::Separator();
   ImGui::TextUnformatted("lifters (applied on release)");
@@ -123,7 +123,7 @@ void App::panel_mill() {
     edit_.lifter_rows = rows;
     if (edit_.lifter_pattern.empty()) edit_.lifter_pattern.push_back(LifterProfile{});
   }
-  if (released()) pending_ = Edit::lifters;
+  if (released()) pending_ = Edit::apply;
   bool high_low = edit_.lifter_pattern.size() >= 2;
   if (ImGui::Checkbox("high/low pattern", &high_low)) {
     if (edit_.lifter_pattern.empty()) edit_.lifter_pattern.push_back(LifterProfile{});
@@ -135,7 +135,7 @@ void App::panel_mill() {
     } else {
       edit_.lifter_pattern.resize(1);
     }
-    pending_ = Edit::lifters;
+    pending_ = Edit::apply;
   }
   for (std::size_t k = 0; k < edit_.lifter_pattern.size(); ++k) {
     LifterProfile& p = edit_.lifter_pattern[k];
@@ -144,12 +144,12 @@ void App::panel_mill() {
     float h = static_cast<float>(1000 * p.height), w = static_cast<float>(1000 * p.top_width),
           a = static_cast<float>(p.face_angle_deg);
     if (ImGui::SliderFloat("height, mm", &h, 2.0f, static_cast<float>(250 * case_.diameter), "%.1f")) p.height = h / 1000;
-    if (released()) pending_ = Edit::lifters;
+    if (released()) pending_ = Edit::apply;
     if (ImGui::SliderFloat("top width, mm", &w, 2.0f, static_cast<float>(200 * case_.diameter), "%.1f"))
       p.top_width = w / 1000;
-    if (released()) pending_ = Edit::lifters;
+    if (released()) pending_ = Edit::apply;
     if (ImGui::SliderFloat("face angle, deg", &a, 0.0f, 59.0f, "%.1f")) p.face_angle_deg = a;
-    if (released()) pending_ = Edit::lifters;
+    if (released()) pending_ = Edit::apply;
     ImGui::PopID();
   }
 }
@@ -165,7 +165,7 @@ void App::panel_charge() {
       s.diameter_max *= ball_scale_;
     }
   }
-  if (released()) pending_ = Edit::repack;
+  if (released()) pending_ = Edit::apply;
   for (const SizeClass& s : edit_.sizes)
     ImGui::Text("  %s %.1f-%.1f mm", s.material.c_str(), 1000 * s.diameter_min, 1000 * s.diameter_max);
 
@@ -174,13 +174,13 @@ void App::panel_charge() {
     edit_.contact.mu_slide = mu;
     for (PairOverride& p : edit_.pairs) p.interaction.mu_slide = mu;
   }
-  if (released()) pending_ = Edit::contact;
+  if (released()) pending_ = Edit::apply;
   float e = static_cast<float>(edit_.contact.restitution);
   if (ImGui::SliderFloat("restitution", &e, 0.05f, 0.95f, "%.2f")) {
     edit_.contact.restitution = e;
     for (PairOverride& p : edit_.pairs) p.interaction.restitution = e;
   }
-  if (released()) pending_ = Edit::contact;
+  if (released()) pending_ = Edit::apply;
   ImGui::TextDisabled("(friction and restitution of every pair)");
 }
 

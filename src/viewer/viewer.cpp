@@ -247,33 +247,60 @@ void App::step_frame() {
   }
 }
 
-// A change from the panel: a new scene from the balls as they are, a new
-// solver on it. On a bad value the old case stays and the panel says why.
-void App::apply_edit(Edit kind) {
-  MillCase next = edit_;
+namespace {
+
+bool same_sizes(const MillCase& a, const MillCase& b) {
+  if (a.sizes.size() != b.sizes.size() || a.number_fractions != b.number_fractions || a.seed != b.seed ||
+      a.materials.size() != b.materials.size())
+    return false;
+  for (std::size_t k = 0; k < a.sizes.size(); ++k)
+    if (a.sizes[k].diameter_min != b.sizes[k].diameter_min || a.sizes[k].diameter_max != b.sizes[k].diameter_max ||
+        a.sizes[k].material != b.sizes[k].material || a.sizes[k].fraction != b.sizes[k].fraction)
+      return false;
+  for (std::size_t k = 0; k < a.materials.size(); ++k)
+    if (a.materials[k].name != b.materials[k].name || a.materials[k].density != b.materials[k].density) return false;
+  return a.diameter == b.diameter && a.length == b.length;
+}
+
+}  // namespace
+
+// A new case from the panel or a script. Speed alone is a new ω; anything
+// else is a new scene made from the balls as they are (core/charge_edit),
+// except a new charge (sizes, materials, mill size), which is packed afresh
+// and settles. On a bad value the old case stays and the panel says why.
+void App::apply_case(const MillCase& next) {
   try {
-    MillDerived nd = derive(next);
-    if (kind == Edit::repack || kind == Edit::reset) {
+    const MillDerived nd = derive(next);
+    MillCase speed_only = case_;
+    speed_only.speed_fraction = next.speed_fraction;
+    speed_only.speed_rpm = next.speed_rpm;
+    if (io::case_to_toml(speed_only) == io::case_to_toml(next)) {
+      case_ = next;
+      derived_ = nd;
+      if (!settling_) solver_->set_mill_omega(derived_.omega);
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "speed %.1f %% of critical, %.2f rpm", 100 * nd.speed_fraction, nd.speed_rpm);
+      message_ = buf;
+      return;
+    }
+    if (!same_sizes(case_, next)) {
       Scene s = build_scene(next, nd);
       s.mill_angle = solver_->mill_angle();
       install_solver(std::move(s), true);
-      message_ = kind == Edit::reset ? "reset: a fresh charge settles" : "new ball size: a fresh charge settles";
-      if (kind == Edit::reset) time_offset_ = settle_from_ = 0;  // the clock starts again
+      message_ = "new charge: " + std::to_string(n_balls_) + " balls packed afresh; they settle, then the mill turns";
     } else {
       const std::vector<BallState> now = solver_->balls();
       std::vector<Ball> balls(now.size());
       for (std::size_t k = 0; k < now.size(); ++k)
         balls[k] = Ball{now[k].id, now[k].material, now[k].radius, now[k].position, now[k].velocity, now[k].omega};
       ChargeEditOptions o;
-      o.match_counts = kind == Edit::filling;
+      o.match_counts = next.filling != case_.filling || next.porosity != case_.porosity;
       o.mill_angle = solver_->mill_angle();
       o.mill_omega = settling_ ? 0.0 : nd.omega;
       o.previous_walls = &scene_.walls;
       o.seed = ++edit_seed_;
       ChargeEditResult r = edit_charge(next, nd, std::move(balls), o);
-      const bool was_settling = settling_;
       install_solver(std::move(r.scene), false);
-      settling_ = was_settling;
       char buf[160];
       std::snprintf(buf, sizeof buf, "applied: %d balls (%ld added, %ld removed, %ld moved out of lifters)",
                     n_balls_, r.added, r.removed, r.moved);
@@ -283,10 +310,34 @@ void App::apply_edit(Edit kind) {
     derived_ = nd;
   } catch (const std::invalid_argument& e) {
     message_ = std::string("not applied: ") + e.what();
-    edit_ = case_;
   } catch (const compute::Error& e) {
     message_ = std::string("not applied (OpenCL): ") + e.what();
-    edit_ = case_;
+  }
+  edit_ = case_;
+}
+
+void App::reset() {
+  try {
+    Scene s = build_scene(case_, derived_);
+    install_solver(std::move(s), true);
+    time_offset_ = settle_from_ = 0;  // the clock starts again
+    message_ = "reset: a fresh charge settles";
+  } catch (const std::exception& e) {
+    message_ = std::string("reset failed: ") + e.what();
+  }
+}
+
+// --edit FRAME:KEY=VALUE: the case with that --set applied, as if from the panel.
+void App::scripted_edits() {
+  for (const auto& [frame, kv] : opt_.edits) {
+    if (frame != frames_) continue;
+    try {
+      apply_case(io::parse_case(io::case_to_toml(case_), case_.name + ".toml", {kv}));
+    } catch (const std::invalid_argument& e) {
+      message_ = std::string("not applied: ") + e.what();
+    }
+    std::printf("millcharge view: frame %ld: %s: %s\n", frames_, kv.c_str(), message_.c_str());
+    std::fflush(stdout);
   }
 }
 
@@ -318,6 +369,7 @@ void App::render() {
   const int mode = static_cast<int>(style_.colour_by);
   style_.range = {colour_lo_[mode], colour_hi_[mode]};
   balls_->draw(view, proj, camera_.orthographic(), style_);
+  if (show_shell_) mill_->draw_near_shell(view, proj, camera_.orthographic(), solver_->mill_angle());
   MillMarks marks;
   marks.show = show_marks_ && !settling_ && monitor_.angles().found;
   marks.toe_deg = static_cast<float>(monitor_.angles().toe_deg);
@@ -405,6 +457,7 @@ int App::run() {
     glfwGetWindowSize(w, &ww, &wh);
     if (ww > 0 && wh > 0) opt_.width = ww, opt_.height = wh;
 
+    scripted_edits();
     const auto t0 = Clock::now();
     step_frame();
     const auto t1 = Clock::now();
@@ -442,11 +495,9 @@ int App::run() {
       window_frames_ = window_steps_ = 0;
       window_from_ = t2;
     }
-    if (pending_ != Edit::none) {
-      const Edit e = pending_;
-      pending_ = Edit::none;
-      apply_edit(e);
-    }
+    if (pending_ == Edit::apply) apply_case(edit_);
+    if (pending_ == Edit::reset) reset();
+    pending_ = Edit::none;
     if (last_frame) break;
   }
   const double wall = std::chrono::duration<double>(Clock::now() - start_).count();

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/mill_case.h"
 #include "core/scene.h"
@@ -17,6 +19,9 @@ struct ViewOptions {
   std::string colour = "speed";  // speed, size, material, impact
   int width = 1280, height = 800;
   bool panel = true;           // the ImGui panel on the left
+  // Changes made as if from the panel before the given frame (0 = the first):
+  // a --set KEY=VALUE applied to the case as it is then.
+  std::vector<std::pair<long, std::string>> edits;
 };
 
 // Opens the window, settles the charge of `scene` (built from c and d) with
