@@ -23,6 +23,9 @@
 #define STB_IMAGE_IMPLEMENTATION
 #include <stb_image.h>
 
+#include "core/mill_case.h"
+#include "io/case_file.h"
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -44,12 +47,12 @@ struct Shot {
 };
 
 // Runs the viewer under xvfb-run: settling (auto, about 0.26 s simulated)
-// and then turning, `frames` frames of 500 steps (dt 2.01e-5 s).
-Shot shoot(const fs::path& dir, const std::string& name, int frames, const std::string& extra) {
+// and then turning, `frames` frames of `steps` steps (dt 2.01e-5 s).
+Shot shoot(const fs::path& dir, const std::string& name, int frames, const std::string& extra, int steps = 500) {
   const fs::path png = dir / (name + ".png"), out = dir / (name + ".out"), err = dir / (name + ".err");
   const std::string cmd = "xvfb-run -a -s '-screen 0 1280x800x24' " + std::string(MC_BINARY) +
                           " view --frames " + std::to_string(frames) +
-                          " --steps-per-frame 500 --camera end --size 1280x800 --screenshot '" + png.string() + "' " +
+                          " --steps-per-frame " + std::to_string(steps) + " --camera end --size 1280x800 --screenshot '" + png.string() + "' " +
                           extra + " > '" + out.string() + "' 2> '" + err.string() + "'";
   const int status = std::system(cmd.c_str());
   Shot s;
@@ -152,5 +155,86 @@ TEST_CASE("view --frames --screenshot draws the lab mill's charge where it shoul
   // side and balls fly: the centroid turns further and rises.
   CHECK(a.angle_deg - b.angle_deg > 12);
   CHECK(a.upper - b.upper > 0.1);
+  fs::remove_all(dir);
+}
+
+namespace {
+
+// The line the viewer prints for a scripted edit before `frame`.
+std::string edit_line(const std::string& out, int frame) {
+  const std::string tag = "millcharge view: frame " + std::to_string(frame) + ": ";
+  const auto at = out.find(tag);
+  if (at == std::string::npos) return "";
+  return out.substr(at, out.find('\n', at) - at);
+}
+
+struct Applied {
+  bool ok = false;
+  long balls = 0, added = 0, removed = 0, moved = 0;
+};
+
+Applied applied(const std::string& line) {
+  Applied a;
+  const auto at = line.find("applied: ");
+  a.ok = at != std::string::npos &&
+         std::sscanf(line.c_str() + at, "applied: %ld balls (%ld added, %ld removed, %ld moved", &a.balls, &a.added,
+                     &a.removed, &a.moved) == 4;
+  return a;
+}
+
+long balls_for(const std::vector<std::string>& overrides) {
+  return mc::derive(mc::io::read_case(mc::io::default_case(), overrides)).n_balls;
+}
+
+}  // namespace
+
+TEST_CASE("view: speed, filling and lifters change in the running window without a restart or a blow-up",
+          "[viewer]") {
+  REQUIRE(std::system("command -v xvfb-run > /dev/null 2>&1") == 0);
+  const fs::path dir = fs::temp_directory_path() / ("millcharge_edit_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  // 0.02 s of settling, then the mill turns; an edit every few frames of 250
+  // steps, as the panel makes them (the same code path).
+  const Shot s = shoot(dir, "edits", 26, "--set run.settle=0.02 --edit 3:lifters.profile.0.height=0.06 "
+                                         "--edit 7:charge.filling=0.4 --edit 11:mill.speed_fraction=0.9 "
+                                         "--edit 15:lifters.rows=16 --edit 19:charge.filling=0.25 "
+                                         "--edit 21:mill.speed_fraction=2.5", 250);
+  INFO(s.out << s.err);
+  const Applied taller = applied(edit_line(s.out, 3));
+  REQUIRE(taller.ok);
+  CHECK(taller.balls == 2714);  // the lifters grew from 25 to 60 mm: balls in their way moved, none lost
+  CHECK(taller.moved > 50);
+  CHECK(taller.removed == 0);
+
+  const Applied fuller = applied(edit_line(s.out, 7));
+  REQUIRE(fuller.ok);
+  const long n40 = balls_for({"lifters.profile.0.height=0.06", "charge.filling=0.4"});
+  CHECK(fuller.balls == n40);
+  CHECK(fuller.added == n40 - 2714);
+
+  CHECK(edit_line(s.out, 11).find("speed 90.0 % of critical") != std::string::npos);
+
+  const Applied rows = applied(edit_line(s.out, 15));
+  REQUIRE(rows.ok);
+  CHECK(rows.moved > 0);  // four more bars, some where balls were
+  CHECK(rows.balls + rows.removed == n40);
+
+  const Applied emptier = applied(edit_line(s.out, 19));
+  REQUIRE(emptier.ok);
+  const long n25 = balls_for({"lifters.profile.0.height=0.06", "lifters.rows=16", "charge.filling=0.25"});
+  CHECK(emptier.balls == n25);
+  CHECK(emptier.removed == rows.balls - n25);
+
+  // A value the case refuses leaves the mill as it was, with the reason.
+  CHECK(edit_line(s.out, 21).find("not applied") != std::string::npos);
+  CHECK(edit_line(s.out, 21).find("mill.speed_fraction") != std::string::npos);
+
+  // Still turning at 90 % after all that, with the charge in the picture.
+  CHECK(s.out.find("turning") != std::string::npos);
+  CHECK(s.out.find("90.0 % of critical") != std::string::npos);
+  const ChargeShape c = measure(s);
+  CHECK(c.covered > 0.15);
+  CHECK(c.angle_deg > 270);
+  CHECK(c.angle_deg < 360);
   fs::remove_all(dir);
 }
