@@ -27,7 +27,7 @@ struct ViewOptions {
   CaseOptions c;
   int frames = 0;              // --frames: draw this many, then exit
   std::string screenshot;      // --screenshot FILE.png after the last frame
-  int steps_per_frame = 0;     // --steps-per-frame; 0: adaptive (40 with --frames)
+  int steps_per_frame = 0;     // --steps-per-frame; 0: default (adaptive; 40 with --frames), −1: adaptive
   std::string camera = "end";  // --camera end|iso
   std::string colour = "speed";  // --colour speed|size|material|impact
   int width = 1280, height = 800;  // --size WxH

@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <stdexcept>
 
@@ -53,8 +54,11 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   view->add_option("--screenshot", vo.screenshot, "write the last frame to FILE.png (with --frames)")
       ->type_name("FILE.png");
-  view->add_option("--steps-per-frame", vo.steps_per_frame, "simulation steps per drawn frame (default: adapt)")
-      ->check(CLI::PositiveNumber);
+  std::string steps_per_frame;
+  view->add_option("--steps-per-frame", steps_per_frame,
+                   "simulation steps per drawn frame, or auto: as many as keep ~30 fps "
+                   "(default: auto; 40 with --frames, for reproducible pictures)")
+      ->type_name("N|auto");
   view->add_option("--camera", vo.camera, "end (axial, default) or iso")->check(CLI::IsMember({"end", "iso"}));
   view->add_option("--colour", vo.colour, "colour the balls by speed, size, material or impact")
       ->check(CLI::IsMember({"speed", "size", "material", "impact"}));
@@ -80,6 +84,14 @@ int main(int argc, char** argv) {
     if (*check) return mc::app::cmd_check(co);
     if (*run) return mc::app::cmd_run(ro);
     if (*view) {
+      if (steps_per_frame == "auto") vo.steps_per_frame = -1;
+      else if (!steps_per_frame.empty()) {
+        char* end = nullptr;
+        const long n = std::strtol(steps_per_frame.c_str(), &end, 10);
+        if (*end != '\0' || n < 1 || n > 1000000)
+          throw std::invalid_argument("--steps-per-frame " + steps_per_frame + ": expected a count >= 1 or auto");
+        vo.steps_per_frame = static_cast<int>(n);
+      }
       if (!size.empty() && (std::sscanf(size.c_str(), "%dx%d", &vo.width, &vo.height) != 2 || vo.width < 320 ||
                             vo.height < 240 || vo.width > 8192 || vo.height > 8192))
         throw std::invalid_argument("--size " + size + ": expected WxH in pixels, e.g. 1280x800");

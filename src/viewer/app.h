@@ -109,7 +109,8 @@ class App {
   int fixed_steps_ = 40;
   float speed_limit_ = 1.0f;  // × real time at most
   double s_per_step_ = 0;     // wall seconds per step, smoothed
-  double render_s_ = 0.01;    // wall seconds per drawn frame besides stepping, smoothed
+  double frame_overhead_s_ = 0.01;  // wall seconds per frame besides stepping, smoothed
+  double advance_s_ = 0;            // wall seconds of this frame's steps
   int last_steps_ = 0;
   bool instances_stale_ = true;
   Edit pending_ = Edit::none;

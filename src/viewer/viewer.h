@@ -14,7 +14,7 @@ struct ViewOptions {
   std::string device;          // --device
   int frames = 0;              // > 0: draw this many frames, then exit (scripted)
   std::string screenshot;      // PNG written after the last scripted frame
-  int steps_per_frame = 0;     // 0: adapt to keep the window responsive (scripted: 40)
+  int steps_per_frame = 0;     // > 0: fixed; 0: adapt (scripted: 40); < 0: adapt, scripted too
   std::string camera = "end";  // "end" (axial, orthographic) or "iso"
   std::string colour = "speed";  // speed, size, material, impact
   int width = 1280, height = 800;
