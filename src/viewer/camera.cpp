@@ -11,8 +11,9 @@ void Camera::end_view(float aspect) {
   target_ = {0, 0, 0.5f * length_};
   yaw_ = pitch_ = 0;
   ortho_ = true;
-  // The shell and the toe/shoulder marks (to 1.2 R) fit the shorter side.
-  const float half = 1.25f * radius_ * std::max(1.0f, 1.0f / aspect);
+  // The shell, the toe/shoulder marks (to 1.22 R) and their labels fit the
+  // shorter side.
+  const float half = 1.32f * radius_ * std::max(1.0f, 1.0f / aspect);
   distance_ = half / std::tan(0.5f * fov_y_);
 }
 

@@ -249,11 +249,14 @@ void App::draw_labels() {
   const float R = static_cast<float>(0.5 * case_.diameter), z = static_cast<float>(case_.length);
   auto label = [&](double deg, const char* name, ImU32 colour) {
     const float a = static_cast<float>(deg * M_PI / 180.0);
-    const glm::vec2 p = to_pixels({1.3f * R * std::cos(a), 1.3f * R * std::sin(a), z});
+    const glm::vec2 p = to_pixels({1.27f * R * std::cos(a), 1.27f * R * std::sin(a), z});
     char text[48];
     std::snprintf(text, sizeof text, "%s %.0f", name, deg);
     const ImVec2 size = ImGui::CalcTextSize(text);
-    dl->AddText({p.x - 0.5f * size.x, p.y - 0.5f * size.y}, colour, text);
+    // Inside the picture, whatever the zoom.
+    const float x = std::clamp(p.x - 0.5f * size.x, panel_width_ + 2, static_cast<float>(opt_.width) - size.x - 2);
+    const float y = std::clamp(p.y - 0.5f * size.y, 2.0f, static_cast<float>(opt_.height) - size.y - 2);
+    dl->AddText({x, y}, colour, text);
   };
   label(monitor_.angles().toe_deg, "toe", IM_COL32(255, 115, 25, 255));
   label(monitor_.angles().shoulder_deg, "shoulder", IM_COL32(50, 230, 255, 255));
