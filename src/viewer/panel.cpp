@@ -256,6 +256,7 @@ void App::draw_labels() {
     // Inside the picture, whatever the zoom.
     const float x = std::clamp(p.x - 0.5f * size.x, panel_width_ + 2, static_cast<float>(opt_.width) - size.x - 2);
     const float y = std::clamp(p.y - 0.5f * size.y, 2.0f, static_cast<float>(opt_.height) - size.y - 2);
+    dl->AddRectFilled({x - 3, y - 1}, {x + size.x + 3, y + size.y + 1}, IM_COL32(28, 31, 36, 220), 3.0f);
     dl->AddText({x, y}, colour, text);
   };
   label(monitor_.angles().toe_deg, "toe", IM_COL32(255, 115, 25, 255));
