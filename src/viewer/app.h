@@ -4,7 +4,7 @@
 #pragma once
 
 #include <chrono>
-#include <deque>
+#include <cstdint>
 #include <memory>
 #include <string>
 
