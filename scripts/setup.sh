@@ -8,7 +8,7 @@ packages=(
   ocl-icd-opencl-dev opencl-clhpp-headers opencl-c-headers pocl-opencl-icd clinfo
   catch2 libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libfmt-dev libstb-dev
   libglfw3-dev libglew-dev libglm-dev libimgui-dev
-  xvfb xauth python3
+  xvfb xauth libgl1-mesa-dri python3
 )
 
 missing=()

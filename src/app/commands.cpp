@@ -6,6 +6,7 @@
 #include <csignal>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -23,6 +24,7 @@
 #include "io/vtk.h"
 #include "sim/mill_run.h"
 #include "sim/solver.h"
+#include "viewer/viewer.h"
 
 namespace mc::app {
 
@@ -638,6 +640,31 @@ int cmd_bench(const BenchOptions& o) {
                  {"reductions", st.reductions_s / total}};
   std::printf("%s\n", j.dump().c_str());
   return 0;
+}
+
+int cmd_view(const ViewOptions& o) {
+  Prepared p = prepare(o.c);
+  viewer::ViewOptions v;
+  v.device = o.c.device;
+  v.frames = o.frames;
+  v.screenshot = o.screenshot;
+  v.steps_per_frame = o.steps_per_frame;
+  v.camera = o.camera;
+  v.colour = o.colour;
+  v.width = o.width;
+  v.height = o.height;
+  v.panel = !o.no_panel;
+  for (const std::string& e : o.edits) {
+    const auto colon = e.find(':');
+    char* end = nullptr;
+    const long frame = colon == std::string::npos ? -1 : std::strtol(e.c_str(), &end, 10);
+    if (colon == std::string::npos || end != e.c_str() + colon || frame < 0 || e.find('=', colon) == std::string::npos)
+      throw std::invalid_argument("--edit " + e + ": expected FRAME:KEY=VALUE, e.g. --edit 100:charge.filling=0.35");
+    v.edits.emplace_back(frame, e.substr(colon + 1));
+  }
+  if (!o.screenshot.empty() && o.frames <= 0)
+    throw std::invalid_argument("--screenshot needs --frames N (the picture is taken after the last frame)");
+  return viewer::run(p.c, p.d, std::move(p.scene), v);
 }
 
 }  // namespace mc::app

@@ -35,9 +35,22 @@ struct BenchOptions {
   bool quiet = false;  // no progress lines on stderr
 };
 
+struct ViewOptions {
+  CaseOptions c;
+  int frames = 0;              // --frames: draw this many, then exit
+  std::string screenshot;      // --screenshot FILE.png after the last frame
+  int steps_per_frame = 0;     // --steps-per-frame; 0: default (adaptive; 40 with --frames), −1: adaptive
+  std::string camera = "end";  // --camera end|iso
+  std::string colour = "speed";  // --colour speed|size|material|impact
+  int width = 1280, height = 800;  // --size WxH
+  bool no_panel = false;       // --no-panel
+  std::vector<std::string> edits;  // --edit FRAME:KEY=VALUE
+};
+
 int cmd_devices();
 int cmd_check(const CaseOptions& o);
 int cmd_run(const RunOptions& o);
 int cmd_bench(const BenchOptions& o);
+int cmd_view(const ViewOptions& o);
 
 }  // namespace mc::app

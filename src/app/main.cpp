@@ -2,6 +2,9 @@
 //   millcharge run   [CASE] [--out DIR] [--duration S] [--device SPEC]
 //                    [--precision float|double] [--set KEY=VALUE]... [--force] [--quiet]
 //   millcharge run   --resume DIR [--device SPEC] [--quiet]
+//   millcharge view  [CASE] [same options] [--frames N --screenshot FILE.png]
+//                    [--steps-per-frame N] [--camera end|iso] [--colour MODE] [--size WxH]
+//                    [--no-panel] [--edit FRAME:KEY=VALUE]...
 //   millcharge check CASE [--set KEY=VALUE]...
 //   millcharge bench [CASE] [--steps N] [--warmup N] [--device SPEC]
 //                    [--precision float|double] [--set KEY=VALUE]... [--quiet]
@@ -10,6 +13,8 @@
 // 1 any other failure (device, blow-up, disk).
 #include <CLI/CLI.hpp>
 
+#include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <stdexcept>
 
@@ -49,6 +54,29 @@ int main(int argc, char** argv) {
   // Fault injection for the failure tests; not for users.
   run->add_option("--inject-nan-at", ro.poison_at_s, "")->group("");
 
+  mc::app::ViewOptions vo;
+  auto* view = app.add_subcommand("view", "watch the charge in a window and change the mill while it turns");
+  add_case_options(view, vo.c, true);
+  view->add_option("--frames", vo.frames, "draw N frames, then exit (scripted: fixed steps per frame)")
+      ->check(CLI::PositiveNumber);
+  view->add_option("--screenshot", vo.screenshot, "write the last frame to FILE.png (with --frames)")
+      ->type_name("FILE.png");
+  std::string steps_per_frame;
+  view->add_option("--steps-per-frame", steps_per_frame,
+                   "simulation steps per drawn frame, or auto: as many as keep ~30 fps "
+                   "(default: auto; 40 with --frames, for reproducible pictures)")
+      ->type_name("N|auto");
+  view->add_option("--camera", vo.camera, "end (axial, default) or iso")->check(CLI::IsMember({"end", "iso"}));
+  view->add_option("--colour", vo.colour, "colour the balls by speed, size, material or impact")
+      ->check(CLI::IsMember({"speed", "size", "material", "impact"}));
+  std::string size;
+  view->add_option("--size", size, "window size in pixels (default 1280x800)")->type_name("WxH");
+  view->add_flag("--no-panel", vo.no_panel, "draw the mill only, without the ImGui panel");
+  view->add_option("--edit", vo.edits,
+                   "before frame FRAME, change a case key as the panel does (repeatable), "
+                   "e.g. --edit 50:lifters.profile.0.height=0.04")
+      ->type_name("FRAME:KEY=VALUE");
+
   mc::app::CaseOptions co;
   auto* check = app.add_subcommand("check", "validate a case and print its derived values");
   add_case_options(check, co, false);
@@ -74,6 +102,20 @@ int main(int argc, char** argv) {
     if (*check) return mc::app::cmd_check(co);
     if (*run) return mc::app::cmd_run(ro);
     if (*bench) return mc::app::cmd_bench(bo);
+    if (*view) {
+      if (steps_per_frame == "auto") vo.steps_per_frame = -1;
+      else if (!steps_per_frame.empty()) {
+        char* end = nullptr;
+        const long n = std::strtol(steps_per_frame.c_str(), &end, 10);
+        if (*end != '\0' || n < 1 || n > 1000000)
+          throw std::invalid_argument("--steps-per-frame " + steps_per_frame + ": expected a count >= 1 or auto");
+        vo.steps_per_frame = static_cast<int>(n);
+      }
+      if (!size.empty() && (std::sscanf(size.c_str(), "%dx%d", &vo.width, &vo.height) != 2 || vo.width < 320 ||
+                            vo.height < 240 || vo.width > 8192 || vo.height > 8192))
+        throw std::invalid_argument("--size " + size + ": expected WxH in pixels, e.g. 1280x800");
+      return mc::app::cmd_view(vo);
+    }
   } catch (const std::invalid_argument& e) {
     std::cerr << "millcharge: " << e.what() << '\n';
     return 2;

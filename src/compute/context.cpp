@@ -191,6 +191,41 @@ Context::Context(const std::string& spec_in) : ledger_(std::make_shared<Ledger>(
   }
 }
 
+Context::Context(const std::string& spec_in, const std::vector<cl_context_properties>& gl_properties) {
+  std::string spec = spec_in;
+  if (spec.empty())
+    if (const char* env = std::getenv("MILLCHARGE_DEVICE")) spec = env;
+  Found f = pick(spec);
+  info_ = f.info;
+  device_ = f.device;
+  if (!info_.gl_sharing) throw Error(info_.label() + " has no cl_khr_gl_sharing");
+  try {
+    const cl_platform_id platform = device_.getInfo<CL_DEVICE_PLATFORM>();
+    std::vector<cl_context_properties> props = {CL_CONTEXT_PLATFORM,
+                                                reinterpret_cast<cl_context_properties>(platform)};
+    props.insert(props.end(), gl_properties.begin(), gl_properties.end());
+    props.push_back(0);
+    // The GL context runs on one device; sharing with another fails later
+    // and less clearly, so ask the driver which one it is.
+    auto get_gl_info = reinterpret_cast<clGetGLContextInfoKHR_fn>(
+        clGetExtensionFunctionAddressForPlatform(platform, "clGetGLContextInfoKHR"));
+    if (!get_gl_info) throw Error(info_.platform_name + " does not export clGetGLContextInfoKHR");
+    cl_device_id gl_device = nullptr;
+    const cl_int err = get_gl_info(props.data(), CL_CURRENT_DEVICE_FOR_GL_CONTEXT_KHR, sizeof gl_device,
+                                   &gl_device, nullptr);
+    if (err != CL_SUCCESS || gl_device == nullptr)
+      throw Error("the driver names no OpenCL device for the GL context (" + error_name(err) + ")");
+    if (gl_device != device_())
+      throw Error(info_.label() + " is not the device that runs the GL context");
+    context_ = cl::Context(device_, props.data());
+    queue_ = cl::CommandQueue(context_, device_);
+  } catch (const cl::Error& e) {
+    throw Error("could not share GL objects with OpenCL device " + info_.label() + ": " + e.what() + " (" +
+                error_name(e.err()) + ")");
+  }
+  shares_gl_ = true;
+}
+
 void Context::finish() {
   try {
     queue_.finish();

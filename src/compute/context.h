@@ -50,12 +50,19 @@ class Context {
  public:
   // spec as for choose_device; when empty, MILLCHARGE_DEVICE is read.
   explicit Context(const std::string& spec = "");
+  // A context that shares objects with an OpenGL context (cl_khr_gl_sharing):
+  // `gl_properties` name the GL context, e.g. {CL_GL_CONTEXT_KHR, glx_context,
+  // CL_GLX_DISPLAY_KHR, display}; the platform and the closing 0 are added.
+  // Throws Error when the device lacks the extension, is not the device that
+  // runs the GL context, or the driver refuses.
+  Context(const std::string& spec, const std::vector<cl_context_properties>& gl_properties);
 
   const DeviceInfo& info() const { return info_; }
   cl::Context& context() { return context_; }
   cl::Device& device() { return device_; }
   cl::CommandQueue& queue() { return queue_; }
   void finish();
+  bool shares_gl() const { return shares_gl_; }
 
   // Device memory. Every Buffer reserves its bytes here before it allocates:
   // a buffer larger than max_alloc_bytes() or one that would take the total
@@ -80,6 +87,7 @@ class Context {
   struct Ledger;
   std::shared_ptr<Ledger> ledger_;
   std::size_t memory_bytes_ = 0;
+  bool shares_gl_ = false;
   DeviceInfo info_;
   cl::Device device_;
   cl::Context context_;

@@ -81,6 +81,8 @@ class Kernel {
   void set(cl_uint index, const Buffer<T>& buffer) {
     set_mem(index, buffer.device());
   }
+  // A buffer the caller owns (a GL buffer shared with OpenCL, for example).
+  void set(cl_uint index, const cl::Buffer& mem) { set_mem(index, mem); }
   void set_mem(cl_uint index, const cl::Buffer& mem);
   [[noreturn]] void fail(const std::string& what, const cl::Error& e) const;
 

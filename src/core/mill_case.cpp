@@ -285,7 +285,7 @@ MillDerived derive(const MillCase& c) {
   return d;
 }
 
-Scene build_scene(const MillCase& c, const MillDerived& d) {
+Scene build_walls(const MillCase& c, const MillDerived& d) {
   Scene s;
   // Ball materials are the case's materials; the liner is the wall material.
   s.materials = c.materials;
@@ -308,6 +308,12 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
   s.numerics.precision = c.precision;
   s.numerics.dt = d.dt;
   s.mill_omega = d.omega;
+  return s;
+}
+
+Scene build_scene(const MillCase& c, const MillDerived& d) {
+  Scene s = build_walls(c, d);
+  const double R = 0.5 * c.diameter;
 
   // The balls, shuffled so the sizes mix, are dropped one by one onto the
   // lowest of a grid of columns in x–z (pitch just over the smallest

@@ -88,6 +88,11 @@ struct MillDerived {
 // derives the values; throws std::invalid_argument naming the key.
 MillDerived derive(const MillCase& c);
 
+// The scene without its charge: materials, pair table, walls, numerics and
+// the case's speed. build_scene adds the packed charge; the viewer keeps the
+// balls it has when the case changes.
+Scene build_walls(const MillCase& c, const MillDerived& d);
+
 // The solver's scene: materials, pair table, walls and the charge placed
 // without overlaps in the lower part of the mill, at rest (not yet settled).
 // The mill turns at the case's speed (the run may hold it still to settle).

@@ -76,6 +76,7 @@ class SolverImpl final : public Solver {
   SolverState save_state() override;
   void restore_state(const SolverState& state) override;
   void poison_ball(int id) override;
+  void write_instances(const cl::Buffer& out) override;
 
   double time_s() const override { return time_; }
   long steps() const override { return steps_; }
@@ -153,6 +154,9 @@ class SolverImpl final : public Solver {
   Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
       k_gather_wall_, k_put_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
       k_layout_, k_profile_, k_count_contacts_, k_clear_flag_, k_carry_count_, k_carry_fill_;
+  // The viewer's kernel, built on first use so that headless runs skip it.
+  std::unique_ptr<compute::Program> view_program_;
+  std::unique_ptr<Kernel> k_instances_;
 };
 
 template <class Real>
@@ -693,6 +697,16 @@ void SolverImpl<Real>::poison_ball(int id) {
 }
 
 template <class Real>
+void SolverImpl<Real>::write_instances(const cl::Buffer& out) {
+  if (!k_instances_) {
+    view_program_ = std::make_unique<compute::Program>(ctx_, std::vector<std::string>{"instances.cl"},
+                                                       compute::BuildOptions(), std::is_same_v<Real, double>);
+    k_instances_ = std::make_unique<Kernel>(*view_program_, "write_instances");
+  }
+  k_instances_->args(params_, pos_, vel_, force_, info_, accum_, time_ - observed_since_, out).launch(n_);
+}
+
+template <class Real>
 std::vector<BallState> SolverImpl<Real>::balls() {
   for (auto* b : {&pos_, &vel_, &omega_, &force_, &torque_}) b->read_from_device();
   info_.read_from_device();
@@ -732,6 +746,10 @@ std::size_t SolverImpl<Real>::device_bytes() const {
 }
 
 }  // namespace
+
+void Solver::write_instances(const cl::Buffer&) {
+  throw std::logic_error("this solver cannot feed the viewer (write_instances)");
+}
 
 double default_skin(const Scene& scene) {
   double r_min = std::numeric_limits<double>::max();

@@ -109,6 +109,13 @@ class Solver {
   // Fault injection for the failure tests: the ball with this id gets a NaN
   // velocity.
   virtual void poison_ball(int id) = 0;
+  // The viewer's data for every ball (cl/instances.h: centre, radius, speed,
+  // material, dissipation power since the last observe(true), id) written
+  // into `out`, which holds at least balls × MC_INSTANCE_FLOATS floats: a
+  // device buffer, or an OpenCL view of a GL buffer that the caller has
+  // acquired. The kernel is built on the first call. Enqueued only: the
+  // caller finishes the queue before reading or drawing.
+  virtual void write_instances(const cl::Buffer& out);
 
   virtual double time_s() const = 0;
   virtual long steps() const = 0;

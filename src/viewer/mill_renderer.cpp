@@ -1,0 +1,193 @@
+#include "viewer/mill_renderer.h"
+
+#include <cmath>
+#include <cstdint>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace mc::viewer {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+constexpr int kSegments = 120;
+
+}  // namespace
+
+void MillRenderer::Mesh::create() {
+  glGenVertexArrays(1, &vao);
+  glGenBuffers(1, &vbo);
+  glBindVertexArray(vao);
+  glBindBuffer(GL_ARRAY_BUFFER, vbo);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex), nullptr);
+  glEnableVertexAttribArray(1);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                        reinterpret_cast<const void*>(std::uintptr_t{sizeof(glm::vec3)}));
+  glBindVertexArray(0);
+}
+
+void MillRenderer::Mesh::destroy() {
+  glDeleteBuffers(1, &vbo);
+  glDeleteVertexArrays(1, &vao);
+}
+
+void MillRenderer::Mesh::upload(const std::vector<Vertex>& v) {
+  glBindBuffer(GL_ARRAY_BUFFER, vbo);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(Vertex)), v.data(), GL_DYNAMIC_DRAW);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  count = static_cast<GLsizei>(v.size());
+}
+
+void MillRenderer::Mesh::draw() const {
+  if (count == 0) return;
+  glBindVertexArray(vao);
+  glDrawArrays(GL_TRIANGLES, 0, count);
+  glBindVertexArray(0);
+}
+
+MillRenderer::MillRenderer() : shader_("mill.vert", "mill.frag") {
+  for (Mesh* m : {&shell_, &plate_, &rims_, &lifters_, &marks_}) m->create();
+}
+
+MillRenderer::~MillRenderer() {
+  for (Mesh* m : {&shell_, &plate_, &rims_, &lifters_, &marks_}) m->destroy();
+}
+
+void MillRenderer::set_walls(const Walls& w) {
+  radius_ = static_cast<float>(w.shell_radius);
+  length_ = static_cast<float>(w.length);
+  const float R = radius_, L = length_;
+  auto at = [](float r, float a, float z) { return glm::vec3(r * std::cos(a), r * std::sin(a), z); };
+
+  // Shell: front faces on the inside, so culling back faces leaves the far half.
+  std::vector<Vertex> shell;
+  for (int k = 0; k < kSegments; ++k) {
+    const float a0 = 2 * kPi * k / kSegments, a1 = 2 * kPi * (k + 1) / kSegments;
+    const glm::vec3 n0 = -at(1, a0, 0), n1 = -at(1, a1, 0);
+    const Vertex p00{at(R, a0, 0), n0}, p10{at(R, a1, 0), n1}, p01{at(R, a0, L), n0}, p11{at(R, a1, L), n1};
+    shell.insert(shell.end(), {p00, p11, p10, p00, p01, p11});
+  }
+  shell_.upload(shell);
+
+  // Back end plate just behind z = 0, facing +z (behind the lifters' end
+  // caps, which would fight it for depth at z = 0).
+  const float behind = -0.004f * R;
+  std::vector<Vertex> plate;
+  const glm::vec3 up_z{0, 0, 1};
+  for (int k = 0; k < kSegments; ++k) {
+    const float a0 = 2 * kPi * k / kSegments, a1 = 2 * kPi * (k + 1) / kSegments;
+    plate.insert(plate.end(), {{glm::vec3(0, 0, behind), up_z}, {at(R, a0, behind), up_z}, {at(R, a1, behind), up_z}});
+  }
+  plate_.upload(plate);
+
+  // Rims: rings from R to 1.06 R just outside both ends, facing out of the
+  // mill (in front of the lifters' end caps).
+  std::vector<Vertex> rims;
+  for (float z : {behind, L - behind}) {
+    const glm::vec3 n{0, 0, z > 0 ? 1.0f : -1.0f};
+    for (int k = 0; k < kSegments; ++k) {
+      const float a0 = 2 * kPi * k / kSegments, a1 = 2 * kPi * (k + 1) / kSegments;
+      const Vertex i0{at(R, a0, z), n}, i1{at(R, a1, z), n}, o0{at(1.06f * R, a0, z), n}, o1{at(1.06f * R, a1, z), n};
+      if (z > 0) rims.insert(rims.end(), {i0, o0, o1, i0, o1, i1});
+      else rims.insert(rims.end(), {i0, o1, o0, i0, i1, o1});
+    }
+  }
+  rims_.upload(rims);
+
+  // Lifters: side faces and end caps of each counter-clockwise polygon.
+  std::vector<Vertex> bars;
+  for (const auto& poly : w.lifters) {
+    const std::size_t n = poly.size();
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vec2 a = poly[k], b = poly[(k + 1) % n];
+      const glm::vec3 nrm = glm::normalize(glm::vec3(b.y - a.y, -(b.x - a.x), 0));
+      const Vertex a0{{a.x, a.y, 0}, nrm}, b0{{b.x, b.y, 0}, nrm}, a1{{a.x, a.y, L}, nrm}, b1{{b.x, b.y, L}, nrm};
+      bars.insert(bars.end(), {a0, b0, b1, a0, b1, a1});
+    }
+    for (std::size_t k = 1; k + 1 < n; ++k) {
+      const Vec2 a = poly[0], b = poly[k], c = poly[k + 1];
+      bars.insert(bars.end(), {{{a.x, a.y, L}, up_z}, {{b.x, b.y, L}, up_z}, {{c.x, c.y, L}, up_z}});
+      bars.insert(bars.end(), {{{a.x, a.y, 0}, -up_z}, {{c.x, c.y, 0}, -up_z}, {{b.x, b.y, 0}, -up_z}});
+    }
+  }
+  lifters_.upload(bars);
+}
+
+void MillRenderer::draw(const glm::mat4& view, const glm::mat4& projection, bool orthographic, double mill_angle,
+                        bool show_shell) {
+  shader_.use();
+  shader_.set("view", view);
+  shader_.set("projection", projection);
+  shader_.set("orthographic", orthographic ? 1 : 0);
+  shader_.set("lit", 1);
+  const glm::mat4 turn = glm::rotate(glm::mat4(1.0f), static_cast<float>(mill_angle), glm::vec3(0, 0, 1));
+  shader_.set("model", turn);
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  if (show_shell) {
+    shader_.set("base_colour", glm::vec4(0.55f, 0.56f, 0.58f, 1.0f));
+    shell_.draw();
+  }
+  shader_.set("base_colour", glm::vec4(0.24f, 0.25f, 0.27f, 1.0f));
+  plate_.draw();
+  shader_.set("base_colour", glm::vec4(0.40f, 0.41f, 0.43f, 1.0f));
+  rims_.draw();
+  glDisable(GL_CULL_FACE);
+  shader_.set("base_colour", glm::vec4(0.62f, 0.63f, 0.65f, 1.0f));
+  lifters_.draw();
+}
+
+void MillRenderer::draw_near_shell(const glm::mat4& view, const glm::mat4& projection, bool orthographic,
+                                   double mill_angle) {
+  shader_.use();
+  shader_.set("view", view);
+  shader_.set("projection", projection);
+  shader_.set("orthographic", orthographic ? 1 : 0);
+  shader_.set("lit", 1);
+  shader_.set("model", glm::rotate(glm::mat4(1.0f), static_cast<float>(mill_angle), glm::vec3(0, 0, 1)));
+  shader_.set("base_colour", glm::vec4(0.70f, 0.72f, 0.76f, 0.22f));
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_FRONT);  // the outside of the near half
+  glEnable(GL_BLEND);
+  glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+  glDepthMask(GL_FALSE);
+  shell_.draw();
+  glDepthMask(GL_TRUE);
+  glDisable(GL_BLEND);
+  glCullFace(GL_BACK);
+  glDisable(GL_CULL_FACE);
+}
+
+void MillRenderer::draw_marks(const glm::mat4& view, const glm::mat4& projection, const MillMarks& marks) {
+  if (!marks.show) return;
+  // Wedges from 1.07 R to 1.22 R at the front end, drawn over everything.
+  std::vector<Vertex> quads;
+  const float R = radius_, z = length_;
+  const glm::vec3 n{0, 0, 1};
+  auto wedge = [&](float deg) {
+    const float a = deg * kPi / 180.0f, h = 0.9f * kPi / 180.0f;
+    auto at = [&](float r, float b) { return glm::vec3(r * std::cos(b), r * std::sin(b), z); };
+    const Vertex i0{at(1.07f * R, a - h), n}, i1{at(1.07f * R, a + h), n}, o0{at(1.22f * R, a - h), n},
+        o1{at(1.22f * R, a + h), n};
+    quads.insert(quads.end(), {i0, o0, o1, i0, o1, i1});
+  };
+  shader_.use();
+  shader_.set("view", view);
+  shader_.set("projection", projection);
+  shader_.set("model", glm::mat4(1.0f));
+  shader_.set("lit", 0);
+  glDisable(GL_DEPTH_TEST);
+  wedge(marks.toe_deg);
+  marks_.upload(quads);
+  shader_.set("base_colour", glm::vec4(1.0f, 0.45f, 0.1f, 1.0f));  // toe: orange
+  marks_.draw();
+  quads.clear();
+  wedge(marks.shoulder_deg);
+  marks_.upload(quads);
+  shader_.set("base_colour", glm::vec4(0.2f, 0.9f, 1.0f, 1.0f));  // shoulder: cyan
+  marks_.draw();
+  glEnable(GL_DEPTH_TEST);
+}
+
+}  // namespace mc::viewer

@@ -1,0 +1,58 @@
+// The mill, cut away so that the charge shows: the far half of the shell
+// (back faces culled: only the inside facing the eye is drawn; the near half
+// translucent over the balls), the back end
+// plate (the front one is left out), the lifter bars as extruded polygons,
+// dark rims at both ends that outline the shell in the end view, and marks
+// for the toe and the shoulder just outside the shell.
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "core/scene.h"
+#include "viewer/gl.h"
+#include "viewer/shader.h"
+
+namespace mc::viewer {
+
+struct MillMarks {
+  bool show = false;
+  float toe_deg = 0, shoulder_deg = 0;  // counter-clockwise from 3 o'clock, lab frame
+};
+
+class MillRenderer {
+ public:
+  MillRenderer();
+  ~MillRenderer();
+  MillRenderer(const MillRenderer&) = delete;
+  MillRenderer& operator=(const MillRenderer&) = delete;
+
+  // Rebuilds the meshes from the walls (after a lifter edit).
+  void set_walls(const Walls& walls);
+  // Opaque parts, before the balls.
+  void draw(const glm::mat4& view, const glm::mat4& projection, bool orthographic, double mill_angle,
+            bool show_shell);
+  // The near half of the shell, translucent: after the balls.
+  void draw_near_shell(const glm::mat4& view, const glm::mat4& projection, bool orthographic, double mill_angle);
+  // Marks on top of everything, after the balls.
+  void draw_marks(const glm::mat4& view, const glm::mat4& projection, const MillMarks& marks);
+
+ private:
+  struct Vertex {
+    glm::vec3 position, normal;
+  };
+  struct Mesh {
+    GLuint vao = 0, vbo = 0;
+    GLsizei count = 0;
+    void create();
+    void destroy();
+    void upload(const std::vector<Vertex>& v);
+    void draw() const;
+  };
+  ShaderProgram shader_;
+  Mesh shell_, plate_, rims_, lifters_, marks_;
+  float radius_ = 0, length_ = 0;
+};
+
+}  // namespace mc::viewer

@@ -1,0 +1,266 @@
+// The ImGui panel on the left of the window: statistics, run control, the
+// mill and charge parameters that change while the mill turns, the view,
+// live plots and output buttons. Sliders that need a new scene apply when
+// released, so one drag is one rebuild.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <imgui.h>
+
+#include "viewer/app.h"
+
+namespace mc::viewer {
+
+namespace {
+
+std::string si(double v, const char* unit) {
+  char buf[64];
+  const double a = std::fabs(v);
+  if (a >= 1e9) std::snprintf(buf, sizeof buf, "%.3g G%s", v / 1e9, unit);
+  else if (a >= 1e6) std::snprintf(buf, sizeof buf, "%.3g M%s", v / 1e6, unit);
+  else if (a >= 1e3) std::snprintf(buf, sizeof buf, "%.3g k%s", v / 1e3, unit);
+  else std::snprintf(buf, sizeof buf, "%.3g %s", v, unit);
+  return buf;
+}
+
+// A colour bar with the shader's ramp (shaders/balls.vert).
+void colour_bar(float lo, float hi, const char* unit) {
+  const ImVec4 stops[5] = {{0.15f, 0.30f, 0.95f, 1}, {0.05f, 0.75f, 0.90f, 1}, {0.25f, 0.85f, 0.25f, 1},
+                           {0.98f, 0.80f, 0.10f, 1}, {0.90f, 0.15f, 0.10f, 1}};
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  const ImVec2 p = ImGui::GetCursorScreenPos();
+  const float w = ImGui::GetContentRegionAvail().x, h = 10;
+  for (int k = 0; k < 4; ++k) {
+    const float x0 = p.x + w * k / 4, x1 = p.x + w * (k + 1) / 4;
+    dl->AddRectFilledMultiColor({x0, p.y}, {x1, p.y + h}, ImGui::GetColorU32(stops[k]), ImGui::GetColorU32(stops[k + 1]),
+                                ImGui::GetColorU32(stops[k + 1]), ImGui::GetColorU32(stops[k]));
+  }
+  ImGui::Dummy({w, h});
+  ImGui::Text("%.3g", lo);
+  ImGui::SameLine(w * 0.5f - 20);
+  ImGui::TextUnformatted(unit);
+  char hi_text[32];
+  std::snprintf(hi_text, sizeof hi_text, "%.3g", hi);
+  ImGui::SameLine(w - ImGui::CalcTextSize(hi_text).x);
+  ImGui::TextUnformatted(hi_text);
+}
+
+bool released() { return ImGui::IsItemDeactivatedAfterEdit(); }
+
+}  // namespace
+
+void App::draw_panel() {
+  ImGui::SetNextWindowPos({0, 0});
+  ImGui::SetNextWindowSize({panel_width_, static_cast<float>(opt_.height)});
+  ImGui::Begin("millcharge", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
+                   ImGuiWindowFlags_NoTitleBar);
+  ImGui::PushItemWidth(-150);
+  panel_stats();
+  if (ImGui::CollapsingHeader("Run", ImGuiTreeNodeFlags_DefaultOpen)) panel_run();
+  if (ImGui::CollapsingHeader("Mill", ImGuiTreeNodeFlags_DefaultOpen)) panel_mill();
+  if (ImGui::CollapsingHeader("Charge", ImGuiTreeNodeFlags_DefaultOpen)) panel_charge();
+  if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) panel_view();
+  if (ImGui::CollapsingHeader("Plots", ImGuiTreeNodeFlags_DefaultOpen)) panel_plots();
+  if (ImGui::CollapsingHeader("Output", ImGuiTreeNodeFlags_DefaultOpen)) panel_output();
+  ImGui::PopItemWidth();
+  ImGui::End();
+}
+
+void App::panel_stats() {
+  ImGui::Text("%s: %d balls", case_.name.c_str(), n_balls_);
+  ImGui::TextWrapped("device %s", solver_->device().label().c_str());
+  ImGui::TextWrapped("data path: %s", feed_->path().c_str());
+  ImGui::Text("%.1f fps drawn, %d steps/frame", fps_, last_steps_);
+  ImGui::Text("%s steps/s, %s particle-updates/s", si(steps_per_s_, "").c_str(),
+              si(steps_per_s_ * n_balls_, "").c_str());
+  const double t = sim_time();
+  if (settling_)
+    ImGui::TextColored({1, 0.8f, 0.3f, 1}, "settling %.3f s (mill at rest)", t - settle_from_);
+  else
+    ImGui::Text("turning %.3f s, %.2f rev (t %.3f s, dt %.3g s)", t - turning_from_,
+                (t - turning_from_) / derived_.revolution_s, t, solver_->dt());
+}
+
+void App::panel_run() {
+  if (ImGui::Button(paused_ ? "Resume (space)" : "Pause (space)")) paused_ = !paused_;
+  ImGui::SameLine();
+  if (ImGui::Button("Step (n)")) step_once_ = true;
+  ImGui::SameLine();
+  if (ImGui::Button("Reset")) {
+    edit_ = case_;
+    pending_ = Edit::reset;
+  }
+  ImGui::Checkbox("adapt steps per frame", &adaptive_);
+  if (adaptive_) {
+    ImGui::SliderFloat("speed limit, x real time", &speed_limit_, 0.01f, 10.0f, "%.2f",
+                       ImGuiSliderFlags_Logarithmic);
+  } else {
+    ImGui::SliderInt("steps per frame", &fixed_steps_, 1, 5000, "%d", ImGuiSliderFlags_Logarithmic);
+  }
+  ImGui::Text("simulated/real: %.3f", steps_per_s_ * solver_->dt());
+}
+
+void App::panel_mill() {
+  float pct = static_cast<float>(100 * derived_.speed_fraction);
+  if (ImGui::SliderFloat("speed, % critical", &pct, 10.0f, 150.0f, "%.1f %%")) set_speed_fraction(pct / 100.0);
+  float rpm = static_cast<float>(derived_.speed_rpm);
+  ImGui::InputFloat("rpm", &rpm, 0, 0, "%.2f");
+  if (released() && rpm > 0) set_speed_fraction(rpm / derived_.critical_rpm);
+  ImGui::Text("critical %.2f rpm, tip %.2f m/s", derived_.critical_rpm, derived_.tip_speed);
+
+  float j = static_cast<float>(edit_.filling);
+  ImGui::SliderFloat("filling J", &j, 0.05f, 0.5f, "%.3f");
+  if (ImGui::IsItemEdited()) edit_.filling = j;
+  if (released()) pending_ = Edit::apply;
+
+  ImGui::Separator();
+  ImGui::TextUnformatted("lifters (applied on release)");
+  int rows = edit_.lifter_rows;
+  ImGui::SliderInt("rows", &rows, 0, 48);
+  if (ImGui::IsItemEdited()) {
+    edit_.lifter_rows = rows;
+    if (edit_.lifter_pattern.empty()) edit_.lifter_pattern.push_back(LifterProfile{});
+  }
+  if (released()) pending_ = Edit::apply;
+  bool high_low = edit_.lifter_pattern.size() >= 2;
+  if (ImGui::Checkbox("high/low pattern", &high_low)) {
+    if (edit_.lifter_pattern.empty()) edit_.lifter_pattern.push_back(LifterProfile{});
+    if (high_low) {
+      LifterProfile low = edit_.lifter_pattern[0];
+      low.height *= 0.6;
+      edit_.lifter_pattern.resize(1);
+      edit_.lifter_pattern.push_back(low);
+    } else {
+      edit_.lifter_pattern.resize(1);
+    }
+    pending_ = Edit::apply;
+  }
+  for (std::size_t k = 0; k < edit_.lifter_pattern.size(); ++k) {
+    LifterProfile& p = edit_.lifter_pattern[k];
+    ImGui::PushID(static_cast<int>(k));
+    if (edit_.lifter_pattern.size() > 1) ImGui::TextUnformatted(k == 0 ? "high rows" : "low rows");
+    float h = static_cast<float>(1000 * p.height), w = static_cast<float>(1000 * p.top_width),
+          a = static_cast<float>(p.face_angle_deg);
+    if (ImGui::SliderFloat("height, mm", &h, 2.0f, static_cast<float>(250 * case_.diameter), "%.1f")) p.height = h / 1000;
+    if (released()) pending_ = Edit::apply;
+    if (ImGui::SliderFloat("top width, mm", &w, 2.0f, static_cast<float>(200 * case_.diameter), "%.1f"))
+      p.top_width = w / 1000;
+    if (released()) pending_ = Edit::apply;
+    if (ImGui::SliderFloat("face angle, deg", &a, 0.0f, 59.0f, "%.1f")) p.face_angle_deg = a;
+    if (released()) pending_ = Edit::apply;
+    ImGui::PopID();
+  }
+}
+
+void App::panel_charge() {
+  float scale = static_cast<float>(ball_scale_);
+  ImGui::SliderFloat("ball size x", &scale, 0.6f, 1.6f, "%.2f");
+  if (ImGui::IsItemEdited()) {
+    ball_scale_ = scale;
+    edit_.sizes = loaded_.sizes;
+    for (SizeClass& s : edit_.sizes) {
+      s.diameter_min *= ball_scale_;
+      s.diameter_max *= ball_scale_;
+    }
+  }
+  if (released()) pending_ = Edit::apply;
+  for (const SizeClass& s : edit_.sizes)
+    ImGui::Text("  %s %.1f-%.1f mm", s.material.c_str(), 1000 * s.diameter_min, 1000 * s.diameter_max);
+
+  float mu = static_cast<float>(edit_.contact.mu_slide);
+  if (ImGui::SliderFloat("friction", &mu, 0.0f, 1.0f, "%.2f")) {
+    edit_.contact.mu_slide = mu;
+    for (PairOverride& p : edit_.pairs) p.interaction.mu_slide = mu;
+  }
+  if (released()) pending_ = Edit::apply;
+  float e = static_cast<float>(edit_.contact.restitution);
+  if (ImGui::SliderFloat("restitution", &e, 0.05f, 0.95f, "%.2f")) {
+    edit_.contact.restitution = e;
+    for (PairOverride& p : edit_.pairs) p.interaction.restitution = e;
+  }
+  if (released()) pending_ = Edit::apply;
+  ImGui::TextDisabled("(friction and restitution of every pair)");
+}
+
+void App::panel_view() {
+  const float aspect = static_cast<float>(scene_width()) / std::max(1, opt_.height);
+  if (ImGui::Button("End view (e)")) camera_.end_view(aspect);
+  ImGui::SameLine();
+  if (ImGui::Button("Isometric (i)")) camera_.isometric(aspect);
+  ImGui::SameLine();
+  bool ortho = camera_.orthographic();
+  if (ImGui::Checkbox("ortho", &ortho)) camera_.set_orthographic(ortho);
+  const char* modes[] = {"speed", "size", "material", "impact energy"};
+  int mode = static_cast<int>(style_.colour_by);
+  if (ImGui::Combo("colour by", &mode, modes, 4)) style_.colour_by = static_cast<ColourBy>(mode);
+  if (style_.colour_by != ColourBy::material) {
+    const char* units[] = {"m/s", "m (radius)", "", "log10 W dissipated"};
+    ImGui::DragFloatRange2("range", &colour_lo_[mode], &colour_hi_[mode], 0.01f);
+    colour_bar(colour_lo_[mode], colour_hi_[mode], units[mode]);
+  }
+  ImGui::Checkbox("axial slab", &style_.slab);
+  if (style_.slab) {
+    ImGui::SliderFloat("slab centre, m", &slab_centre_, 0.0f, static_cast<float>(case_.length), "%.3f");
+    ImGui::SliderFloat("slab width, m", &slab_width_, 0.005f, static_cast<float>(case_.length), "%.3f");
+  }
+  ImGui::Checkbox("shell", &show_shell_);
+  ImGui::SameLine();
+  ImGui::Checkbox("toe/shoulder marks", &show_marks_);
+  ImGui::TextDisabled("drag: orbit, right/shift-drag: pan, wheel: zoom");
+}
+
+void App::panel_plots() {
+  const auto& tq = monitor_.torque_power();
+  const auto& ds = monitor_.dissipation_power();
+  float hi = 1;
+  for (float v : tq) hi = std::max(hi, v);
+  for (float v : ds) hi = std::max(hi, v);
+  hi *= 1.1f;
+  const float w = ImGui::GetContentRegionAvail().x;
+  char label[96];
+  std::snprintf(label, sizeof label, "torque power, mean %.0f W", monitor_.mean_torque_power());
+  ImGui::PlotLines("##torque", tq.data(), static_cast<int>(tq.size()), 0, label, 0, hi, {w, 60});
+  std::snprintf(label, sizeof label, "dissipation, mean %.0f W", monitor_.mean_dissipation_power());
+  ImGui::PlotLines("##dissipation", ds.data(), static_cast<int>(ds.size()), 0, label, 0, hi, {w, 60});
+  const ChargeAngles& a = monitor_.angles();
+  if (a.found) std::snprintf(label, sizeof label, "toe %.0f deg", a.toe_deg);
+  else std::snprintf(label, sizeof label, "toe (no band yet)");
+  ImGui::PlotLines("##toe", monitor_.toe().data(), static_cast<int>(monitor_.toe().size()), 0, label, FLT_MAX,
+                   FLT_MAX, {w, 45});
+  if (a.found) std::snprintf(label, sizeof label, "shoulder %.0f deg", a.shoulder_deg);
+  else std::snprintf(label, sizeof label, "shoulder (no band yet)");
+  ImGui::PlotLines("##shoulder", monitor_.shoulder().data(), static_cast<int>(monitor_.shoulder().size()), 0, label,
+                   FLT_MAX, FLT_MAX, {w, 45});
+}
+
+void App::panel_output() {
+  if (ImGui::Button("Screenshot (p)")) screenshot_requested_ = true;
+  ImGui::SameLine();
+  if (ImGui::Button("Save state")) save_state();
+  if (!message_.empty()) ImGui::TextWrapped("%s", message_.c_str());
+}
+
+// Toe and shoulder named beside their marks in the picture.
+void App::draw_labels() {
+  if (!show_marks_ || settling_ || !monitor_.angles().found) return;
+  ImDrawList* dl = ImGui::GetForegroundDrawList();
+  const float R = static_cast<float>(0.5 * case_.diameter), z = static_cast<float>(case_.length);
+  auto label = [&](double deg, const char* name, ImU32 colour) {
+    const float a = static_cast<float>(deg * M_PI / 180.0);
+    const glm::vec2 p = to_pixels({1.27f * R * std::cos(a), 1.27f * R * std::sin(a), z});
+    char text[48];
+    std::snprintf(text, sizeof text, "%s %.0f", name, deg);
+    const ImVec2 size = ImGui::CalcTextSize(text);
+    // Inside the picture, whatever the zoom.
+    const float x = std::clamp(p.x - 0.5f * size.x, panel_width_ + 2, static_cast<float>(opt_.width) - size.x - 2);
+    const float y = std::clamp(p.y - 0.5f * size.y, 2.0f, static_cast<float>(opt_.height) - size.y - 2);
+    dl->AddRectFilled({x - 3, y - 1}, {x + size.x + 3, y + size.y + 1}, IM_COL32(28, 31, 36, 220), 3.0f);
+    dl->AddText({x, y}, colour, text);
+  };
+  label(monitor_.angles().toe_deg, "toe", IM_COL32(255, 115, 25, 255));
+  label(monitor_.angles().shoulder_deg, "shoulder", IM_COL32(50, 230, 255, 255));
+}
+
+}  // namespace mc::viewer

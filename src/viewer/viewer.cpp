@@ -1,0 +1,533 @@
+#include "viewer/viewer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <iostream>
+#include <stdexcept>
+
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_opengl3.h>
+
+#include "core/charge_edit.h"
+#include "io/atomic_file.h"
+#include "io/case_file.h"
+#include "io/vtk.h"
+#include "viewer/app.h"
+#include "viewer/gl_sharing.h"
+#include "viewer/screenshot.h"
+
+namespace mc::viewer {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kG = 9.81;
+constexpr double kTargetFrameS = 1.0 / 30;  // interactive: at least ~30 drawn frames per second
+
+void glfw_error(int code, const char* what) { std::cerr << "millcharge view: GLFW error " << code << ": " << what << '\n'; }
+
+ColourBy colour_from(const std::string& s) {
+  if (s == "size") return ColourBy::size;
+  if (s == "material") return ColourBy::material;
+  if (s == "impact") return ColourBy::impact;
+  return ColourBy::speed;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------ window
+
+Window::Window(int width, int height, const std::string& title, bool vsync) {
+  glfwSetErrorCallback(glfw_error);
+  if (!glfwInit())
+    throw std::runtime_error("cannot start GLFW: no display? (on a machine without one, run under xvfb-run)");
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  window_ = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
+  if (!window_) {
+    glfwTerminate();
+    throw std::runtime_error("cannot open a window with OpenGL 3.3 core (no display, or the driver is too old)");
+  }
+  glfwMakeContextCurrent(window_);
+  glfwSwapInterval(vsync ? 1 : 0);
+  glewExperimental = GL_TRUE;  // core profiles need it with GLEW 2.x
+  const GLenum glew = glewInit();
+  glGetError();  // glewInit leaves GL_INVALID_ENUM behind on core profiles
+  if (glew != GLEW_OK) {
+    glfwDestroyWindow(window_);
+    glfwTerminate();
+    throw std::runtime_error(std::string("cannot load OpenGL functions (GLEW): ") +
+                             reinterpret_cast<const char*>(glewGetErrorString(glew)));
+  }
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini in the working folder
+  ImGui::StyleColorsDark();
+  ImGui_ImplGlfw_InitForOpenGL(window_, true);
+  ImGui_ImplOpenGL3_Init("#version 330 core");
+  imgui_ = true;
+}
+
+Window::~Window() {
+  if (imgui_) {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+  }
+  glfwDestroyWindow(window_);
+  glfwTerminate();
+}
+
+std::string Window::gl_version() const {
+  const auto* v = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+  const auto* r = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  return std::string(v ? v : "?") + ", " + (r ? r : "?");
+}
+
+// ------------------------------------------------------------------ app
+
+App::App(const MillCase& c, const MillDerived& d, Scene scene, const ViewOptions& options)
+    : opt_(options), scripted_(options.frames > 0), loaded_(c), case_(c), edit_(c), derived_(d) {
+  window_ = std::make_unique<Window>(opt_.width, opt_.height, "millcharge view: " + c.name, !scripted_);
+  if (!opt_.panel) panel_width_ = 0;
+  make_context();
+  balls_ = std::make_unique<BallRenderer>();
+  mill_ = std::make_unique<MillRenderer>();
+  feed_ = std::make_unique<InstanceFeed>(*ctx_, why_not_shared_);
+  if (opt_.steps_per_frame > 0) {
+    adaptive_ = false;
+    fixed_steps_ = opt_.steps_per_frame;
+  } else if (scripted_ && opt_.steps_per_frame == 0) {
+    adaptive_ = false;  // reproducible pictures
+    fixed_steps_ = 40;
+  }
+  style_.colour_by = colour_from(opt_.colour);
+  // Colour ranges: speed up to twice the tip speed (balls falling from the
+  // shoulder), the case's radii, 1 mW to 30 W dissipated.
+  colour_hi_[0] = static_cast<float>(2 * d.tip_speed);
+  double rmin = 1e300, rmax = 0;
+  for (const SizeClass& s : c.sizes) rmin = std::min(rmin, 0.5 * s.diameter_min), rmax = std::max(rmax, 0.5 * s.diameter_max);
+  colour_lo_[1] = static_cast<float>(rmin);
+  colour_hi_[1] = static_cast<float>(rmax > rmin ? rmax : 1.2 * rmin);
+  colour_lo_[3] = -3.0f;
+  colour_hi_[3] = 1.5f;
+  install_solver(std::move(scene), true);
+  slab_centre_ = static_cast<float>(0.5 * c.length);
+  slab_width_ = static_cast<float>(std::min(c.length, 2.5 * derived_.largest_ball_diameter));
+  camera_.frame_mill(0.5 * c.diameter, c.length);
+  const float aspect = static_cast<float>(scene_width()) / std::max(1, opt_.height);
+  if (opt_.camera == "iso") camera_.isometric(aspect);
+  else camera_.end_view(aspect);
+}
+
+App::~App() {
+  // GL objects go before the window's context.
+  feed_.reset();
+  mill_.reset();
+  balls_.reset();
+}
+
+// The OpenCL context: one that shares with GL where the device offers
+// cl_khr_gl_sharing and is the GL context's device; a plain one otherwise.
+void App::make_context() {
+  compute::DeviceInfo dev = compute::choose_device(opt_.device.empty() && std::getenv("MILLCHARGE_DEVICE")
+                                                       ? std::getenv("MILLCHARGE_DEVICE")
+                                                       : opt_.device);
+  if (!dev.gl_sharing) {
+    why_not_shared_ = dev.name + " has no cl_khr_gl_sharing";
+  } else {
+    const auto props = gl_sharing_properties(window_->get());
+    if (props.empty()) {
+      why_not_shared_ = "the window's GL context is not a GLX one";
+    } else {
+      try {
+        ctx_ = std::make_unique<compute::Context>(opt_.device, props);
+      } catch (const compute::Error& e) {
+        why_not_shared_ = e.what();
+      }
+    }
+  }
+  if (!ctx_) ctx_ = std::make_unique<compute::Context>(opt_.device);
+}
+
+double App::sim_time() const { return time_offset_ + (solver_ ? solver_->time_s() : 0.0); }
+
+int App::scene_width() const { return std::max(1, opt_.width - static_cast<int>(panel_width_)); }
+
+// A new solver for `scene`; the old one's time carries on. With `settle` the
+// mill stands still until the charge is at rest (as `run` settles it).
+void App::install_solver(Scene scene, bool settle) {
+  const double t = sim_time();
+  if (settle) scene.mill_omega = 0;
+  auto next = make_solver(*ctx_, scene);  // the old solver stays if this throws
+  solver_ = std::move(next);
+  time_offset_ = t;
+  scene_ = std::move(scene);
+  n_balls_ = static_cast<int>(scene_.balls.size());
+  scene_.balls.clear();  // the solver holds them now
+  scene_.balls.shrink_to_fit();
+  if (settle) {
+    settling_ = true;
+    settle_from_ = t;
+    monitor_.clear();
+  }
+  mill_->set_walls(scene_.walls);
+  balls_->resize(n_balls_);
+  feed_->attach(*balls_);
+  instances_stale_ = true;
+}
+
+void App::set_speed_fraction(double fraction) {
+  MillCase next = case_;
+  next.speed_fraction = fraction;
+  next.speed_rpm = 0;
+  try {
+    derived_ = derive(next);
+    case_ = next;
+    edit_.speed_fraction = fraction;
+    edit_.speed_rpm = 0;
+    if (!settling_) solver_->set_mill_omega(derived_.omega);
+  } catch (const std::invalid_argument& e) {
+    message_ = e.what();
+  }
+}
+
+// Steps for this frame, then the balls into the vertex buffer and the sums
+// into the monitor.
+void App::step_frame() {
+  int steps = 0;
+  if (!paused_ || step_once_) {
+    if (step_once_) steps = 1;
+    else if (!adaptive_) steps = fixed_steps_;
+    else {
+      // What fits in the frame budget, and no faster than the speed limit.
+      // Where drawing alone takes most of a frame (software GL, a loaded
+      // machine), the simulation still gets as much as drawing takes, up to
+      // a whole frame period: ~15 fps rather than a crawl of the charge.
+      const double budget =
+          std::max(kTargetFrameS - frame_overhead_s_, std::min(frame_overhead_s_, kTargetFrameS));
+      const double per_step = s_per_step_ > 0 ? s_per_step_ : 1e-3;
+      const double by_budget = budget / per_step;
+      const double by_limit = speed_limit_ * std::max(last_frame_s_, 1.0 / 240) / solver_->dt();
+      steps = static_cast<int>(std::clamp(std::min(by_budget, by_limit), 1.0, 200000.0));
+    }
+    step_once_ = false;
+  }
+  last_steps_ = steps;
+  advance_s_ = 0;
+  if (steps > 0) {
+    const auto t0 = Clock::now();
+    solver_->advance(steps);
+    const double s = std::chrono::duration<double>(Clock::now() - t0).count();
+    const double per = s / steps;
+    s_per_step_ = s_per_step_ > 0 ? 0.8 * s_per_step_ + 0.2 * per : per;
+    advance_s_ = s;
+    feed_->update(*solver_, *balls_);
+    monitor_.after_steps(*solver_, sim_time(), !settling_);
+    steps_ += steps;
+    window_steps_ += steps;
+    instances_stale_ = false;
+    if (settling_) {
+      const double in_settle = sim_time() - settle_from_;
+      const bool auto_settle = case_.settle < 0;
+      const double max_settle = auto_settle ? 2.0 + 4.0 * std::sqrt(case_.diameter / kG) : case_.settle;
+      const bool at_rest = auto_settle && in_settle > 0.1 && monitor_.rms_speed() < 0.01 * std::sqrt(kG * case_.diameter);
+      if (at_rest || in_settle >= max_settle - 0.5 * solver_->dt()) {
+        settling_ = false;
+        turning_from_ = sim_time();
+        solver_->set_mill_omega(derived_.omega);
+        solver_->observe(true);
+        solver_->take_contact_profile();
+        monitor_.clear();
+      }
+    }
+  } else if (instances_stale_) {
+    feed_->update(*solver_, *balls_);
+    instances_stale_ = false;
+  }
+}
+
+namespace {
+
+bool same_sizes(const MillCase& a, const MillCase& b) {
+  if (a.sizes.size() != b.sizes.size() || a.number_fractions != b.number_fractions || a.seed != b.seed ||
+      a.materials.size() != b.materials.size())
+    return false;
+  for (std::size_t k = 0; k < a.sizes.size(); ++k)
+    if (a.sizes[k].diameter_min != b.sizes[k].diameter_min || a.sizes[k].diameter_max != b.sizes[k].diameter_max ||
+        a.sizes[k].material != b.sizes[k].material || a.sizes[k].fraction != b.sizes[k].fraction)
+      return false;
+  for (std::size_t k = 0; k < a.materials.size(); ++k)
+    if (a.materials[k].name != b.materials[k].name || a.materials[k].density != b.materials[k].density) return false;
+  return a.diameter == b.diameter && a.length == b.length;
+}
+
+}  // namespace
+
+// A new case from the panel or a script. Speed alone is a new ω; anything
+// else is a new scene made from the balls as they are (core/charge_edit),
+// except a new charge (sizes, materials, mill size), which is packed afresh
+// and settles. On a bad value the old case stays and the panel says why.
+void App::apply_case(const MillCase& next) {
+  try {
+    const MillDerived nd = derive(next);
+    MillCase speed_only = case_;
+    speed_only.speed_fraction = next.speed_fraction;
+    speed_only.speed_rpm = next.speed_rpm;
+    if (io::case_to_toml(speed_only) == io::case_to_toml(next)) {
+      case_ = next;
+      derived_ = nd;
+      if (!settling_) solver_->set_mill_omega(derived_.omega);
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "speed %.1f %% of critical, %.2f rpm", 100 * nd.speed_fraction, nd.speed_rpm);
+      message_ = buf;
+      return;
+    }
+    if (!same_sizes(case_, next)) {
+      Scene s = build_scene(next, nd);
+      s.mill_angle = solver_->mill_angle();
+      install_solver(std::move(s), true);
+      message_ = "new charge: " + std::to_string(n_balls_) + " balls packed afresh; they settle, then the mill turns";
+    } else {
+      const std::vector<BallState> now = solver_->balls();
+      std::vector<Ball> balls(now.size());
+      for (std::size_t k = 0; k < now.size(); ++k)
+        balls[k] = Ball{now[k].id, now[k].material, now[k].radius, now[k].position, now[k].velocity, now[k].omega};
+      ChargeEditOptions o;
+      o.match_counts = next.filling != case_.filling || next.porosity != case_.porosity;
+      o.mill_angle = solver_->mill_angle();
+      o.mill_omega = settling_ ? 0.0 : nd.omega;
+      o.previous_walls = &scene_.walls;
+      o.seed = ++edit_seed_;
+      ChargeEditResult r = edit_charge(next, nd, std::move(balls), o);
+      install_solver(std::move(r.scene), false);
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "applied: %d balls (%ld added, %ld removed, %ld moved out of lifters)",
+                    n_balls_, r.added, r.removed, r.moved);
+      message_ = buf;
+    }
+    case_ = next;
+    derived_ = nd;
+  } catch (const std::invalid_argument& e) {
+    message_ = std::string("not applied: ") + e.what();
+  } catch (const compute::Error& e) {
+    message_ = std::string("not applied (OpenCL): ") + e.what();
+  }
+  edit_ = case_;
+}
+
+void App::reset() {
+  try {
+    Scene s = build_scene(case_, derived_);
+    install_solver(std::move(s), true);
+    time_offset_ = settle_from_ = 0;  // the clock starts again
+    message_ = "reset: a fresh charge settles";
+  } catch (const std::exception& e) {
+    message_ = std::string("reset failed: ") + e.what();
+  }
+}
+
+// --edit FRAME:KEY=VALUE: the case with that --set applied, as if from the panel.
+void App::scripted_edits() {
+  for (const auto& [frame, kv] : opt_.edits) {
+    if (frame != frames_) continue;
+    try {
+      apply_case(io::parse_case(io::case_to_toml(case_), case_.name + ".toml", {kv}));
+    } catch (const std::invalid_argument& e) {
+      message_ = std::string("not applied: ") + e.what();
+    }
+    std::printf("millcharge view: frame %ld: %s: %s\n", frames_, kv.c_str(), message_.c_str());
+    std::fflush(stdout);
+  }
+}
+
+glm::vec2 App::to_pixels(const glm::vec3& p) const {
+  const float w = static_cast<float>(scene_width()), h = static_cast<float>(opt_.height);
+  const glm::vec4 clip = camera_.projection(w / h) * camera_.view() * glm::vec4(p, 1.0f);
+  const glm::vec3 ndc = glm::vec3(clip) / clip.w;
+  return {panel_width_ + 0.5f * (ndc.x + 1) * w, 0.5f * (1 - ndc.y) * h};
+}
+
+void App::render() {
+  int fb_w = 0, fb_h = 0;
+  glfwGetFramebufferSize(window_->get(), &fb_w, &fb_h);
+  glViewport(0, 0, fb_w, fb_h);
+  glClearColor(0.11f, 0.12f, 0.14f, 1.0f);
+  glClearDepth(1.0);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  // The scene right of the panel.
+  const float scale = fb_w / static_cast<float>(std::max(1, opt_.width));
+  const int x0 = static_cast<int>(panel_width_ * scale);
+  glViewport(x0, 0, std::max(1, fb_w - x0), fb_h);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  const float aspect = static_cast<float>(scene_width()) / std::max(1, opt_.height);
+  const glm::mat4 view = camera_.view(), proj = camera_.projection(aspect);
+  mill_->draw(view, proj, camera_.orthographic(), solver_->mill_angle(), show_shell_);
+  style_.slab_from = slab_centre_ - 0.5f * slab_width_;
+  style_.slab_to = slab_centre_ + 0.5f * slab_width_;
+  const int mode = static_cast<int>(style_.colour_by);
+  style_.range = {colour_lo_[mode], colour_hi_[mode]};
+  balls_->draw(view, proj, camera_.orthographic(), style_);
+  if (show_shell_) mill_->draw_near_shell(view, proj, camera_.orthographic(), solver_->mill_angle());
+  MillMarks marks;
+  marks.show = show_marks_ && !settling_ && monitor_.angles().found;
+  marks.toe_deg = static_cast<float>(monitor_.angles().toe_deg);
+  marks.shoulder_deg = static_cast<float>(monitor_.angles().shoulder_deg);
+  mill_->draw_marks(view, proj, marks);
+  glDisable(GL_DEPTH_TEST);
+  glViewport(0, 0, fb_w, fb_h);
+}
+
+void App::handle_input() {
+  const ImGuiIO& io = ImGui::GetIO();
+  const float aspect = static_cast<float>(scene_width()) / std::max(1, opt_.height);
+  if (!io.WantCaptureMouse && io.MousePos.x >= panel_width_) {
+    if (ImGui::IsMouseDragging(ImGuiMouseButton_Left) && !io.KeyShift)
+      camera_.orbit(io.MouseDelta.x, io.MouseDelta.y);
+    if (ImGui::IsMouseDragging(ImGuiMouseButton_Right) || ImGui::IsMouseDragging(ImGuiMouseButton_Middle) ||
+        (ImGui::IsMouseDragging(ImGuiMouseButton_Left) && io.KeyShift))
+      camera_.pan(io.MouseDelta.x, io.MouseDelta.y, static_cast<float>(opt_.height));
+    if (io.MouseWheel != 0) camera_.zoom(io.MouseWheel);
+  }
+  if (!io.WantCaptureKeyboard) {
+    if (ImGui::IsKeyPressed(GLFW_KEY_SPACE)) paused_ = !paused_;
+    if (ImGui::IsKeyPressed(GLFW_KEY_N)) step_once_ = true;
+    if (ImGui::IsKeyPressed(GLFW_KEY_E)) camera_.end_view(aspect);
+    if (ImGui::IsKeyPressed(GLFW_KEY_I)) camera_.isometric(aspect);
+    if (ImGui::IsKeyPressed(GLFW_KEY_P)) screenshot_requested_ = true;
+    if (ImGui::IsKeyPressed(GLFW_KEY_ESCAPE)) glfwSetWindowShouldClose(window_->get(), GLFW_TRUE);
+  }
+}
+
+std::string App::stamp() const {
+  const std::time_t t = std::time(nullptr);
+  char s[32];
+  std::strftime(s, sizeof s, "%Y%m%d-%H%M%S", std::localtime(&t));
+  return s;
+}
+
+// Reads the back buffer: call after everything of the frame is drawn.
+void App::take_screenshot(const std::string& path_in, bool announce) {
+  const fs::path path = path_in.empty() ? fs::path("runs") / ("view-" + case_.name + "-" + stamp() + ".png") : fs::path(path_in);
+  int fb_w = 0, fb_h = 0;
+  glfwGetFramebufferSize(window_->get(), &fb_w, &fb_h);
+  try {
+    write_png(path, read_back_buffer(fb_w, fb_h));
+    if (announce) message_ = "wrote " + path.string();
+  } catch (const std::exception& e) {
+    message_ = e.what();
+    if (!announce) throw;
+  }
+}
+
+void App::save_state() {
+  const fs::path dir = fs::path("runs") / ("view-" + case_.name + "-" + stamp());
+  try {
+    fs::create_directories(dir);
+    const std::vector<BallState> balls = solver_->balls();
+    io::Snapshot s;
+    s.time_s = sim_time();
+    for (const BallState& b : balls) {
+      s.position.push_back({float(b.position.x), float(b.position.y), float(b.position.z)});
+      s.velocity.push_back({float(b.velocity.x), float(b.velocity.y), float(b.velocity.z)});
+      s.radius.push_back(float(b.radius));
+      s.material.push_back(b.material);
+      s.id.push_back(b.id);
+    }
+    io::write_vtp(dir / "charge.vtp", s);
+    io::write_file_atomic(dir / "case.toml", io::case_to_toml(case_));
+    message_ = "saved " + (dir / "charge.vtp").string() + " and case.toml";
+  } catch (const std::exception& e) {
+    message_ = std::string("save failed: ") + e.what();
+  }
+}
+
+int App::run() {
+  GLFWwindow* w = window_->get();
+  start_ = window_from_ = Clock::now();
+  auto last = Clock::now();
+  while (!glfwWindowShouldClose(w)) {
+    glfwPollEvents();
+    if (!scripted_ && glfwGetWindowAttrib(w, GLFW_ICONIFIED)) {
+      glfwWaitEventsTimeout(0.1);
+      continue;
+    }
+    int ww = 0, wh = 0;
+    glfwGetWindowSize(w, &ww, &wh);
+    if (ww > 0 && wh > 0) opt_.width = ww, opt_.height = wh;
+
+    scripted_edits();
+    step_frame();
+
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    handle_input();
+    if (opt_.panel) draw_panel();
+    draw_labels();
+    ImGui::Render();
+    render();
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+
+    ++frames_;
+    ++window_frames_;
+    const bool last_frame = scripted_ && frames_ >= opt_.frames;
+    if (last_frame && !opt_.screenshot.empty()) take_screenshot(opt_.screenshot, false);
+    if (screenshot_requested_) {
+      take_screenshot("", true);
+      screenshot_requested_ = false;
+    }
+    glfwSwapBuffers(w);
+
+    const auto t2 = Clock::now();
+    last_frame_s_ = std::chrono::duration<double>(t2 - last).count();
+    last = t2;
+    // Everything in a frame but the steps: drawing, the copy, the sums.
+    const double overhead = std::max(0.0, last_frame_s_ - advance_s_);
+    frame_overhead_s_ = 0.8 * frame_overhead_s_ + 0.2 * overhead;
+    const double window_s = std::chrono::duration<double>(t2 - window_from_).count();
+    if (window_s >= 1.0) {
+      fps_ = window_frames_ / window_s;
+      steps_per_s_ = window_steps_ / window_s;
+      window_frames_ = window_steps_ = 0;
+      window_from_ = t2;
+    }
+    if (pending_ == Edit::apply) apply_case(edit_);
+    if (pending_ == Edit::reset) reset();
+    pending_ = Edit::none;
+    if (last_frame) break;
+  }
+  const double wall = std::chrono::duration<double>(Clock::now() - start_).count();
+  std::fprintf(stderr,
+               "millcharge view: %ld frames in %.1f s: %.2f drawn fps, %.0f steps/s, %.3g particle-updates/s "
+               "(%d balls, %s steps per frame, %s)\n",
+               frames_, wall, frames_ / wall, steps_ / wall, steps_ / wall * n_balls_, n_balls_,
+               adaptive_ ? "adaptive" : std::to_string(fixed_steps_).c_str(), feed_->path().c_str());
+  if (scripted_ && !opt_.screenshot.empty()) {
+    const glm::vec2 axis = to_pixels({0, 0, static_cast<float>(case_.length)});
+    const glm::vec2 rim = to_pixels({static_cast<float>(0.5 * case_.diameter), 0, static_cast<float>(case_.length)});
+    std::printf(
+        "millcharge view: wrote %s (%dx%d): mill axis at pixel (%.1f, %.1f), shell radius %.1f px; "
+        "%s %.3f s, %.1f %% of critical, %d balls\n",
+        opt_.screenshot.c_str(), opt_.width, opt_.height, axis.x, axis.y, glm::length(rim - axis),
+        settling_ ? "settling" : "turning", settling_ ? sim_time() - settle_from_ : sim_time() - turning_from_,
+        100 * derived_.speed_fraction, n_balls_);
+  }
+  return 0;
+}
+
+int run(const MillCase& c, const MillDerived& d, Scene scene, const ViewOptions& options) {
+  App app(c, d, std::move(scene), options);
+  return app.run();
+}
+
+}  // namespace mc::viewer
