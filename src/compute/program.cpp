@@ -1,5 +1,7 @@
 #include "compute/program.h"
 
+#include <cstdlib>
+
 #include <unistd.h>
 
 #include <cstdio>
@@ -138,7 +140,10 @@ Program::Program(Context& ctx, const std::vector<std::string>& files,
   for (const std::string& f : files)
     source += "#line 1 \"" + f + "\"\n" + read_file(dir + "/" + f) + "\n";
   if (double_) options.define("MC_DOUBLE");
-  const std::string opts = options.str(dir);
+  std::string opts = options.str(dir);
+  // Extra compiler options for tuning and for drivers that need them, e.g.
+  // MILLCHARGE_CL_OPTIONS="-cl-mad-enable".
+  if (const char* extra = std::getenv("MILLCHARGE_CL_OPTIONS")) opts += std::string(" ") + extra;
   try {
     program_ = cl::Program(ctx.context(), source);
   } catch (const cl::Error& e) {
