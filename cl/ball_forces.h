@@ -11,8 +11,9 @@
 #define MC_BALL_FORCES_H
 
 typedef struct {
-  real mill_angle; /* rad, mill frame = world rotated by this about +z */
-  real mill_omega; /* rad/s */
+  real cos_angle, sin_angle; /* of the mill angle: mill frame = world
+                                rotated by it about +z */
+  real omega;                /* rad/s */
 } MillState;
 
 /* One wall contact: updates the ball's slot for `key` (kept in the private
@@ -20,20 +21,15 @@ typedef struct {
 MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel,
                         real4 om, real radius, PairParams pp, MillState mill,
                         real dt, int law, const int* old_key,
-                        const real4* old_hist, int* new_key, real4* new_hist,
+                        const real3* old_hist, int* new_key, real3* new_hist,
                         int* n_new, int* overflow, real3* f_sum, real3* t_sum,
                         real* torque_axis, real* dissipated, real* elastic) {
   real3 spring = make_real3(0, 0, 0);
-  real energy = R(0.0);
-  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-    if (old_key[s] == key) {
-      spring = xyz_of(old_hist[s]);
-      energy = old_hist[s].w;
-    }
-  }
+  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s)
+    if (old_key[s] == key) spring = old_hist[s];
   const real arm = radius - overlap;
   const real3 rc = p - arm * n; /* contact point, world frame */
-  const real3 w_mill = make_real3(0, 0, mill.mill_omega);
+  const real3 w_mill = make_real3(0, 0, mill.omega);
   const real3 v_wall = cross(w_mill, rc);
   const real3 w_ball = xyz_of(om);
   ContactGeom g;
@@ -55,7 +51,7 @@ MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel,
   *elastic += c.elastic;
   if (*n_new < MC_MAX_WALL_CONTACTS) {
     new_key[*n_new] = key;
-    new_hist[*n_new] = make_real4(c.spring.x, c.spring.y, c.spring.z, energy + c.dissipated);
+    new_hist[*n_new] = c.spring;
     *n_new += 1;
   } else {
     *overflow = 1;
@@ -68,8 +64,8 @@ MC_FN void ball_forces(
     MC_GLOBAL const real4* pos, MC_GLOBAL const real4* vel,
     MC_GLOBAL const real4* omega, MC_GLOBAL const int2* info,
     MC_GLOBAL const int* neigh_start, MC_GLOBAL const int* neigh_count,
-    MC_GLOBAL const int* neigh_index, MC_GLOBAL real4* neigh_hist,
-    MC_GLOBAL int* wall_key, MC_GLOBAL real4* wall_hist,
+    MC_GLOBAL const int* neigh_index, MC_GLOBAL real* neigh_hist,
+    MC_GLOBAL int* wall_key, MC_GLOBAL real* wall_hist,
     MC_GLOBAL real4* force, MC_GLOBAL real4* torque, MC_GLOBAL real4* accum,
     MC_GLOBAL int* status) {
   const int n = sp->n_balls;
@@ -99,7 +95,11 @@ MC_FN void ball_forces(
     const real dist = length(dx);
     const real overlap = ri + pj4.w - dist;
     if (overlap <= R(0.0) || dist <= R(0.0)) {
-      neigh_hist[k] = make_real4(0, 0, 0, 0);
+      /* Apart: the spring is gone. Most listed pairs are apart and already
+       * zero, so read before writing. */
+      const real3 h0 = load_hist(neigh_hist, k);
+      if (h0.x != R(0.0) || h0.y != R(0.0) || h0.z != R(0.0))
+        store_hist(make_real3(0, 0, 0), neigh_hist, k);
       continue;
     }
     const real4 vj = vel[j];
@@ -118,25 +118,26 @@ MC_FN void ball_forces(
     g.r_eff = ri * pj4.w / (ri + pj4.w);
     g.inv_inertia_sum = wi.w + wj.w;
     const PairParams pp = pairs[MC_PAIR_INDEX(sp, mat_i, info[j].y)];
-    const real4 h = neigh_hist[k];
-    const ContactOut c = contact_force(pp, g, xyz_of(h), dt, law);
+    const ContactOut c = contact_force(pp, g, load_hist(neigh_hist, k), dt, law);
     f_sum += c.force;
     t_sum += c.torque;
     dissipated += R(0.5) * c.dissipated;
     elastic += R(0.5) * c.elastic;
-    neigh_hist[k] = make_real4(c.spring.x, c.spring.y, c.spring.z, h.w + c.dissipated);
+    store_hist(c.spring, neigh_hist, k);
   }
 
   /* ---- walls, in the mill frame ---- */
   int old_key[MC_MAX_WALL_CONTACTS];
-  real4 old_hist[MC_MAX_WALL_CONTACTS];
+  real3 old_hist[MC_MAX_WALL_CONTACTS];
   int new_key[MC_MAX_WALL_CONTACTS];
-  real4 new_hist[MC_MAX_WALL_CONTACTS];
+  real3 new_hist[MC_MAX_WALL_CONTACTS];
+  int any_old = 0;
   for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
     old_key[s] = wall_key[s * n + i];
-    old_hist[s] = wall_hist[s * n + i];
+    any_old |= old_key[s] != MC_WALL_NONE;
+    old_hist[s] = old_key[s] != MC_WALL_NONE ? load_hist(wall_hist, s * n + i) : make_real3(0, 0, 0);
     new_key[s] = MC_WALL_NONE;
-    new_hist[s] = make_real4(0, 0, 0, 0);
+    new_hist[s] = make_real3(0, 0, 0);
   }
   int n_new = 0;
   int overflow = 0;
@@ -166,7 +167,7 @@ MC_FN void ball_forces(
   }
   const int nl = sp->n_lifters;
   if (nl > 0 && p.x * p.x + p.y * p.y > sp->lifter_reach * sp->lifter_reach) {
-    const real c = cos(mill.mill_angle), s = sin(mill.mill_angle);
+    const real c = mill.cos_angle, s = mill.sin_angle;
     const real3 pm = rotate_z(p, c, -s); /* into the mill frame */
     const int k0 = nearest_lifter(atan2(pm.y, pm.x), sp->lifter_first_angle,
                                   sp->lifter_spacing, nl);
@@ -187,17 +188,19 @@ MC_FN void ball_forces(
       }
     }
   }
-  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-    wall_key[s * n + i] = new_key[s];
-    wall_hist[s * n + i] = new_hist[s];
-  }
+  /* A ball that touched no wall and touches none keeps its empty slots. */
+  if (any_old || n_new > 0)
+    for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+      wall_key[s * n + i] = new_key[s];
+      if (new_key[s] != MC_WALL_NONE) store_hist(new_hist[s], wall_hist, s * n + i);
+    }
   if (overflow) MC_ATOMIC_OR(status, MC_FLAG_WALL_OVERFLOW);
 
   force[i] = make_real4(f_sum.x, f_sum.y, f_sum.z, R(0.0));
   torque[i] = make_real4(t_sum.x, t_sum.y, t_sum.z, R(0.0));
   const real4 a = accum[i];
   accum[i] = make_real4(a.x + torque_axis * dt,
-                        a.y + torque_axis * mill.mill_omega * dt,
+                        a.y + torque_axis * mill.omega * dt,
                         a.z + dissipated, elastic);
 }
 

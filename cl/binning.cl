@@ -32,13 +32,12 @@ __kernel void bin_scatter(int n, __global const int* ball_cell,
 
 /* Insertion sort of each cell's few entries by ball id. */
 __kernel void bin_sort_cells(int n_cells, __global const int* cell_start,
-                             __global const int* cell_count,
                              __global int* sorted_index,
                              __global const int2* info) {
   const int c = get_global_id(0);
   if (c >= n_cells) return;
   const int b = cell_start[c];
-  const int m = cell_count[c];
+  const int m = cell_start[c + 1] - b;
   for (int a = b + 1; a < b + m; ++a) {
     const int idx = sorted_index[a];
     const int key = info[idx].x;
@@ -64,16 +63,24 @@ __kernel void gather_int2(int n, __global const int* perm,
   if (i < n) dst[i] = src[perm[i]];
 }
 
-/* Wall-contact history is stored slot-major (slot s of ball i at s·n + i). */
-__kernel void gather_wall_slots(int n, __global const int* perm,
-                                __global const int* src_key,
-                                __global const real4* src_hist,
-                                __global int* dst_key, __global real4* dst_hist) {
+/* Wall-contact history is stored slot-major (slot s of ball i at s·n + i),
+ * springs packed three reals each. One slot at a time goes through scratch
+ * arrays of one entry per ball, then back: no second copy of all slots. */
+__kernel void gather_wall_slot(int n, int slot, __global const int* perm,
+                               __global const int* key, __global const real* hist,
+                               __global int* tmp_key, __global real* tmp_hist) {
   const int i = get_global_id(0);
   if (i >= n) return;
-  const int from = perm[i];
-  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-    dst_key[s * n + i] = src_key[s * n + from];
-    dst_hist[s * n + i] = src_hist[s * n + from];
-  }
+  const int from = slot * n + perm[i];
+  tmp_key[i] = key[from];
+  store_hist(load_hist(hist, from), tmp_hist, i);
+}
+
+__kernel void put_wall_slot(int n, int slot, __global const int* tmp_key,
+                            __global const real* tmp_hist, __global int* key,
+                            __global real* hist) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  key[slot * n + i] = tmp_key[i];
+  store_hist(load_hist(tmp_hist, i), hist, slot * n + i);
 }

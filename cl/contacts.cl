@@ -1,9 +1,14 @@
 /* contacts.cl — the neighbour lists (the "collision links"): for each ball,
  * the balls within r_i + r_j + skin, stored compactly (CSR: a start and a
- * count per ball). Built in two passes, count then fill, after binning has
+ * count per ball). Cell c holds the balls cell_start[c] .. cell_start[c + 1].
+ * Built in two passes, count then fill, after binning has
  * put the balls in cell order. The fill pass carries each persisting pair's
  * tangential spring over from the previous list, which was written in the
- * previous ball order: `perm` maps a new index to the old one. */
+ * previous ball order: `perm` maps a new index to the old one. Only the
+ * springs that are not zero (pairs in contact) are carried: before the new
+ * lists are built they are copied out of the old lists into a compact carry
+ * list (carry_count, a scan, carry_fill), so that the old lists need no
+ * second buffer while the new ones are written. */
 #include "mc_shim.h"
 #include "layout.h"
 #include "grid.h"
@@ -17,7 +22,6 @@ inline int is_neighbour(__global const SimParams* sp, real4 a, real4 b) {
 __kernel void contacts_count(__global const SimParams* sp,
                              __global const real4* pos,
                              __global const int* cell_start,
-                             __global const int* cell_count,
                              __global int* neigh_count) {
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
@@ -29,7 +33,7 @@ __kernel void contacts_count(__global const SimParams* sp,
       for (int x = max(c.x - 1, 0); x <= min(c.x + 1, sp->grid_nx - 1); ++x) {
         const int cell = (z * sp->grid_ny + y) * sp->grid_nx + x;
         const int b = cell_start[cell];
-        const int e = b + cell_count[cell];
+        const int e = cell_start[cell + 1];
         for (int j = b; j < e; ++j)
           if (j != i && is_neighbour(sp, pi, pos[j])) ++count;
       }
@@ -39,15 +43,14 @@ __kernel void contacts_count(__global const SimParams* sp,
 __kernel void contacts_fill(__global const SimParams* sp,
                             __global const real4* pos,
                             __global const int* cell_start,
-                            __global const int* cell_count,
                             __global const int* neigh_start,
                             __global int* neigh_index,
-                            __global real4* neigh_hist,
+                            __global real* neigh_hist,
                             __global const int* perm,
                             __global const int* old_start,
                             __global const int* old_count,
                             __global const int* old_index,
-                            __global const real4* old_hist) {
+                            __global const real* old_hist) {
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
   const real4 pi = pos[i];
@@ -61,16 +64,52 @@ __kernel void contacts_fill(__global const SimParams* sp,
       for (int x = max(c.x - 1, 0); x <= min(c.x + 1, sp->grid_nx - 1); ++x) {
         const int cell = (z * sp->grid_ny + y) * sp->grid_nx + x;
         const int b = cell_start[cell];
-        const int e = b + cell_count[cell];
+        const int e = cell_start[cell + 1];
         for (int j = b; j < e; ++j) {
           if (j == i || !is_neighbour(sp, pi, pos[j])) continue;
           const int oj = perm[j];
-          real4 h = (real4)(0, 0, 0, 0);
+          real3 h = (real3)(0, 0, 0);
           for (int q = ob; q < oe; ++q)
-            if (old_index[q] == oj) { h = old_hist[q]; break; }
+            if (old_index[q] == oj) { h = load_hist(old_hist, q); break; }
           neigh_index[k] = j;
-          neigh_hist[k] = h;
+          store_hist(h, neigh_hist, k);
           ++k;
         }
       }
+}
+
+/* Springs to carry over, per ball, in the old order. */
+__kernel void carry_count(int n, __global const int* neigh_start,
+                          __global const int* neigh_count,
+                          __global const real* neigh_hist,
+                          __global int* carry_count) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  int c = 0;
+  const int b = neigh_start[i];
+  for (int k = b; k < b + neigh_count[i]; ++k) {
+    const real3 h = load_hist(neigh_hist, k);
+    if (h.x != R(0.0) || h.y != R(0.0) || h.z != R(0.0)) ++c;
+  }
+  carry_count[i] = c;
+}
+
+__kernel void carry_fill(int n, __global const int* neigh_start,
+                         __global const int* neigh_count,
+                         __global const int* neigh_index,
+                         __global const real* neigh_hist,
+                         __global const int* carry_start,
+                         __global int* carry_index, __global real* carry_hist) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  int q = carry_start[i];
+  const int b = neigh_start[i];
+  for (int k = b; k < b + neigh_count[i]; ++k) {
+    const real3 h = load_hist(neigh_hist, k);
+    if (h.x != R(0.0) || h.y != R(0.0) || h.z != R(0.0)) {
+      carry_index[q] = neigh_index[k];
+      store_hist(h, carry_hist, q);
+      ++q;
+    }
+  }
 }

@@ -7,21 +7,22 @@
 
 __kernel void forces(__global const SimParams* sp,
                      __global const PairParams* pairs,
-                     __global const LifterPolygon* lifters, real mill_angle,
-                     real mill_omega, __global const real4* pos,
+                     __global const LifterPolygon* lifters, real mill_cos,
+                     real mill_sin, real mill_omega, __global const real4* pos,
                      __global const real4* vel, __global const real4* omega,
                      __global const int2* info, __global const int* neigh_start,
                      __global const int* neigh_count,
                      __global const int* neigh_index,
-                     __global real4* neigh_hist, __global int* wall_key,
-                     __global real4* wall_hist, __global real4* force,
+                     __global real* neigh_hist, __global int* wall_key,
+                     __global real* wall_hist, __global real4* force,
                      __global real4* torque, __global real4* accum,
                      __global int* status) {
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
   MillState mill;
-  mill.mill_angle = mill_angle;
-  mill.mill_omega = mill_omega;
+  mill.cos_angle = mill_cos;
+  mill.sin_angle = mill_sin;
+  mill.omega = mill_omega;
   ball_forces(i, sp, pairs, lifters, mill, pos, vel, omega, info, neigh_start,
               neigh_count, neigh_index, neigh_hist, wall_key, wall_hist, force,
               torque, accum, status);

@@ -23,6 +23,7 @@
 #define MC_FLAG_REBUILD 1       /* a ball moved more than half the skin */
 #define MC_FLAG_WALL_OVERFLOW 2 /* more wall contacts than history slots */
 #define MC_FLAG_NOT_FINITE 4    /* NaN or Inf in a ball's state */
+#define MC_FLAG_ESCAPED 8       /* a ball wholly outside the shell or the end plates */
 
 #define MC_LAW_LINEAR 0
 #define MC_LAW_HERTZ 1

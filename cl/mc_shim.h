@@ -30,6 +30,9 @@ typedef float4 real4;
 #define xyz_of(v) ((v).xyz)
 #define R(x) ((real)(x))
 #define MC_ATOMIC_OR(ptr, bits) atomic_or((ptr), (bits))
+/* Contact springs are stored packed, three reals each (no padding). */
+#define load_hist(p, k) vload3((k), (p))
+#define store_hist(v, p, k) vstore3((v), (k), (p))
 
 #else
 /* ------------------------------------------------------------------ host */
@@ -70,6 +73,8 @@ inline real2 operator+(real2 a, real2 b) { return {a.x + b.x, a.y + b.y}; }
 inline real2 operator-(real2 a, real2 b) { return {a.x - b.x, a.y - b.y}; }
 inline real2 operator*(real s, real2 a) { return {s * a.x, s * a.y}; }
 inline real dot(real2 a, real2 b) { return a.x * b.x + a.y * b.y; }
+inline real3 load_hist(const real* p, std::size_t k) { return real3{p[3 * k], p[3 * k + 1], p[3 * k + 2]}; }
+inline void store_hist(real3 v, real* p, std::size_t k) { p[3 * k] = v.x; p[3 * k + 1] = v.y; p[3 * k + 2] = v.z; }
 using std::sqrt; using std::fabs; using std::fmin; using std::fmax; using std::pow;
 using std::sin; using std::cos; using std::atan2; using std::floor;
 #endif

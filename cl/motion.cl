@@ -17,6 +17,11 @@ __kernel void motion(__global const SimParams* sp, __global real4* pos,
   if (flags) MC_ATOMIC_OR(status, flags);
 }
 
+/* Clears status bits once the host has acted on them. */
+__kernel void clear_status_flag(__global int* status, int bits) {
+  if (get_global_id(0) == 0) atomic_and(status, ~bits);
+}
+
 /* Reports the device's struct sizes so the host can check its mirrors. */
 __kernel void layout_sizes(__global int* out) {
   out[0] = (int)sizeof(SimParams);

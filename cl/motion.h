@@ -23,8 +23,18 @@ MC_FN int integrate_ball(int i, MC_GLOBAL const SimParams* sp,
   int flags = 0;
   const real4 b = pos_at_build[i];
   const real dx = p.x - b.x, dy = p.y - b.y, dz = p.z - b.z;
-  const real half_skin = R(0.5) * sp->skin;
-  if (dx * dx + dy * dy + dz * dz > half_skin * half_skin) flags |= MC_FLAG_REBUILD;
+  /* The host acts on this flag one step later (it reads the status word
+   * without stalling the queue), so the ball must still be inside half the
+   * skin after one more step: the flag goes up two steps' travel early. */
+  const real reach = R(0.5) * sp->skin - R(2.0) * dt * sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+  if (reach <= R(0.0) || dx * dx + dy * dy + dz * dz > reach * reach) flags |= MC_FLAG_REBUILD;
+  /* A ball wholly outside the shell or past an end plate has gone through a
+   * wall: the contact was too soft or too short for this dt. */
+  const real rho2 = p.x * p.x + p.y * p.y;
+  const real out_r = sp->shell_radius + p.w;
+  if ((sp->shell_radius > R(0.0) && rho2 > out_r * out_r) ||
+      (sp->length > R(0.0) && (p.z < -p.w || p.z > sp->length + p.w)))
+    flags |= MC_FLAG_ESCAPED;
   /* Comparisons with NaN are false, so this also catches NaN. */
   const real big = R(1e30);
   if (!(fabs(p.x) + fabs(p.y) + fabs(p.z) + fabs(v.x) + fabs(v.y) + fabs(v.z) +

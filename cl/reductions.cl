@@ -63,3 +63,33 @@ void reduce_observables(__global const SimParams* sp,
     for (int k = 0; k < MC_N_OBSERVABLES; ++k)
       partial[get_group_id(0) * MC_N_OBSERVABLES + k] = tmp[k * MC_REDUCE_WG];
 }
+
+/* Contacts now, for reports: counts[0] ball-ball contacts (each pair counted
+ * by both balls), counts[1] wall contacts, counts[2] neighbour-list entries. */
+__kernel void count_contacts(__global const SimParams* sp,
+                             __global const real4* pos,
+                             __global const int* neigh_start,
+                             __global const int* neigh_count,
+                             __global const int* neigh_index,
+                             __global const int* wall_key,
+                             __global int* counts) {
+  const int i = get_global_id(0);
+  const int n = sp->n_balls;
+  if (i >= n) return;
+  const real4 pi = pos[i];
+  int touching = 0;
+  const int b = neigh_start[i];
+  const int e = b + neigh_count[i];
+  for (int k = b; k < e; ++k) {
+    const real4 pj = pos[neigh_index[k]];
+    const real3 d = xyz_of(pi) - xyz_of(pj);
+    const real r = pi.w + pj.w;
+    if (dot(d, d) < r * r) ++touching;
+  }
+  int walls = 0;
+  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s)
+    if (wall_key[s * n + i] != MC_WALL_NONE) ++walls;
+  atomic_add(&counts[0], touching);
+  atomic_add(&counts[1], walls);
+  atomic_add(&counts[2], e - b);
+}

@@ -158,3 +158,85 @@ TEST_CASE("every bad case is refused with its message, status 2 and no run folde
   CHECK(n >= 25);
   fs::remove_all(work);
 }
+
+TEST_CASE("an empty or blank case file is refused as empty, status 2", "[case][cli]") {
+  const fs::path work = temp_dir("empty_cases");
+  fs::create_directories(work);
+  for (const char* text : {"", "\n\n  \t\n", "# only a comment\n"}) {
+    const fs::path file = work / "blank.toml";
+    std::ofstream(file, std::ios::binary) << text;
+    const fs::path err = work / "err.txt";
+    const std::string cmd = std::string(MC_BINARY) + " check '" + file.string() + "' > /dev/null 2> '" +
+                            err.string() + "'";
+    const int status = std::system(cmd.c_str());
+    const std::string message = read_text(err);
+    INFO("text: '" << text << "' message: " << message);
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 2);
+    CHECK_THAT(message, Catch::Contains("blank.toml: empty: a case needs the tables"));
+  }
+  fs::remove_all(work);
+}
+
+TEST_CASE("non-ASCII text outside strings and comments is refused before toml++ sees it", "[case]") {
+  const std::string lab = read_text(mc::io::default_case());
+  auto with = [&](const std::string& from, const std::string& to) {
+    std::string t = lab;
+    const std::size_t at = t.find(from);
+    REQUIRE(at != std::string::npos);
+    return t.replace(at, from.size(), to);
+  };
+  // The fuzzer's finding: "2.ƚ11" reached undefined behaviour in toml++ 3.3.
+  CHECK_THAT(error_of(with("youngs_modulus = 2.0e11 # Pa", "youngs_modulus = 2.\xc6\x9a" "11")),
+             Catch::Contains("case.toml:55:20: not valid TOML: character U+019A outside a string or comment"));
+  CHECK_THAT(error_of(with("diameter = 0.9 ", "diameter = 0.9\xc2\xb5 ")),
+             Catch::Contains("case.toml:19:15: not valid TOML: character U+00B5 outside a string or comment"));
+  CHECK_THAT(error_of(with("diameter = 0.9 ", "diameter = 0.9\xa5 ")),
+             Catch::Contains("not valid TOML: byte 0xA5 (not UTF-8) outside a string or comment"));
+  // The second finding: a quote where no string may start ("8n'Ǎ") opens none.
+  CHECK_THAT(error_of("title = 8n'\xc7\x8d" "8889tfraction\n"),
+             Catch::Contains("case.toml:1:12: not valid TOML: character U+01CD outside a string or comment"));
+  // A UTF-8 byte order mark at the start is allowed.
+  CHECK(mc::io::parse_case("\xEF\xBB\xBF" + lab, "case.toml").diameter == 0.9);
+  // After a backslash in a string (never valid TOML) too.
+  CHECK_THAT(error_of(with("title = \"Laboratory", "title = \"\\\xc2\xb5 Laboratory")),
+             Catch::Contains("case.toml:16:11: not valid TOML: character U+00B5 after a backslash"));
+  CHECK_THAT(error_of(with("title = \"Laboratory ball mill, 0.9 m x 0.15 m, 20-25.4 mm balls\"",
+                           "title = \"\"\"a \\  \xc2\xb5\n\"\"\"")),
+             Catch::Contains("case.toml:16:17: not valid TOML: character U+00B5 after a backslash"));
+  // In strings and comments it is text, as TOML says.
+  const mc::MillCase c = mc::io::parse_case(
+      with("title = \"Laboratory", "# \xc2\xb5m \xce\xbc \xe3\x80\x80\ntitle = \"\"\"\xc2\xb5 \\\"\xc6\x9a\"\"\"\"  # \xc6\x9a\n#"),
+      "case.toml");
+  CHECK(c.title == "\xc2\xb5 \"\xc6\x9a\"");
+  CHECK(mc::io::parse_case(with("title = \"Laboratory", "title = '''\xc2\xb5''' # \n#"), "case.toml").title == "\xc2\xb5");
+  // A --set value with such a character is a string, as any value that is not TOML.
+  CHECK_THAT(error_of(lab, {"mill.diameter=0.9\xc2\xb5"}),
+             Catch::Contains("mill.diameter: expected a number, got a string"));
+}
+
+TEST_CASE("absurd sizes are refused by derive() with the key, before anything is allocated", "[case]") {
+  const std::string lab = read_text(mc::io::default_case());
+  // 2^32 lifter rows is not 0 rows.
+  CHECK_THAT(error_of(lab, {"lifters.rows=4294967296"}), Catch::Contains("lifters.rows: must be in [0, 400]"));
+  // A mill of 1.09e12 balls: the count is refused, not rounded into a long.
+  CHECK_THAT(error_of(lab, {"mill.diameter=400", "mill.length=300"}),
+             Catch::Contains("charge: the case needs 1.09251e+12 balls"));
+  CHECK_THAT(error_of(lab, {"mill.diameter=1e300"}), Catch::Contains("mill.diameter: must be at most 1000 m (got 1e+300)"));
+  CHECK_THAT(error_of(lab, {"mill.length=1001"}), Catch::Contains("mill.length: must be at most 1000 m (got 1001)"));
+  CHECK_THAT(error_of(lab, {"mill.diameter=1000", "mill.length=1000", "charge.size.0.diameter_min=2.5e-8",
+                            "charge.size.0.diameter_max=2.5e-8"}),
+             Catch::Contains("more than the 50 million supported"));
+  // Few balls in a huge mill: the packing's columns would be absurd.
+  CHECK_THAT(error_of(lab, {"mill.diameter=400", "mill.length=300", "charge.filling=1e-9"}),
+             Catch::Contains("charge.size: the mill (400 m x 300 m) is too large for its smallest balls (0.02 m): "
+                             "placing them needs 2.88321e+08 columns"));
+  // Just inside the limits the same case derives (1 ball per class at least).
+  const mc::MillCase ok = mc::io::parse_case(lab, "lab.toml", {"mill.diameter=20", "mill.length=3", "charge.filling=1e-9"});
+  CHECK(mc::derive(ok).n_balls == 1);
+  // A contact so stiff that the run would be 3e152 steps.
+  CHECK_THAT(error_of(lab, {"contact.stiffness=1e300"}), Catch::Contains("steps, more than 1e11"));
+  CHECK_THAT(error_of(lab, {"run.snapshot_interval=1e-5"}), Catch::Contains("600000 snapshots, more than 100000"));
+  CHECK_THAT(error_of(lab, {"run.duration=inf"}), Catch::Contains("run.duration: must be a finite number"));
+  CHECK_THAT(error_of(lab, {"mill.diameter=nan"}), Catch::Contains("mill.diameter: must be a finite number"));
+}

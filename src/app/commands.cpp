@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -18,6 +19,7 @@
 #include "core/morrell.h"
 #include "io/atomic_file.h"
 #include "io/case_file.h"
+#include "io/checkpoint.h"
 #include "io/png_plot.h"
 #include "io/vtk.h"
 #include "sim/mill_run.h"
@@ -39,9 +41,9 @@ struct Prepared {
   Scene scene;
 };
 
-Prepared prepare(const CaseOptions& o) {
+Prepared prepare(const CaseOptions& o, const fs::path& default_path = io::default_case()) {
   Prepared p;
-  p.path = o.case_path.empty() ? io::default_case() : fs::path(o.case_path);
+  p.path = o.case_path.empty() ? default_path : fs::path(o.case_path);
   std::vector<std::string> overrides = o.overrides;
   if (o.duration > 0) {
     std::ostringstream s;
@@ -180,8 +182,7 @@ nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::js
 int cmd_devices() {
   const auto devices = compute::list_devices();
   if (devices.empty()) {
-    std::cerr << "millcharge: no OpenCL platform found: install an OpenCL driver "
-                 "(scripts/setup.sh installs PoCL for the CPU)\n";
+    std::cerr << "millcharge: OpenCL: " << compute::no_device_message() << '\n';
     return 1;
   }
   for (const auto& d : devices)
@@ -235,31 +236,133 @@ int cmd_check(const CaseOptions& o) {
   return 0;
 }
 
+namespace {
+
+volatile std::sig_atomic_t g_signal = 0;
+extern "C" void on_stop_signal(int sig) { g_signal = sig; }
+
+// SIGINT and SIGTERM ask the run to stop at the next chunk with a checkpoint;
+// the previous handlers come back when the run ends.
+class StopSignals {
+ public:
+  StopSignals() {
+    g_signal = 0;
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~StopSignals() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  int signal() const { return g_signal; }
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+// The first `rows` data rows of an earlier timeseries.csv, and the file cut
+// back to them (atomically), for a resumed run.
+std::vector<std::string> keep_rows(const fs::path& csv, long rows) {
+  std::ifstream in(csv);
+  if (!in) throw std::invalid_argument(csv.string() + ": missing; the run folder is incomplete");
+  std::vector<std::string> lines;
+  std::string line;
+  while (static_cast<long>(lines.size()) < rows + 1 && std::getline(in, line)) lines.push_back(line);
+  if (static_cast<long>(lines.size()) < rows + 1)
+    throw std::invalid_argument(csv.string() + ": holds " + std::to_string(lines.size() ? lines.size() - 1 : 0) +
+                                " rows, the checkpoint " + std::to_string(rows));
+  std::string text;
+  for (const std::string& l : lines) text += l + "\n";
+  io::write_file_atomic(csv, text);
+  lines.erase(lines.begin());
+  return lines;
+}
+
+}  // namespace
+
 int cmd_run(const RunOptions& o) {
-  Prepared p = prepare(o.c);
+  const bool resume = !o.resume.empty();
+  Prepared p;
+  io::Checkpoint cp;
+  if (resume) {
+    if (!o.c.case_path.empty() || !o.c.overrides.empty() || o.c.duration > 0 || !o.c.precision.empty())
+      throw std::invalid_argument("--resume " + o.resume +
+                                  ": continues the run with its own case; a CASE, --set, --duration or --precision "
+                                  "cannot be given with it");
+    const fs::path dir(o.resume);
+    try {
+      cp = io::read_checkpoint(dir / io::kCheckpointFile);
+    } catch (const io::CheckpointError& e) {
+      throw std::invalid_argument(std::string(e.what()) + "; the run cannot be resumed from it");
+    }
+    std::error_code ec;
+    if (cp.run.phase == 3 && fs::exists(dir / "summary.json", ec))
+      throw std::invalid_argument("--resume " + o.resume + ": the run there is complete (summary.json); nothing to do");
+    p.path = dir / "case.toml";
+    p.c = io::parse_case(cp.case_toml, (dir / io::kCheckpointFile).string() + " (case)");
+    p.c.name = cp.case_name;
+    p.d = derive(p.c);
+    p.scene = build_scene(p.c, p.d);
+  } else {
+    p = prepare(o.c);
+  }
   const MillCase& c = p.c;
   const MillDerived& d = p.d;
   // Device and kernels before any file is written.
   compute::Context ctx(o.c.device);
   auto solver = make_solver(ctx, p.scene);
-  const fs::path out = o.out.empty() ? default_out(c) : fs::path(o.out);
-  make_run_dir(out, o.force);
-  io::write_file_atomic(out / "case.toml", io::case_to_toml(c));
+  if (resume) {
+    try {
+      solver->restore_state(cp.solver);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(o.resume + "/" + io::kCheckpointFile + ": " + e.what());
+    }
+  }
+  const fs::path out = resume ? fs::path(o.resume) : o.out.empty() ? default_out(c) : fs::path(o.out);
+  const std::string case_text = resume ? cp.case_toml : io::case_to_toml(c);
+  std::vector<std::string> kept_rows;
+  if (resume) {
+    kept_rows = keep_rows(out / "timeseries.csv", cp.run.rows);
+  } else {
+    make_run_dir(out, o.force);
+    io::write_file_atomic(out / "case.toml", case_text);
+  }
 
   std::printf("millcharge: %s: D %.3g m x L %.3g m, %s balls, %.1f %% of critical (%.2f rpm), J %.3f, dt %.3g s, %s\n",
               c.name.c_str(), c.diameter, c.length, thousands(d.n_balls).c_str(), 100 * d.speed_fraction, d.speed_rpm,
               d.filling_from_counts, d.dt, c.precision == Precision::double_ ? "double" : "float");
   std::printf("millcharge: device %s; output in %s\n", ctx.info().label().c_str(), out.string().c_str());
+  if (resume)
+    std::printf("millcharge: resuming at t = %.4f s (step %s, %ld rows written)\n", solver->time_s(),
+                thousands(solver->steps()).c_str(), cp.run.rows);
   std::fflush(stdout);
 
-  std::ofstream csv(out / "timeseries.csv");
+  std::ofstream csv;
+  if (resume) {
+    csv.open(out / "timeseries.csv", std::ios::app);
+  } else {
+    csv.open(out / "timeseries.csv");
+    csv << "time_s,revolutions,torque_Nm,torque_power_W,dissipation_power_W,torque_arm_power_W,kinetic_J,"
+           "rotational_J,potential_J,elastic_J,toe_deg,shoulder_deg,com_angle_deg,neighbours_per_ball,averaged\n";
+  }
   if (!csv) throw std::runtime_error("cannot write " + (out / "timeseries.csv").string());
-  csv << "time_s,revolutions,torque_Nm,torque_power_W,dissipation_power_W,torque_arm_power_W,kinetic_J,"
-         "rotational_J,potential_J,elastic_J,toe_deg,shoulder_deg,com_angle_deg,neighbours_per_ball,averaged\n";
   csv.flush();
   std::vector<double> t_series, p_torque, p_diss;
+  for (const std::string& row : kept_rows) {  // the plot's points from the rows kept
+    double v[5];
+    if (std::sscanf(row.c_str(), "%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4]) == 5 &&
+        v[0] >= 0.05 * d.revolution_s) {
+      t_series.push_back(v[0]);
+      p_torque.push_back(v[3]);
+      p_diss.push_back(v[4]);
+    }
+  }
   io::PvdIndex pvd(out / "charge.pvd");
-  int n_snap = 0;
+  if (resume) pvd.keep_existing(static_cast<std::size_t>(cp.run.snapshots));
+  int n_snap = resume ? static_cast<int>(cp.run.snapshots) : 0;
   RunHooks hooks;
   hooks.on_row = [&](const TimeRow& r) {
     char line[512];
@@ -285,9 +388,45 @@ int cmd_run(const RunOptions& o) {
   };
   ProgressPrinter progress(o.quiet);
   hooks.on_progress = [&](const RunProgress& pr) { progress(pr); };
+  // Checkpoints: the rows and snapshots are on disk before the checkpoint
+  // that counts them, so a resumed run cuts the files back to it.
+  double checkpoint_t = resume ? solver->time_s() : -1;
+  hooks.checkpoint_interval_s = c.checkpoint_interval;
+  hooks.on_checkpoint = [&](const RunState& rs) {
+    csv.flush();
+    io::write_checkpoint(out / io::kCheckpointFile, io::Checkpoint{c.name, case_text, rs, solver->save_state()});
+    checkpoint_t = solver->time_s();
+  };
+  StopSignals signals;
+  hooks.stop_requested = [&] { return signals.signal() != 0; };
+  hooks.poison_at_s = o.poison_at_s;
 
-  const RunSummary s = run_mill(*solver, p.scene, c, d, hooks);
+  RunSummary s;
+  try {
+    s = run_mill(*solver, p.scene, c, d, hooks, resume ? cp.run : RunState{});
+  } catch (const compute::Error&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    std::string m = e.what();
+    if (checkpoint_t >= 0)
+      m += ". The last good checkpoint (t = " + std::to_string(checkpoint_t) + " s) is " +
+           (out / io::kCheckpointFile).string() + "; after a fix that keeps the case, resume with: millcharge run --resume " +
+           out.string();
+    else
+      m += ". No checkpoint was written before it";
+    throw std::runtime_error(m);
+  }
   csv.close();
+  if (s.interrupted) {
+    progress.finish_line();
+    const int sig = signals.signal();
+    std::fprintf(stderr,
+                 "millcharge: stopped by %s at t = %.4f s; checkpoint %s written; continue with: millcharge run "
+                 "--resume %s\n",
+                 sig == SIGTERM ? "SIGTERM" : "SIGINT", solver->time_s(), (out / io::kCheckpointFile).string().c_str(),
+                 out.string().c_str());
+    return 128 + sig;
+  }
 
   const MorrellInput mi = morrell_input(c, d);
   const MorrellResult m = morrell_c_model(mi);
@@ -381,6 +520,125 @@ int cmd_run(const RunOptions& o) {
               s.wall_s, s.updates_per_s);
   std::printf("wrote           %s/{summary.json, timeseries.csv, charge.pvd, power.png, charge.png}\n",
               out.string().c_str());
+  return 0;
+}
+
+// The benchmark: the case's charge packed and turning for a warm-up, then
+// timed steps with the observers a run has (a row of observables every output
+// interval, ten contact-profile samples per row), then a shorter pass with
+// stage timing for the shares. One JSON line on stdout.
+int cmd_bench(const BenchOptions& o) {
+  using clock = std::chrono::steady_clock;
+  Prepared p;
+  io::Checkpoint cp;
+  if (!o.from.empty()) {
+    if (!o.c.case_path.empty() || !o.c.overrides.empty())
+      throw std::invalid_argument("--from " + o.from + ": the case is the run's own; a CASE or --set cannot be given with it");
+    try {
+      cp = io::read_checkpoint(fs::path(o.from) / io::kCheckpointFile);
+    } catch (const io::CheckpointError& e) {
+      throw std::invalid_argument(e.what());
+    }
+    p.c = io::parse_case(cp.case_toml, o.from + "/" + io::kCheckpointFile + " (case)");
+    p.c.name = cp.case_name;
+    if (!o.c.precision.empty() && (o.c.precision == "double") != (p.c.precision == Precision::double_))
+      throw std::invalid_argument("--from " + o.from + ": the checkpoint holds " +
+                                  (p.c.precision == Precision::double_ ? "double" : "float") + " state");
+    p.d = derive(p.c);
+    p.scene = build_scene(p.c, p.d);
+  } else {
+    p = prepare(o.c, io::case_dir() / "bench_100k.toml");
+  }
+  const MillCase& c = p.c;
+  const MillDerived& d = p.d;
+  compute::Context ctx(o.c.device);
+  auto note = [&](const std::string& s) {
+    if (!o.quiet) std::fprintf(stderr, "bench: %s\n", s.c_str());
+  };
+  note(c.name + ": " + thousands(d.n_balls) + " balls on " + ctx.info().label());
+  const auto t_build = clock::now();
+  auto solver = make_solver(ctx, p.scene);
+  if (!o.from.empty()) solver->restore_state(cp.solver);
+  solver->set_mill_omega(d.omega);
+  const long n = d.n_balls;
+  const double warmup_s = o.warmup >= 0 ? o.warmup : o.from.empty() ? 0.25 : 0.0;
+  const long warmup = std::lround(warmup_s / d.dt);
+  const long out_steps = std::max(1L, std::lround(c.output_interval / d.dt));
+  const long profile_every = std::max(1L, out_steps / 10);
+  long since_row = 0;
+  // Steps in chunks between the observers' calls, as run_mill makes them.
+  auto steps = [&](long count) {
+    for (long done = 0; done < count;) {
+      const long chunk = std::min(count - done, profile_every - since_row % profile_every);
+      solver->advance(chunk);
+      done += chunk;
+      since_row += chunk;
+      if (since_row % profile_every == 0) solver->sample_contact_profile();
+      if (since_row >= out_steps) {
+        solver->observe(true);
+        (void)solver->take_contact_profile();
+        since_row = 0;
+      }
+    }
+    ctx.finish();
+  };
+  const auto t_warm = clock::now();
+  note("kernels built and charge uploaded in " + duration_text(std::chrono::duration<double>(t_warm - t_build).count()) +
+       "; warm-up " + thousands(warmup) + " steps");
+  steps(warmup);
+  const double warm_s = std::chrono::duration<double>(clock::now() - t_warm).count();
+  long n_steps = o.steps;
+  if (n_steps <= 0) {
+    const double rate = warmup > 0 && warm_s > 0 ? warmup / warm_s : 100.0;
+    n_steps = std::clamp(std::lround(10.0 * rate), 100L, 100000L);
+  }
+  note("timing " + thousands(n_steps) + " steps");
+  const long rebuilds0 = solver->rebuilds();
+  const auto t0 = clock::now();
+  steps(n_steps);
+  const double wall = std::chrono::duration<double>(clock::now() - t0).count();
+  const long rebuilds = solver->rebuilds() - rebuilds0;
+  const ContactStats cs = solver->contact_stats();
+
+  // The shares: a shorter pass with the queue drained after every stage.
+  const long stage_steps = std::max(20L, n_steps / 4);
+  note("stage timing over " + thousands(stage_steps) + " steps");
+  solver->set_stage_timing(true);
+  steps(stage_steps);
+  const StageTimes st = solver->stage_times();
+  solver->set_stage_timing(false);
+
+  const double total = st.total() > 0 ? st.total() : 1.0;
+  nlohmann::ordered_json j;
+  j["case"] = c.name;
+  j["n_particles"] = n;
+  j["steps"] = n_steps;
+  j["wall_s"] = wall;
+  j["particle_updates_per_s"] = static_cast<double>(n) * n_steps / wall;
+  j["steps_per_s"] = n_steps / wall;
+  j["contacts_per_ball"] = cs.ball_contacts_per_ball;
+  j["wall_contacts_per_ball"] = cs.wall_contacts_per_ball;
+  j["list_entries_per_ball"] = cs.list_entries_per_ball;
+  j["rebuild_every_steps"] = number_or_null(rebuilds > 0 ? static_cast<double>(n_steps) / rebuilds : std::nan(""));
+  j["device"] = ctx.info().name;
+  j["device_type"] = ctx.info().type;
+  j["platform"] = ctx.info().platform_name;
+  j["compute_units"] = ctx.info().compute_units;
+  j["precision"] = c.precision == Precision::double_ ? "double" : "float";
+  j["law"] = c.law == ContactLaw::hertz ? "hertz" : "linear";
+  j["dt_s"] = d.dt;
+  j["device_bytes"] = solver->device_bytes();
+  j["bytes_per_ball"] = static_cast<double>(solver->device_bytes()) / n;
+  j["warmup_steps"] = warmup;
+  j["from"] = o.from.empty() ? nlohmann::json() : nlohmann::json(o.from);
+  j["stage_steps"] = stage_steps;
+  j["stage_timed_updates_per_s"] = static_cast<double>(n) * stage_steps / total;
+  j["stages"] = {{"binning", st.binning_s / total},
+                 {"contacts", st.contacts_s / total},
+                 {"forces", st.forces_s / total},
+                 {"motion", st.motion_s / total},
+                 {"reductions", st.reductions_s / total}};
+  std::printf("%s\n", j.dump().c_str());
   return 0;
 }
 

@@ -21,6 +21,18 @@ struct RunOptions {
   std::string out;     // --out; empty: runs/<case>-<time>
   bool force = false;  // --force: replace an earlier run in --out
   bool quiet = false;  // --quiet: no progress lines
+  std::string resume;  // --resume DIR: continue the run in DIR from its checkpoint
+  double poison_at_s = -1;  // fault injection for tests: NaN in a ball at this time
+};
+
+struct BenchOptions {
+  CaseOptions c;       // empty case_path: the 100,000-ball benchmark mill
+  long steps = 0;      // timed steps; 0: about 10 wall seconds' worth
+  double warmup = -1;  // simulated s of the turning mill before the timing;
+                       // < 0: 0.25 s from a packed charge (it collapses into
+                       // a dense bed), 0 from a checkpoint
+  std::string from;    // --from DIR: start from the checkpoint of a run in DIR
+  bool quiet = false;  // no progress lines on stderr
 };
 
 struct ViewOptions {
@@ -38,6 +50,7 @@ struct ViewOptions {
 int cmd_devices();
 int cmd_check(const CaseOptions& o);
 int cmd_run(const RunOptions& o);
+int cmd_bench(const BenchOptions& o);
 int cmd_view(const ViewOptions& o);
 
 }  // namespace mc::app

@@ -1,10 +1,13 @@
 // millcharge — the command line (DESIGN.md, "Command line"):
 //   millcharge run   [CASE] [--out DIR] [--duration S] [--device SPEC]
 //                    [--precision float|double] [--set KEY=VALUE]... [--force] [--quiet]
+//   millcharge run   --resume DIR [--device SPEC] [--quiet]
 //   millcharge view  [CASE] [same options] [--frames N --screenshot FILE.png]
 //                    [--steps-per-frame N] [--camera end|iso] [--colour MODE] [--size WxH]
 //                    [--no-panel] [--edit FRAME:KEY=VALUE]...
 //   millcharge check CASE [--set KEY=VALUE]...
+//   millcharge bench [CASE] [--steps N] [--warmup N] [--device SPEC]
+//                    [--precision float|double] [--set KEY=VALUE]... [--quiet]
 //   millcharge devices
 // Exit status: 0 done; 2 bad input (a message names the key; nothing written);
 // 1 any other failure (device, blow-up, disk).
@@ -46,6 +49,10 @@ int main(int argc, char** argv) {
   run->add_option("--out", ro.out, "output folder (default runs/CASE-DATE-TIME)");
   run->add_flag("--force", ro.force, "replace an earlier run in --out");
   run->add_flag("--quiet", ro.quiet, "no progress lines");
+  run->add_option("--resume", ro.resume, "continue the run in DIR from its checkpoint (checkpoint.bin)")
+      ->type_name("DIR");
+  // Fault injection for the failure tests; not for users.
+  run->add_option("--inject-nan-at", ro.poison_at_s, "")->group("");
 
   mc::app::ViewOptions vo;
   auto* view = app.add_subcommand("view", "watch the charge in a window and change the mill while it turns");
@@ -74,6 +81,17 @@ int main(int argc, char** argv) {
   auto* check = app.add_subcommand("check", "validate a case and print its derived values");
   add_case_options(check, co, false);
 
+  mc::app::BenchOptions bo;
+  auto* bench = app.add_subcommand("bench", "time the solver on a turning charge; prints one JSON line");
+  add_case_options(bench, bo.c, true);
+  bench->add_option("--steps", bo.steps, "timed steps (default: about 10 s worth)")->check(CLI::PositiveNumber);
+  bench->add_option("--warmup", bo.warmup,
+                    "simulated seconds of the turning mill before the timing (default 0.25; 0 with --from)")
+      ->check(CLI::NonNegativeNumber);
+  bench->add_option("--from", bo.from, "start from the checkpoint of a run in DIR (a settled, turning charge)")
+      ->type_name("DIR");
+  bench->add_flag("--quiet", bo.quiet, "no progress lines");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -83,6 +101,7 @@ int main(int argc, char** argv) {
     if (*devices) return mc::app::cmd_devices();
     if (*check) return mc::app::cmd_check(co);
     if (*run) return mc::app::cmd_run(ro);
+    if (*bench) return mc::app::cmd_bench(bo);
     if (*view) {
       if (steps_per_frame == "auto") vo.steps_per_frame = -1;
       else if (!steps_per_frame.empty()) {

@@ -1,8 +1,12 @@
 // A typed buffer pairing a host array with its device copy (FluidX3D's habit):
 // fill `host`, write_to_device(); run kernels; read_from_device(), read `host`.
+// Each buffer reserves its bytes with the Context before it allocates, so a
+// run that does not fit the device stops with the bytes needed and available
+// (Context::reserve) before the driver is asked.
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -27,13 +31,19 @@ class Buffer {
 
   // New size on both sides; device contents are not kept.
   void resize(std::size_t n) {
-    host.assign(n, T{});
+    // The old device buffer goes first (its reservation with it).
+    device_ = cl::Buffer();
+    reservation_.reset();
+    if (n > (static_cast<std::size_t>(-1) / 2) / sizeof(T))
+      throw Error("device out of memory: buffer '" + label_ + "' of " + std::to_string(n) +
+                  " elements is larger than any device; " + kOutOfMemoryFix);
     const std::size_t b = (n == 0 ? 1 : n) * sizeof(T);
+    reservation_ = ctx_->reserve(b, label_);  // throws when it does not fit
+    host.assign(n, T{});
     try {
       device_ = cl::Buffer(ctx_->context(), CL_MEM_READ_WRITE, b);
     } catch (const cl::Error& e) {
-      throw Error("cannot allocate device buffer '" + label_ + "' of " + std::to_string(b) +
-                  " bytes: " + error_name(e.err()));
+      throw ctx_->error("allocating buffer '" + label_ + "' of " + bytes_text(b), e.err());
     }
   }
 
@@ -42,7 +52,7 @@ class Buffer {
     try {
       ctx_->queue().enqueueWriteBuffer(device_, CL_TRUE, 0, bytes(), host.data());
     } catch (const cl::Error& e) {
-      throw Error("writing buffer '" + label_ + "' failed: " + error_name(e.err()));
+      throw ctx_->error("writing buffer '" + label_ + "'", e.err());
     }
   }
   void read_from_device() {
@@ -50,7 +60,7 @@ class Buffer {
     try {
       ctx_->queue().enqueueReadBuffer(device_, CL_TRUE, 0, bytes(), host.data());
     } catch (const cl::Error& e) {
-      throw Error("reading buffer '" + label_ + "' failed: " + error_name(e.err()));
+      throw ctx_->error("reading buffer '" + label_ + "'", e.err());
     }
   }
   // Device-to-device copy of the first n elements of another buffer.
@@ -59,7 +69,7 @@ class Buffer {
     try {
       ctx_->queue().enqueueCopyBuffer(other.device_, device_, 0, 0, n * sizeof(T));
     } catch (const cl::Error& e) {
-      throw Error("copying into buffer '" + label_ + "' failed: " + error_name(e.err()));
+      throw ctx_->error("copying into buffer '" + label_ + "'", e.err());
     }
   }
 
@@ -67,6 +77,7 @@ class Buffer {
   Context* ctx_ = nullptr;
   std::string label_;
   cl::Buffer device_;
+  std::shared_ptr<void> reservation_;  // gives the bytes back to the Context
 };
 
 }  // namespace mc::compute

@@ -1,7 +1,9 @@
 #include "compute/context.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <sstream>
 
@@ -26,6 +28,12 @@ struct Found {
   DeviceInfo info;
   cl::Device device;
 };
+
+int platform_count() {
+  cl_uint n = 0;
+  if (clGetPlatformIDs(0, nullptr, &n) != CL_SUCCESS) return 0;
+  return static_cast<int>(n);
+}
 
 std::vector<Found> enumerate() {
   std::vector<Found> out;
@@ -68,11 +76,7 @@ std::vector<Found> enumerate() {
 
 Found pick(const std::string& spec_in) {
   const std::vector<Found> all = enumerate();
-  if (all.empty())
-    throw Error(
-        "no OpenCL platform found: install an OpenCL driver (on Debian, "
-        "`sudo apt-get install pocl-opencl-icd ocl-icd-libopencl1` for the CPU, "
-        "or your GPU vendor's OpenCL driver), or run scripts/setup.sh");
+  if (all.empty()) throw Error(no_device_message());
   const std::string spec = lower(spec_in);
   auto first_of_type = [&](const std::string& t) -> const Found* {
     for (const Found& f : all)
@@ -118,6 +122,21 @@ std::string DeviceInfo::label() const {
   return s.str();
 }
 
+std::string no_device_message() {
+  std::string m;
+  const int platforms = platform_count();
+  if (platforms == 0)
+    m = "no OpenCL platform found";
+  else
+    m = "no OpenCL device found (" + std::to_string(platforms) + " platform" + (platforms == 1 ? "" : "s") +
+        " without devices)";
+  m += ": install an OpenCL driver (on Debian `sudo apt-get install pocl-opencl-icd` for the CPU, or your GPU "
+       "vendor's OpenCL driver), then check that `millcharge devices` or `clinfo -l` lists a device";
+  if (const char* v = std::getenv("OCL_ICD_VENDORS"); v && *v)
+    m += std::string("; OCL_ICD_VENDORS is set to '") + v + "': unset it to use the drivers in /etc/OpenCL/vendors";
+  return m;
+}
+
 std::vector<DeviceInfo> list_devices() {
   std::vector<DeviceInfo> out;
   for (const Found& f : enumerate()) out.push_back(f.info);
@@ -126,13 +145,43 @@ std::vector<DeviceInfo> list_devices() {
 
 DeviceInfo choose_device(const std::string& spec) { return pick(spec).info; }
 
-Context::Context(const std::string& spec_in) {
+struct Context::Ledger {
+  std::atomic<std::size_t> allocated{0};
+};
+
+namespace {
+
+// "512M", "2G", "1048576" → bytes; 0 when unset or not a size.
+std::size_t memory_override() {
+  const char* env = std::getenv("MILLCHARGE_DEVICE_MEMORY");
+  if (!env || !*env) return 0;
+  char* end = nullptr;
+  const double v = std::strtod(env, &end);
+  double scale = 1;
+  if (end && *end) {
+    switch (std::toupper(static_cast<unsigned char>(*end))) {
+      case 'K': scale = 1024.0; break;
+      case 'M': scale = 1024.0 * 1024; break;
+      case 'G': scale = 1024.0 * 1024 * 1024; break;
+      default: throw Error(std::string("MILLCHARGE_DEVICE_MEMORY='") + env + "': expected bytes, e.g. 512M or 2G");
+    }
+  }
+  if (!(v > 0) || v * scale > 1e18)
+    throw Error(std::string("MILLCHARGE_DEVICE_MEMORY='") + env + "': expected bytes, e.g. 512M or 2G");
+  return static_cast<std::size_t>(v * scale);
+}
+
+}  // namespace
+
+Context::Context(const std::string& spec_in) : ledger_(std::make_shared<Ledger>()) {
   std::string spec = spec_in;
   if (spec.empty())
     if (const char* env = std::getenv("MILLCHARGE_DEVICE")) spec = env;
   Found f = pick(spec);
   info_ = f.info;
   device_ = f.device;
+  memory_bytes_ = info_.global_mem_bytes;
+  if (const std::size_t limit = memory_override(); limit > 0) memory_bytes_ = std::min(memory_bytes_, limit);
   try {
     context_ = cl::Context(device_);
     queue_ = cl::CommandQueue(context_, device_);
@@ -181,9 +230,62 @@ void Context::finish() {
   try {
     queue_.finish();
   } catch (const cl::Error& e) {
-    throw Error(std::string("OpenCL queue failed: ") + e.what() + " (" +
-                error_name(e.err()) + ")");
+    throw error(std::string("OpenCL queue failed: ") + e.what(), e.err());
   }
+}
+
+std::size_t Context::allocated_bytes() const { return ledger_->allocated.load(); }
+
+std::size_t Context::max_alloc_bytes() const {
+  return std::min(info_.max_alloc_bytes > 0 ? info_.max_alloc_bytes : memory_bytes_, memory_bytes_);
+}
+
+std::shared_ptr<void> Context::reserve(std::size_t bytes, const std::string& label) {
+  if (bytes > max_alloc_bytes()) {
+    std::ostringstream m;
+    m << "device out of memory: buffer '" << label << "' needs " << bytes_text(bytes) << " in one piece, but "
+      << info_.label() << " allows at most " << bytes_text(max_alloc_bytes())
+      << " per buffer (CL_DEVICE_MAX_MEM_ALLOC_SIZE); " << kOutOfMemoryFix;
+    throw Error(m.str());
+  }
+  const std::size_t before = ledger_->allocated.load();
+  if (bytes > memory_bytes_ || before > memory_bytes_ - bytes) {
+    std::ostringstream m;
+    m << "device out of memory: the run needs at least " << bytes_text(before + bytes) << " but " << info_.label()
+      << " has " << bytes_text(memory_bytes_)
+      << (memory_bytes_ < info_.global_mem_bytes ? " (set by MILLCHARGE_DEVICE_MEMORY)" : "")
+      << "; buffer '" << label << "' of " << bytes_text(bytes) << " did not fit on top of " << bytes_text(before)
+      << " already allocated; " << kOutOfMemoryFix;
+    throw Error(m.str());
+  }
+  ledger_->allocated += bytes;
+  std::shared_ptr<Ledger> ledger = ledger_;
+  return std::shared_ptr<void>(nullptr, [ledger, bytes](void*) { ledger->allocated -= bytes; });
+}
+
+Error Context::error(const std::string& what, int code) const {
+  if (!is_out_of_memory(code)) return Error(what + ": " + error_name(code));
+  std::ostringstream m;
+  m << "device out of memory (" << (code == CL_MEM_OBJECT_ALLOCATION_FAILURE ? "CL_MEM_OBJECT_ALLOCATION_FAILURE"
+                                    : code == CL_OUT_OF_RESOURCES            ? "CL_OUT_OF_RESOURCES"
+                                                                             : "CL_OUT_OF_HOST_MEMORY")
+    << ") " << what << ": the run's buffers take " << bytes_text(allocated_bytes()) << " of the "
+    << bytes_text(memory_bytes_) << " that " << info_.label() << " has; " << kOutOfMemoryFix;
+  return Error(m.str());
+}
+
+bool is_out_of_memory(int code) {
+  return code == CL_MEM_OBJECT_ALLOCATION_FAILURE || code == CL_OUT_OF_RESOURCES || code == CL_OUT_OF_HOST_MEMORY;
+}
+
+std::string bytes_text(std::size_t bytes) {
+  char buf[96];
+  const double b = static_cast<double>(bytes);
+  if (b >= 1024.0 * 1024 * 1024) std::snprintf(buf, sizeof buf, "%.2f GiB", b / (1024.0 * 1024 * 1024));
+  else if (b >= 1024.0 * 1024) std::snprintf(buf, sizeof buf, "%.1f MiB", b / (1024.0 * 1024));
+  else if (b >= 1024.0) std::snprintf(buf, sizeof buf, "%.1f KiB", b / 1024.0);
+  else std::snprintf(buf, sizeof buf, "%zu bytes", bytes);
+  return std::string(buf) + (bytes >= 1024 ? " (" + std::to_string(bytes) + " bytes)" : "");
 }
 
 std::string error_name(int code) {

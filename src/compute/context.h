@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -35,6 +36,10 @@ struct DeviceInfo {
 // All devices of all platforms; empty when there is no OpenCL platform.
 std::vector<DeviceInfo> list_devices();
 
+// What to print when list_devices() is empty: no platform (or platforms
+// without devices), and how to fix it.
+std::string no_device_message();
+
 // Picks a device from a spec: "" or "auto" (a GPU when there is one, else the
 // first device), "gpu", "cpu", "P:D" (platform and device index), or a part
 // of the device or platform name. Throws Error naming the spec and listing the
@@ -59,7 +64,29 @@ class Context {
   void finish();
   bool shares_gl() const { return shares_gl_; }
 
+  // Device memory. Every Buffer reserves its bytes here before it allocates:
+  // a buffer larger than max_alloc_bytes() or one that would take the total
+  // over memory_bytes() throws Error ("device out of memory: ... needs ...,
+  // ... available; fix: ...") instead of failing somewhere in the driver.
+  // The reservation is given back when the last copy of the token goes.
+  std::shared_ptr<void> reserve(std::size_t bytes, const std::string& label);
+  std::size_t allocated_bytes() const;
+  // CL_DEVICE_GLOBAL_MEM_SIZE, or MILLCHARGE_DEVICE_MEMORY (bytes, with an
+  // optional K, M or G suffix) when that is smaller: the memory a run may use.
+  std::size_t memory_bytes() const { return memory_bytes_; }
+  // CL_DEVICE_MAX_MEM_ALLOC_SIZE (capped at memory_bytes()).
+  std::size_t max_alloc_bytes() const;
+
+  // The error for an OpenCL call that failed while doing `what` (e.g.
+  // "writing buffer 'positions'"): the out-of-memory codes
+  // (CL_MEM_OBJECT_ALLOCATION_FAILURE, CL_OUT_OF_RESOURCES,
+  // CL_OUT_OF_HOST_MEMORY) give the bytes in use and available and the fix.
+  Error error(const std::string& what, int code) const;
+
  private:
+  struct Ledger;
+  std::shared_ptr<Ledger> ledger_;
+  std::size_t memory_bytes_ = 0;
   bool shares_gl_ = false;
   DeviceInfo info_;
   cl::Device device_;
@@ -69,5 +96,16 @@ class Context {
 
 // Text of an OpenCL error code, for messages.
 std::string error_name(int code);
+
+// True for the codes that mean the device (or the host) ran out of memory.
+bool is_out_of_memory(int code);
+
+// "1.50 GiB (1610612736 bytes)", for messages.
+std::string bytes_text(std::size_t bytes);
+
+// The fix printed with every out-of-memory message.
+inline constexpr const char* kOutOfMemoryFix =
+    "fix: fewer balls (a lower charge.filling or larger balls), a smaller case, another --device with more "
+    "memory (see `millcharge devices`), or --precision float instead of double";
 
 }  // namespace mc::compute

@@ -1,6 +1,12 @@
 #include "compute/program.h"
 
+#include <cstdlib>
+
+#include <unistd.h>
+
+#include <cstdio>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 namespace mc::compute {
@@ -41,7 +47,86 @@ std::string read_file(const std::string& path) {
   return s.str();
 }
 
+// Some drivers (PoCL's clang) also print a failed build's diagnostics on
+// stderr ("1 error generated."): while the kernels build, stderr goes to a
+// temporary file; release() puts it back and returns what was written.
+class StderrCapture {
+ public:
+  StderrCapture() {
+    std::fflush(stderr);
+    tmp_ = std::tmpfile();
+    if (!tmp_) return;
+    saved_ = ::dup(2);
+    if (saved_ < 0 || ::dup2(::fileno(tmp_), 2) < 0) {
+      if (saved_ >= 0) ::close(saved_);
+      saved_ = -1;
+    }
+  }
+  std::string release() {
+    std::string text;
+    if (saved_ >= 0) {
+      std::fflush(stderr);
+      ::dup2(saved_, 2);
+      ::close(saved_);
+      saved_ = -1;
+      std::rewind(tmp_);
+      char buf[4096];
+      for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, tmp_)) > 0;) text.append(buf, n);
+    }
+    if (tmp_) std::fclose(tmp_);
+    tmp_ = nullptr;
+    return text;
+  }
+  ~StderrCapture() { release(); }
+  StderrCapture(const StderrCapture&) = delete;
+  StderrCapture& operator=(const StderrCapture&) = delete;
+
+ private:
+  std::FILE* tmp_ = nullptr;
+  int saved_ = -1;
+};
+
+bool has_error(const std::string& line) {
+  return line.find("error:") != std::string::npos || line.find("error :") != std::string::npos;
+}
+
 }  // namespace
+
+std::string build_failure_message(const std::string& device, const std::string& dir,
+                                  const std::vector<std::string>& files, const std::string& log) {
+  // The log's error lines (file:line:col: error: ...), the first few of them,
+  // and the files they name; the whole log when it has no such line.
+  std::vector<std::string> errors, lines;
+  std::set<std::string> named;
+  std::istringstream in(log);
+  for (std::string line; std::getline(in, line);) {
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+    if (line.empty()) continue;
+    lines.push_back(line);
+    if (!has_error(line)) continue;
+    errors.push_back(line);
+    for (const std::string& f : files)
+      if (line.find(f + ":") != std::string::npos) named.insert(f);
+  }
+  constexpr std::size_t kShown = 8;
+  const std::vector<std::string>& shown = errors.empty() ? lines : errors;
+  std::string which;
+  for (const std::string& f : named.empty() ? std::set<std::string>(files.begin(), files.end()) : named)
+    which += (which.empty() ? "" : ", ") + f;
+  std::ostringstream m;
+  m << "kernel build failed: " << which << " (in " << dir << ") did not compile on " << device;
+  if (shown.empty()) {
+    m << " (the driver gave no build log)";
+  } else {
+    m << (errors.empty() ? "; build log:" : "; first errors:");
+    for (std::size_t k = 0; k < shown.size() && k < kShown; ++k) m << "\n  " << shown[k];
+    if (shown.size() > kShown) m << "\n  ... and " << shown.size() - kShown << " more";
+  }
+  m << "\nfix: if you edited the kernels, correct the lines above; otherwise make sure " << dir
+    << " holds this build's cl/ folder (unset MILLCHARGE_KERNEL_DIR or point it there), update the OpenCL "
+       "driver, or try another --device (see `millcharge devices`)";
+  return m.str();
+}
 
 Program::Program(Context& ctx, const std::vector<std::string>& files,
                  BuildOptions options, bool double_precision)
@@ -55,24 +140,32 @@ Program::Program(Context& ctx, const std::vector<std::string>& files,
   for (const std::string& f : files)
     source += "#line 1 \"" + f + "\"\n" + read_file(dir + "/" + f) + "\n";
   if (double_) options.define("MC_DOUBLE");
-  const std::string opts = options.str(dir);
+  std::string opts = options.str(dir);
+  // Extra compiler options for tuning and for drivers that need them, e.g.
+  // MILLCHARGE_CL_OPTIONS="-cl-mad-enable".
+  if (const char* extra = std::getenv("MILLCHARGE_CL_OPTIONS")) opts += std::string(" ") + extra;
   try {
     program_ = cl::Program(ctx.context(), source);
   } catch (const cl::Error& e) {
     throw Error("cannot create OpenCL program: " + error_name(e.err()));
   }
+  StderrCapture driver_output;
   try {
     program_.build({ctx.device()}, opts.c_str());
+    // A good build: whatever the driver printed goes out as before.
+    const std::string printed = driver_output.release();
+    if (!printed.empty()) std::fputs(printed.c_str(), stderr);
   } catch (const cl::Error& e) {
+    const std::string printed = driver_output.release();  // the build log has it too
     std::string log;
     try {
       log = program_.getBuildInfo<CL_PROGRAM_BUILD_LOG>(ctx.device());
     } catch (const cl::Error&) {
     }
-    std::ostringstream msg;
-    msg << "kernel build failed on " << ctx.info().label() << " (options: " << opts << ")";
-    if (!log.empty()) msg << ":\n" << log;
-    throw Error(msg.str());
+    if (log.find_first_not_of(" \n\r\t") == std::string::npos) log = printed;
+    if (e.err() != CL_BUILD_PROGRAM_FAILURE && log.empty())
+      throw ctx.error("building the kernels in " + dir + " on " + ctx.info().label(), e.err());
+    throw Error(build_failure_message(ctx.info().label(), dir, files, log));
   }
 }
 
@@ -85,7 +178,7 @@ Kernel::Kernel(Program& program, const std::string& name) : program_(program), n
 }
 
 void Kernel::fail(const std::string& what, const cl::Error& e) const {
-  throw Error("kernel '" + name_ + "': " + what + ": " + error_name(e.err()));
+  throw program_.ctx().error("kernel '" + name_ + "': " + what, e.err());
 }
 
 void Kernel::set(cl_uint index, double value) {

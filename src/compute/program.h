@@ -14,6 +14,12 @@ namespace mc::compute {
 // Folder of the .cl files: $MILLCHARGE_KERNEL_DIR, else the source tree's cl/.
 std::string kernel_dir();
 
+// The message of a failed build: the files that failed, the build log's first
+// error lines and what to do. `device` is DeviceInfo::label(), `dir` the
+// kernel folder, `log` the driver's build log.
+std::string build_failure_message(const std::string& device, const std::string& dir,
+                                  const std::vector<std::string>& files, const std::string& log);
+
 // Compile-time constants handed to the kernels as -D options, built in one
 // place (FluidX3D's habit).
 class BuildOptions {

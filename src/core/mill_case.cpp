@@ -36,6 +36,25 @@ double mean_cube(double a, double b) {
 
 double sphere_volume(double d) { return kPi / 6.0 * d * d * d; }
 
+// Limits that keep a case's memory and time bounded (derive() refuses more).
+constexpr double kMaxBalls = 50e6;
+constexpr double kMaxColumns = 10e6;
+constexpr double kMaxCells = 200e6;
+constexpr double kMaxSteps = 1e11;
+
+// The columns and grid cells build_scene() uses, in double (no overflow).
+struct PackingGrid {
+  double columns, cells;
+};
+PackingGrid packing_grid(const MillCase& c, double d_min, double d_max) {
+  const double R = 0.5 * c.diameter, rmin = 0.5 * d_min, rmax = 0.5 * d_max;
+  const double gap = 0.02 * rmin, pitch = 2 * rmin + 2 * gap, cell = 2 * rmax + 2 * gap;
+  const double nx = std::floor((2 * R - 2 * gap) / pitch);
+  const double nz = std::max(1.0, std::floor((c.length - 2 * gap) / pitch));
+  const double gx = std::ceil(2 * R / cell) + 1, gz = std::ceil(c.length / cell) + 1;
+  return {nx * nz, gx * gx * gz};
+}
+
 }  // namespace
 
 int material_index(const MillCase& c, const std::string& name) {
@@ -49,8 +68,18 @@ MillDerived derive(const MillCase& c) {
   const double R = 0.5 * c.diameter;
   if (!(c.diameter > 0)) fail("mill.diameter", "must be > 0 m (got " + num(c.diameter) + ")");
   if (!(c.length > 0)) fail("mill.length", "must be > 0 m (got " + num(c.length) + ")");
+  if (!(c.diameter <= 1000)) fail("mill.diameter", "must be at most 1000 m (got " + num(c.diameter) + ")");
+  if (!(c.length <= 1000)) fail("mill.length", "must be at most 1000 m (got " + num(c.length) + ")");
   if (material_index(c, c.liner) < 0) fail("mill.liner", "unknown material \"" + c.liner + "\"");
   if (c.sizes.empty()) fail("charge.size", "the charge needs at least one size class");
+  // Materials first: the ball counts divide by the densities.
+  for (const Material& m : c.materials) {
+    const std::string key = "materials." + m.name;
+    if (!(m.density > 0)) fail(key + ".density", "must be > 0 kg/m³ (got " + num(m.density) + ")");
+    if (!(m.youngs_modulus > 0)) fail(key + ".youngs_modulus", "must be > 0 Pa (got " + num(m.youngs_modulus) + ")");
+    if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5))
+      fail(key + ".poisson_ratio", "must be in (-1, 0.5) (got " + num(m.poisson_ratio) + ")");
+  }
 
   // Size classes.
   double d_min = 1e300, fsum = 0;
@@ -123,6 +152,8 @@ MillDerived derive(const MillCase& c) {
   }
   d.lifter_volume = lifter_area * c.length;
   d.mill_volume = kPi * R * R * c.length - d.lifter_volume;
+  if (!(d.mill_volume > 0 && std::isfinite(d.mill_volume)))
+    fail("lifters.profile", "the lifters leave no room in the mill (free volume " + num(d.mill_volume) + " m³)");
 
   // Charge.
   if (!(c.filling > 0 && c.filling <= 0.5))
@@ -133,22 +164,31 @@ MillDerived derive(const MillCase& c) {
   std::vector<double> mean_volume(c.sizes.size());
   for (std::size_t k = 0; k < c.sizes.size(); ++k)
     mean_volume[k] = kPi / 6.0 * mean_cube(c.sizes[k].diameter_min, c.sizes[k].diameter_max);
-  d.class_counts.assign(c.sizes.size(), 0);
+  // Ball counts, in double first: an absurd case (a huge mill, tiny balls)
+  // must be refused by the count, not overflow a long.
+  std::vector<double> counts(c.sizes.size(), 0.0);
   if (c.number_fractions) {
     double per_ball = 0;
     for (std::size_t k = 0; k < c.sizes.size(); ++k) per_ball += c.sizes[k].fraction * mean_volume[k];
     const double n_total = d.charge_solid_volume / per_ball;
-    for (std::size_t k = 0; k < c.sizes.size(); ++k)
-      d.class_counts[k] = std::max(1L, std::lround(n_total * c.sizes[k].fraction));
+    for (std::size_t k = 0; k < c.sizes.size(); ++k) counts[k] = n_total * c.sizes[k].fraction;
   } else {
     double vol_weight = 0;
     for (const SizeClass& s : c.sizes) vol_weight += s.fraction / c.materials[material_index(c, s.material)].density;
     for (std::size_t k = 0; k < c.sizes.size(); ++k) {
       const SizeClass& s = c.sizes[k];
       const double share = s.fraction / c.materials[material_index(c, s.material)].density / vol_weight;
-      d.class_counts[k] = std::max(1L, std::lround(share * d.charge_solid_volume / mean_volume[k]));
+      counts[k] = share * d.charge_solid_volume / mean_volume[k];
     }
   }
+  double n_total = 0;
+  for (double n : counts) n_total += std::max(1.0, n);
+  if (!(n_total <= kMaxBalls))
+    fail("charge", "the case needs " + num(n_total) + " balls (a " + num(c.diameter) + " m x " + num(c.length) +
+                       " m mill, smallest ball " + num(d_min) + " m, charge.filling " + num(c.filling) +
+                       "), more than the 50 million supported: use larger balls, a lower filling or a smaller mill");
+  d.class_counts.assign(c.sizes.size(), 0);
+  for (std::size_t k = 0; k < c.sizes.size(); ++k) d.class_counts[k] = std::max(1L, std::lround(counts[k]));
   double solid = 0;
   for (std::size_t k = 0; k < c.sizes.size(); ++k) {
     d.n_balls += d.class_counts[k];
@@ -156,16 +196,21 @@ MillDerived derive(const MillCase& c) {
     d.charge_mass += d.class_counts[k] * mean_volume[k] * c.materials[material_index(c, c.sizes[k].material)].density;
   }
   d.filling_from_counts = solid / (1 - c.porosity) / d.mill_volume;
-  if (d.n_balls > 50'000'000) fail("charge", std::to_string(d.n_balls) + " balls is more than the 50 million supported");
+
+  // The initial packing (build_scene) drops balls in columns one smallest
+  // ball apart and finds neighbours in a grid of cells one largest ball wide:
+  // both grow with the mill's size in balls, whatever the filling.
+  const PackingGrid g = packing_grid(c, d_min, dmax);
+  if (!(g.columns <= kMaxColumns))
+    fail("charge.size", "the mill (" + num(c.diameter) + " m x " + num(c.length) + " m) is too large for its smallest balls (" +
+                            num(d_min) + " m): placing them needs " + num(g.columns) +
+                            " columns, more than 10 million; use larger balls or a smaller mill");
+  if (!(g.cells <= kMaxCells))
+    fail("charge.size", "the mill (" + num(c.diameter) + " m x " + num(c.length) + " m) is too large for its largest balls (" +
+                            num(dmax) + " m): placing them needs a grid of " + num(g.cells) +
+                            " cells, more than 200 million; use larger balls or a smaller mill");
 
   // Contact pairs and the shortest contact.
-  for (const Material& m : c.materials) {
-    const std::string key = "materials." + m.name;
-    if (!(m.density > 0)) fail(key + ".density", "must be > 0 kg/m³ (got " + num(m.density) + ")");
-    if (!(m.youngs_modulus > 0)) fail(key + ".youngs_modulus", "must be > 0 Pa (got " + num(m.youngs_modulus) + ")");
-    if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5))
-      fail(key + ".poisson_ratio", "must be in (-1, 0.5) (got " + num(m.poisson_ratio) + ")");
-  }
   auto check_interaction = [&](const Interaction& in, const std::string& key) {
     if (!(in.restitution > 0 && in.restitution <= 1))
       fail(key + ".restitution", "must be in (0, 1] (got " + num(in.restitution) + ")");
@@ -212,6 +257,9 @@ MillDerived derive(const MillCase& c) {
   // Time step and run times.
   if (!(c.steps_per_contact >= 8 && c.steps_per_contact <= 1000))
     fail("run.steps_per_contact", "must be in [8, 1000] (got " + num(c.steps_per_contact) + ")");
+  if (!(d.contact_time > 0 && d.contact_time < 1e300))
+    fail("contact.stiffness", "the shortest contact lasts " + num(d.contact_time) +
+                                  " s: check the stiffness, the materials and the ball sizes");
   d.dt_auto = !(c.dt > 0);
   if (c.dt < 0) fail("run.dt", "must be > 0 s or \"auto\" (got " + num(c.dt) + ")");
   d.dt = d.dt_auto ? d.contact_time / c.steps_per_contact : c.dt;
@@ -224,7 +272,16 @@ MillDerived derive(const MillCase& c) {
     fail("run.warmup", "must be in [0, duration = " + num(c.duration) + " s) (got " + num(c.warmup) + ")");
   if (!(c.output_interval >= d.dt)) fail("run.output_interval", "must be at least one step (" + num(d.dt) + " s)");
   if (c.snapshot_interval < 0) fail("run.snapshot_interval", "must be >= 0 s (0: no snapshots)");
+  if (!(c.checkpoint_interval >= 0))
+    fail("run.checkpoint_interval", "must be >= 0 s (0: checkpoints only on a signal and at the end)");
   if (c.settle > 60) fail("run.settle", "must be at most 60 s or \"auto\"");
+  const double steps = (c.duration + std::max(c.settle, 0.0)) / d.dt;
+  if (!(steps <= kMaxSteps))
+    fail("run.duration", num(c.duration) + " s at dt " + num(d.dt) + " s is " + num(steps) +
+                             " steps, more than 1e11: shorten the run, or raise run.dt or soften the contacts");
+  if (c.snapshot_interval > 0 && !(c.duration / c.snapshot_interval <= 1e5))
+    fail("run.snapshot_interval", num(c.snapshot_interval) + " s gives " + num(c.duration / c.snapshot_interval) +
+                                      " snapshots, more than 100000");
   return d;
 }
 
@@ -307,11 +364,16 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
   const double cell = 2 * rmax + 2 * gap;
   const int gx = static_cast<int>(std::ceil(2 * R / cell)) + 1;
   const int gz = static_cast<int>(std::ceil(c.length / cell)) + 1;
-  std::vector<std::vector<int>> grid(static_cast<std::size_t>(gx) * gx * gz);
-  auto cell_of = [&](double v, double lo, int n) { return std::clamp(static_cast<int>((v - lo) / cell), 0, n - 1); };
-  auto grid_at = [&](int ix, int iy, int iz) -> std::vector<int>& {
-    return grid[(static_cast<std::size_t>(iz) * gx + iy) * gx + ix];
+  // Each cell holds the first and last of its balls, next_in_cell links them
+  // in the order placed (8 bytes a cell: derive() bounds the cells).
+  std::vector<int> grid(static_cast<std::size_t>(gx) * gx * gz, -1), grid_last(grid.size(), -1);
+  std::vector<int> next_in_cell;
+  next_in_cell.reserve(pending.size());
+  auto cell_of = [&](double v, double lo, int n) {
+    return static_cast<int>(std::clamp(std::floor((v - lo) / cell), 0.0, static_cast<double>(n - 1)));
   };
+  auto cell_index = [&](int ix, int iy, int iz) { return (static_cast<std::size_t>(iz) * gx + iy) * gx + ix; };
+  auto grid_at = [&](int ix, int iy, int iz) { return grid[cell_index(ix, iy, iz)]; };
 
   struct Bound {
     double cx, cy, r;
@@ -341,7 +403,7 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
       for (int cz = std::max(0, iz - 1); cz <= std::min(gz - 1, iz + 1); ++cz)
         for (int cy = std::max(0, iy - 1); cy <= std::min(gx - 1, iy + 1); ++cy)
           for (int cx = std::max(0, ix - 1); cx <= std::min(gx - 1, ix + 1); ++cx)
-            for (int j : grid_at(cx, cy, cz)) {
+            for (int j = grid_at(cx, cy, cz); j >= 0; j = next_in_cell[j]) {
               const Ball& b = s.balls[j];
               const double reach = r + b.radius + gap;
               const double dx = x - b.position.x, dz = z - b.position.z, dy = y - b.position.y;
@@ -386,7 +448,11 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
       b.material = p.material;
       b.radius = p.radius;
       b.position = {x, y, z};
-      grid_at(cell_of(x, -R, gx), cell_of(y, -R, gx), cell_of(z, 0.0, gz)).push_back(b.id);
+      const std::size_t at = cell_index(cell_of(x, -R, gx), cell_of(y, -R, gx), cell_of(z, 0.0, gz));
+      next_in_cell.push_back(-1);
+      if (grid_last[at] >= 0) next_in_cell[grid_last[at]] = b.id;
+      else grid[at] = b.id;
+      grid_last[at] = b.id;
       s.balls.push_back(b);
       columns[k].top = y + p.radius;
       lowest.push({columns[k].top, k});

@@ -59,6 +59,7 @@ struct MillCase {
   double steps_per_contact = 25;  // auto dt = shortest contact time / this
   double output_interval = 0.01;  // s between timeseries rows
   double snapshot_interval = 0;   // s between .vtp snapshots; 0: none
+  double checkpoint_interval = 0.5;  // simulated s between checkpoints; 0: only on a signal and at the end
   Precision precision = Precision::single;
 };
 

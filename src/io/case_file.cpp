@@ -3,7 +3,9 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <set>
@@ -214,6 +216,101 @@ bool is_index(const std::string& s) {
   return !s.empty() && s.size() < 7 && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
+// toml++ 3.3 (Debian 12's) reaches a TOML_UNREACHABLE, undefined behaviour,
+// in is_non_ascii_horizontal_whitespace() for most non-ASCII characters where
+// it expects whitespace or a value (found by fuzz/fuzz_case_file.cpp: "2.ƚ11").
+// TOML allows non-ASCII text only inside strings and comments, and never right
+// after a backslash, so such a byte is refused here, before toml++ sees it.
+void refuse_stray_non_ascii(std::string_view t, const std::string& source) {
+  auto fail_at = [&](std::size_t i, const char* where) {
+    std::size_t line = 1, line_start = 0;
+    for (std::size_t k = 0; k < i; ++k)
+      if (t[k] == '\n') ++line, line_start = k + 1;
+    std::size_t col = 1;
+    for (std::size_t k = line_start; k < i; ++k)
+      if ((static_cast<unsigned char>(t[k]) & 0xC0) != 0x80) ++col;
+    // The character as U+XXXX when it is valid UTF-8, else the byte.
+    const auto b = [&](std::size_t k) { return k < t.size() ? static_cast<unsigned char>(t[k]) : 0u; };
+    unsigned cp = 0;
+    int len = 0;
+    if ((b(i) & 0xE0) == 0xC0) cp = b(i) & 0x1F, len = 2;
+    else if ((b(i) & 0xF0) == 0xE0) cp = b(i) & 0x0F, len = 3;
+    else if ((b(i) & 0xF8) == 0xF0) cp = b(i) & 0x07, len = 4;
+    for (int k = 1; k < len; ++k) {
+      if ((b(i + k) & 0xC0) != 0x80) {
+        len = 0;
+        break;
+      }
+      cp = cp << 6 | (b(i + k) & 0x3F);
+    }
+    char what[64];
+    if (len > 0) std::snprintf(what, sizeof what, "character U+%04X", cp);
+    else std::snprintf(what, sizeof what, "byte 0x%02X (not UTF-8)", b(i));
+    throw CaseError(source + ":" + std::to_string(line) + ":" + std::to_string(col) + ": not valid TOML: " + what +
+                    " " + where);
+  };
+  enum { code, comment, basic, literal, ml_basic, ml_literal } st = code;
+  const std::size_t n = t.size();
+  auto at = [&](std::size_t i, const char* s) { return t.compare(i, std::strlen(s), s) == 0; };
+  // At a closing delimiter of a multi-line string: up to two more quotes
+  // belong to the string; returns the index of the last quote.
+  auto close_run = [&](std::size_t i, char q) {
+    std::size_t j = i;
+    while (j < n && t[j] == q && j - i < 5) ++j;
+    return j - 1;
+  };
+  // A quote opens a string only where TOML allows one: a key at the start of
+  // a line or after '.', '{' or ',', a value after '=', '[' or ','. Anywhere
+  // else ("8n'...") the document is invalid anyway, and toml++ may read on
+  // past the quote, so what follows is checked as outside a string.
+  char prev = '\n';
+  std::size_t i = 0;
+  if (at(0, "\xEF\xBB\xBF")) i = 3;  // a UTF-8 byte order mark
+  for (; i < n; ++i) {
+    const unsigned char ch = static_cast<unsigned char>(t[i]);
+    switch (st) {
+      case code: {
+        if (ch >= 0x80) fail_at(i, "outside a string or comment");
+        const bool may_open = prev == '=' || prev == '[' || prev == ',' || prev == '{' || prev == '.' || prev == '\n';
+        if (ch == '#') st = comment;
+        else if (may_open && at(i, "\"\"\"")) st = ml_basic, i += 2;
+        else if (may_open && at(i, "'''")) st = ml_literal, i += 2;
+        else if (may_open && ch == '"') st = basic;
+        else if (may_open && ch == '\'') st = literal;
+        if (ch != ' ' && ch != '\t' && ch != '\r') prev = static_cast<char>(ch);
+        break;
+      }
+      case comment:
+        if (ch == '\n') st = code, prev = '\n';
+        break;
+      case basic:
+      case ml_basic:
+        if (ch == '\\') {
+          std::size_t j = i + 1;
+          if (st == ml_basic)
+            while (j < n && (t[j] == ' ' || t[j] == '\t')) ++j;
+          if (j < n && static_cast<unsigned char>(t[j]) >= 0x80) fail_at(j, "after a backslash");
+          if (j < n && t[j] != '\n' && t[j] != '\r') i = j;  // skip the escaped character
+        } else if (st == basic && (ch == '"' || ch == '\n')) {
+          st = code, prev = static_cast<char>(ch);
+        } else if (st == ml_basic && at(i, "\"\"\"")) {
+          i = close_run(i, '"');
+          st = code, prev = '"';
+        }
+        break;
+      case literal:
+        if (ch == '\'' || ch == '\n') st = code, prev = static_cast<char>(ch);
+        break;
+      case ml_literal:
+        if (at(i, "'''")) {
+          i = close_run(i, '\'');
+          st = code, prev = '\'';
+        }
+        break;
+    }
+  }
+}
+
 // Applies one --set to the parsed document; returns the canonical key.
 std::string apply_override(toml::table& root, const std::string& arg) {
   const std::size_t eq = arg.find('=');
@@ -225,9 +322,13 @@ std::string apply_override(toml::table& root, const std::string& arg) {
 
   toml::table value_doc;
   try {
-    value_doc = toml::parse(std::string_view("v = " + text), std::string_view("--set"));
+    const std::string doc = "v = " + text;
+    refuse_stray_non_ascii(doc, "--set");
+    value_doc = toml::parse(std::string_view(doc), std::string_view("--set"));
   } catch (const toml::parse_error&) {
     value_doc = toml::table{{"v", text}};  // not TOML: a bare string
+  } catch (const CaseError&) {
+    value_doc = toml::table{{"v", text}};
   }
   toml::node& value = *value_doc.get("v");
 
@@ -339,8 +440,9 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
   if (const toml::table* lt = top.table("lifters", false)) {
     Section s(r, *lt, "lifters");
     s.knows({"rows", "first_angle", "profile"});
-    c.lifter_rows = static_cast<int>(s.integer("rows"));
-    if (c.lifter_rows < 0 || c.lifter_rows > 400) r.fail("lifters.rows", s.node("rows"), "must be in [0, 400]");
+    const long rows = s.integer("rows");  // checked before the cast: 2^32 rows is not 0 rows
+    if (rows < 0 || rows > 400) r.fail("lifters.rows", s.node("rows"), "must be in [0, 400]");
+    c.lifter_rows = static_cast<int>(rows);
     c.lifter_first_angle_deg = s.number("first_angle", 0.0);
     const auto profiles = s.tables("profile");
     for (std::size_t k = 0; k < profiles.size(); ++k) {
@@ -385,7 +487,7 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
   {
     Section s(r, *top.table("run", true), "run");
     s.knows({"duration", "warmup", "settle", "dt", "steps_per_contact", "output_interval", "snapshot_interval",
-             "precision"});
+             "checkpoint_interval", "precision"});
     c.duration = s.number("duration");
     c.warmup = s.number("warmup", 0.0);
     c.settle = s.number_or_auto("settle", -1);
@@ -395,6 +497,7 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
     c.steps_per_contact = s.number("steps_per_contact", 25.0);
     c.output_interval = s.number("output_interval", 0.01);
     c.snapshot_interval = s.number("snapshot_interval", 0.0);
+    c.checkpoint_interval = s.number("checkpoint_interval", 0.5);
     c.precision =
         s.string("precision", std::string("float"), {"float", "double"}) == "double" ? Precision::double_ : Precision::single;
   }
@@ -404,6 +507,7 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
 }  // namespace
 
 MillCase parse_case(std::string_view text, const std::string& source, const std::vector<std::string>& overrides) {
+  refuse_stray_non_ascii(text, source);
   toml::table root;
   try {
     root = toml::parse(text, source);
@@ -499,6 +603,7 @@ std::string case_to_toml(const MillCase& c) {
                   {"steps_per_contact", c.steps_per_contact},
                   {"output_interval", c.output_interval},
                   {"snapshot_interval", c.snapshot_interval},
+                  {"checkpoint_interval", c.checkpoint_interval},
                   {"precision", c.precision == Precision::double_ ? "double" : "float"}};
   if (c.settle >= 0) run.insert("settle", c.settle);
   else run.insert("settle", "auto");

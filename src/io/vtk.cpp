@@ -445,6 +445,30 @@ Snapshot read_vtp(const std::filesystem::path& path) {
 
 PvdIndex::PvdIndex(std::filesystem::path pvd_path) : path_(std::move(pvd_path)) {}
 
+void PvdIndex::keep_existing(std::size_t count) {
+  entries_.clear();
+  if (count == 0) return;
+  std::ifstream in(path_);
+  std::string line;
+  auto attr = [](const std::string& l, const std::string& key, std::string& out) {
+    const auto at = l.find(key + "=\"");
+    if (at == std::string::npos) return false;
+    const auto from = at + key.size() + 2;
+    const auto to = l.find('"', from);
+    if (to == std::string::npos) return false;
+    out = l.substr(from, to - from);
+    return true;
+  };
+  while (entries_.size() < count && std::getline(in, line)) {
+    std::string t, f;
+    if (line.find("<DataSet") == std::string::npos || !attr(line, "timestep", t) || !attr(line, "file", f)) continue;
+    entries_.emplace_back(std::strtod(t.c_str(), nullptr), f);
+  }
+  if (entries_.size() < count)
+    throw std::runtime_error(path_.string() + ": lists " + std::to_string(entries_.size()) + " snapshots, the checkpoint " +
+                             std::to_string(count));
+}
+
 void PvdIndex::add(double time_s, const std::string& relative_file) {
   if (!std::isfinite(time_s))
     throw std::invalid_argument("PvdIndex::add: " + path_.string() + ": time is not finite");

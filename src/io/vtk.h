@@ -33,6 +33,9 @@ class PvdIndex {
  public:
   explicit PvdIndex(std::filesystem::path pvd_path);
   void add(double time_s, const std::string& relative_file);
+  // Takes the first `count` entries of the index file already at the path
+  // (for a resumed run); throws std::runtime_error if it holds fewer.
+  void keep_existing(std::size_t count);
   const std::filesystem::path& path() const { return path_; }
 
  private:

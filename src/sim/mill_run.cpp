@@ -43,7 +43,7 @@ class Rate {
 }  // namespace
 
 RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const MillDerived& d,
-                    const RunHooks& hooks) {
+                    const RunHooks& hooks, RunState st) {
   RunSummary sum;
   const double dt = solver.dt();
   const long n = static_cast<long>(scene.balls.size());
@@ -51,6 +51,7 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   Rate rate;
   double last_report = -1e9;
   const long turn_steps = std::max(1L, std::lround(c.duration / dt));
+  if (st.window_profile.empty()) st.window_profile.assign(kProfileBins, 0);
 
   auto report = [&](const char* phase, double sim, double revs, double done, bool force) {
     const double wall = seconds_since(wall0);
@@ -70,38 +71,85 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     hooks.on_progress(p);
   };
 
+  // Checkpoints at chunk boundaries: every interval of simulated time, and on
+  // a stop request (then the run returns). They read the solver's state and
+  // leave it as it was, so a run with checkpoints takes the same steps.
+  double next_checkpoint =
+      hooks.checkpoint_interval_s > 0
+          ? (std::floor(solver.time_s() / hooks.checkpoint_interval_s + 1e-9) + 1) * hooks.checkpoint_interval_s
+          : 1e300;
+  auto checkpoint = [&]() {
+    if (!hooks.on_checkpoint) return;
+    RunState copy = st;
+    copy.wall_s = st.wall_s + seconds_since(wall0);
+    hooks.on_checkpoint(copy);
+  };
+  bool poisoned = false;
+  // After a chunk: fault injection, a stop request, a periodic checkpoint.
+  auto after_chunk = [&]() -> bool {
+    if (hooks.poison_at_s >= 0 && !poisoned && solver.time_s() >= hooks.poison_at_s) {
+      solver.poison_ball(0);
+      poisoned = true;
+    }
+    if (hooks.stop_requested && hooks.stop_requested()) {
+      checkpoint();
+      return true;
+    }
+    if (solver.time_s() >= next_checkpoint - 0.5 * dt) {
+      checkpoint();
+      while (next_checkpoint <= solver.time_s() + 0.5 * dt) next_checkpoint += hooks.checkpoint_interval_s;
+    }
+    return false;
+  };
+  auto finish = [&](bool interrupted) {
+    sum.interrupted = interrupted;
+    sum.wall_s = st.wall_s + seconds_since(wall0);
+    sum.steps = solver.steps();
+    sum.updates_per_s = sum.wall_s > 0 ? static_cast<double>(n) * sum.steps / sum.wall_s : 0;
+    return sum;
+  };
+
   // ---- settle: the mill at rest until the charge is still ----
   const double omega = d.omega;
-  solver.set_mill_omega(0.0);
   const double rest_speed = 0.01 * std::sqrt(kG * c.diameter);
   const bool auto_settle = c.settle < 0;
   const double max_settle = auto_settle ? 2.0 + 4.0 * std::sqrt(c.diameter / kG) : c.settle;
   const long chunk = std::max(1L, std::lround(0.02 / dt));
-  const double t_start = solver.time_s();
-  solver.observe(true);
-  while (solver.time_s() - t_start < max_settle - 0.5 * dt) {
-    const long left = std::lround((max_settle - (solver.time_s() - t_start)) / dt);
-    solver.advance(std::min(chunk, std::max(1L, left)));
-    const Observables o = solver.observe(true);
-    const double v_rms = std::sqrt(2 * (o.kinetic_J) / o.charge_mass_kg);
-    report("settle", solver.time_s() - t_start, 0, 0, false);
-    if (auto_settle && solver.time_s() - t_start > 0.1 && v_rms < rest_speed) {
-      sum.settled = true;
-      break;
+  if (st.phase == 0) {
+    solver.set_mill_omega(0.0);
+    st.settle_start_s = solver.time_s();
+    solver.observe(true);
+    st.phase = 1;
+  }
+  if (st.phase == 1) {
+    const double t_start = st.settle_start_s;
+    while (solver.time_s() - t_start < max_settle - 0.5 * dt) {
+      const long left = std::lround((max_settle - (solver.time_s() - t_start)) / dt);
+      solver.advance(std::min(chunk, std::max(1L, left)));
+      const Observables o = solver.observe(true);
+      const double v_rms = std::sqrt(2 * (o.kinetic_J) / o.charge_mass_kg);
+      report("settle", solver.time_s() - t_start, 0, 0, false);
+      if (auto_settle && solver.time_s() - t_start > 0.1 && v_rms < rest_speed) {
+        st.settled = true;
+        break;
+      }
+      if (after_chunk()) return finish(true);
+    }
+    st.settle_s = solver.time_s() - t_start;
+    if (!auto_settle) st.settled = true;
+    {  // the filling the settled bed reaches
+      const auto balls = solver.balls();
+      std::vector<Vec3> xyr;
+      xyr.reserve(balls.size());
+      for (const BallState& b : balls) xyr.push_back({b.position.x, b.position.y, b.radius});
+      st.settled_filling = settled_filling(scene, xyr);
     }
   }
-  sum.settle_s = solver.time_s() - t_start;
-  if (!auto_settle) sum.settled = true;
-  {  // the filling the settled bed reaches
-    const auto balls = solver.balls();
-    std::vector<Vec3> xyr;
-    xyr.reserve(balls.size());
-    for (const BallState& b : balls) xyr.push_back({b.position.x, b.position.y, b.radius});
-    sum.settled_filling = settled_filling(scene, xyr);
-  }
+  sum.settle_s = st.settle_s;
+  sum.settled = st.settled;
+  sum.settled_filling = st.settled_filling;
 
   // ---- turn ----
-  solver.set_mill_omega(omega);
   const long out_steps = std::max(1L, std::lround(c.output_interval / dt));
   const long warm_steps = std::min(turn_steps, static_cast<long>(std::ceil(c.warmup / dt)));
   const double rev_steps = d.revolution_s / dt;
@@ -124,21 +172,23 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     return std::min(b, turn_steps);
   };
 
-  const double time0 = solver.time_s();
-  solver.observe(true);
-  solver.take_contact_profile();
-  if (hooks.on_snapshot && snap_steps > 0) hooks.on_snapshot(0.0);
-
-  std::vector<long> window_profile(kProfileBins, 0);
-  double e_window_start = 0, e_end = 0;
-  double work = 0, diss = 0, torque_time = 0, arm_time = 0, span = 0, comx = 0, comy = 0, neigh = 0;
-  long rows_in_window = 0;
-  {
+  if (st.phase == 1) {
+    solver.set_mill_omega(omega);
+    st.turn_start_s = solver.time_s();
+    solver.observe(true);
+    solver.take_contact_profile();
+    if (hooks.on_snapshot && snap_steps > 0) {
+      hooks.on_snapshot(0.0);
+      ++st.snapshots;
+    }
     const Observables o = solver.observe(false);
-    e_window_start = o.total_energy();
+    st.e_window_start = o.total_energy();
+    st.phase = 2;
   }
-  long s = 0;
-  while (s < turn_steps) {
+  const double time0 = st.turn_start_s;
+
+  long& s = st.turn_step;
+  while (st.phase == 2 && s < turn_steps) {
     const long row_end = next_boundary(s);
     long next = row_end;
     const long next_profile = (s / profile_every + 1) * profile_every;
@@ -166,50 +216,54 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
       r.torque_arm_power_W = omega * o.charge_mass_kg * kG * o.com_x_m;
       r.neighbours_per_ball = o.neighbours_per_ball;
       r.averaged = s > window_start;
-      if (s == window_start) e_window_start = o.total_energy();
+      if (s == window_start) st.e_window_start = o.total_energy();
       if (r.averaged) {
-        for (int k = 0; k < kProfileBins; ++k) window_profile[k] += prof[k];
-        work += o.wall_work_J;
-        diss += o.dissipated_J;
-        torque_time += o.wall_torque_Nm * o.interval_s;
-        arm_time += r.torque_arm_power_W * o.interval_s;
-        span += o.interval_s;
-        comx += o.com_x_m;
-        comy += o.com_y_m;
-        neigh += o.neighbours_per_ball;
-        ++rows_in_window;
+        for (int k = 0; k < kProfileBins; ++k) st.window_profile[k] += prof[k];
+        st.work += o.wall_work_J;
+        st.diss += o.dissipated_J;
+        st.torque_time += o.wall_torque_Nm * o.interval_s;
+        st.arm_time += r.torque_arm_power_W * o.interval_s;
+        st.span += o.interval_s;
+        st.comx += o.com_x_m;
+        st.comy += o.com_y_m;
+        st.neigh += o.neighbours_per_ball;
+        ++st.rows_in_window;
       }
-      e_end = o.total_energy();
+      st.e_end = o.total_energy();
+      ++st.rows;
       if (hooks.on_row) hooks.on_row(r);
     }
-    if (hooks.on_snapshot && snap_steps > 0 && (s % snap_steps == 0 || s == turn_steps))
+    if (hooks.on_snapshot && snap_steps > 0 && (s % snap_steps == 0 || s == turn_steps)) {
       hooks.on_snapshot(solver.time_s() - time0);
+      ++st.snapshots;
+    }
     const double turned = solver.time_s() - time0;
     report("turn", turned, turned / d.revolution_s, static_cast<double>(s) / turn_steps, s == turn_steps);
+    if (s < turn_steps && after_chunk()) return finish(true);
   }
+  st.phase = 3;
 
+  const double span = st.span;
   sum.turning_s = solver.time_s() - time0;
   sum.revolutions = sum.turning_s / d.revolution_s;
-  sum.steps = solver.steps();
   sum.simulated_s = sum.settle_s + sum.turning_s;
   sum.window_from_s = window_start * dt;
   sum.window_to_s = sum.turning_s;
   sum.window_revolutions = span / d.revolution_s;
   if (span > 0) {
-    sum.torque_power_W = work / span;
-    sum.dissipation_power_W = diss / span;
-    sum.torque_Nm = torque_time / span;
-    sum.torque_arm_power_W = arm_time / span;
-    sum.energy_change_W = (e_end - e_window_start) / span;
-    sum.com_angle_deg = angle_deg(comx / rows_in_window, comy / rows_in_window);
-    sum.neighbours_per_ball = neigh / rows_in_window;
+    sum.torque_power_W = st.work / span;
+    sum.dissipation_power_W = st.diss / span;
+    sum.torque_Nm = st.torque_time / span;
+    sum.torque_arm_power_W = st.arm_time / span;
+    sum.energy_change_W = (st.e_end - st.e_window_start) / span;
+    sum.com_angle_deg = angle_deg(st.comx / st.rows_in_window, st.comy / st.rows_in_window);
+    sum.neighbours_per_ball = st.neigh / st.rows_in_window;
   }
   sum.imbalance = sum.torque_power_W != 0 ? (sum.torque_power_W - sum.dissipation_power_W) / sum.torque_power_W : 0;
-  sum.profile = window_profile;
-  sum.angles = toe_and_shoulder(window_profile);
-  sum.wall_s = seconds_since(wall0);
-  sum.updates_per_s = sum.wall_s > 0 ? static_cast<double>(n) * sum.steps / sum.wall_s : 0;
-  return sum;
+  sum.profile = st.window_profile;
+  sum.angles = toe_and_shoulder(st.window_profile);
+  checkpoint();
+  return finish(false);
 }
 
 }  // namespace mc

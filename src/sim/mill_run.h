@@ -66,17 +66,48 @@ struct RunSummary {
   std::vector<long> profile;        // the window's contact counts per bin
   double wall_s = 0;                // wall time of settling and turning
   double updates_per_s = 0;         // balls × steps / wall_s
+  bool interrupted = false;         // stopped on request, checkpoint written
+};
+
+// Where a run stands, beside the solver's own state: what a checkpoint holds
+// so that a resumed run takes the same steps and the same averages.
+struct RunState {
+  int phase = 0;                 // 0 settling, 1 turning, 2 done
+  double settle_start_s = 0;     // solver time when settling began
+  bool settled = false;
+  double settle_s = 0;
+  double settled_filling = 0;
+  double turn_start_s = 0;       // solver time when the mill started
+  long turn_step = 0;            // steps of the turning mill done
+  std::vector<long> window_profile;
+  double e_window_start = 0, e_end = 0, work = 0, diss = 0, torque_time = 0, arm_time = 0, span = 0,
+         comx = 0, comy = 0, neigh = 0;
+  long rows_in_window = 0;
+  long rows = 0;                 // rows handed to on_row
+  long snapshots = 0;            // snapshots handed to on_snapshot
+  double wall_s = 0;             // wall seconds spent before this call
 };
 
 struct RunHooks {
   std::function<void(const TimeRow&)> on_row;
   std::function<void(double turning_s)> on_snapshot;  // read the solver's balls there
   std::function<void(const RunProgress&)> on_progress;
+  // Checkpoints: on_checkpoint is called every checkpoint_interval_s of
+  // simulated time (0: never) at a chunk boundary, when stop_requested()
+  // turns true (then the run returns with `interrupted`), and at the end.
+  std::function<void(const RunState&)> on_checkpoint;
+  std::function<bool()> stop_requested;
+  double checkpoint_interval_s = 0;
+  // Fault injection for the failure tests: a NaN velocity for ball 0 once the
+  // simulated time passes this (< 0: never).
+  double poison_at_s = -1;
 };
 
-// Runs the case on a solver made from build_scene(c, d). Throws what the
+// Runs the case on a solver made from build_scene(c, d). `state` says where
+// to begin (a default RunState: from the start; one from a checkpoint, with
+// the solver restored from the same checkpoint: from there). Throws what the
 // solver throws (blow-ups, device errors).
 RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const MillDerived& d,
-                    const RunHooks& hooks);
+                    const RunHooks& hooks, RunState state = {});
 
 }  // namespace mc

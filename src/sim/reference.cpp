@@ -19,17 +19,16 @@ struct ReferenceSolver::State {
   std::vector<real4> pos, vel, omega, force, torque, accum, pos_at_build;
   std::vector<int2> info;
   std::vector<int> wall_key;
-  std::vector<real4> wall_hist;
+  std::vector<real> wall_hist;  // packed, 3 per slot
   std::vector<int> neigh_start, neigh_count, neigh_index;
-  std::vector<real4> neigh_hist;
-  std::map<std::pair<int, int>, real4> history;  // (i, j) → spring, by index
+  std::vector<real> neigh_hist;  // packed, 3 per entry
+  std::map<std::pair<int, int>, real3> history;  // (i, j) → spring, by index
   int status = 0;
   double time = 0, angle = 0, omega_mill = 0;
   int n = 0;
 
   void build_lists() {
     // Every pair within touching distance, with its spring carried over.
-    std::map<std::pair<int, int>, real4> kept;
     neigh_index.clear();
     neigh_hist.clear();
     for (int i = 0; i < n; ++i) {
@@ -41,7 +40,8 @@ struct ReferenceSolver::State {
         if (dx * dx + dy * dy + dz * dz >= cut * cut) continue;
         neigh_index.push_back(j);
         auto it = history.find({i, j});
-        neigh_hist.push_back(it != history.end() ? it->second : real4{0, 0, 0, 0});
+        const real3 h = it != history.end() ? it->second : real3{0, 0, 0};
+        neigh_hist.insert(neigh_hist.end(), {h.x, h.y, h.z});
       }
       neigh_count[i] = static_cast<int>(neigh_index.size()) - neigh_start[i];
     }
@@ -50,11 +50,11 @@ struct ReferenceSolver::State {
     history.clear();
     for (int i = 0; i < n; ++i)
       for (int k = neigh_start[i]; k < neigh_start[i] + neigh_count[i]; ++k)
-        history[{i, neigh_index[k]}] = neigh_hist[k];
+        history[{i, neigh_index[k]}] = load_hist(neigh_hist.data(), k);
   }
   void forces() {
     build_lists();
-    MillState mill{angle, omega_mill};
+    MillState mill{std::cos(angle), std::sin(angle), omega_mill};
     for (int i = 0; i < n; ++i)
       ball_forces(i, &sp, pairs.data(), lifters.data(), mill, pos.data(), vel.data(), omega.data(),
                   info.data(), neigh_start.data(), neigh_count.data(), neigh_index.data(),
@@ -79,7 +79,7 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
   s.pos.resize(n); s.vel.resize(n); s.omega.resize(n); s.force.resize(n); s.torque.resize(n);
   s.accum.assign(n, real4{0, 0, 0, 0}); s.pos_at_build.resize(n); s.info.resize(n);
   s.wall_key.assign(static_cast<std::size_t>(n) * MC_MAX_WALL_CONTACTS, MC_WALL_NONE);
-  s.wall_hist.assign(static_cast<std::size_t>(n) * MC_MAX_WALL_CONTACTS, real4{0, 0, 0, 0});
+  s.wall_hist.assign(static_cast<std::size_t>(n) * MC_MAX_WALL_CONTACTS * 3, real{0});
   s.neigh_start.assign(n, 0); s.neigh_count.assign(n, 0);
   for (int i = 0; i < n; ++i) {
     const Ball& b = balls[i];

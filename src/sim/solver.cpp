@@ -1,7 +1,9 @@
 #include "sim/solver.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -32,7 +34,8 @@ class Scan {
         block_sums_(ctx, max_n / kScanWG + 1, "scan block sums"),
         total_(ctx, 1, "scan total") {}
 
-  void run(const Buffer<int>& in, Buffer<int>& out, int n) {
+  template <class In>
+  void run(const In& in, Buffer<int>& out, int n) {
     const int n_blocks = (n + kScanWG - 1) / kScanWG;
     if (static_cast<std::size_t>(n_blocks) > block_sums_.size())
       block_sums_.resize(n_blocks);
@@ -67,6 +70,12 @@ class SolverImpl final : public Solver {
   void set_mill_omega(double w) override { mill_omega_ = w; }
   void sample_contact_profile() override;
   std::vector<long> take_contact_profile() override;
+  void set_stage_timing(bool on) override;
+  StageTimes stage_times() const override { return stages_; }
+  ContactStats contact_stats() override;
+  SolverState save_state() override;
+  void restore_state(const SolverState& state) override;
+  void poison_ball(int id) override;
   void write_instances(const cl::Buffer& out) override;
 
   double time_s() const override { return time_; }
@@ -83,7 +92,9 @@ class SolverImpl final : public Solver {
   void rebuild();
   void forces();
   void motion();
-  void check_status();
+  void read_status();
+  void wait_status();
+  void lap(double StageTimes::*stage);
 
   compute::Context& ctx_;
   compute::Program program_;
@@ -105,29 +116,44 @@ class SolverImpl final : public Solver {
   Buffer<real4> pos_, vel_, omega_, force_, torque_, accum_, pos_at_build_;
   Buffer<int2> info_;  // (id, material)
   Buffer<int> wall_key_;
-  Buffer<real4> wall_hist_;
-  // spares the gathers write into before a swap
+  Buffer<Real> wall_hist_;  // packed springs, 3 per slot
+  // the spare the gathers write into before a swap (and the scratch of the
+  // info and wall-slot gathers)
   Buffer<real4> spare4_;
-  Buffer<int2> spare2_;
-  Buffer<int> spare_key_;
-  Buffer<real4> spare_hist_;
   // binning
-  Buffer<int> cell_count_, cell_start_, ball_cell_, ball_rank_, sorted_index_;
-  // neighbour lists, current and previous (for the history carry-over)
+  // cell_start_ has n_cells + 1 entries (the last is the number of balls).
+  // The counts live only while binning, in the carried springs' buffer,
+  // which is free then (see rebuild).
+  Buffer<int> cell_start_, ball_cell_, ball_rank_, sorted_index_;
+  // neighbour lists, and the springs carried over a rebuild (compact: only
+  // pairs in contact; partner index in the old order)
   Buffer<int> neigh_start_, neigh_count_, neigh_index_;
-  Buffer<real4> neigh_hist_;
-  Buffer<int> old_start_, old_count_, old_index_;
-  Buffer<real4> old_hist_;
+  Buffer<Real> neigh_hist_;  // packed springs, 3 per entry
+  Buffer<int> carry_start_, carry_count_, carry_index_;
+  Buffer<Real> carry_hist_;
   // status word and reduction partials
   Buffer<int> status_;
   Buffer<Real> partial_;
   Buffer<int> profile_;
+  Buffer<int> counts_;
   double total_mass_ = 0;
+
+  // The status word of step s is read without waiting and acted on at step
+  // s + 1, so the host never stalls the queue inside a step (the motion
+  // kernel flags a rebuild one step early to allow for this).
+  int status_host_ = 0;
+  cl::Event status_event_;
+  bool status_in_flight_ = false;
+  int pending_flags_ = 0;  // read, not yet acted on
+
+  bool timing_ = false;
+  StageTimes stages_;
+  std::chrono::steady_clock::time_point lap_start_;
 
   Scan scan_;
   Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
-      k_gather_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
-      k_layout_, k_profile_;
+      k_gather_wall_, k_put_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
+      k_layout_, k_profile_, k_count_contacts_, k_clear_flag_, k_carry_count_, k_carry_fill_;
   // The viewer's kernel, built on first use so that headless runs skip it.
   std::unique_ptr<compute::Program> view_program_;
   std::unique_ptr<Kernel> k_instances_;
@@ -162,25 +188,23 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       pos_at_build_(ctx, n_, "positions at list build"),
       info_(ctx, n_, "ids and materials"),
       wall_key_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "wall contact keys"),
-      wall_hist_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "wall contact history"),
+      wall_hist_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS * 3, "wall contact history"),
       spare4_(ctx, n_, "spare real4"),
-      spare2_(ctx, n_, "spare int2"),
-      spare_key_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "spare wall keys"),
-      spare_hist_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "spare wall history"),
       ball_cell_(ctx, n_, "ball cell"),
       ball_rank_(ctx, n_, "ball rank in cell"),
       sorted_index_(ctx, n_, "sorted index"),
       neigh_start_(ctx, n_, "neighbour start"),
       neigh_count_(ctx, n_, "neighbour count"),
-      neigh_index_(ctx, static_cast<std::size_t>(n_) * 8 + 64, "neighbour index"),
-      neigh_hist_(ctx, static_cast<std::size_t>(n_) * 8 + 64, "neighbour history"),
-      old_start_(ctx, n_, "previous neighbour start"),
-      old_count_(ctx, n_, "previous neighbour count"),
-      old_index_(ctx, 1, "previous neighbour index"),
-      old_hist_(ctx, 1, "previous neighbour history"),
+      neigh_index_(ctx, static_cast<std::size_t>(n_) + 64, "neighbour index"),
+      neigh_hist_(ctx, (static_cast<std::size_t>(n_) + 64) * 3, "neighbour history"),
+      carry_start_(ctx, n_, "carried spring start"),
+      carry_count_(ctx, n_, "carried spring count"),
+      carry_index_(ctx, 1, "carried spring partner"),
+      carry_hist_(ctx, 3, "carried springs"),
       status_(ctx, 1, "status"),
       partial_(ctx, (static_cast<std::size_t>(n_) / kReduceWG + 1) * kObservables, "reduction partials"),
       profile_(ctx, kProfileBins, "contact profile"),
+      counts_(ctx, 3, "contact counts"),
       scan_(program_, ctx, std::max<std::size_t>(n_, 1)),
       k_bin_clear_(program_, "bin_clear"),
       k_bin_count_(program_, "bin_count"),
@@ -188,14 +212,19 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_bin_sort_(program_, "bin_sort_cells"),
       k_gather4_(program_, "gather_real4"),
       k_gather2_(program_, "gather_int2"),
-      k_gather_wall_(program_, "gather_wall_slots"),
+      k_gather_wall_(program_, "gather_wall_slot"),
+      k_put_wall_(program_, "put_wall_slot"),
       k_contacts_count_(program_, "contacts_count"),
       k_contacts_fill_(program_, "contacts_fill"),
       k_forces_(program_, "forces"),
       k_motion_(program_, "motion"),
       k_reduce_(program_, "reduce_observables"),
       k_layout_(program_, "layout_sizes"),
-      k_profile_(program_, "profile_contacts") {
+      k_profile_(program_, "profile_contacts"),
+      k_count_contacts_(program_, "count_contacts"),
+      k_clear_flag_(program_, "clear_status_flag"),
+      k_carry_count_(program_, "carry_count"),
+      k_carry_fill_(program_, "carry_fill") {
   if (n_ == 0) throw std::invalid_argument("scene: no balls");
 
   // The device's struct sizes must equal the host mirrors'.
@@ -223,11 +252,12 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
     info_.host[i] = {b.id, b.material};
   }
   std::fill(wall_key_.host.begin(), wall_key_.host.end(), MC_WALL_NONE);
-  for (auto* b : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &wall_hist_}) b->write_to_device();
+  for (auto* b : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_}) b->write_to_device();
+  wall_hist_.write_to_device();
   info_.write_to_device();
   wall_key_.write_to_device();
   // Empty lists: the first rebuild takes these as the previous lists.
-  for (auto* b : {&neigh_start_, &neigh_count_, &old_start_, &old_count_}) b->write_to_device();
+  for (auto* b : {&neigh_start_, &neigh_count_}) b->write_to_device();
   status_.write_to_device();
   profile_.write_to_device();
 
@@ -328,58 +358,76 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   n_cells_ = static_cast<int>(d[0] * d[1] * d[2]);
   params_.write_to_device();
 
-  cell_count_ = Buffer<int>(ctx_, n_cells_, "cell count");
-  cell_start_ = Buffer<int>(ctx_, n_cells_, "cell start");
+  cell_start_ = Buffer<int>(ctx_, static_cast<std::size_t>(n_cells_) + 1, "cell start");
 }
 
 template <class Real>
 void SolverImpl<Real>::rebuild() {
   const int n = n_;
-  k_bin_clear_.args(cell_count_, n_cells_).launch(n_cells_);
-  k_bin_count_.args(params_, pos_, cell_count_, ball_cell_, ball_rank_).launch(n);
-  scan_.run(cell_count_, cell_start_, n_cells_);
+  // The counts per cell go in the carried springs' buffer: it is refilled
+  // only after binning.
+  const std::size_t count_reals = ((static_cast<std::size_t>(n_cells_) + 1) * sizeof(int) + sizeof(Real) - 1) / sizeof(Real);
+  if (carry_hist_.size() < count_reals) carry_hist_.resize(count_reals);
+  Buffer<Real>& cell_count = carry_hist_;
+  k_bin_clear_.args(cell_count, n_cells_ + 1).launch(n_cells_ + 1);
+  k_bin_count_.args(params_, pos_, cell_count, ball_cell_, ball_rank_).launch(n);
+  scan_.run(cell_count, cell_start_, n_cells_ + 1);
   k_bin_scatter_.args(n, ball_cell_, ball_rank_, cell_start_, sorted_index_).launch(n);
-  k_bin_sort_.args(n_cells_, cell_start_, cell_count_, sorted_index_, info_).launch(n_cells_);
+  k_bin_sort_.args(n_cells_, cell_start_, sorted_index_, info_).launch(n_cells_);
 
   // Put the ball arrays in cell order.
   for (Buffer<real4>* b : {&pos_, &vel_, &omega_, &accum_}) {
     k_gather4_.args(n, sorted_index_, *b, spare4_).launch(n);
     std::swap(*b, spare4_);
   }
-  k_gather2_.args(n, sorted_index_, info_, spare2_).launch(n);
-  std::swap(info_, spare2_);
-  k_gather_wall_.args(n, sorted_index_, wall_key_, wall_hist_, spare_key_, spare_hist_).launch(n);
-  std::swap(wall_key_, spare_key_);
-  std::swap(wall_hist_, spare_hist_);
+  // The ids and the wall slots go through the spare (and ball_cell_, free
+  // once the balls are scattered) and back.
+  k_gather2_.args(n, sorted_index_, info_, spare4_).launch(n);
+  ctx_.queue().enqueueCopyBuffer(spare4_.device(), info_.device(), 0, 0, info_.bytes());
+  for (int slot = 0; slot < MC_MAX_WALL_CONTACTS; ++slot) {
+    k_gather_wall_.args(n, slot, sorted_index_, wall_key_, wall_hist_, ball_cell_, spare4_).launch(n);
+    k_put_wall_.args(n, slot, ball_cell_, spare4_, wall_key_, wall_hist_).launch(n);
+  }
   pos_at_build_.copy_from(pos_, n);
+  lap(&StageTimes::binning_s);
 
-  // New lists; the previous ones (in the previous order) feed the carry-over.
-  std::swap(neigh_start_, old_start_);
-  std::swap(neigh_count_, old_count_);
-  std::swap(neigh_index_, old_index_);
-  std::swap(neigh_hist_, old_hist_);
-  k_contacts_count_.args(params_, pos_, cell_start_, cell_count_, neigh_count_).launch(n);
+  // The springs of pairs in contact, out of the lists (in the old order).
+  k_carry_count_.args(n, neigh_start_, neigh_count_, neigh_hist_, carry_count_).launch(n);
+  scan_.run(carry_count_, carry_start_, n);
+  const int carried = scan_.read_total();
+  if (static_cast<std::size_t>(carried) > carry_index_.size())
+    carry_index_.resize(static_cast<std::size_t>(carried) + carried / 16 + 64);
+  if (static_cast<std::size_t>(carried) * 3 > carry_hist_.size())
+    carry_hist_.resize(std::max(carry_index_.size() * 3, count_reals));
+  k_carry_fill_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_hist_, carry_start_, carry_index_, carry_hist_)
+      .launch(n);
+  // New lists in their place.
+  k_contacts_count_.args(params_, pos_, cell_start_, neigh_count_).launch(n);
   scan_.run(neigh_count_, neigh_start_, n);
   const int total = scan_.read_total();
   if (static_cast<std::size_t>(total) > neigh_index_.size()) {
-    // The lists grow as needed: no contact is ever dropped.
-    const std::size_t cap = static_cast<std::size_t>(total) + total / 4 + 64;
+    // The lists grow as needed (with a sixteenth to spare): no contact is
+    // ever dropped.
+    const std::size_t cap = static_cast<std::size_t>(total) + total / 16 + 64;
     neigh_index_.resize(cap);
-    neigh_hist_.resize(cap);
+    neigh_hist_.resize(cap * 3);
   }
-  k_contacts_fill_.args(params_, pos_, cell_start_, cell_count_, neigh_start_, neigh_index_,
-                        neigh_hist_, sorted_index_, old_start_, old_count_, old_index_, old_hist_)
+  k_contacts_fill_.args(params_, pos_, cell_start_, neigh_start_, neigh_index_,
+                        neigh_hist_, sorted_index_, carry_start_, carry_count_, carry_index_, carry_hist_)
       .launch(n);
   ++rebuilds_;
+  lap(&StageTimes::contacts_s);
 }
 
 template <class Real>
 void SolverImpl<Real>::forces() {
   k_forces_
-      .args(params_, pairs_, lifters_, mill_angle_, mill_omega_, pos_, vel_, omega_, info_,
+      .args(params_, pairs_, lifters_, std::cos(mill_angle_), std::sin(mill_angle_), mill_omega_, pos_, vel_,
+            omega_, info_,
             neigh_start_, neigh_count_, neigh_index_, neigh_hist_, wall_key_, wall_hist_, force_,
             torque_, accum_, status_)
       .launch(n_);
+  lap(&StageTimes::forces_s);
 }
 
 template <class Real>
@@ -388,10 +436,45 @@ void SolverImpl<Real>::motion() {
 }
 
 template <class Real>
-void SolverImpl<Real>::check_status() {
-  status_.read_from_device();
-  const int flags = status_.host[0];
-  if (flags == 0) return;
+void SolverImpl<Real>::lap(double StageTimes::*stage) {
+  if (!timing_) return;
+  ctx_.finish();
+  const auto now = std::chrono::steady_clock::now();
+  stages_.*stage += std::chrono::duration<double>(now - lap_start_).count();
+  lap_start_ = now;
+}
+
+template <class Real>
+void SolverImpl<Real>::set_stage_timing(bool on) {
+  timing_ = on;
+  stages_ = {};
+  if (on) {
+    ctx_.finish();
+    lap_start_ = std::chrono::steady_clock::now();
+  }
+}
+
+// Enqueues a read of the status word without waiting for it.
+template <class Real>
+void SolverImpl<Real>::read_status() {
+  try {
+    ctx_.queue().enqueueReadBuffer(status_.device(), CL_FALSE, 0, sizeof(int), &status_host_, nullptr,
+                                   &status_event_);
+  } catch (const cl::Error& e) {
+    throw compute::Error("reading the status word failed: " + compute::error_name(e.err()));
+  }
+  status_in_flight_ = true;
+}
+
+// Waits for the status read in flight, if any; throws on a blow-up or a wall
+// overflow, and leaves the flags for the next step's rebuild decision.
+template <class Real>
+void SolverImpl<Real>::wait_status() {
+  if (!status_in_flight_) return;
+  status_event_.wait();
+  status_in_flight_ = false;
+  pending_flags_ |= status_host_;
+  const int flags = pending_flags_;
   if (flags & MC_FLAG_NOT_FINITE) {
     std::ostringstream m;
     m << "blow-up at t = " << time_ << " s (step " << steps_
@@ -399,24 +482,48 @@ void SolverImpl<Real>::check_status() {
       << " s) too large for the contact stiffness, or balls overlapping at the start";
     throw std::runtime_error(m.str());
   }
+  if (flags & MC_FLAG_ESCAPED) {
+    std::ostringstream m;
+    m << "a ball left the mill at t = " << time_ << " s (step " << steps_ << ")";
+    pos_.read_from_device();
+    info_.read_from_device();
+    const auto& sp = params_.host[0];
+    for (int i = 0; i < n_; ++i) {
+      const auto& p = pos_.host[i];
+      if (std::hypot(p.x, p.y) > sp.shell_radius + p.w || p.z < -p.w || (sp.length > 0 && p.z > sp.length + p.w)) {
+        m << ": ball " << info_.host[i].x << " is at (" << p.x << ", " << p.y << ", " << p.z << ") m";
+        break;
+      }
+    }
+    m << ". It went through a wall: dt (" << dt_
+      << " s) is too large for the contact stiffness, or the charge started overlapping a lifter or the shell";
+    throw std::runtime_error(m.str());
+  }
   if (flags & MC_FLAG_WALL_OVERFLOW)
     throw std::runtime_error("a ball touches more than " + std::to_string(MC_MAX_WALL_CONTACTS) +
                              " walls at once (MC_MAX_WALL_CONTACTS in cl/layout.h): lifters too close together?");
-  status_.host[0] = 0;
-  status_.write_to_device();
-  if (flags & MC_FLAG_REBUILD) rebuild();
 }
 
 template <class Real>
 void SolverImpl<Real>::advance(long steps) {
   for (long s = 0; s < steps; ++s) {
     motion();
-    check_status();
+    // The previous step's flags, read while this step's motion runs: a
+    // rebuild they ask for comes now, before this step's forces.
+    wait_status();
+    if (pending_flags_ & MC_FLAG_REBUILD) {
+      rebuild();
+      k_clear_flag_.args(status_, MC_FLAG_REBUILD).launch(1);
+    }
+    pending_flags_ = 0;
+    read_status();
+    lap(&StageTimes::motion_s);
     ++steps_;
     time_ += dt_;
     mill_angle_ = std::fmod(mill_angle_ + mill_omega_ * dt_, 2.0 * M_PI);
     forces();
   }
+  wait_status();  // report a blow-up from the last step now, not later
 }
 
 template <class Real>
@@ -425,6 +532,7 @@ Observables SolverImpl<Real>::observe(bool reset) {
   k_reduce_.args(params_, pos_, vel_, omega_, force_, torque_, accum_, neigh_count_, reset ? 1 : 0, partial_)
       .launch(static_cast<std::size_t>(groups) * kReduceWG, kReduceWG);
   partial_.read_from_device();
+  lap(&StageTimes::reductions_s);
   double s[kObservables] = {};
   for (int g = 0; g < groups; ++g)
     for (int k = 0; k < kObservables; ++k) s[k] += partial_.host[g * kObservables + k];
@@ -451,6 +559,20 @@ Observables SolverImpl<Real>::observe(bool reset) {
 template <class Real>
 void SolverImpl<Real>::sample_contact_profile() {
   k_profile_.args(params_, pos_, wall_key_, kProfileBins, profile_).launch(n_);
+  lap(&StageTimes::reductions_s);
+}
+
+template <class Real>
+ContactStats SolverImpl<Real>::contact_stats() {
+  std::fill(counts_.host.begin(), counts_.host.end(), 0);
+  counts_.write_to_device();
+  k_count_contacts_.args(params_, pos_, neigh_start_, neigh_count_, neigh_index_, wall_key_, counts_).launch(n_);
+  counts_.read_from_device();
+  ContactStats c;
+  c.ball_contacts_per_ball = static_cast<double>(counts_.host[0]) / n_;
+  c.wall_contacts_per_ball = static_cast<double>(counts_.host[1]) / n_;
+  c.list_entries_per_ball = static_cast<double>(counts_.host[2]) / n_;
+  return c;
 }
 
 template <class Real>
@@ -460,6 +582,118 @@ std::vector<long> SolverImpl<Real>::take_contact_profile() {
   std::fill(profile_.host.begin(), profile_.host.end(), 0);
   profile_.write_to_device();
   return out;
+}
+
+namespace {
+
+template <class T>
+void put_array(SolverState& st, const char* name, compute::Buffer<T>& b, std::size_t count) {
+  b.read_from_device();
+  const auto* p = reinterpret_cast<const unsigned char*>(b.host.data());
+  st.arrays.emplace_back(name, std::vector<unsigned char>(p, p + count * sizeof(T)));
+}
+
+template <class T>
+void get_array(const SolverState& st, const char* name, compute::Buffer<T>& b, bool resize) {
+  for (const auto& [key, bytes] : st.arrays) {
+    if (key != name) continue;
+    if (bytes.size() % sizeof(T) != 0)
+      throw std::invalid_argument(std::string("state array ") + name + ": size is not a whole number of elements");
+    const std::size_t count = bytes.size() / sizeof(T);
+    if (resize) {
+      if (count > b.size()) b.resize(count);
+    } else if (count != b.size()) {
+      throw std::invalid_argument(std::string("state array ") + name + " holds " + std::to_string(count) +
+                                  " elements, the solver " + std::to_string(b.size()));
+    }
+    std::memcpy(b.host.data(), bytes.data(), bytes.size());
+    b.write_to_device();
+    return;
+  }
+  throw std::invalid_argument(std::string("state array ") + name + " is missing");
+}
+
+}  // namespace
+
+template <class Real>
+SolverState SolverImpl<Real>::save_state() {
+  wait_status();
+  SolverState st;
+  st.real_bytes = sizeof(Real);
+  st.n_balls = n_;
+  st.time_s = time_;
+  st.steps = steps_;
+  st.rebuilds = rebuilds_;
+  st.mill_angle = mill_angle_;
+  st.mill_omega = mill_omega_;
+  st.observed_since = observed_since_;
+  st.pending_flags = pending_flags_;
+  const std::size_t n = n_;
+  const std::size_t slots = n * MC_MAX_WALL_CONTACTS;
+  put_array(st, "pos", pos_, n);
+  put_array(st, "vel", vel_, n);
+  put_array(st, "omega", omega_, n);
+  put_array(st, "force", force_, n);
+  put_array(st, "torque", torque_, n);
+  put_array(st, "accum", accum_, n);
+  put_array(st, "pos_at_build", pos_at_build_, n);
+  put_array(st, "info", info_, n);
+  put_array(st, "wall_key", wall_key_, slots);
+  put_array(st, "wall_hist", wall_hist_, slots * 3);
+  put_array(st, "neigh_start", neigh_start_, n);
+  put_array(st, "neigh_count", neigh_count_, n);
+  const std::size_t entries = static_cast<std::size_t>(neigh_start_.host[n - 1]) + neigh_count_.host[n - 1];
+  put_array(st, "neigh_index", neigh_index_, entries);
+  put_array(st, "neigh_hist", neigh_hist_, entries * 3);
+  put_array(st, "status", status_, 1);
+  put_array(st, "profile", profile_, kProfileBins);
+  return st;
+}
+
+template <class Real>
+void SolverImpl<Real>::restore_state(const SolverState& st) {
+  if (st.real_bytes != static_cast<int>(sizeof(Real)))
+    throw std::invalid_argument("the state was saved in " + std::string(st.real_bytes == 8 ? "double" : "float") +
+                                " precision, this solver runs in " + (sizeof(Real) == 8 ? "double" : "float"));
+  if (st.n_balls != n_)
+    throw std::invalid_argument("the state holds " + std::to_string(st.n_balls) + " balls, the scene " +
+                                std::to_string(n_));
+  ctx_.finish();
+  status_in_flight_ = false;
+  get_array(st, "pos", pos_, false);
+  get_array(st, "vel", vel_, false);
+  get_array(st, "omega", omega_, false);
+  get_array(st, "force", force_, false);
+  get_array(st, "torque", torque_, false);
+  get_array(st, "accum", accum_, false);
+  get_array(st, "pos_at_build", pos_at_build_, false);
+  get_array(st, "info", info_, false);
+  get_array(st, "wall_key", wall_key_, false);
+  get_array(st, "wall_hist", wall_hist_, false);
+  get_array(st, "neigh_start", neigh_start_, false);
+  get_array(st, "neigh_count", neigh_count_, false);
+  get_array(st, "neigh_index", neigh_index_, true);
+  get_array(st, "neigh_hist", neigh_hist_, true);
+  get_array(st, "status", status_, false);
+  get_array(st, "profile", profile_, false);
+  time_ = st.time_s;
+  steps_ = st.steps;
+  rebuilds_ = st.rebuilds;
+  mill_angle_ = st.mill_angle;
+  mill_omega_ = st.mill_omega;
+  observed_since_ = st.observed_since;
+  pending_flags_ = st.pending_flags;
+  ctx_.finish();
+}
+
+template <class Real>
+void SolverImpl<Real>::poison_ball(int id) {
+  wait_status();
+  info_.read_from_device();
+  vel_.read_from_device();
+  for (int i = 0; i < n_; ++i)
+    if (info_.host[i].x == id) vel_.host[i].x = std::numeric_limits<Real>::quiet_NaN();
+  vel_.write_to_device();
 }
 
 template <class Real>
@@ -499,16 +733,16 @@ std::vector<std::pair<int, int>> SolverImpl<Real>::neighbour_pairs() {
 
 template <class Real>
 std::size_t SolverImpl<Real>::device_bytes() const {
-  std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() + profile_.bytes() +
+  std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() + profile_.bytes() + counts_.bytes() +
                   partial_.bytes() + scan_.bytes();
-  for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_,
-                        &wall_hist_, &spare4_, &spare_hist_, &neigh_hist_, &old_hist_})
+  for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_, &spare4_})
     b += x->bytes();
-  for (const auto* x : {&wall_key_, &spare_key_, &cell_count_, &cell_start_, &ball_cell_,
+  for (const auto* x : {&wall_hist_, &neigh_hist_, &carry_hist_}) b += x->bytes();
+  for (const auto* x : {&wall_key_, &cell_start_, &ball_cell_,
                         &ball_rank_, &sorted_index_, &neigh_start_, &neigh_count_, &neigh_index_,
-                        &old_start_, &old_count_, &old_index_})
+                        &carry_start_, &carry_count_, &carry_index_})
     b += x->bytes();
-  return b + info_.bytes() + spare2_.bytes();
+  return b + info_.bytes();
 }
 
 }  // namespace
@@ -520,7 +754,7 @@ void Solver::write_instances(const cl::Buffer&) {
 double default_skin(const Scene& scene) {
   double r_min = std::numeric_limits<double>::max();
   for (const Ball& b : scene.balls) r_min = std::min(r_min, b.radius);
-  return scene.balls.empty() ? 0.0 : 0.3 * r_min;
+  return scene.balls.empty() ? 0.0 : 0.2 * r_min;
 }
 
 std::unique_ptr<Solver> make_solver(compute::Context& ctx, const Scene& scene) {

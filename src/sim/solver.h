@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -42,6 +43,43 @@ struct Observables {
 
 inline constexpr int kProfileBins = 360;
 
+// Where a step's time goes, for the benchmark: wall seconds per stage, taken
+// with the queue drained after each stage (so only while timing is on).
+struct StageTimes {
+  double binning_s = 0;     // cell of each ball, sort, reorder of the state
+  double contacts_s = 0;    // neighbour lists and the history carry-over
+  double forces_s = 0;      // contact and wall forces
+  double motion_s = 0;      // integration and the status word
+  double reductions_s = 0;  // observables and the contact profile
+  double total() const { return binning_s + contacts_s + forces_s + motion_s + reductions_s; }
+};
+
+// Contacts now, for reports: ball-ball contacts per ball (each pair counted
+// by both balls, the coordination number), wall contacts per ball, and
+// neighbour-list entries per ball.
+struct ContactStats {
+  double ball_contacts_per_ball = 0;
+  double wall_contacts_per_ball = 0;
+  double list_entries_per_ball = 0;
+};
+
+// The whole state a solver continues from, for checkpoints: host scalars and
+// the device arrays that live across steps, byte for byte in the device's
+// layout (scratch arrays are left out). Restoring it into a solver built for
+// the same scene, precision and device continues the run bit for bit.
+struct SolverState {
+  int real_bytes = 0;  // 4 float, 8 double
+  long n_balls = 0;
+  double time_s = 0;
+  long steps = 0;
+  long rebuilds = 0;
+  double mill_angle = 0;
+  double mill_omega = 0;
+  double observed_since = 0;
+  int pending_flags = 0;  // the last step's status, not yet acted on
+  std::vector<std::pair<std::string, std::vector<unsigned char>>> arrays;  // name → bytes
+};
+
 class Solver {
  public:
   virtual ~Solver() = default;
@@ -59,6 +97,18 @@ class Solver {
   // The counts since the last take; resets them.
   virtual std::vector<long> take_contact_profile() = 0;
 
+  // Stage timing (off by default): turning it on drains the queue after
+  // every stage, which costs a little; reset by turning it on again.
+  virtual void set_stage_timing(bool on) = 0;
+  virtual StageTimes stage_times() const = 0;
+  virtual ContactStats contact_stats() = 0;
+
+  virtual SolverState save_state() = 0;
+  // Throws std::invalid_argument when the state does not fit this solver.
+  virtual void restore_state(const SolverState& state) = 0;
+  // Fault injection for the failure tests: the ball with this id gets a NaN
+  // velocity.
+  virtual void poison_ball(int id) = 0;
   // The viewer's data for every ball (cl/instances.h: centre, radius, speed,
   // material, dissipation power since the last observe(true), id) written
   // into `out`, which holds at least balls × MC_INSTANCE_FLOATS floats: a
@@ -81,7 +131,9 @@ class Solver {
 // compute::Error for device trouble.
 std::unique_ptr<Solver> make_solver(compute::Context& ctx, const Scene& scene);
 
-// Skin used when the scene leaves it at 0: 30 % of the smallest radius.
+// Skin used when the scene leaves it at 0: 20 % of the smallest radius (a
+// thinner skin lists fewer pairs and rebuilds more often; at 20 % a dense
+// charge rebuilds every 25-100 steps and lists about 6 pairs per ball).
 double default_skin(const Scene& scene);
 
 }  // namespace mc

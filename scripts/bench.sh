@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# The benchmark table: `millcharge bench` on the lab mill, the 100k benchmark
+# mill and seed mill D (1.28 M balls), and the scaling set (the benchmark mill
+# cut to 10k and stretched to 1M balls: same cross-section, same work per
+# ball). Prints a Markdown table on stdout and keeps each JSON line in
+# runs/bench-DATE/. Usage:
+#   bash scripts/bench.sh [--device SPEC] [--only lab,100k,D,10k,1M] [--steps N]
+# Each row warms up 0.25 s of simulated time first (the packed charge falls
+# into a dense bed); on 2 CPU cores mill D takes most of an hour.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+device=""; only="lab,10k,100k,1M,D"; steps=""
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --device) device="$2"; shift 2 ;;
+    --only) only="$2"; shift 2 ;;
+    --steps) steps="$2"; shift 2 ;;
+    *) echo "bench.sh: unknown argument $1 (use --device, --only, --steps)" >&2; exit 2 ;;
+  esac
+done
+[ -x build/millcharge ] || bash scripts/build.sh >&2
+out="runs/bench-$(date +%Y%m%d-%H%M%S)"
+mkdir -p "$out"
+args=(); [ -n "$device" ] && args+=(--device "$device"); [ -n "$steps" ] && args+=(--steps "$steps")
+declare -A case_of=(
+  [lab]="assets/cases/lab.toml"
+  [10k]="assets/cases/bench_100k.toml --set mill.length=0.305"
+  [100k]="assets/cases/bench_100k.toml"
+  [1M]="assets/cases/bench_100k.toml --set mill.length=30.5"
+  [D]="assets/cases/mill_d.toml"
+)
+IFS=',' read -r -a rows <<< "$only"
+for r in "${rows[@]}"; do
+  [ -n "${case_of[$r]:-}" ] || { echo "bench.sh: no row '$r' (lab, 10k, 100k, 1M, D)" >&2; exit 2; }
+  echo "bench.sh: $r" >&2
+  # shellcheck disable=SC2086
+  build/millcharge bench ${case_of[$r]} "${args[@]}" > "$out/$r.json"
+done
+python3 - "$out" "${rows[@]}" <<'PY'
+import json, sys
+out, rows = sys.argv[1], sys.argv[2:]
+print("| case | balls | device | precision | steps/s | particle-updates/s | contacts/ball | B/ball | binning | contacts | forces | motion | reductions |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+for r in rows:
+    j = json.load(open(f"{out}/{r}.json"))
+    s = j["stages"]
+    print(f"| {r} ({j['case']}) | {j['n_particles']:,} | {j['device']} | {j['precision']} | {j['steps_per_s']:.1f} | "
+          f"{j['particle_updates_per_s']:.3g} | {j['contacts_per_ball']:.2f} | {j['bytes_per_ball']:.0f} | "
+          + " | ".join(f"{100*s[k]:.0f} %" for k in ("binning", "contacts", "forces", "motion", "reductions")) + " |")
+PY
+echo "bench.sh: JSON lines in $out" >&2

@@ -1,0 +1,254 @@
+#include "io/checkpoint.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "io/atomic_file.h"
+
+namespace mc::io {
+
+namespace {
+
+constexpr char kMagic[] = "millcharge checkpoint\n";
+constexpr std::uint32_t kVersion = 1;
+
+std::uint64_t fnv1a(const char* p, std::size_t n) {
+  std::uint64_t h = 1469598103934665603ULL;
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= static_cast<unsigned char>(p[i]);
+    h *= 1099511628211ULL;
+  }
+  return h;
+}
+
+template <class T>
+void put(std::string& out, T v) {
+  out.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+
+void put_record(std::string& out, const std::string& name, const char* data, std::size_t n) {
+  put(out, static_cast<std::uint32_t>(name.size()));
+  out += name;
+  put(out, static_cast<std::uint64_t>(n));
+  out.append(data, n);
+}
+
+// key=value lines; doubles keep all their bits through %.17g.
+class Scalars {
+ public:
+  void set(const std::string& k, double v) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%.17g", v);
+    text_ += k + "=" + b + "\n";
+  }
+  void set(const std::string& k, long v) { text_ += k + "=" + std::to_string(v) + "\n"; }
+  void set(const std::string& k, int v) { set(k, static_cast<long>(v)); }
+  void set(const std::string& k, bool v) { set(k, static_cast<long>(v ? 1 : 0)); }
+  const std::string& text() const { return text_; }
+
+ private:
+  std::string text_;
+};
+
+class ScalarReader {
+ public:
+  ScalarReader(const std::string& text, std::string where) : where_(std::move(where)) {
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line)) {
+      const auto eq = line.find('=');
+      if (eq != std::string::npos) values_[line.substr(0, eq)] = line.substr(eq + 1);
+    }
+  }
+  double real(const std::string& k) const {
+    const std::string& v = at(k);
+    char* end = nullptr;
+    const double d = std::strtod(v.c_str(), &end);
+    if (end == v.c_str() || *end) throw CheckpointError(where_ + ": " + k + " is not a number");
+    return d;
+  }
+  long integer(const std::string& k) const {
+    const std::string& v = at(k);
+    char* end = nullptr;
+    const long l = std::strtol(v.c_str(), &end, 10);
+    if (end == v.c_str() || *end) throw CheckpointError(where_ + ": " + k + " is not an integer");
+    return l;
+  }
+
+ private:
+  const std::string& at(const std::string& k) const {
+    const auto it = values_.find(k);
+    if (it == values_.end()) throw CheckpointError(where_ + ": " + k + " is missing");
+    return it->second;
+  }
+  std::string where_;
+  std::map<std::string, std::string> values_;
+};
+
+}  // namespace
+
+void write_checkpoint(const std::filesystem::path& path, const Checkpoint& cp) {
+  std::string payload;
+  put_record(payload, "case.name", cp.case_name.data(), cp.case_name.size());
+  put_record(payload, "case.toml", cp.case_toml.data(), cp.case_toml.size());
+
+  const RunState& r = cp.run;
+  Scalars rs;
+  rs.set("phase", r.phase);
+  rs.set("settle_start_s", r.settle_start_s);
+  rs.set("settled", r.settled);
+  rs.set("settle_s", r.settle_s);
+  rs.set("settled_filling", r.settled_filling);
+  rs.set("turn_start_s", r.turn_start_s);
+  rs.set("turn_step", r.turn_step);
+  rs.set("e_window_start", r.e_window_start);
+  rs.set("e_end", r.e_end);
+  rs.set("work", r.work);
+  rs.set("diss", r.diss);
+  rs.set("torque_time", r.torque_time);
+  rs.set("arm_time", r.arm_time);
+  rs.set("span", r.span);
+  rs.set("comx", r.comx);
+  rs.set("comy", r.comy);
+  rs.set("neigh", r.neigh);
+  rs.set("rows_in_window", r.rows_in_window);
+  rs.set("rows", r.rows);
+  rs.set("snapshots", r.snapshots);
+  rs.set("wall_s", r.wall_s);
+  put_record(payload, "run", rs.text().data(), rs.text().size());
+  std::vector<std::int64_t> prof(r.window_profile.begin(), r.window_profile.end());
+  put_record(payload, "run.window_profile", reinterpret_cast<const char*>(prof.data()),
+             prof.size() * sizeof(std::int64_t));
+
+  const SolverState& s = cp.solver;
+  Scalars ss;
+  ss.set("real_bytes", s.real_bytes);
+  ss.set("n_balls", s.n_balls);
+  ss.set("time_s", s.time_s);
+  ss.set("steps", s.steps);
+  ss.set("rebuilds", s.rebuilds);
+  ss.set("mill_angle", s.mill_angle);
+  ss.set("mill_omega", s.mill_omega);
+  ss.set("observed_since", s.observed_since);
+  ss.set("pending_flags", s.pending_flags);
+  put_record(payload, "solver", ss.text().data(), ss.text().size());
+  for (const auto& [name, bytes] : s.arrays)
+    put_record(payload, "array." + name, reinterpret_cast<const char*>(bytes.data()), bytes.size());
+
+  std::string file(kMagic);
+  put(file, kVersion);
+  put(file, static_cast<std::uint64_t>(payload.size()));
+  file += payload;
+  put(file, fnv1a(payload.data(), payload.size()));
+  write_file_atomic(path, file);
+}
+
+Checkpoint read_checkpoint(const std::filesystem::path& path) {
+  const std::string where = path.string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw CheckpointError(where + ": cannot open the checkpoint (is this a run folder?)");
+  std::string file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t magic_len = std::strlen(kMagic);
+  if (file.size() < magic_len || file.compare(0, magic_len, kMagic) != 0)
+    throw CheckpointError(where + ": not a millcharge checkpoint");
+  std::size_t at = magic_len;
+  auto get = [&](auto& v, const char* what) {
+    if (file.size() - at < sizeof v)
+      throw CheckpointError(where + ": truncated (" + std::to_string(file.size()) + " bytes; ends inside the " +
+                            what + ")");
+    std::memcpy(&v, file.data() + at, sizeof v);
+    at += sizeof v;
+  };
+  std::uint32_t version = 0;
+  get(version, "header");
+  if (version != kVersion)
+    throw CheckpointError(where + ": format version " + std::to_string(version) + ", this millcharge reads " +
+                          std::to_string(kVersion));
+  std::uint64_t len = 0;
+  get(len, "header");
+  if (file.size() - at < len + sizeof(std::uint64_t))
+    throw CheckpointError(where + ": truncated (" + std::to_string(file.size()) + " bytes of " +
+                          std::to_string(at + len + sizeof(std::uint64_t)) + "): the write was cut short");
+  const char* payload = file.data() + at;
+  std::uint64_t hash = 0;
+  std::memcpy(&hash, payload + len, sizeof hash);
+  if (fnv1a(payload, len) != hash) throw CheckpointError(where + ": checksum mismatch: the file is damaged");
+  if (file.size() != at + len + sizeof hash)
+    throw CheckpointError(where + ": " + std::to_string(file.size() - (at + len + sizeof hash)) +
+                          " stray bytes after the checksum");
+
+  std::map<std::string, std::string> records;
+  std::size_t p = 0;
+  auto take = [&](std::size_t n) {
+    if (len - p < n) throw CheckpointError(where + ": a record runs past the end of the payload");
+    const std::size_t from = p;
+    p += n;
+    return from;
+  };
+  while (p < len) {
+    std::uint32_t name_len = 0;
+    std::memcpy(&name_len, payload + take(sizeof name_len), sizeof name_len);
+    const std::string name(payload + take(name_len), name_len);
+    std::uint64_t n = 0;
+    std::memcpy(&n, payload + take(sizeof n), sizeof n);
+    records[name] = std::string(payload + take(n), n);
+  }
+  auto record = [&](const std::string& name) -> const std::string& {
+    const auto it = records.find(name);
+    if (it == records.end()) throw CheckpointError(where + ": the record '" + name + "' is missing");
+    return it->second;
+  };
+
+  Checkpoint cp;
+  cp.case_name = record("case.name");
+  cp.case_toml = record("case.toml");
+  const ScalarReader rs(record("run"), where + ": run");
+  RunState& r = cp.run;
+  r.phase = static_cast<int>(rs.integer("phase"));
+  r.settle_start_s = rs.real("settle_start_s");
+  r.settled = rs.integer("settled") != 0;
+  r.settle_s = rs.real("settle_s");
+  r.settled_filling = rs.real("settled_filling");
+  r.turn_start_s = rs.real("turn_start_s");
+  r.turn_step = rs.integer("turn_step");
+  r.e_window_start = rs.real("e_window_start");
+  r.e_end = rs.real("e_end");
+  r.work = rs.real("work");
+  r.diss = rs.real("diss");
+  r.torque_time = rs.real("torque_time");
+  r.arm_time = rs.real("arm_time");
+  r.span = rs.real("span");
+  r.comx = rs.real("comx");
+  r.comy = rs.real("comy");
+  r.neigh = rs.real("neigh");
+  r.rows_in_window = rs.integer("rows_in_window");
+  r.rows = rs.integer("rows");
+  r.snapshots = rs.integer("snapshots");
+  r.wall_s = rs.real("wall_s");
+  const std::string& prof = record("run.window_profile");
+  std::vector<std::int64_t> counts(prof.size() / sizeof(std::int64_t));
+  std::memcpy(counts.data(), prof.data(), counts.size() * sizeof(std::int64_t));
+  r.window_profile.assign(counts.begin(), counts.end());
+
+  const ScalarReader ss(record("solver"), where + ": solver");
+  SolverState& s = cp.solver;
+  s.real_bytes = static_cast<int>(ss.integer("real_bytes"));
+  s.n_balls = ss.integer("n_balls");
+  s.time_s = ss.real("time_s");
+  s.steps = ss.integer("steps");
+  s.rebuilds = ss.integer("rebuilds");
+  s.mill_angle = ss.real("mill_angle");
+  s.mill_omega = ss.real("mill_omega");
+  s.observed_since = ss.real("observed_since");
+  s.pending_flags = static_cast<int>(ss.integer("pending_flags"));
+  for (const auto& [name, bytes] : records)
+    if (name.rfind("array.", 0) == 0)
+      s.arrays.emplace_back(name.substr(6), std::vector<unsigned char>(bytes.begin(), bytes.end()));
+  return cp;
+}
+
+}  // namespace mc::io

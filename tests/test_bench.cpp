@@ -1,0 +1,89 @@
+// The benchmark command, as a smoke run: one JSON line with the figures the
+// issue names, consistent with each other. Speeds are not asserted here:
+// performance is measured with the benchmark itself, on a quiet machine.
+#include <catch2/catch.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+
+using Catch::Matchers::WithinAbs;
+using Catch::Matchers::WithinRel;
+
+namespace {
+
+std::string run_capture(const std::string& cmd, int& status) {
+  std::string out;
+  FILE* p = popen(cmd.c_str(), "r");
+  REQUIRE(p != nullptr);
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, p)) out += buf;
+  status = pclose(p);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("bench prints one JSON line with consistent figures on the lab mill", "[bench]") {
+  int status = -1;
+  const std::string out = run_capture(std::string(MC_BINARY) + " bench " + MC_ASSET_DIR +
+                                          "/cases/lab.toml --steps 200 --warmup 0.05 --quiet",
+                                      status);
+  REQUIRE(status == 0);
+  REQUIRE(out.find('\n') == out.size() - 1);  // exactly one line
+  const auto j = nlohmann::json::parse(out);
+  const long n = j.at("n_particles");
+  CHECK(n == 2714);
+  CHECK(j.at("steps").get<long>() == 200);
+  const double wall = j.at("wall_s");
+  REQUIRE(wall > 0);
+  CHECK_THAT(j.at("particle_updates_per_s").get<double>(), WithinRel(n * 200.0 / wall, 1e-9));
+  CHECK_THAT(j.at("bytes_per_ball").get<double>(), WithinRel(j.at("device_bytes").get<double>() / n, 1e-9));
+  CHECK(j.at("bytes_per_ball").get<double>() < 1000);
+  // The charge has fallen onto itself after 0.05 s: contacts exist, and
+  // the lists hold every contact plus the skin's near misses.
+  const double contacts = j.at("contacts_per_ball");
+  CHECK(contacts > 0.1);
+  CHECK(contacts < 12);
+  CHECK(j.at("list_entries_per_ball").get<double>() >= contacts);
+  CHECK(j.at("precision") == "float");
+  double sum = 0;
+  for (const char* stage : {"binning", "contacts", "forces", "motion", "reductions"}) {
+    const double share = j.at("stages").at(stage);
+    CHECK(share >= 0);
+    sum += share;
+  }
+  CHECK_THAT(sum, WithinAbs(1.0, 1e-9));
+  CHECK(j.at("stages").at("forces").get<double>() > 0.2);  // the forces dominate a DEM step
+}
+
+TEST_CASE("bench refuses a bad case with status 2 and a message", "[bench]") {
+  int status = -1;
+  const std::string out = run_capture(std::string(MC_BINARY) + " bench " + MC_ASSET_DIR +
+                                          "/cases/lab.toml --set mill.diameter=-1 --quiet 2>&1",
+                                      status);
+  CHECK(WEXITSTATUS(status) == 2);
+  CHECK(out.find("mill.diameter") != std::string::npos);
+}
+
+TEST_CASE("bench starts from a run's checkpoint with --from", "[bench]") {
+  const std::string dir = "/tmp/millcharge-test-bench-from-" + std::to_string(::getpid());
+  int status = -1;
+  run_capture(std::string(MC_BINARY) + " run --quiet --force --set run.duration=0.02 --set run.settle=0.2 --set run.warmup=0 --out " +
+                  dir + " >/dev/null 2>&1",
+              status);
+  REQUIRE(status == 0);
+  const std::string out = run_capture(std::string(MC_BINARY) + " bench --from " + dir + " --steps 100 --quiet", status);
+  REQUIRE(status == 0);
+  const auto j = nlohmann::json::parse(out);
+  CHECK(j.at("n_particles").get<long>() == 2714);
+  CHECK(j.at("warmup_steps").get<long>() == 0);
+  CHECK(j.at("from") == dir);
+  // The state is the run's after 0.22 s, not a fresh packing (whose balls
+  // all start apart, and would touch nothing 100 steps later).
+  CHECK(j.at("contacts_per_ball").get<double>() > 0.2);
+  CHECK(j.at("list_entries_per_ball").get<double>() > 4);
+  std::system(("rm -rf " + dir).c_str());
+}

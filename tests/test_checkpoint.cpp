@@ -1,0 +1,260 @@
+// Runs that survive: checkpoints and --resume (bit for bit), signals, damaged
+// checkpoints, and the failure paths (NaN, a ball leaving the mill, too many
+// wall contacts, neighbour lists that must grow).
+#include <catch2/catch.hpp>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "helpers.h"
+#include "io/checkpoint.h"
+
+namespace fs = std::filesystem;
+using namespace mc;
+
+namespace {
+
+// A short lab run: 0.05 s of settling, 0.2 s of turning, checkpoints every
+// 0.05 s. About 12,000 steps.
+const std::string kShort =
+    " --quiet --set run.duration=0.2 --set run.settle=0.05 --set run.warmup=0.05"
+    " --set run.checkpoint_interval=0.05 --set run.snapshot_interval=0.1";
+
+fs::path scratch(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("millcharge-test-" + std::to_string(::getpid()) + "-" + name);
+  fs::remove_all(p);
+  return p;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+int run_cmd(const std::string& args, std::string* err = nullptr) {
+  const fs::path log = scratch("stderr.txt");
+  const int st = std::system((std::string(MC_BINARY) + " " + args + " >/dev/null 2>'" + log.string() + "'").c_str());
+  if (err) *err = slurp(log);
+  fs::remove(log);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+// Starts the binary in the background; returns its pid.
+pid_t spawn(const std::string& args) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd = "exec " + std::string(MC_BINARY) + " " + args + " >/dev/null 2>&1";
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Waits until the run's checkpoint reads back with the mill turning.
+bool wait_for_turning_checkpoint(const fs::path& dir, double seconds) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < until) {
+    try {
+      if (io::read_checkpoint(dir / io::kCheckpointFile).run.phase == 2) return true;
+    } catch (const std::exception&) {
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return false;
+}
+
+void require_same_state(const io::Checkpoint& a, const io::Checkpoint& b) {
+  REQUIRE(a.solver.steps == b.solver.steps);
+  CHECK(a.solver.time_s == b.solver.time_s);
+  CHECK(a.solver.mill_angle == b.solver.mill_angle);
+  CHECK(a.run.rows == b.run.rows);
+  CHECK(a.run.work == b.run.work);
+  CHECK(a.run.diss == b.run.diss);
+  CHECK(a.run.window_profile == b.run.window_profile);
+  REQUIRE(a.solver.arrays.size() == b.solver.arrays.size());
+  for (std::size_t k = 0; k < a.solver.arrays.size(); ++k) {
+    INFO("array " << a.solver.arrays[k].first);
+    CHECK(a.solver.arrays[k].first == b.solver.arrays[k].first);
+    CHECK(a.solver.arrays[k].second == b.solver.arrays[k].second);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("SIGKILL during a run, then --resume, ends bit for bit where an unbroken run ends", "[checkpoint]") {
+  const fs::path a = scratch("unbroken"), b = scratch("killed");
+  REQUIRE(run_cmd("run" + kShort + " --out '" + a.string() + "'") == 0);
+
+  const pid_t pid = spawn("run" + kShort + " --out '" + b.string() + "'");
+  REQUIRE(pid > 0);
+  const bool turning = wait_for_turning_checkpoint(b, 120);
+  ::kill(pid, SIGKILL);
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  REQUIRE(turning);
+  REQUIRE(WIFSIGNALED(st));
+  CHECK(!fs::exists(b / "summary.json"));
+  const io::Checkpoint mid = io::read_checkpoint(b / io::kCheckpointFile);
+  CHECK(mid.solver.time_s < 0.25 - 1e-6);  // killed before the end
+
+  std::string err;
+  REQUIRE(run_cmd("run --quiet --resume '" + b.string() + "'", &err) == 0);
+  INFO(err);
+  require_same_state(io::read_checkpoint(a / io::kCheckpointFile), io::read_checkpoint(b / io::kCheckpointFile));
+  // No row lost or written twice.
+  CHECK(slurp(a / "timeseries.csv") == slurp(b / "timeseries.csv"));
+  CHECK(slurp(a / "charge.pvd") == slurp(b / "charge.pvd"));
+  // A finished run is not resumed again.
+  CHECK(run_cmd("run --quiet --resume '" + b.string() + "'", &err) == 2);
+  CHECK(err.find("complete") != std::string::npos);
+  fs::remove_all(a);
+  fs::remove_all(b);
+}
+
+TEST_CASE("SIGTERM stops a run with a checkpoint and a message saying how to go on", "[checkpoint]") {
+  const fs::path dir = scratch("sigterm");
+  const fs::path log = scratch("sigterm.txt");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd = "exec " + std::string(MC_BINARY) + " run" + kShort + " --out '" + dir.string() +
+                            "' >/dev/null 2>'" + log.string() + "'";
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const bool turning = wait_for_turning_checkpoint(dir, 120);
+  ::kill(pid, SIGTERM);
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  REQUIRE(turning);
+  REQUIRE(WIFEXITED(st));
+  CHECK(WEXITSTATUS(st) == 128 + SIGTERM);
+  const std::string err = slurp(log);
+  CHECK(err.find("stopped by SIGTERM") != std::string::npos);
+  CHECK(err.find("--resume " + dir.string()) != std::string::npos);
+  const io::Checkpoint cp = io::read_checkpoint(dir / io::kCheckpointFile);
+  CHECK(cp.run.phase == 2);
+  CHECK(run_cmd("run --quiet --resume '" + dir.string() + "'") == 0);
+  CHECK(fs::exists(dir / "summary.json"));
+  fs::remove_all(dir);
+  fs::remove(log);
+}
+
+TEST_CASE("a truncated, damaged or foreign checkpoint is refused with a message", "[checkpoint]") {
+  const fs::path dir = scratch("damaged");
+  REQUIRE(run_cmd("run --quiet --set run.duration=0.02 --set run.settle=0.01 --set run.warmup=0 "
+                  "--set run.output_interval=0.01 --out '" + dir.string() + "'") == 0);
+  const fs::path f = dir / io::kCheckpointFile;
+  const std::string good = slurp(f);
+  REQUIRE(good.size() > 1000);
+  fs::remove(dir / "summary.json");  // so that --resume would run
+  auto write = [&](const std::string& bytes) { std::ofstream(f, std::ios::binary | std::ios::trunc) << bytes; };
+  auto refused = [&](const std::string& bytes, const std::string& expect) {
+    write(bytes);
+    CHECK_THROWS_WITH(io::read_checkpoint(f), Catch::Contains(expect));
+    std::string err;
+    CHECK(run_cmd("run --quiet --resume '" + dir.string() + "'", &err) == 2);
+    CHECK(err.find(expect) != std::string::npos);
+    CHECK(err.find("cannot be resumed") != std::string::npos);
+  };
+  refused(good.substr(0, good.size() / 2), "truncated");
+  refused(good.substr(0, 30), "truncated");
+  std::string flipped = good;
+  flipped[flipped.size() / 2] ^= 0x5a;
+  refused(flipped, "checksum mismatch");
+  refused("[mill]\ndiameter = 1\n", "not a millcharge checkpoint");
+  refused("", "not a millcharge checkpoint");
+  refused(good + "xx", "stray bytes");
+  // The good file still resumes (here: only writes the summary again).
+  write(good);
+  CHECK(run_cmd("run --quiet --resume '" + dir.string() + "'") == 0);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a NaN stops the run naming the likely causes, and the last good checkpoint stays", "[checkpoint][failure]") {
+  const fs::path dir = scratch("nan");
+  std::string err;
+  const int status = run_cmd("run" + kShort + " --inject-nan-at 0.12 --out '" + dir.string() + "'", &err);
+  CHECK(status == 1);
+  CHECK(err.find("NaN") != std::string::npos);
+  CHECK(err.find("dt") != std::string::npos);
+  CHECK(err.find("last good checkpoint") != std::string::npos);
+  CHECK(!fs::exists(dir / "summary.json"));
+  const io::Checkpoint cp = io::read_checkpoint(dir / io::kCheckpointFile);
+  CHECK(cp.solver.time_s <= 0.12);
+  CHECK(cp.solver.time_s >= 0.09);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a ball shot through the shell stops the run: it left the mill", "[failure]") {
+  Scene s = test::bare_scene(Material{"steel"}, Material{"liner"}, Interaction{}, ContactLaw::linear);
+  s.walls.shell_radius = 0.2;
+  s.walls.length = 0.1;
+  s.numerics.dt = 1e-5;
+  Ball b;
+  b.radius = 0.01;
+  b.position = {0.15, 0, 0.05};
+  b.velocity = {5000, 0, 0};  // 5 cm per step: straight through the shell
+  s.balls = {b};
+  auto solver = make_solver(test::context(), s);
+  CHECK_THROWS_WITH(solver->advance(20), Catch::Contains("left the mill") && Catch::Contains("dt"));
+}
+
+TEST_CASE("a ball touching more walls than it has history slots stops the run", "[failure]") {
+  // A slice shorter than the ball (both end plates), against the shell, and
+  // wedged between two lifter bars: five walls at once.
+  Scene s = test::bare_scene(Material{"steel"}, Material{"liner"}, Interaction{}, ContactLaw::linear);
+  s.walls.shell_radius = 0.1;
+  s.walls.length = 0.019;
+  s.walls.lifters = {{{0.07, 0.0098}, {0.1, 0.0098}, {0.1, 0.03}, {0.07, 0.03}},
+                     {{0.07, -0.03}, {0.1, -0.03}, {0.1, -0.0098}, {0.07, -0.0098}}};
+  s.numerics.dt = 1e-6;
+  s.numerics.gravity = {0, 0, 0};
+  Ball b;
+  b.radius = 0.01;
+  b.position = {0.0901, 0, 0.0095};
+  s.balls = {b};
+  auto solver = make_solver(test::context(), s);
+  CHECK_THROWS_WITH(solver->advance(5), Catch::Contains("walls at once"));
+}
+
+TEST_CASE("neighbour lists grow past their first size and drop no contact", "[failure]") {
+  // An FCC block: 12 neighbours per inner ball, more than the 8 per ball
+  // the lists start with.
+  Scene s = test::bare_scene(Material{"steel"}, Material{"liner"}, Interaction{}, ContactLaw::linear);
+  const double r = 0.005, a = 2 * std::sqrt(2.0) * r * 1.001;
+  const Vec3 basis[4] = {{0, 0, 0}, {0.5, 0.5, 0}, {0.5, 0, 0.5}, {0, 0.5, 0.5}};
+  int id = 0;
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 5; ++j)
+      for (int k = 0; k < 5; ++k)
+        for (const Vec3& q : basis) {
+          Ball b;
+          b.id = id++;
+          b.radius = r;
+          b.position = {(i + q.x) * a, (j + q.y) * a, (k + q.z) * a};
+          s.balls.push_back(b);
+        }
+  auto solver = make_solver(test::context(), s);
+  const auto pairs = solver->neighbour_pairs();
+  CHECK(pairs.size() > 8 * s.balls.size());
+  std::set<std::pair<int, int>> listed(pairs.begin(), pairs.end());
+  CHECK(listed.size() == pairs.size());
+  const double cut = 2 * r + default_skin(s);
+  std::size_t expected = 0;
+  for (const Ball& p : s.balls)
+    for (const Ball& q : s.balls)
+      if (p.id != q.id && (p.position - q.position).norm() < cut) {
+        ++expected;
+        CHECK(listed.count({p.id, q.id}) == 1);
+      }
+  CHECK(listed.size() == expected);
+}
