@@ -56,7 +56,10 @@ int main(int argc, char** argv) {
 
   mc::app::ViewOptions vo;
   auto* view = app.add_subcommand("view", "watch the charge in a window and change the mill while it turns");
-  add_case_options(view, vo.c, true);
+  add_case_options(view, vo.c, false);  // no --duration: the window runs until it is closed
+  view->add_option("--device", vo.c.device, "OpenCL device: auto, gpu, cpu, P:D or part of a name");
+  view->add_option("--precision", vo.c.precision, "float or double (overrides run.precision)")
+      ->check(CLI::IsMember({"float", "double"}));
   view->add_option("--frames", vo.frames, "draw N frames, then exit (scripted: fixed steps per frame)")
       ->check(CLI::PositiveNumber);
   view->add_option("--screenshot", vo.screenshot, "write the last frame to FILE.png (with --frames)")
