@@ -8,6 +8,7 @@ namespace mc::viewer {
 void ChargeMonitor::clear() {
   work_J_ = dissipated_J_ = span_s_ = 0;
   profile_since_ = -1;
+  hold_until_s_ = -1;
   profiles_.clear();
   torque_w_.clear();
   diss_w_.clear();
@@ -28,9 +29,13 @@ void ChargeMonitor::after_steps(Solver& solver, double time_s, bool turning) {
     solver.take_contact_profile();  // nothing from settling counts
     return;
   }
-  work_J_ += last_.wall_work_J;
-  dissipated_J_ += last_.dissipated_J;
-  span_s_ += last_.interval_s;
+  if (time_s < hold_until_s_) {
+    work_J_ = dissipated_J_ = span_s_ = 0;
+  } else {
+    work_J_ += last_.wall_work_J;
+    dissipated_J_ += last_.dissipated_J;
+    span_s_ += last_.interval_s;
+  }
   if (span_s_ >= kPowerEvery) {
     push(torque_w_, static_cast<float>(work_J_ / span_s_));
     push(diss_w_, static_cast<float>(dissipated_J_ / span_s_));

@@ -19,6 +19,9 @@ class ChargeMonitor {
   static constexpr int kProfileWindow = 5;       // profiles summed for one toe/shoulder
 
   void clear();
+  // No power points before this simulated time: the start-up jolt of the
+  // mill would flatten the plot (as `run`'s power.png leaves it out).
+  void hold_power_until(double time_s) { hold_until_s_ = time_s; }
   // After each frame that stepped: reads the solver's sums since the last
   // reset (and resets them), and samples the contact profile while turning.
   // `time_s` is the viewer's simulated time.
@@ -38,6 +41,7 @@ class ChargeMonitor {
   static void push(std::vector<float>& v, float x);
   double work_J_ = 0, dissipated_J_ = 0, span_s_ = 0;
   double profile_since_ = -1;
+  double hold_until_s_ = -1;
   std::deque<std::vector<long>> profiles_;
   std::vector<float> torque_w_, diss_w_, toe_deg_, shoulder_deg_;
   ChargeAngles angles_;

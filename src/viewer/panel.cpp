@@ -59,10 +59,10 @@ void App::draw_panel() {
   ImGui::PushItemWidth(-150);
   panel_stats();
   if (ImGui::CollapsingHeader("Run", ImGuiTreeNodeFlags_DefaultOpen)) panel_run();
+  if (ImGui::CollapsingHeader("Plots", ImGuiTreeNodeFlags_DefaultOpen)) panel_plots();
   if (ImGui::CollapsingHeader("Mill", ImGuiTreeNodeFlags_DefaultOpen)) panel_mill();
   if (ImGui::CollapsingHeader("Charge", ImGuiTreeNodeFlags_DefaultOpen)) panel_charge();
   if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) panel_view();
-  if (ImGui::CollapsingHeader("Plots", ImGuiTreeNodeFlags_DefaultOpen)) panel_plots();
   if (ImGui::CollapsingHeader("Output", ImGuiTreeNodeFlags_DefaultOpen)) panel_output();
   ImGui::PopItemWidth();
   ImGui::End();
@@ -221,18 +221,18 @@ void App::panel_plots() {
   const float w = ImGui::GetContentRegionAvail().x;
   char label[96];
   std::snprintf(label, sizeof label, "torque power, mean %.0f W", monitor_.mean_torque_power());
-  ImGui::PlotLines("##torque", tq.data(), static_cast<int>(tq.size()), 0, label, 0, hi, {w, 60});
+  ImGui::PlotLines("##torque", tq.data(), static_cast<int>(tq.size()), 0, label, 0, hi, {w, 48});
   std::snprintf(label, sizeof label, "dissipation, mean %.0f W", monitor_.mean_dissipation_power());
-  ImGui::PlotLines("##dissipation", ds.data(), static_cast<int>(ds.size()), 0, label, 0, hi, {w, 60});
+  ImGui::PlotLines("##dissipation", ds.data(), static_cast<int>(ds.size()), 0, label, 0, hi, {w, 48});
   const ChargeAngles& a = monitor_.angles();
   if (a.found) std::snprintf(label, sizeof label, "toe %.0f deg", a.toe_deg);
   else std::snprintf(label, sizeof label, "toe (no band yet)");
   ImGui::PlotLines("##toe", monitor_.toe().data(), static_cast<int>(monitor_.toe().size()), 0, label, FLT_MAX,
-                   FLT_MAX, {w, 45});
+                   FLT_MAX, {w, 36});
   if (a.found) std::snprintf(label, sizeof label, "shoulder %.0f deg", a.shoulder_deg);
   else std::snprintf(label, sizeof label, "shoulder (no band yet)");
   ImGui::PlotLines("##shoulder", monitor_.shoulder().data(), static_cast<int>(monitor_.shoulder().size()), 0, label,
-                   FLT_MAX, FLT_MAX, {w, 45});
+                   FLT_MAX, FLT_MAX, {w, 36});
 }
 
 void App::panel_output() {

@@ -247,6 +247,7 @@ void App::step_frame() {
         solver_->observe(true);
         solver_->take_contact_profile();
         monitor_.clear();
+        monitor_.hold_power_until(turning_from_ + 0.05 * derived_.revolution_s);
       }
     }
   } else if (instances_stale_) {
