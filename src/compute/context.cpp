@@ -173,7 +173,8 @@ std::size_t memory_override() {
 
 }  // namespace
 
-Context::Context(const std::string& spec_in) : ledger_(std::make_shared<Ledger>()) {
+// The device from a spec (or MILLCHARGE_DEVICE), and the memory a run may use.
+void Context::choose(const std::string& spec_in) {
   std::string spec = spec_in;
   if (spec.empty())
     if (const char* env = std::getenv("MILLCHARGE_DEVICE")) spec = env;
@@ -182,6 +183,10 @@ Context::Context(const std::string& spec_in) : ledger_(std::make_shared<Ledger>(
   device_ = f.device;
   memory_bytes_ = info_.global_mem_bytes;
   if (const std::size_t limit = memory_override(); limit > 0) memory_bytes_ = std::min(memory_bytes_, limit);
+}
+
+Context::Context(const std::string& spec_in) : ledger_(std::make_shared<Ledger>()) {
+  choose(spec_in);
   try {
     context_ = cl::Context(device_);
     queue_ = cl::CommandQueue(context_, device_);
@@ -193,14 +198,7 @@ Context::Context(const std::string& spec_in) : ledger_(std::make_shared<Ledger>(
 
 Context::Context(const std::string& spec_in, const std::vector<cl_context_properties>& gl_properties)
     : ledger_(std::make_shared<Ledger>()) {
-  std::string spec = spec_in;
-  if (spec.empty())
-    if (const char* env = std::getenv("MILLCHARGE_DEVICE")) spec = env;
-  Found f = pick(spec);
-  info_ = f.info;
-  device_ = f.device;
-  memory_bytes_ = info_.global_mem_bytes;
-  if (const std::size_t limit = memory_override(); limit > 0) memory_bytes_ = std::min(memory_bytes_, limit);
+  choose(spec_in);
   if (!info_.gl_sharing) throw Error(info_.label() + " has no cl_khr_gl_sharing");
   try {
     const cl_platform_id platform = device_.getInfo<CL_DEVICE_PLATFORM>();

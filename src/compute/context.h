@@ -84,6 +84,7 @@ class Context {
   Error error(const std::string& what, int code) const;
 
  private:
+  void choose(const std::string& spec);
   struct Ledger;
   std::shared_ptr<Ledger> ledger_;
   std::size_t memory_bytes_ = 0;
