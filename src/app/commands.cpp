@@ -62,6 +62,23 @@ Prepared prepare(const CaseOptions& o, const fs::path& default_path = io::defaul
   return p;
 }
 
+// The case of the run in `dir`, from its checkpoint (read into `cp`). A bad
+// checkpoint is bad input: its message, then `consequence`.
+Prepared prepare_from_checkpoint(const fs::path& dir, io::Checkpoint& cp, const std::string& consequence) {
+  try {
+    cp = io::read_checkpoint(dir / io::kCheckpointFile);
+  } catch (const io::CheckpointError& e) {
+    throw std::invalid_argument(e.what() + consequence);
+  }
+  Prepared p;
+  p.path = dir / "case.toml";
+  p.c = io::parse_case(cp.case_toml, (dir / io::kCheckpointFile).string() + " (case)");
+  p.c.name = cp.case_name;
+  p.d = derive(p.c);
+  p.scene = build_scene(p.c, p.d);
+  return p;
+}
+
 std::string thousands(long v) {
   std::string s = std::to_string(v);
   for (int i = static_cast<int>(s.size()) - 3; i > (v < 0 ? 1 : 0); i -= 3) s.insert(i, ",");
@@ -293,19 +310,10 @@ int cmd_run(const RunOptions& o) {
                                   ": continues the run with its own case; a CASE, --set, --duration or --precision "
                                   "cannot be given with it");
     const fs::path dir(o.resume);
-    try {
-      cp = io::read_checkpoint(dir / io::kCheckpointFile);
-    } catch (const io::CheckpointError& e) {
-      throw std::invalid_argument(std::string(e.what()) + "; the run cannot be resumed from it");
-    }
+    p = prepare_from_checkpoint(dir, cp, "; the run cannot be resumed from it");
     std::error_code ec;
     if (cp.run.phase == 3 && fs::exists(dir / "summary.json", ec))
       throw std::invalid_argument("--resume " + o.resume + ": the run there is complete (summary.json); nothing to do");
-    p.path = dir / "case.toml";
-    p.c = io::parse_case(cp.case_toml, (dir / io::kCheckpointFile).string() + " (case)");
-    p.c.name = cp.case_name;
-    p.d = derive(p.c);
-    p.scene = build_scene(p.c, p.d);
   } else {
     p = prepare(o.c);
   }
@@ -534,18 +542,10 @@ int cmd_bench(const BenchOptions& o) {
   if (!o.from.empty()) {
     if (!o.c.case_path.empty() || !o.c.overrides.empty())
       throw std::invalid_argument("--from " + o.from + ": the case is the run's own; a CASE or --set cannot be given with it");
-    try {
-      cp = io::read_checkpoint(fs::path(o.from) / io::kCheckpointFile);
-    } catch (const io::CheckpointError& e) {
-      throw std::invalid_argument(e.what());
-    }
-    p.c = io::parse_case(cp.case_toml, o.from + "/" + io::kCheckpointFile + " (case)");
-    p.c.name = cp.case_name;
+    p = prepare_from_checkpoint(o.from, cp, "");
     if (!o.c.precision.empty() && (o.c.precision == "double") != (p.c.precision == Precision::double_))
       throw std::invalid_argument("--from " + o.from + ": the checkpoint holds " +
                                   (p.c.precision == Precision::double_ ? "double" : "float") + " state");
-    p.d = derive(p.c);
-    p.scene = build_scene(p.c, p.d);
   } else {
     p = prepare(o.c, io::case_dir() / "bench_100k.toml");
   }

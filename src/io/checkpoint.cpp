@@ -71,6 +71,10 @@ class ScalarReader {
     if (end == v.c_str() || *end) throw CheckpointError(where_ + ": " + k + " is not a number");
     return d;
   }
+  void get(const std::string& k, double& v) const { v = real(k); }
+  void get(const std::string& k, long& v) const { v = integer(k); }
+  void get(const std::string& k, int& v) const { v = static_cast<int>(integer(k)); }
+  void get(const std::string& k, bool& v) const { v = integer(k) != 0; }
   long integer(const std::string& k) const {
     const std::string& v = at(k);
     char* end = nullptr;
@@ -89,6 +93,46 @@ class ScalarReader {
   std::map<std::string, std::string> values_;
 };
 
+// Every scalar of a RunState and of a SolverState, by name: one list that
+// the writer and the reader both walk.
+template <class R, class F>
+void run_fields(R& r, F&& f) {
+  f("phase", r.phase);
+  f("settle_start_s", r.settle_start_s);
+  f("settled", r.settled);
+  f("settle_s", r.settle_s);
+  f("settled_filling", r.settled_filling);
+  f("turn_start_s", r.turn_start_s);
+  f("turn_step", r.turn_step);
+  f("e_window_start", r.e_window_start);
+  f("e_end", r.e_end);
+  f("work", r.work);
+  f("diss", r.diss);
+  f("torque_time", r.torque_time);
+  f("arm_time", r.arm_time);
+  f("span", r.span);
+  f("comx", r.comx);
+  f("comy", r.comy);
+  f("neigh", r.neigh);
+  f("rows_in_window", r.rows_in_window);
+  f("rows", r.rows);
+  f("snapshots", r.snapshots);
+  f("wall_s", r.wall_s);
+}
+
+template <class S, class F>
+void solver_fields(S& s, F&& f) {
+  f("real_bytes", s.real_bytes);
+  f("n_balls", s.n_balls);
+  f("time_s", s.time_s);
+  f("steps", s.steps);
+  f("rebuilds", s.rebuilds);
+  f("mill_angle", s.mill_angle);
+  f("mill_omega", s.mill_omega);
+  f("observed_since", s.observed_since);
+  f("pending_flags", s.pending_flags);
+}
+
 }  // namespace
 
 void write_checkpoint(const std::filesystem::path& path, const Checkpoint& cp) {
@@ -98,27 +142,7 @@ void write_checkpoint(const std::filesystem::path& path, const Checkpoint& cp) {
 
   const RunState& r = cp.run;
   Scalars rs;
-  rs.set("phase", r.phase);
-  rs.set("settle_start_s", r.settle_start_s);
-  rs.set("settled", r.settled);
-  rs.set("settle_s", r.settle_s);
-  rs.set("settled_filling", r.settled_filling);
-  rs.set("turn_start_s", r.turn_start_s);
-  rs.set("turn_step", r.turn_step);
-  rs.set("e_window_start", r.e_window_start);
-  rs.set("e_end", r.e_end);
-  rs.set("work", r.work);
-  rs.set("diss", r.diss);
-  rs.set("torque_time", r.torque_time);
-  rs.set("arm_time", r.arm_time);
-  rs.set("span", r.span);
-  rs.set("comx", r.comx);
-  rs.set("comy", r.comy);
-  rs.set("neigh", r.neigh);
-  rs.set("rows_in_window", r.rows_in_window);
-  rs.set("rows", r.rows);
-  rs.set("snapshots", r.snapshots);
-  rs.set("wall_s", r.wall_s);
+  run_fields(r, [&](const char* k, auto v) { rs.set(k, v); });
   put_record(payload, "run", rs.text().data(), rs.text().size());
   std::vector<std::int64_t> prof(r.window_profile.begin(), r.window_profile.end());
   put_record(payload, "run.window_profile", reinterpret_cast<const char*>(prof.data()),
@@ -126,15 +150,7 @@ void write_checkpoint(const std::filesystem::path& path, const Checkpoint& cp) {
 
   const SolverState& s = cp.solver;
   Scalars ss;
-  ss.set("real_bytes", s.real_bytes);
-  ss.set("n_balls", s.n_balls);
-  ss.set("time_s", s.time_s);
-  ss.set("steps", s.steps);
-  ss.set("rebuilds", s.rebuilds);
-  ss.set("mill_angle", s.mill_angle);
-  ss.set("mill_omega", s.mill_omega);
-  ss.set("observed_since", s.observed_since);
-  ss.set("pending_flags", s.pending_flags);
+  solver_fields(s, [&](const char* k, auto v) { ss.set(k, v); });
   put_record(payload, "solver", ss.text().data(), ss.text().size());
   for (const auto& [name, bytes] : s.arrays)
     put_record(payload, "array." + name, reinterpret_cast<const char*>(bytes.data()), bytes.size());
@@ -208,27 +224,7 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
   cp.case_toml = record("case.toml");
   const ScalarReader rs(record("run"), where + ": run");
   RunState& r = cp.run;
-  r.phase = static_cast<int>(rs.integer("phase"));
-  r.settle_start_s = rs.real("settle_start_s");
-  r.settled = rs.integer("settled") != 0;
-  r.settle_s = rs.real("settle_s");
-  r.settled_filling = rs.real("settled_filling");
-  r.turn_start_s = rs.real("turn_start_s");
-  r.turn_step = rs.integer("turn_step");
-  r.e_window_start = rs.real("e_window_start");
-  r.e_end = rs.real("e_end");
-  r.work = rs.real("work");
-  r.diss = rs.real("diss");
-  r.torque_time = rs.real("torque_time");
-  r.arm_time = rs.real("arm_time");
-  r.span = rs.real("span");
-  r.comx = rs.real("comx");
-  r.comy = rs.real("comy");
-  r.neigh = rs.real("neigh");
-  r.rows_in_window = rs.integer("rows_in_window");
-  r.rows = rs.integer("rows");
-  r.snapshots = rs.integer("snapshots");
-  r.wall_s = rs.real("wall_s");
+  run_fields(r, [&](const char* k, auto& v) { rs.get(k, v); });
   const std::string& prof = record("run.window_profile");
   std::vector<std::int64_t> counts(prof.size() / sizeof(std::int64_t));
   std::memcpy(counts.data(), prof.data(), counts.size() * sizeof(std::int64_t));
@@ -236,15 +232,7 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
 
   const ScalarReader ss(record("solver"), where + ": solver");
   SolverState& s = cp.solver;
-  s.real_bytes = static_cast<int>(ss.integer("real_bytes"));
-  s.n_balls = ss.integer("n_balls");
-  s.time_s = ss.real("time_s");
-  s.steps = ss.integer("steps");
-  s.rebuilds = ss.integer("rebuilds");
-  s.mill_angle = ss.real("mill_angle");
-  s.mill_omega = ss.real("mill_omega");
-  s.observed_since = ss.real("observed_since");
-  s.pending_flags = static_cast<int>(ss.integer("pending_flags"));
+  solver_fields(s, [&](const char* k, auto& v) { ss.get(k, v); });
   for (const auto& [name, bytes] : records)
     if (name.rfind("array.", 0) == 0)
       s.arrays.emplace_back(name.substr(6), std::vector<unsigned char>(bytes.begin(), bytes.end()));

@@ -511,13 +511,13 @@ void SolverImpl<Real>::advance(long steps) {
     // The previous step's flags, read while this step's motion runs: a
     // rebuild they ask for comes now, before this step's forces.
     wait_status();
+    lap(&StageTimes::motion_s);
     if (pending_flags_ & MC_FLAG_REBUILD) {
       rebuild();
       k_clear_flag_.args(status_, MC_FLAG_REBUILD).launch(1);
     }
     pending_flags_ = 0;
     read_status();
-    lap(&StageTimes::motion_s);
     ++steps_;
     time_ += dt_;
     mill_angle_ = std::fmod(mill_angle_ + mill_omega_ * dt_, 2.0 * M_PI);
