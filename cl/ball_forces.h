@@ -6,7 +6,8 @@
  * Every ball evaluates each of its contacts itself (full neighbour lists), so
  * no atomics are needed and the result does not depend on thread order; each
  * side books half of a pair's energies. Walls have infinite mass and turn
- * with the mill: their velocity at the contact point is ω ẑ × r. */
+ * with the mill: their velocity at the contact point is ω ẑ × r.
+ */
 #ifndef MC_BALL_FORCES_H
 #define MC_BALL_FORCES_H
 
@@ -15,6 +16,42 @@ typedef struct {
                                 rotated by it about +z */
   real omega;                /* rad/s */
 } MillState;
+
+/* The geometry of a ball–ball contact seen from ball i: normal from j to i,
+ * overlap, contact-point velocities, effective mass and radius. Positions,
+ * velocities and spins are xyz; inv_m and inv_I are the balls' 1/m, 1/I. */
+/* Whether two balls touch: the overlap r_i + r_j − |p_i − p_j| is positive.
+ * Every kernel decides it with this one expression, so that the pass that
+ * picks the touching pairs and the law that evaluates them agree to the
+ * last bit. */
+MC_FN int pair_touches(v3 p_i, real r_i, v3 p_j, real r_j) {
+  const v3 dx = v3_sub(p_i, p_j);
+  const real d2 = v3_dot(dx, dx);
+  const real reach = r_i + r_j;
+  /* Most listed pairs are apart: the square decides those without a root. */
+  return d2 < reach * reach && d2 > R(0.0) && reach - sqrt(d2) > R(0.0);
+}
+
+MC_FN ContactGeom pair_geometry(v3 p_i, real r_i, v3 v_i, v3 w_i, real inv_m_i, real inv_I_i,
+                                v3 p_j, real r_j, v3 v_j, v3 w_j, real inv_m_j, real inv_I_j) {
+  const v3 dx = v3_sub(p_i, p_j);
+  const real dist = sqrt(v3_dot(dx, dx));
+  const real overlap = (r_i + r_j) - dist;
+  const v3 nrm = v3_scale(R(1.0) / dist, dx);
+  const real arm_i = r_i - R(0.5) * overlap;
+  const real arm_j = r_j - R(0.5) * overlap;
+  ContactGeom g;
+  g.normal = nrm;
+  g.overlap = overlap;
+  g.v_rel = v3_sub(v3_add(v_i, v3_cross(w_i, v3_scale(-arm_i, nrm))),
+                   v3_add(v_j, v3_cross(w_j, v3_scale(arm_j, nrm))));
+  g.w_rel = v3_sub(w_i, w_j);
+  g.arm = arm_i;
+  g.m_eff = R(1.0) / (inv_m_i + inv_m_j);
+  g.r_eff = r_i * r_j / (r_i + r_j);
+  g.inv_inertia_sum = inv_I_i + inv_I_j;
+  return g;
+}
 
 /* One wall contact: updates the ball's slot for `key` (kept in the private
  * arrays new_key/new_hist), adds force, torque and the observables. */
@@ -33,17 +70,17 @@ MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel,
   const real3 v_wall = cross(w_mill, rc);
   const real3 w_ball = xyz_of(om);
   ContactGeom g;
-  g.normal = n;
+  g.normal = v3_of(n);
   g.overlap = overlap;
-  g.v_rel = xyz_of(vel) + cross(w_ball, -arm * n) - v_wall;
-  g.w_rel = w_ball - w_mill;
+  g.v_rel = v3_of(xyz_of(vel) + cross(w_ball, -arm * n) - v_wall);
+  g.w_rel = v3_of(w_ball - w_mill);
   g.arm = arm;
   g.m_eff = R(1.0) / vel.w;
   g.r_eff = radius;
   g.inv_inertia_sum = om.w;
-  const ContactOut c = contact_force(pp, g, spring, dt, law);
-  *f_sum += c.force;
-  *t_sum += c.torque;
+  const ContactOut c = contact_force(law_params(pp), g, v3_of(spring), dt, law);
+  *f_sum += real3_of(c.force);
+  *t_sum += real3_of(c.torque);
   /* Torque of the wall on the ball about the mill axis: r_c × F plus the
    * rolling couple. */
   *torque_axis += rc.x * c.force.y - rc.y * c.force.x + c.rolling.z;
@@ -51,7 +88,7 @@ MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel,
   *elastic += c.elastic;
   if (*n_new < MC_MAX_WALL_CONTACTS) {
     new_key[*n_new] = key;
-    new_hist[*n_new] = c.spring;
+    new_hist[*n_new] = real3_of(c.spring);
     *n_new += 1;
   } else {
     *overflow = 1;
@@ -91,10 +128,7 @@ MC_FN void ball_forces(
   for (int k = start; k < start + count; ++k) {
     const int j = neigh_index[k];
     const real4 pj4 = pos[j];
-    const real3 dx = p - xyz_of(pj4);
-    const real dist = length(dx);
-    const real overlap = ri + pj4.w - dist;
-    if (overlap <= R(0.0) || dist <= R(0.0)) {
+    if (!pair_touches(v3_of(p), ri, v3_of(xyz_of(pj4)), pj4.w)) {
       /* Apart: the spring is gone. Most listed pairs are apart and already
        * zero, so read before writing. */
       const real3 h0 = load_hist(neigh_hist, k);
@@ -104,26 +138,15 @@ MC_FN void ball_forces(
     }
     const real4 vj = vel[j];
     const real4 wj = omega[j];
-    const real3 nrm = dx / dist;
-    const real arm_i = ri - R(0.5) * overlap;
-    const real arm_j = pj4.w - R(0.5) * overlap;
-    ContactGeom g;
-    g.normal = nrm;
-    g.overlap = overlap;
-    g.v_rel = (xyz_of(vi) + cross(xyz_of(wi), -arm_i * nrm)) -
-              (xyz_of(vj) + cross(xyz_of(wj), arm_j * nrm));
-    g.w_rel = xyz_of(wi) - xyz_of(wj);
-    g.arm = arm_i;
-    g.m_eff = R(1.0) / (vi.w + vj.w);
-    g.r_eff = ri * pj4.w / (ri + pj4.w);
-    g.inv_inertia_sum = wi.w + wj.w;
+    const ContactGeom g = pair_geometry(v3_of(p), ri, v3_of(xyz_of(vi)), v3_of(xyz_of(wi)), vi.w, wi.w,
+                                        v3_of(xyz_of(pj4)), pj4.w, v3_of(xyz_of(vj)), v3_of(xyz_of(wj)), vj.w, wj.w);
     const PairParams pp = pairs[MC_PAIR_INDEX(sp, mat_i, info[j].y)];
-    const ContactOut c = contact_force(pp, g, load_hist(neigh_hist, k), dt, law);
-    f_sum += c.force;
-    t_sum += c.torque;
+    const ContactOut c = contact_force(law_params(pp), g, v3_of(load_hist(neigh_hist, k)), dt, law);
+    f_sum += real3_of(c.force);
+    t_sum += real3_of(c.torque);
     dissipated += R(0.5) * c.dissipated;
     elastic += R(0.5) * c.elastic;
-    store_hist(c.spring, neigh_hist, k);
+    store_hist(real3_of(c.spring), neigh_hist, k);
   }
 
   /* ---- walls, in the mill frame ---- */
@@ -169,12 +192,16 @@ MC_FN void ball_forces(
   if (nl > 0 && p.x * p.x + p.y * p.y > sp->lifter_reach * sp->lifter_reach) {
     const real c = mill.cos_angle, s = mill.sin_angle;
     const real3 pm = rotate_z(p, c, -s); /* into the mill frame */
-    const int k0 = nearest_lifter(atan2(pm.y, pm.x), sp->lifter_first_angle,
+    const int k0 = nearest_lifter(atan2_fast(pm.y, pm.x), sp->lifter_first_angle,
                                   sp->lifter_spacing, nl);
     const int k_lo = (nl >= 3) ? -1 : 0;
     const int k_hi = (nl >= 3) ? 1 : nl - 1;
     for (int dk = k_lo; dk <= k_hi; ++dk) {
       const int k = (nl >= 3) ? (k0 + dk + nl) % nl : dk;
+      /* Most balls near the shell are clear of the bar's bounding circle. */
+      const real4 bd = lifters[k].bound;
+      const real bx = pm.x - bd.x, by = pm.y - bd.y, br = bd.z + ri;
+      if (bx * bx + by * by >= br * br) continue;
       real2 out2;
       const real dist =
           polygon_signed_distance(&lifters[k], make_real2(pm.x, pm.y), &out2);

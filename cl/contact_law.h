@@ -13,15 +13,37 @@
  * Rolling: constant directional torque (Ai et al. 2011, model A),
  * M = −μr·R*·Fn·ω̂_roll, capped so one step cannot reverse the relative spin.
  * Energy: dissipation is the work done on the contact minus the change of the
- * energy it stores, so damping, sliding and rolling losses are all counted. */
+ * energy it stores, so damping, sliding and rolling losses are all counted.
+ *
+ * Written on plain structs of three reals (v3) and with selects instead of
+ * branches, so that a kernel running one contact per work-item can be put in
+ * SIMD lanes by PoCL: a float3 value or a branch between vectors stops its
+ * work-group vectoriser (branch wip/contact-slots has such a kernel). */
 #ifndef MC_CONTACT_LAW_H
 #define MC_CONTACT_LAW_H
 
+typedef struct { real x, y, z; } v3;
+
+MC_FN v3 v3_make(real x, real y, real z) { v3 r; r.x = x; r.y = y; r.z = z; return r; }
+MC_FN v3 v3_add(v3 a, v3 b) { return v3_make(a.x + b.x, a.y + b.y, a.z + b.z); }
+MC_FN v3 v3_sub(v3 a, v3 b) { return v3_make(a.x - b.x, a.y - b.y, a.z - b.z); }
+MC_FN v3 v3_scale(real s, v3 a) { return v3_make(s * a.x, s * a.y, s * a.z); }
+MC_FN real v3_dot(v3 a, v3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+MC_FN v3 v3_cross(v3 a, v3 b) {
+  return v3_make(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+/* c ? a : b, a component at a time */
+MC_FN v3 v3_select(int c, v3 a, v3 b) {
+  return v3_make(c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z);
+}
+MC_FN v3 v3_of(real3 a) { return v3_make(a.x, a.y, a.z); }
+MC_FN real3 real3_of(v3 a) { return make_real3(a.x, a.y, a.z); }
+
 typedef struct {
-  real3 normal;     /* unit normal from the other body to the ball */
+  v3 normal;        /* unit normal from the other body to the ball */
   real overlap;     /* δ > 0, m */
-  real3 v_rel;      /* ball's contact-point velocity minus the other's */
-  real3 w_rel;      /* ω_ball − ω_other */
+  v3 v_rel;         /* ball's contact-point velocity minus the other's */
+  v3 w_rel;         /* ω_ball − ω_other */
   real arm;         /* ball centre to contact point, m */
   real m_eff;       /* m* */
   real r_eff;       /* R* */
@@ -29,93 +51,101 @@ typedef struct {
 } ContactGeom;
 
 typedef struct {
-  real3 force;      /* on the ball, N */
-  real3 torque;     /* on the ball about its centre, N·m */
-  real3 spring;     /* updated tangential spring ξ, m */
-  real3 rolling;    /* the rolling-resistance couple, part of torque */
+  v3 force;         /* on the ball, N */
+  v3 torque;        /* on the ball about its centre, N·m */
+  v3 spring;        /* updated tangential spring ξ, m */
+  v3 rolling;       /* the rolling-resistance couple, part of torque */
   real normal_force; /* Fn ≥ 0, N */
   real dissipated;  /* energy lost in this contact this step, J */
   real elastic;     /* energy stored in the contact now, J */
 } ContactOut;
+
+/* The coefficients the law reads, as plain values (a kernel running many
+ * contacts side by side gathers each one separately). */
+typedef struct {
+  real kn, kt_over_kn, e_star, g_star, damping, mu_slide, mu_roll;
+} LawParams;
+
+MC_FN LawParams law_params(PairParams pp) {
+  LawParams l;
+  l.kn = pp.kn;
+  l.kt_over_kn = pp.kt_over_kn;
+  l.e_star = pp.e_star;
+  l.g_star = pp.g_star;
+  l.damping = pp.damping;
+  l.mu_slide = pp.mu_slide;
+  l.mu_roll = pp.mu_roll;
+  return l;
+}
 
 /* Hertz: 4/3·E*·sqrt(R*)·δ^1.5 = 2/3·Sn·δ with Sn = 2E*·sqrt(R*δ). */
 MC_FN real hertz_normal_stiffness(real e_star, real r_eff, real overlap) {
   return R(2.0) * e_star * sqrt(r_eff * overlap);
 }
 
-MC_FN ContactOut contact_force(PairParams pp, ContactGeom g, real3 spring_old,
+MC_FN ContactOut contact_force(LawParams pp, ContactGeom g, v3 spring_old,
                                real dt, int law) {
   ContactOut out;
-  const real3 n = g.normal;
+  const v3 n = g.normal;
   const real d = g.overlap;
-  const real vn = dot(g.v_rel, n);
-  const real3 vt = g.v_rel - vn * n;
+  const real vn = v3_dot(g.v_rel, n);
+  const v3 vt = v3_sub(g.v_rel, v3_scale(vn, n));
 
-  real f_elastic, kn_damp, kt, u_normal;
-  if (law == MC_LAW_HERTZ) {
-    const real sn = hertz_normal_stiffness(pp.e_star, g.r_eff, d);
-    f_elastic = R(2.0) / R(3.0) * sn * d;
-    kn_damp = sn;
-    kt = R(8.0) * pp.g_star * sqrt(g.r_eff * d);
-    u_normal = R(0.4) * f_elastic * d;
-  } else {
-    f_elastic = pp.kn * d;
-    kn_damp = pp.kn;
-    kt = pp.kt_over_kn * pp.kn;
-    u_normal = R(0.5) * pp.kn * d * d;
-  }
+  /* Both laws as selects (the Hertz root is taken either way). */
+  const int hertz = law == MC_LAW_HERTZ;
+  const real root = sqrt(fmax(g.r_eff * d, R(0.0)));
+  const real sn = R(2.0) * pp.e_star * root;
+  const real f_elastic = hertz ? R(2.0) / R(3.0) * sn * d : pp.kn * d;
+  const real kn_damp = hertz ? sn : pp.kn;
+  const real kt = hertz ? R(8.0) * pp.g_star * root : pp.kt_over_kn * pp.kn;
+  const real u_normal = hertz ? R(0.4) * f_elastic * d : R(0.5) * pp.kn * d * d;
   /* The Hertz form carries sqrt(5/6)·sqrt(3/2) inside `damping` (see
    * restitution.cpp); both laws then read γ = damping·sqrt(S·m*). */
   const real gamma_n = pp.damping * sqrt(kn_damp * g.m_eff);
   const real gamma_t = pp.damping * sqrt(kt * g.m_eff);
 
-  real fn = f_elastic - gamma_n * vn;
-  if (fn < R(0.0)) fn = R(0.0);
+  const real fn = fmax(f_elastic - gamma_n * vn, R(0.0));
   real dissipated = (f_elastic - fn) * vn * dt;
 
-  /* Tangential spring: rotate the old spring into the new tangent plane. */
-  real3 s = spring_old - dot(spring_old, n) * n;
-  const real old_len2 = dot(spring_old, spring_old);
-  const real new_len2 = dot(s, s);
-  if (new_len2 > R(0.0)) s = s * sqrt(old_len2 / new_len2);
-  const real u_t_old = R(0.5) * kt * dot(s, s);
-  const real3 s_rot = s;
-  s += vt * dt;
-  real3 ft = -kt * s - gamma_t * vt;
-  const real ft_len = length(ft);
+  /* Tangential spring: rotate the old spring into the new tangent plane,
+   * keeping its length. */
+  const v3 s_proj = v3_sub(spring_old, v3_scale(v3_dot(spring_old, n), n));
+  const real old_len2 = v3_dot(spring_old, spring_old);
+  const real new_len2 = v3_dot(s_proj, s_proj);
+  const v3 s_rot = v3_scale(new_len2 > R(0.0) ? sqrt(old_len2 / new_len2) : R(1.0), s_proj);
+  const real u_t_old = R(0.5) * kt * v3_dot(s_rot, s_rot);
+  const v3 slip = v3_scale(dt, vt);
+  const v3 s_stick = v3_add(s_rot, slip);
+  const v3 ft_stick = v3_sub(v3_scale(-kt, s_stick), v3_scale(gamma_t, vt));
+  const real ft_len = sqrt(v3_dot(ft_stick, ft_stick));
   const real ft_max = pp.mu_slide * fn;
-  if (ft_len > ft_max) {
-    /* Sliding: the force is the Coulomb force, and the spring alone is set to
-     * carry it. (Setting spring + dashpot to it, as LAMMPS' history model
-     * does, loads the spring with the dashpot's force: at a fast slip it then
-     * stores energy that no physical spring holds, and that energy vanishes
-     * uncounted when the contact opens.) As Fn → 0 at separation the spring
-     * goes to zero, so an opening contact takes no energy with it. */
-    ft = (ft_len > R(0.0)) ? ft * (ft_max / ft_len) : ft;
-    s = (kt > R(0.0)) ? (-R(1.0) / kt) * ft : make_real3(0, 0, 0);
-  }
-  const real u_t_new = R(0.5) * kt * dot(s, s);
+  /* Sliding: the force is the Coulomb force, and the spring alone is set to
+   * carry it. (Setting spring + dashpot to it, as LAMMPS' history model
+   * does, loads the spring with the dashpot's force: at a fast slip it then
+   * stores energy that no physical spring holds, and that energy vanishes
+   * uncounted when the contact opens.) As Fn → 0 at separation the spring
+   * goes to zero, so an opening contact takes no energy with it. */
+  const int sliding = ft_len > ft_max;
+  const v3 ft = v3_scale(sliding ? ft_max / ft_len : R(1.0), ft_stick);
+  const v3 s = v3_select(sliding, v3_scale(kt > R(0.0) ? -R(1.0) / kt : R(0.0), ft), s_stick);
+  const real u_t_new = R(0.5) * kt * v3_dot(s, s);
   /* Work on the contact over the step minus the change of stored energy. The
    * spring's work is taken at the step's midpoint spring force: with the end
    * force a sticking spring would show ½·kt·|vt·dt|² of dissipation every
    * step that no contact loses. */
-  const real3 slip = vt * dt;
-  dissipated += -dot(ft, slip) - R(0.5) * kt * dot(s - s_rot, slip) - (u_t_new - u_t_old);
+  dissipated += -v3_dot(ft, slip) - R(0.5) * kt * v3_dot(v3_sub(s, s_rot), slip) - (u_t_new - u_t_old);
 
   /* Rolling resistance on the rolling part of the relative spin. */
-  real3 w_roll = g.w_rel - dot(g.w_rel, n) * n;
-  const real w_len = length(w_roll);
-  real3 m_roll = make_real3(0, 0, 0);
-  if (w_len > R(0.0) && pp.mu_roll > R(0.0)) {
-    real m_mag = pp.mu_roll * g.r_eff * fn;
-    const real cap = w_len / (dt * g.inv_inertia_sum);
-    if (m_mag > cap) m_mag = cap;
-    m_roll = (-m_mag / w_len) * w_roll;
-    dissipated += m_mag * w_len * dt;
-  }
+  const v3 w_roll = v3_sub(g.w_rel, v3_scale(v3_dot(g.w_rel, n), n));
+  const real w_len = sqrt(v3_dot(w_roll, w_roll));
+  const int rolling = w_len > R(0.0) && pp.mu_roll > R(0.0);
+  const real cap = w_len / (dt * g.inv_inertia_sum);
+  const real m_mag = rolling ? fmin(pp.mu_roll * g.r_eff * fn, cap) : R(0.0);
+  const v3 m_roll = v3_scale(rolling ? -m_mag / w_len : R(0.0), w_roll);
+  dissipated += m_mag * w_len * dt;
 
-  out.force = fn * n + ft;
-  out.torque = cross(-g.arm * n, ft) + m_roll;
+  out.force = v3_add(v3_scale(fn, n), ft);
+  out.torque = v3_add(v3_cross(v3_scale(-g.arm, n), ft), m_roll);
   out.spring = s;
   out.rolling = m_roll;
   out.normal_force = fn;

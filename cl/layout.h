@@ -49,6 +49,7 @@ typedef struct {
   real2 vertices[MC_POLY_MAX_VERTS];
   int n_vertices;
   int pad0, pad1, pad2;
+  real4 bound; /* a circle holding the polygon: centre xy, radius z */
 } LifterPolygon;
 
 /* Parameters fixed for a run (changed only at a step boundary by the host). */

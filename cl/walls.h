@@ -59,6 +59,22 @@ MC_FN real3 rotate_z(real3 v, real c, real s) {
   return make_real3(c * v.x - s * v.y, s * v.x + c * v.y, v.z);
 }
 
+/* atan2(y, x) within 1e-5 rad, without the library call: it only picks the
+ * nearest lifter row, whose neighbours are tested too. Octant reduction and
+ * a degree-11 odd polynomial for atan on [0, 1]. */
+MC_FN real atan2_fast(real y, real x) {
+  const real ax = fabs(x), ay = fabs(y);
+  const real hi = fmax(ax, ay), lo = fmin(ax, ay);
+  const real t = hi > R(0.0) ? lo / hi : R(0.0);
+  const real t2 = t * t;
+  real a = ((((R(-0.0117212) * t2 + R(0.05265332)) * t2 - R(0.11643287)) * t2 + R(0.19354346)) * t2 -
+            R(0.33262347)) * t2 + R(0.99997726);
+  a *= t;
+  a = ay > ax ? R(1.5707963267948966) - a : a;
+  a = x < R(0.0) ? R(3.141592653589793) - a : a;
+  return y < R(0.0) ? -a : a;
+}
+
 /* Index of the lifter row whose centre angle is nearest to `angle` (rad,
  * mill frame), for rows spaced evenly starting at `first`. */
 MC_FN int nearest_lifter(real angle, real first, real spacing, int n_lifters) {

@@ -4,12 +4,15 @@
 # cut to 10k and stretched to 1M balls: same cross-section, same work per
 # ball). Prints a Markdown table on stdout and keeps each JSON line in
 # runs/bench-DATE/. Usage:
-#   bash scripts/bench.sh [--device SPEC] [--only lab,100k,D,10k,1M] [--steps N]
+#   bash scripts/bench.sh [--device SPEC] [--only lab,10k-settled,10k,100k,1M,D] [--steps N]
 # Each row warms up 0.25 s of simulated time first (the packed charge falls
-# into a dense bed); on 2 CPU cores mill D takes most of an hour.
+# into a dense bed); on 2 CPU cores mill D takes most of an hour. The
+# 10k-settled row first runs the 10k mill until its charge has settled and
+# turned 0.05 s (`millcharge run`, about a minute on 2 cores) and times the
+# steps after that from the run's checkpoint (`bench --from`).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-device=""; only="lab,10k,100k,1M,D"; steps=""
+device=""; only="lab,10k-settled,10k,100k,1M,D"; steps=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --device) device="$2"; shift 2 ;;
@@ -21,9 +24,11 @@ done
 [ -x build/millcharge ] || bash scripts/build.sh >&2
 out="runs/bench-$(date +%Y%m%d-%H%M%S)"
 mkdir -p "$out"
-args=(); [ -n "$device" ] && args+=(--device "$device"); [ -n "$steps" ] && args+=(--steps "$steps")
+dev=(); [ -n "$device" ] && dev+=(--device "$device")
+args=("${dev[@]}"); [ -n "$steps" ] && args+=(--steps "$steps")
 declare -A case_of=(
   [lab]="assets/cases/lab.toml"
+  [10k-settled]="--from $out/settled-10k"
   [10k]="assets/cases/bench_100k.toml --set mill.length=0.305"
   [100k]="assets/cases/bench_100k.toml"
   [1M]="assets/cases/bench_100k.toml --set mill.length=30.5"
@@ -31,8 +36,12 @@ declare -A case_of=(
 )
 IFS=',' read -r -a rows <<< "$only"
 for r in "${rows[@]}"; do
-  [ -n "${case_of[$r]:-}" ] || { echo "bench.sh: no row '$r' (lab, 10k, 100k, 1M, D)" >&2; exit 2; }
+  [ -n "${case_of[$r]:-}" ] || { echo "bench.sh: no row '$r' (lab, 10k-settled, 10k, 100k, 1M, D)" >&2; exit 2; }
   echo "bench.sh: $r" >&2
+  if [ "$r" = 10k-settled ]; then
+    build/millcharge run assets/cases/bench_100k.toml --set mill.length=0.305 --set run.duration=0.05 \
+      --set run.warmup=0 "${dev[@]}" --out "$out/settled-10k" --quiet > "$out/settled-10k.log"
+  fi
   # shellcheck disable=SC2086
   build/millcharge bench ${case_of[$r]} "${args[@]}" > "$out/$r.json"
 done

@@ -297,6 +297,8 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
     lifters_.host[k].n_vertices = t.lifters[k].n_vertices;
     for (int v = 0; v < MC_POLY_MAX_VERTS; ++v)
       lifters_.host[k].vertices[v] = {Real(t.lifters[k].vertices[v].x), Real(t.lifters[k].vertices[v].y)};
+    const auto& b = t.lifters[k].bound;
+    lifters_.host[k].bound = {Real(b.x), Real(b.y), Real(b.z), Real(0)};
   }
   lifters_.write_to_device();
 

@@ -22,10 +22,17 @@ SceneTables scene_tables(const Scene& scene) {
   for (const auto& poly : w.lifters) {
     f64::LifterPolygon p{};
     p.n_vertices = static_cast<int>(poly.size());
+    double cx = 0, cy = 0;
     for (std::size_t v = 0; v < poly.size(); ++v) {
       p.vertices[v] = {poly[v].x, poly[v].y};
       reach = std::min(reach, std::hypot(poly[v].x, poly[v].y));
+      cx += poly[v].x / static_cast<double>(poly.size());
+      cy += poly[v].y / static_cast<double>(poly.size());
     }
+    double radius = 0;
+    for (const auto& v : poly) radius = std::max(radius, std::hypot(v.x - cx, v.y - cy));
+    // A little over, so that rounding in float never rejects a touching ball.
+    p.bound = {cx, cy, radius * (1 + 1e-4) + 1e-6, 0};
     t.lifters.push_back(p);
   }
   if (t.lifters.empty()) t.lifters.push_back(f64::LifterPolygon{});
