@@ -6,8 +6,7 @@
  * Every ball evaluates each of its contacts itself (full neighbour lists), so
  * no atomics are needed and the result does not depend on thread order; each
  * side books half of a pair's energies. Walls have infinite mass and turn
- * with the mill: their velocity at the contact point is ω ẑ × r.
- */
+ * with the mill: their velocity at the contact point is ω ẑ × r. */
 #ifndef MC_BALL_FORCES_H
 #define MC_BALL_FORCES_H
 
@@ -17,13 +16,10 @@ typedef struct {
   real omega;                /* rad/s */
 } MillState;
 
-/* The geometry of a ball–ball contact seen from ball i: normal from j to i,
- * overlap, contact-point velocities, effective mass and radius. Positions,
- * velocities and spins are xyz; inv_m and inv_I are the balls' 1/m, 1/I. */
-/* Whether two balls touch: the overlap r_i + r_j − |p_i − p_j| is positive.
- * Every kernel decides it with this one expression, so that the pass that
- * picks the touching pairs and the law that evaluates them agree to the
- * last bit. */
+/* Whether two balls touch: the overlap r_i + r_j − |p_i − p_j| that
+ * pair_geometry computes is positive. The squared distance alone can say
+ * "touching" for an overlap that rounds to below zero, whose Hertz root is
+ * a NaN; so the overlap itself decides. */
 MC_FN int pair_touches(v3 p_i, real r_i, v3 p_j, real r_j) {
   const v3 dx = v3_sub(p_i, p_j);
   const real d2 = v3_dot(dx, dx);
@@ -32,6 +28,9 @@ MC_FN int pair_touches(v3 p_i, real r_i, v3 p_j, real r_j) {
   return d2 < reach * reach && d2 > R(0.0) && reach - sqrt(d2) > R(0.0);
 }
 
+/* The geometry of a ball–ball contact seen from ball i: normal from j to i,
+ * overlap, contact-point velocities, effective mass and radius. Positions,
+ * velocities and spins are xyz; inv_m and inv_I are the balls' 1/m, 1/I. */
 MC_FN ContactGeom pair_geometry(v3 p_i, real r_i, v3 v_i, v3 w_i, real inv_m_i, real inv_I_i,
                                 v3 p_j, real r_j, v3 v_j, v3 w_j, real inv_m_j, real inv_I_j) {
   const v3 dx = v3_sub(p_i, p_j);
@@ -78,7 +77,7 @@ MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel,
   g.m_eff = R(1.0) / vel.w;
   g.r_eff = radius;
   g.inv_inertia_sum = om.w;
-  const ContactOut c = contact_force(law_params(pp), g, v3_of(spring), dt, law);
+  const ContactOut c = contact_force(pp, g, v3_of(spring), dt, law);
   *f_sum += real3_of(c.force);
   *t_sum += real3_of(c.torque);
   /* Torque of the wall on the ball about the mill axis: r_c × F plus the
@@ -141,7 +140,7 @@ MC_FN void ball_forces(
     const ContactGeom g = pair_geometry(v3_of(p), ri, v3_of(xyz_of(vi)), v3_of(xyz_of(wi)), vi.w, wi.w,
                                         v3_of(xyz_of(pj4)), pj4.w, v3_of(xyz_of(vj)), v3_of(xyz_of(wj)), vj.w, wj.w);
     const PairParams pp = pairs[MC_PAIR_INDEX(sp, mat_i, info[j].y)];
-    const ContactOut c = contact_force(law_params(pp), g, v3_of(load_hist(neigh_hist, k)), dt, law);
+    const ContactOut c = contact_force(pp, g, v3_of(load_hist(neigh_hist, k)), dt, law);
     f_sum += real3_of(c.force);
     t_sum += real3_of(c.torque);
     dissipated += R(0.5) * c.dissipated;

@@ -60,30 +60,12 @@ typedef struct {
   real elastic;     /* energy stored in the contact now, J */
 } ContactOut;
 
-/* The coefficients the law reads, as plain values (a kernel running many
- * contacts side by side gathers each one separately). */
-typedef struct {
-  real kn, kt_over_kn, e_star, g_star, damping, mu_slide, mu_roll;
-} LawParams;
-
-MC_FN LawParams law_params(PairParams pp) {
-  LawParams l;
-  l.kn = pp.kn;
-  l.kt_over_kn = pp.kt_over_kn;
-  l.e_star = pp.e_star;
-  l.g_star = pp.g_star;
-  l.damping = pp.damping;
-  l.mu_slide = pp.mu_slide;
-  l.mu_roll = pp.mu_roll;
-  return l;
-}
-
 /* Hertz: 4/3·E*·sqrt(R*)·δ^1.5 = 2/3·Sn·δ with Sn = 2E*·sqrt(R*δ). */
 MC_FN real hertz_normal_stiffness(real e_star, real r_eff, real overlap) {
   return R(2.0) * e_star * sqrt(r_eff * overlap);
 }
 
-MC_FN ContactOut contact_force(LawParams pp, ContactGeom g, v3 spring_old,
+MC_FN ContactOut contact_force(PairParams pp, ContactGeom g, v3 spring_old,
                                real dt, int law) {
   ContactOut out;
   const v3 n = g.normal;

@@ -26,9 +26,6 @@ typedef float4 real4;
 #define MC_FN inline __attribute__((always_inline))
 #define MC_GLOBAL __global
 #define MC_CONST __constant
-/* sqrt(dot): the library length() guards against overflow, which costs a
- * scaling step that contact geometry never needs. */
-#define norm3(v) sqrt(dot((v), (v)))
 #define make_real2(x, y) ((real2)((x), (y)))
 #define make_real3(x, y, z) ((real3)((x), (y), (z)))
 #define make_real4(x, y, z, w) ((real4)((x), (y), (z), (w)))
@@ -73,7 +70,6 @@ inline real dot(real3 a, real3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline real3 cross(real3 a, real3 b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-inline real norm3(real3 a) { return std::sqrt(dot(a, a)); }
 inline real2 operator+(real2 a, real2 b) { return {a.x + b.x, a.y + b.y}; }
 inline real2 operator-(real2 a, real2 b) { return {a.x - b.x, a.y - b.y}; }
 inline real2 operator*(real s, real2 a) { return {s * a.x, s * a.y}; }
