@@ -149,78 +149,92 @@ MC_FN void ball_forces(
   }
 
   /* ---- walls, in the mill frame ---- */
-  int old_key[MC_MAX_WALL_CONTACTS];
-  real3 old_hist[MC_MAX_WALL_CONTACTS];
-  int new_key[MC_MAX_WALL_CONTACTS];
-  real3 new_hist[MC_MAX_WALL_CONTACTS];
-  int any_old = 0;
-  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-    old_key[s] = wall_key[s * n + i];
-    any_old |= old_key[s] != MC_WALL_NONE;
-    old_hist[s] = old_key[s] != MC_WALL_NONE ? load_hist(wall_hist, s * n + i) : make_real3(0, 0, 0);
-    new_key[s] = MC_WALL_NONE;
-    new_hist[s] = make_real3(0, 0, 0);
-  }
-  int n_new = 0;
-  int overflow = 0;
-  const PairParams pw = pairs[MC_PAIR_INDEX(sp, mat_i, sp->n_materials)];
-
-  if (sp->shell_radius > R(0.0)) {
-    real3 nrm;
-    const real ov = shell_overlap(p, ri, sp->shell_radius, &nrm);
-    if (ov > R(0.0))
-      wall_contact(MC_WALL_SHELL, nrm, ov, p, vi, wi, ri, pw, mill, dt, law,
-                   old_key, old_hist, new_key, new_hist, &n_new, &overflow,
-                   &f_sum, &t_sum, &torque_axis, &dissipated, &elastic);
-  }
-  if (sp->length > R(0.0)) {
-    const real ov_low = ri - p.z;
-    if (ov_low > R(0.0))
-      wall_contact(MC_WALL_PLATE_LOW, make_real3(0, 0, 1), ov_low, p, vi, wi, ri,
-                   pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
-                   &n_new, &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
-                   &elastic);
-    const real ov_high = ri - (sp->length - p.z);
-    if (ov_high > R(0.0))
-      wall_contact(MC_WALL_PLATE_HIGH, make_real3(0, 0, -1), ov_high, p, vi, wi,
-                   ri, pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
-                   &n_new, &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
-                   &elastic);
-  }
+  /* Most balls touch no wall and touched none last step; they skip the wall
+   * code. Slots fill from the first, so an empty first slot means no wall
+   * history. The tests below are margins around the exact ones inside (a
+   * ball that passes them still has to overlap). */
   const int nl = sp->n_lifters;
-  if (nl > 0 && p.x * p.x + p.y * p.y > sp->lifter_reach * sp->lifter_reach) {
-    const real c = mill.cos_angle, s = mill.sin_angle;
-    const real3 pm = rotate_z(p, c, -s); /* into the mill frame */
-    const int k0 = nearest_lifter(atan2_fast(pm.y, pm.x), sp->lifter_first_angle,
-                                  sp->lifter_spacing, nl);
-    const int k_lo = (nl >= 3) ? -1 : 0;
-    const int k_hi = (nl >= 3) ? 1 : nl - 1;
-    for (int dk = k_lo; dk <= k_hi; ++dk) {
-      const int k = (nl >= 3) ? (k0 + dk + nl) % nl : dk;
-      /* Most balls near the shell are clear of the bar's bounding circle. */
-      const real4 bd = lifters[k].bound;
-      const real bx = pm.x - bd.x, by = pm.y - bd.y, br = bd.z + ri;
-      if (bx * bx + by * by >= br * br) continue;
-      real2 out2;
-      const real dist =
-          polygon_signed_distance(&lifters[k], make_real2(pm.x, pm.y), &out2);
-      const real ov = ri - dist;
-      if (ov > R(0.0)) {
-        const real3 nrm = rotate_z(make_real3(out2.x, out2.y, 0), c, s);
-        wall_contact(MC_WALL_LIFTER0 + k, nrm, ov, p, vi, wi, ri, pw, mill, dt,
-                     law, old_key, old_hist, new_key, new_hist, &n_new,
-                     &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
+  const real rho2 = p.x * p.x + p.y * p.y;
+  const real margin = R(1e-4) * ri;
+  const real r_clear = sp->shell_radius - ri - margin;
+  const int near_wall =
+      wall_key[i] != MC_WALL_NONE ||
+      (sp->shell_radius > R(0.0) && (r_clear <= R(0.0) || rho2 > r_clear * r_clear)) ||
+      (sp->length > R(0.0) && (p.z < ri + margin || p.z > sp->length - ri - margin)) ||
+      (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach);
+  if (near_wall) {
+    int old_key[MC_MAX_WALL_CONTACTS];
+    real3 old_hist[MC_MAX_WALL_CONTACTS];
+    int new_key[MC_MAX_WALL_CONTACTS];
+    real3 new_hist[MC_MAX_WALL_CONTACTS];
+    int any_old = 0;
+    for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+      old_key[s] = wall_key[s * n + i];
+      any_old |= old_key[s] != MC_WALL_NONE;
+      old_hist[s] = old_key[s] != MC_WALL_NONE ? load_hist(wall_hist, s * n + i) : make_real3(0, 0, 0);
+      new_key[s] = MC_WALL_NONE;
+      new_hist[s] = make_real3(0, 0, 0);
+    }
+    int n_new = 0;
+    int overflow = 0;
+    const PairParams pw = pairs[MC_PAIR_INDEX(sp, mat_i, sp->n_materials)];
+
+    if (sp->shell_radius > R(0.0)) {
+      real3 nrm;
+      const real ov = shell_overlap(p, ri, sp->shell_radius, &nrm);
+      if (ov > R(0.0))
+        wall_contact(MC_WALL_SHELL, nrm, ov, p, vi, wi, ri, pw, mill, dt, law,
+                     old_key, old_hist, new_key, new_hist, &n_new, &overflow,
+                     &f_sum, &t_sum, &torque_axis, &dissipated, &elastic);
+    }
+    if (sp->length > R(0.0)) {
+      const real ov_low = ri - p.z;
+      if (ov_low > R(0.0))
+        wall_contact(MC_WALL_PLATE_LOW, make_real3(0, 0, 1), ov_low, p, vi, wi, ri,
+                     pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
+                     &n_new, &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
                      &elastic);
+      const real ov_high = ri - (sp->length - p.z);
+      if (ov_high > R(0.0))
+        wall_contact(MC_WALL_PLATE_HIGH, make_real3(0, 0, -1), ov_high, p, vi, wi,
+                     ri, pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
+                     &n_new, &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
+                     &elastic);
+    }
+    if (nl > 0 && p.x * p.x + p.y * p.y > sp->lifter_reach * sp->lifter_reach) {
+      const real c = mill.cos_angle, s = mill.sin_angle;
+      const real3 pm = rotate_z(p, c, -s); /* into the mill frame */
+      const int k0 = nearest_lifter(atan2_fast(pm.y, pm.x), sp->lifter_first_angle,
+                                    sp->lifter_spacing, nl);
+      const int k_lo = (nl >= 3) ? -1 : 0;
+      const int k_hi = (nl >= 3) ? 1 : nl - 1;
+      for (int dk = k_lo; dk <= k_hi; ++dk) {
+        const int k = (nl >= 3) ? (k0 + dk + nl) % nl : dk;
+        /* Most balls near the shell are clear of the bar's bounding circle. */
+        const real4 bd = lifters[k].bound;
+        const real bx = pm.x - bd.x, by = pm.y - bd.y, br = bd.z + ri;
+        if (bx * bx + by * by >= br * br) continue;
+        real2 out2;
+        const real dist =
+            polygon_signed_distance(&lifters[k], make_real2(pm.x, pm.y), &out2);
+        const real ov = ri - dist;
+        if (ov > R(0.0)) {
+          const real3 nrm = rotate_z(make_real3(out2.x, out2.y, 0), c, s);
+          wall_contact(MC_WALL_LIFTER0 + k, nrm, ov, p, vi, wi, ri, pw, mill, dt,
+                       law, old_key, old_hist, new_key, new_hist, &n_new,
+                       &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
+                       &elastic);
+        }
       }
     }
+    /* A ball that touched no wall and touches none keeps its empty slots. */
+    if (any_old || n_new > 0)
+      for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+        wall_key[s * n + i] = new_key[s];
+        if (new_key[s] != MC_WALL_NONE) store_hist(new_hist[s], wall_hist, s * n + i);
+      }
+    if (overflow) MC_ATOMIC_OR(status, MC_FLAG_WALL_OVERFLOW);
   }
-  /* A ball that touched no wall and touches none keeps its empty slots. */
-  if (any_old || n_new > 0)
-    for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-      wall_key[s * n + i] = new_key[s];
-      if (new_key[s] != MC_WALL_NONE) store_hist(new_hist[s], wall_hist, s * n + i);
-    }
-  if (overflow) MC_ATOMIC_OR(status, MC_FLAG_WALL_OVERFLOW);
 
   force[i] = make_real4(f_sum.x, f_sum.y, f_sum.z, R(0.0));
   torque[i] = make_real4(t_sum.x, t_sum.y, t_sum.z, R(0.0));
