@@ -201,7 +201,7 @@ MC_FN void ball_forces(
                      &n_new, &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
                      &elastic);
     }
-    if (nl > 0 && p.x * p.x + p.y * p.y > sp->lifter_reach * sp->lifter_reach) {
+    if (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach) {
       const real c = mill.cos_angle, s = mill.sin_angle;
       const real3 pm = rotate_z(p, c, -s); /* into the mill frame */
       const int k0 = nearest_lifter(atan2_fast(pm.y, pm.x), sp->lifter_first_angle,

@@ -114,15 +114,20 @@ void MillRenderer::set_walls(const Walls& w) {
   lifters_.upload(bars);
 }
 
-void MillRenderer::draw(const glm::mat4& view, const glm::mat4& projection, bool orthographic, double mill_angle,
-                        bool show_shell) {
+// The lit shader with the mill's parts turned to the mill angle.
+void MillRenderer::use_turning(const glm::mat4& view, const glm::mat4& projection, bool orthographic,
+                               double mill_angle) {
   shader_.use();
   shader_.set("view", view);
   shader_.set("projection", projection);
   shader_.set("orthographic", orthographic ? 1 : 0);
   shader_.set("lit", 1);
-  const glm::mat4 turn = glm::rotate(glm::mat4(1.0f), static_cast<float>(mill_angle), glm::vec3(0, 0, 1));
-  shader_.set("model", turn);
+  shader_.set("model", glm::rotate(glm::mat4(1.0f), static_cast<float>(mill_angle), glm::vec3(0, 0, 1)));
+}
+
+void MillRenderer::draw(const glm::mat4& view, const glm::mat4& projection, bool orthographic, double mill_angle,
+                        bool show_shell) {
+  use_turning(view, projection, orthographic, mill_angle);
   glEnable(GL_CULL_FACE);
   glCullFace(GL_BACK);
   if (show_shell) {
@@ -140,12 +145,7 @@ void MillRenderer::draw(const glm::mat4& view, const glm::mat4& projection, bool
 
 void MillRenderer::draw_near_shell(const glm::mat4& view, const glm::mat4& projection, bool orthographic,
                                    double mill_angle) {
-  shader_.use();
-  shader_.set("view", view);
-  shader_.set("projection", projection);
-  shader_.set("orthographic", orthographic ? 1 : 0);
-  shader_.set("lit", 1);
-  shader_.set("model", glm::rotate(glm::mat4(1.0f), static_cast<float>(mill_angle), glm::vec3(0, 0, 1)));
+  use_turning(view, projection, orthographic, mill_angle);
   shader_.set("base_colour", glm::vec4(0.70f, 0.72f, 0.76f, 0.22f));
   glEnable(GL_CULL_FACE);
   glCullFace(GL_FRONT);  // the outside of the near half

@@ -39,6 +39,7 @@ class MillRenderer {
   void draw_marks(const glm::mat4& view, const glm::mat4& projection, const MillMarks& marks);
 
  private:
+  void use_turning(const glm::mat4& view, const glm::mat4& projection, bool orthographic, double mill_angle);
   struct Vertex {
     glm::vec3 position, normal;
   };
