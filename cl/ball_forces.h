@@ -100,13 +100,17 @@ MC_FN void ball_forces(
     MC_GLOBAL const real4* pos, MC_GLOBAL const real4* vel,
     MC_GLOBAL const real4* omega, MC_GLOBAL const int2* info,
     MC_GLOBAL const int* neigh_start, MC_GLOBAL const int* neigh_count,
-    MC_GLOBAL const int* neigh_index, MC_GLOBAL real* neigh_hist,
+    MC_GLOBAL int* neigh_index, MC_GLOBAL real* neigh_hist,
     MC_GLOBAL int* wall_key, MC_GLOBAL real* wall_hist,
     MC_GLOBAL real4* force, MC_GLOBAL real4* torque, MC_GLOBAL real4* accum,
     MC_GLOBAL int* status) {
   const int n = sp->n_balls;
   const real dt = sp->dt;
+#ifdef MC_LAW
+  const int law = MC_LAW; /* the kernels are built for the run's law */
+#else
   const int law = sp->law;
+#endif
   const real4 pi4 = pos[i];
   const real4 vi = vel[i];
   const real4 wi = omega[i];
@@ -122,17 +126,19 @@ MC_FN void ball_forces(
   real elastic = R(0.0);
 
   /* ---- ball–ball ---- */
+  /* An entry's link says whether the pair touched at the last evaluation
+   * (MC_LINK_*): only then is its spring live. So an apart pair, most of
+   * the list, costs its partner's position and nothing else: no spring is
+   * read or cleared, and the link changes only when a contact opens or
+   * closes. */
   const int start = neigh_start[i];
   const int count = neigh_count[i];
   for (int k = start; k < start + count; ++k) {
-    const int j = neigh_index[k];
+    const int link = neigh_index[k];
+    const int j = MC_LINK_PARTNER(link);
     const real4 pj4 = pos[j];
     if (!pair_touches(v3_of(p), ri, v3_of(xyz_of(pj4)), pj4.w)) {
-      /* Apart: the spring is gone. Most listed pairs are apart and already
-       * zero, so read before writing. */
-      const real3 h0 = load_hist(neigh_hist, k);
-      if (h0.x != R(0.0) || h0.y != R(0.0) || h0.z != R(0.0))
-        store_hist(make_real3(0, 0, 0), neigh_hist, k);
+      if (MC_LINK_TOUCHING(link)) neigh_index[k] = j; /* opened: the spring is gone */
       continue;
     }
     const real4 vj = vel[j];
@@ -140,12 +146,15 @@ MC_FN void ball_forces(
     const ContactGeom g = pair_geometry(v3_of(p), ri, v3_of(xyz_of(vi)), v3_of(xyz_of(wi)), vi.w, wi.w,
                                         v3_of(xyz_of(pj4)), pj4.w, v3_of(xyz_of(vj)), v3_of(xyz_of(wj)), vj.w, wj.w);
     const PairParams pp = pairs[MC_PAIR_INDEX(sp, mat_i, info[j].y)];
-    const ContactOut c = contact_force(pp, g, v3_of(load_hist(neigh_hist, k)), dt, law);
+    /* A new contact starts with no spring. */
+    const v3 spring = MC_LINK_TOUCHING(link) ? v3_of(load_hist(neigh_hist, k)) : v3_make(0, 0, 0);
+    const ContactOut c = contact_force(pp, g, spring, dt, law);
     f_sum += real3_of(c.force);
     t_sum += real3_of(c.torque);
     dissipated += R(0.5) * c.dissipated;
     elastic += R(0.5) * c.elastic;
     store_hist(real3_of(c.spring), neigh_hist, k);
+    if (!MC_LINK_TOUCHING(link)) neigh_index[k] = MC_LINK_TOUCHED(j);
   }
 
   /* ---- walls, in the mill frame ---- */
@@ -167,19 +176,25 @@ MC_FN void ball_forces(
     real3 old_hist[MC_MAX_WALL_CONTACTS];
     int new_key[MC_MAX_WALL_CONTACTS];
     real3 new_hist[MC_MAX_WALL_CONTACTS];
-    int any_old = 0;
+    /* Slots fill from the first: an empty first slot means no history. */
+    const int any_old = wall_key[i] != MC_WALL_NONE;
     for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-      old_key[s] = wall_key[s * n + i];
-      any_old |= old_key[s] != MC_WALL_NONE;
-      old_hist[s] = old_key[s] != MC_WALL_NONE ? load_hist(wall_hist, s * n + i) : make_real3(0, 0, 0);
+      old_key[s] = MC_WALL_NONE;
+      old_hist[s] = make_real3(0, 0, 0);
       new_key[s] = MC_WALL_NONE;
       new_hist[s] = make_real3(0, 0, 0);
     }
+    if (any_old)
+      for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+        old_key[s] = wall_key[s * n + i];
+        if (old_key[s] != MC_WALL_NONE) old_hist[s] = load_hist(wall_hist, s * n + i);
+      }
     int n_new = 0;
     int overflow = 0;
     const PairParams pw = pairs[MC_PAIR_INDEX(sp, mat_i, sp->n_materials)];
 
-    if (sp->shell_radius > R(0.0)) {
+    /* The root only for a ball that may reach the shell (the margin test). */
+    if (sp->shell_radius > R(0.0) && (r_clear <= R(0.0) || rho2 > r_clear * r_clear)) {
       real3 nrm;
       const real ov = shell_overlap(p, ri, sp->shell_radius, &nrm);
       if (ov > R(0.0))

@@ -5,7 +5,7 @@
  * put the balls in cell order. The fill pass carries each persisting pair's
  * tangential spring over from the previous list, which was written in the
  * previous ball order: `perm` maps a new index to the old one. Only the
- * springs that are not zero (pairs in contact) are carried: before the new
+ * springs of pairs in contact (MC_LINK_TOUCHING) are carried: before the new
  * lists are built they are copied out of the old lists into a compact carry
  * list (carry_count, a scan, carry_fill), so that the old lists need no
  * second buffer while the new ones are written. */
@@ -69,28 +69,28 @@ __kernel void contacts_fill(__global const SimParams* sp,
           if (j == i || !is_neighbour(sp, pi, pos[j])) continue;
           const int oj = perm[j];
           real3 h = (real3)(0, 0, 0);
+          int link = j;
           for (int q = ob; q < oe; ++q)
-            if (old_index[q] == oj) { h = load_hist(old_hist, q); break; }
-          neigh_index[k] = j;
+            if (old_index[q] == oj) { h = load_hist(old_hist, q); link = MC_LINK_TOUCHED(j); break; }
+          neigh_index[k] = link;
           store_hist(h, neigh_hist, k);
           ++k;
         }
       }
 }
 
-/* Springs to carry over, per ball, in the old order. */
+/* Springs to carry over (pairs touching at the last evaluation), per ball,
+ * in the old order. */
 __kernel void carry_count(int n, __global const int* neigh_start,
                           __global const int* neigh_count,
-                          __global const real* neigh_hist,
+                          __global const int* neigh_index,
                           __global int* carry_count) {
   const int i = get_global_id(0);
   if (i >= n) return;
   int c = 0;
   const int b = neigh_start[i];
-  for (int k = b; k < b + neigh_count[i]; ++k) {
-    const real3 h = load_hist(neigh_hist, k);
-    if (h.x != R(0.0) || h.y != R(0.0) || h.z != R(0.0)) ++c;
-  }
+  for (int k = b; k < b + neigh_count[i]; ++k)
+    if (MC_LINK_TOUCHING(neigh_index[k])) ++c;
   carry_count[i] = c;
 }
 
@@ -105,10 +105,10 @@ __kernel void carry_fill(int n, __global const int* neigh_start,
   int q = carry_start[i];
   const int b = neigh_start[i];
   for (int k = b; k < b + neigh_count[i]; ++k) {
-    const real3 h = load_hist(neigh_hist, k);
-    if (h.x != R(0.0) || h.y != R(0.0) || h.z != R(0.0)) {
-      carry_index[q] = neigh_index[k];
-      store_hist(h, carry_hist, q);
+    const int link = neigh_index[k];
+    if (MC_LINK_TOUCHING(link)) {
+      carry_index[q] = MC_LINK_PARTNER(link);
+      store_hist(load_hist(neigh_hist, k), carry_hist, q);
       ++q;
     }
   }

@@ -25,6 +25,15 @@
 #define MC_FLAG_NOT_FINITE 4    /* NaN or Inf in a ball's state */
 #define MC_FLAG_ESCAPED 8       /* a ball wholly outside the shell or the end plates */
 
+/* A neighbour-list entry (a link) holds the partner's index j while the
+ * pair is apart, and ~j (negative) while it touched at the last force
+ * evaluation: only then is the entry's tangential spring live. A pair that
+ * starts to touch starts with no spring, so an apart entry's spring is never
+ * read (nor cleared). */
+#define MC_LINK_TOUCHING(link) ((link) < 0)
+#define MC_LINK_PARTNER(link) ((link) < 0 ? ~(link) : (link))
+#define MC_LINK_TOUCHED(j) (~(j))
+
 #define MC_LAW_LINEAR 0
 #define MC_LAW_HERTZ 1
 

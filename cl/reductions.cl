@@ -81,7 +81,7 @@ __kernel void count_contacts(__global const SimParams* sp,
   const int b = neigh_start[i];
   const int e = b + neigh_count[i];
   for (int k = b; k < e; ++k) {
-    const real4 pj = pos[neigh_index[k]];
+    const real4 pj = pos[MC_LINK_PARTNER(neigh_index[k])];
     const real3 d = xyz_of(pi) - xyz_of(pj);
     const real r = pi.w + pj.w;
     if (dot(d, d) < r * r) ++touching;

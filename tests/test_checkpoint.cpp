@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include <thread>
 
 #include "helpers.h"
+#include "core/drum.h"
 #include "io/checkpoint.h"
 
 namespace fs = std::filesystem;
@@ -257,4 +259,57 @@ TEST_CASE("neighbour lists grow past their first size and drop no contact", "[fa
         CHECK(listed.count({p.id, q.id}) == 1);
       }
   CHECK(listed.size() == expected);
+}
+
+TEST_CASE("a state saved before the lists flagged touching pairs resumes the same run", "[checkpoint]") {
+  // Earlier checkpoints hold plain partner indices ("neigh_index") and a
+  // spring of zero for every pair apart; the flag (MC_LINK_TOUCHING) is then
+  // read off the springs. Made here from a state of today's form.
+  DrumSpec spec;
+  spec.n_balls = 300;
+  const Scene sc = make_drum(spec);
+  auto a = make_solver(test::context(), sc);
+  a->advance(10000);  // a bed with springs in its contacts
+  SolverState old = a->save_state();
+  std::vector<unsigned char>* links = nullptr;
+  std::vector<unsigned char>* hist = nullptr;
+  for (auto& [name, bytes] : old.arrays) {
+    if (name == "neigh_link") links = &bytes;
+    if (name == "neigh_hist") hist = &bytes;
+  }
+  REQUIRE(links != nullptr);
+  REQUIRE(hist != nullptr);
+  const std::size_t entries = links->size() / sizeof(int);
+  REQUIRE(hist->size() == entries * 3 * sizeof(float));
+  int touching = 0, with_spring = 0;
+  for (std::size_t k = 0; k < entries; ++k) {
+    int link;
+    std::memcpy(&link, links->data() + k * sizeof(int), sizeof(int));
+    float* h = reinterpret_cast<float*>(hist->data()) + 3 * k;
+    if (link < 0) {
+      ++touching;
+      with_spring += h[0] != 0 || h[1] != 0 || h[2] != 0;
+      link = ~link;
+    } else {
+      h[0] = h[1] = h[2] = 0;
+    }
+    std::memcpy(links->data() + k * sizeof(int), &link, sizeof(int));
+  }
+  REQUIRE(touching > 100);
+  REQUIRE(with_spring > touching / 2);
+  for (auto& entry : old.arrays)
+    if (entry.first == "neigh_link") entry.first = "neigh_index";
+
+  auto b = make_solver(test::context(), sc);
+  b->restore_state(old);
+  a->advance(1000);
+  b->advance(1000);
+  const auto ba = a->balls(), bb = b->balls();
+  REQUIRE(ba.size() == bb.size());
+  int differ = 0;
+  for (std::size_t i = 0; i < ba.size(); ++i)
+    differ += !(ba[i].position.x == bb[i].position.x && ba[i].position.y == bb[i].position.y &&
+                ba[i].position.z == bb[i].position.z && ba[i].omega.x == bb[i].omega.x &&
+                ba[i].omega.y == bb[i].omega.y && ba[i].omega.z == bb[i].omega.z);
+  CHECK(differ == 0);
 }

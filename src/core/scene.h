@@ -54,7 +54,7 @@ struct Numerics {
   ContactLaw law = ContactLaw::hertz;
   Precision precision = Precision::single;
   double dt = 1e-5;      // s
-  double skin = 0.0;     // m; 0: 0.3 · smallest radius
+  double skin = 0.0;     // m; 0: 0.2 · smallest radius (default_skin)
   Vec3 gravity{0.0, -9.81, 0.0};
 };
 

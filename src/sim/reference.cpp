@@ -38,8 +38,8 @@ struct ReferenceSolver::State {
         const double dx = pos[i].x - pos[j].x, dy = pos[i].y - pos[j].y, dz = pos[i].z - pos[j].z;
         const double cut = pos[i].w + pos[j].w;
         if (dx * dx + dy * dy + dz * dz >= cut * cut) continue;
-        neigh_index.push_back(j);
         auto it = history.find({i, j});
+        neigh_index.push_back(it != history.end() ? MC_LINK_TOUCHED(j) : j);
         const real3 h = it != history.end() ? it->second : real3{0, 0, 0};
         neigh_hist.insert(neigh_hist.end(), {h.x, h.y, h.z});
       }
@@ -47,10 +47,12 @@ struct ReferenceSolver::State {
     }
   }
   void save_history() {
+    // The springs of the pairs that touch now (the others have none).
     history.clear();
     for (int i = 0; i < n; ++i)
       for (int k = neigh_start[i]; k < neigh_start[i] + neigh_count[i]; ++k)
-        history[{i, neigh_index[k]}] = load_hist(neigh_hist.data(), k);
+        if (MC_LINK_TOUCHING(neigh_index[k]))
+          history[{i, MC_LINK_PARTNER(neigh_index[k])}] = load_hist(neigh_hist.data(), k);
   }
   void forces() {
     build_lists();

@@ -99,6 +99,7 @@ class SolverImpl final : public Solver {
   compute::Context& ctx_;
   compute::Program program_;
   int n_;
+  ContactLaw law_;  // built into the kernels (MC_LAW)
   double dt_;
   double time_ = 0;
   long steps_ = 0;
@@ -121,9 +122,8 @@ class SolverImpl final : public Solver {
   // info and wall-slot gathers)
   Buffer<real4> spare4_;
   // binning
-  // cell_start_ has n_cells + 1 entries (the last is the number of balls).
-  // The counts live only while binning, in the carried springs' buffer,
-  // which is free then (see rebuild).
+  // cell_start_ has n_cells + 1 entries (the last is the number of balls);
+  // while binning it first holds the counts, scanned in place.
   Buffer<int> cell_start_, ball_cell_, ball_rank_, sorted_index_;
   // neighbour lists, and the springs carried over a rebuild (compact: only
   // pairs in contact; partner index in the old order)
@@ -160,9 +160,12 @@ class SolverImpl final : public Solver {
 };
 
 template <class Real>
-compute::BuildOptions SolverImpl<Real>::options(const Scene&) {
+compute::BuildOptions SolverImpl<Real>::options(const Scene& scene) {
   compute::BuildOptions o;
   o.define("MC_SCAN_WG", kScanWG).define("MC_REDUCE_WG", kReduceWG);
+  // The law is fixed for a run: built in, the force kernel drops the other
+  // law's arithmetic (setup_params checks that a new scene keeps it).
+  o.define("MC_LAW", scene.numerics.law == ContactLaw::hertz ? MC_LAW_HERTZ : MC_LAW_LINEAR);
   return o;
 }
 
@@ -173,6 +176,7 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
                {"scan.cl", "binning.cl", "contacts.cl", "forces.cl", "motion.cl", "reductions.cl", "profile.cl"},
                options(scene), std::is_same_v<Real, double>),
       n_(static_cast<int>(scene.balls.size())),
+      law_(scene.numerics.law),
       dt_(scene.numerics.dt),
       mill_angle_(scene.mill_angle),
       mill_omega_(scene.mill_omega),
@@ -317,6 +321,8 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   sp.n_materials = tp.n_materials;
   sp.n_lifters = tp.n_lifters;
   sp.law = tp.law;
+  if (sp.law != (law_ == ContactLaw::hertz ? MC_LAW_HERTZ : MC_LAW_LINEAR))
+    throw std::invalid_argument("the contact law cannot change in a running solver (its kernels are built for one)");
 
   double r_max = 0;
   Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
@@ -366,14 +372,11 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
 template <class Real>
 void SolverImpl<Real>::rebuild() {
   const int n = n_;
-  // The counts per cell go in the carried springs' buffer: it is refilled
-  // only after binning.
-  const std::size_t count_reals = ((static_cast<std::size_t>(n_cells_) + 1) * sizeof(int) + sizeof(Real) - 1) / sizeof(Real);
-  if (carry_hist_.size() < count_reals) carry_hist_.resize(count_reals);
-  Buffer<Real>& cell_count = carry_hist_;
-  k_bin_clear_.args(cell_count, n_cells_ + 1).launch(n_cells_ + 1);
-  k_bin_count_.args(params_, pos_, cell_count, ball_cell_, ball_rank_).launch(n);
-  scan_.run(cell_count, cell_start_, n_cells_ + 1);
+  // The counts per cell are scanned in place into the cell starts (each
+  // work-item of the scan reads its entry before it writes it).
+  k_bin_clear_.args(cell_start_, n_cells_ + 1).launch(n_cells_ + 1);
+  k_bin_count_.args(params_, pos_, cell_start_, ball_cell_, ball_rank_).launch(n);
+  scan_.run(cell_start_, cell_start_, n_cells_ + 1);
   k_bin_scatter_.args(n, ball_cell_, ball_rank_, cell_start_, sorted_index_).launch(n);
   k_bin_sort_.args(n_cells_, cell_start_, sorted_index_, info_).launch(n_cells_);
 
@@ -394,13 +397,13 @@ void SolverImpl<Real>::rebuild() {
   lap(&StageTimes::binning_s);
 
   // The springs of pairs in contact, out of the lists (in the old order).
-  k_carry_count_.args(n, neigh_start_, neigh_count_, neigh_hist_, carry_count_).launch(n);
+  k_carry_count_.args(n, neigh_start_, neigh_count_, neigh_index_, carry_count_).launch(n);
   scan_.run(carry_count_, carry_start_, n);
   const int carried = scan_.read_total();
   if (static_cast<std::size_t>(carried) > carry_index_.size())
     carry_index_.resize(static_cast<std::size_t>(carried) + carried / 16 + 64);
   if (static_cast<std::size_t>(carried) * 3 > carry_hist_.size())
-    carry_hist_.resize(std::max(carry_index_.size() * 3, count_reals));
+    carry_hist_.resize(carry_index_.size() * 3);
   k_carry_fill_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_hist_, carry_start_, carry_index_, carry_hist_)
       .launch(n);
   // New lists in their place.
@@ -595,6 +598,12 @@ void put_array(SolverState& st, const char* name, compute::Buffer<T>& b, std::si
   st.arrays.emplace_back(name, std::vector<unsigned char>(p, p + count * sizeof(T)));
 }
 
+bool has_array(const SolverState& st, const char* name) {
+  for (const auto& entry : st.arrays)
+    if (entry.first == name) return true;
+  return false;
+}
+
 template <class T>
 void get_array(const SolverState& st, const char* name, compute::Buffer<T>& b, bool resize) {
   for (const auto& [key, bytes] : st.arrays) {
@@ -645,7 +654,7 @@ SolverState SolverImpl<Real>::save_state() {
   put_array(st, "neigh_start", neigh_start_, n);
   put_array(st, "neigh_count", neigh_count_, n);
   const std::size_t entries = static_cast<std::size_t>(neigh_start_.host[n - 1]) + neigh_count_.host[n - 1];
-  put_array(st, "neigh_index", neigh_index_, entries);
+  put_array(st, "neigh_link", neigh_index_, entries);
   put_array(st, "neigh_hist", neigh_hist_, entries * 3);
   put_array(st, "status", status_, 1);
   put_array(st, "profile", profile_, kProfileBins);
@@ -674,8 +683,20 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
   get_array(st, "wall_hist", wall_hist_, false);
   get_array(st, "neigh_start", neigh_start_, false);
   get_array(st, "neigh_count", neigh_count_, false);
-  get_array(st, "neigh_index", neigh_index_, true);
   get_array(st, "neigh_hist", neigh_hist_, true);
+  if (has_array(st, "neigh_link")) {
+    get_array(st, "neigh_link", neigh_index_, true);
+  } else {
+    // Saved before the links carried the touching flag: a pair held a
+    // spring exactly when it was not zero.
+    get_array(st, "neigh_index", neigh_index_, true);
+    const std::size_t entries = static_cast<std::size_t>(neigh_start_.host[n_ - 1]) + neigh_count_.host[n_ - 1];
+    for (std::size_t k = 0; k < entries; ++k) {
+      const Real* h = &neigh_hist_.host[3 * k];
+      if (h[0] != 0 || h[1] != 0 || h[2] != 0) neigh_index_.host[k] = MC_LINK_TOUCHED(neigh_index_.host[k]);
+    }
+    neigh_index_.write_to_device();
+  }
   get_array(st, "status", status_, false);
   get_array(st, "profile", profile_, false);
   time_ = st.time_s;
@@ -729,7 +750,7 @@ std::vector<std::pair<int, int>> SolverImpl<Real>::neighbour_pairs() {
   std::vector<std::pair<int, int>> out;
   for (int i = 0; i < n_; ++i)
     for (int k = neigh_start_.host[i]; k < neigh_start_.host[i] + neigh_count_.host[i]; ++k)
-      out.emplace_back(info_.host[i].x, info_.host[neigh_index_.host[k]].x);
+      out.emplace_back(info_.host[i].x, info_.host[MC_LINK_PARTNER(neigh_index_.host[k])].x);
   return out;
 }
 
