@@ -166,9 +166,10 @@ MC_FN void ball_forces(
   const real rho2 = p.x * p.x + p.y * p.y;
   const real margin = R(1e-4) * ri;
   const real r_clear = sp->shell_radius - ri - margin;
+  const int any_old = wall_key[i] != MC_WALL_NONE;
+  const int near_shell = sp->shell_radius > R(0.0) && (r_clear <= R(0.0) || rho2 > r_clear * r_clear);
   const int near_wall =
-      wall_key[i] != MC_WALL_NONE ||
-      (sp->shell_radius > R(0.0) && (r_clear <= R(0.0) || rho2 > r_clear * r_clear)) ||
+      any_old || near_shell ||
       (sp->length > R(0.0) && (p.z < ri + margin || p.z > sp->length - ri - margin)) ||
       (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach);
   if (near_wall) {
@@ -176,25 +177,17 @@ MC_FN void ball_forces(
     real3 old_hist[MC_MAX_WALL_CONTACTS];
     int new_key[MC_MAX_WALL_CONTACTS];
     real3 new_hist[MC_MAX_WALL_CONTACTS];
-    /* Slots fill from the first: an empty first slot means no history. */
-    const int any_old = wall_key[i] != MC_WALL_NONE;
     for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-      old_key[s] = MC_WALL_NONE;
-      old_hist[s] = make_real3(0, 0, 0);
+      old_key[s] = any_old ? wall_key[s * n + i] : MC_WALL_NONE;
+      old_hist[s] = old_key[s] != MC_WALL_NONE ? load_hist(wall_hist, s * n + i) : make_real3(0, 0, 0);
       new_key[s] = MC_WALL_NONE;
       new_hist[s] = make_real3(0, 0, 0);
     }
-    if (any_old)
-      for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-        old_key[s] = wall_key[s * n + i];
-        if (old_key[s] != MC_WALL_NONE) old_hist[s] = load_hist(wall_hist, s * n + i);
-      }
     int n_new = 0;
     int overflow = 0;
     const PairParams pw = pairs[MC_PAIR_INDEX(sp, mat_i, sp->n_materials)];
 
-    /* The root only for a ball that may reach the shell (the margin test). */
-    if (sp->shell_radius > R(0.0) && (r_clear <= R(0.0) || rho2 > r_clear * r_clear)) {
+    if (near_shell) { /* the root only for a ball that may reach the shell */
       real3 nrm;
       const real ov = shell_overlap(p, ri, sp->shell_radius, &nrm);
       if (ov > R(0.0))

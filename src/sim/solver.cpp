@@ -95,6 +95,10 @@ class SolverImpl final : public Solver {
   void read_status();
   void wait_status();
   void lap(double StageTimes::*stage);
+  // Entries in the neighbour lists, from the host copies of starts and counts.
+  std::size_t list_entries() const {
+    return static_cast<std::size_t>(neigh_start_.host[n_ - 1]) + neigh_count_.host[n_ - 1];
+  }
 
   compute::Context& ctx_;
   compute::Program program_;
@@ -321,7 +325,7 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   sp.n_materials = tp.n_materials;
   sp.n_lifters = tp.n_lifters;
   sp.law = tp.law;
-  if (sp.law != (law_ == ContactLaw::hertz ? MC_LAW_HERTZ : MC_LAW_LINEAR))
+  if (scene.numerics.law != law_)
     throw std::invalid_argument("the contact law cannot change in a running solver (its kernels are built for one)");
 
   double r_max = 0;
@@ -653,7 +657,7 @@ SolverState SolverImpl<Real>::save_state() {
   put_array(st, "wall_hist", wall_hist_, slots * 3);
   put_array(st, "neigh_start", neigh_start_, n);
   put_array(st, "neigh_count", neigh_count_, n);
-  const std::size_t entries = static_cast<std::size_t>(neigh_start_.host[n - 1]) + neigh_count_.host[n - 1];
+  const std::size_t entries = list_entries();
   put_array(st, "neigh_link", neigh_index_, entries);
   put_array(st, "neigh_hist", neigh_hist_, entries * 3);
   put_array(st, "status", status_, 1);
@@ -690,8 +694,7 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
     // Saved before the links carried the touching flag: a pair held a
     // spring exactly when it was not zero.
     get_array(st, "neigh_index", neigh_index_, true);
-    const std::size_t entries = static_cast<std::size_t>(neigh_start_.host[n_ - 1]) + neigh_count_.host[n_ - 1];
-    for (std::size_t k = 0; k < entries; ++k) {
+    for (std::size_t k = 0; k < list_entries(); ++k) {
       const Real* h = &neigh_hist_.host[3 * k];
       if (h[0] != 0 || h[1] != 0 || h[2] != 0) neigh_index_.host[k] = MC_LINK_TOUCHED(neigh_index_.host[k]);
     }
