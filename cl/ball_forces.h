@@ -3,10 +3,15 @@
  * runs it for every ball; the CPU reference (src/sim/reference.cpp) loops
  * over it, so a test of the reference tests the kernel's arithmetic.
  *
- * Every ball evaluates each of its contacts itself (full neighbour lists), so
- * no atomics are needed and the result does not depend on thread order; each
- * side books half of a pair's energies. Walls have infinite mass and turn
- * with the mill: their velocity at the contact point is ω ẑ × r. */
+ * Each pair is listed once, by the ball with the lower index (half lists),
+ * and its force is evaluated once. The ball adds its own side; the partner's
+ * side (−F, its torque, half the dissipation) goes into the partner's
+ * incoming slot of pair_out (neigh_rev[k] says which; MC_SLOT_REALS), and
+ * ball_reactions adds a ball's incoming slots, which lie side by side, after
+ * every ball is done. Each ball sums in a fixed order, so there are no
+ * atomics and the result does not depend on thread order. A pair's stored
+ * energy is booked to the ball that lists it (only its total is reported). Walls have infinite mass
+ * and turn with the mill: their velocity at the contact point is ω ẑ × r. */
 #ifndef MC_BALL_FORCES_H
 #define MC_BALL_FORCES_H
 
@@ -101,7 +106,7 @@ MC_FN void ball_forces(
     MC_GLOBAL const real4* omega, MC_GLOBAL const int2* info,
     MC_GLOBAL const int* neigh_start, MC_GLOBAL const int* neigh_count,
     MC_GLOBAL int* neigh_index, MC_GLOBAL real* neigh_hist,
-    MC_GLOBAL int* wall_key, MC_GLOBAL real* wall_hist,
+    MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out, MC_GLOBAL int* wall_key, MC_GLOBAL real* wall_hist,
     MC_GLOBAL real4* force, MC_GLOBAL real4* torque, MC_GLOBAL real4* accum,
     MC_GLOBAL int* status) {
   const int n = sp->n_balls;
@@ -126,11 +131,13 @@ MC_FN void ball_forces(
   real elastic = R(0.0);
 
   /* ---- ball–ball ---- */
-  /* An entry's link says whether the pair touched at the last evaluation
-   * (MC_LINK_*): only then is its spring live. So an apart pair, most of
-   * the list, costs its partner's position and nothing else: no spring is
-   * read or cleared, and the link changes only when a contact opens or
-   * closes. */
+  /* The list holds the partners j > i. An entry's link says whether the
+   * pair touched at the last evaluation (MC_LINK_*): only then is its spring
+   * live. So an apart pair, most of the list, costs its partner's position
+   * and nothing else: no spring is read or cleared, and the link changes
+   * only when a contact opens or closes. A touching pair leaves the
+   * partner's side in its slot neigh_rev[k] (MC_SLOT_REALS); a pair that
+   * opens clears it, so the slots of apart pairs are zero. */
   const int start = neigh_start[i];
   const int count = neigh_count[i];
   for (int k = start; k < start + count; ++k) {
@@ -138,7 +145,11 @@ MC_FN void ball_forces(
     const int j = MC_LINK_PARTNER(link);
     const real4 pj4 = pos[j];
     if (!pair_touches(v3_of(p), ri, v3_of(xyz_of(pj4)), pj4.w)) {
-      if (MC_LINK_TOUCHING(link)) neigh_index[k] = j; /* opened: the spring is gone */
+      if (MC_LINK_TOUCHING(link)) { /* opened: the spring and the reaction are gone */
+        neigh_index[k] = j;
+        MC_GLOBAL real* slot = pair_out + MC_SLOT_REALS * neigh_rev[k];
+        for (int r = 0; r < MC_SLOT_REALS; ++r) slot[r] = R(0.0);
+      }
       continue;
     }
     const real4 vj = vel[j];
@@ -151,8 +162,21 @@ MC_FN void ball_forces(
     const ContactOut c = contact_force(pp, g, spring, dt, law);
     f_sum += real3_of(c.force);
     t_sum += real3_of(c.torque);
-    dissipated += R(0.5) * c.dissipated;
-    elastic += R(0.5) * c.elastic;
+    const real half_dissipated = R(0.5) * c.dissipated;
+    dissipated += half_dissipated;
+    elastic += c.elastic;
+    /* j sees −n, −F and −M_roll with its own lever arm: its tangential
+     * torque is −arm_j·(−n) × (−F) = −arm_j·n × F (n × F = n × F_t). */
+    const real arm_j = pj4.w - R(0.5) * g.overlap;
+    const v3 t_j = v3_sub(v3_scale(-arm_j, v3_cross(g.normal, c.force)), c.rolling);
+    MC_GLOBAL real* slot = pair_out + MC_SLOT_REALS * neigh_rev[k];
+    slot[0] = -c.force.x;
+    slot[1] = -c.force.y;
+    slot[2] = -c.force.z;
+    slot[3] = half_dissipated;
+    slot[4] = t_j.x;
+    slot[5] = t_j.y;
+    slot[6] = t_j.z;
     store_hist(real3_of(c.spring), neigh_hist, k);
     if (!MC_LINK_TOUCHING(link)) neigh_index[k] = MC_LINK_TOUCHED(j);
   }
@@ -250,6 +274,31 @@ MC_FN void ball_forces(
   accum[i] = make_real4(a.x + torque_axis * dt,
                         a.y + torque_axis * mill.omega * dt,
                         a.z + dissipated, elastic);
+}
+
+
+/* The partners' sides of ball j's pairs: its incoming slots in_start[j] ..
+ * in_start[j + 1] of pair_out, one per pair listed by a lower ball, in
+ * ascending order of that ball's entry (zero while the pair is apart). */
+MC_FN void ball_reactions(int j, MC_GLOBAL const int* in_start,
+                          MC_GLOBAL const real* pair_out,
+                          MC_GLOBAL real4* force, MC_GLOBAL real4* torque,
+                          MC_GLOBAL real4* accum) {
+  const int b = in_start[j];
+  const int e = in_start[j + 1];
+  if (e == b) return;
+  real4 f = force[j];
+  real4 t = torque[j];
+  real4 a = accum[j];
+  for (int q = b; q < e; ++q) {
+    MC_GLOBAL const real* slot = pair_out + MC_SLOT_REALS * q;
+    f.x += slot[0]; f.y += slot[1]; f.z += slot[2];
+    a.z += slot[3];
+    t.x += slot[4]; t.y += slot[5]; t.z += slot[6];
+  }
+  force[j] = f;
+  torque[j] = t;
+  accum[j] = a;
 }
 
 #endif /* MC_BALL_FORCES_H */

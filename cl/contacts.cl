@@ -1,14 +1,23 @@
-/* contacts.cl — the neighbour lists (the "collision links"): for each ball,
- * the balls within r_i + r_j + skin, stored compactly (CSR: a start and a
- * count per ball). Cell c holds the balls cell_start[c] .. cell_start[c + 1].
- * Built in two passes, count then fill, after binning has
- * put the balls in cell order. The fill pass carries each persisting pair's
- * tangential spring over from the previous list, which was written in the
- * previous ball order: `perm` maps a new index to the old one. Only the
- * springs of pairs in contact (MC_LINK_TOUCHING) are carried: before the new
- * lists are built they are copied out of the old lists into a compact carry
- * list (carry_count, a scan, carry_fill), so that the old lists need no
- * second buffer while the new ones are written. */
+/* contacts.cl — the neighbour lists (the "collision links"): each pair of
+ * balls within r_i + r_j + skin once, in the list of the ball with the lower
+ * index (half lists), stored compactly (CSR: a start and a count per ball).
+ * Cell c holds the balls cell_start[c] .. cell_start[c + 1]. Built in two
+ * passes, count then fill, after binning has put the balls in cell order.
+ * The fill pass carries each persisting pair's tangential spring over from
+ * the previous list, which was written in the previous ball order: `perm`
+ * maps a new index to the old one. Only the springs of pairs in contact
+ * (MC_LINK_TOUCHING) are carried: before the new lists are built they are
+ * copied out of the old lists into a compact carry list (carry_count, a
+ * scan, carry_fill), so that the old lists need no second buffer while the
+ * new ones are written. A spring is seen from the ball that lists the pair;
+ * when the new order hands the pair to the other ball, the spring changes
+ * sign.
+ *
+ * Each ball's incoming slots (one per entry k of a lower ball's list that
+ * holds it) are indexed too, for the reactions: in_count, a scan,
+ * in_scatter, then in_sort puts each ball's entries in ascending order, so
+ * that its forces are summed in an order that does not depend on the
+ * threads, and tells each entry its slot (neigh_rev). */
 #include "mc_shim.h"
 #include "layout.h"
 #include "grid.h"
@@ -34,10 +43,22 @@ __kernel void contacts_count(__global const SimParams* sp,
         const int cell = (z * sp->grid_ny + y) * sp->grid_nx + x;
         const int b = cell_start[cell];
         const int e = cell_start[cell + 1];
-        for (int j = b; j < e; ++j)
-          if (j != i && is_neighbour(sp, pi, pos[j])) ++count;
+        for (int j = max(b, i + 1); j < e; ++j)
+          if (is_neighbour(sp, pi, pos[j])) ++count;
       }
   neigh_count[i] = count;
+}
+
+/* The spring of the pair (old indices a < b) from a's side, if it was
+ * carried; zero and 0 if not. */
+inline int find_carried(int a, int b, __global const int* carry_start,
+                        __global const int* carry_count,
+                        __global const int* carry_index,
+                        __global const real* carry_hist, real3* h) {
+  const int q0 = carry_start[a];
+  for (int q = q0; q < q0 + carry_count[a]; ++q)
+    if (carry_index[q] == b) { *h = load_hist(carry_hist, q); return 1; }
+  return 0;
 }
 
 __kernel void contacts_fill(__global const SimParams* sp,
@@ -47,17 +68,15 @@ __kernel void contacts_fill(__global const SimParams* sp,
                             __global int* neigh_index,
                             __global real* neigh_hist,
                             __global const int* perm,
-                            __global const int* old_start,
-                            __global const int* old_count,
-                            __global const int* old_index,
-                            __global const real* old_hist) {
+                            __global const int* carry_start,
+                            __global const int* carry_count,
+                            __global const int* carry_index,
+                            __global const real* carry_hist) {
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
   const real4 pi = pos[i];
   const int4 c = grid_cell_of(sp, xyz_of(pi));
   const int oi = perm[i];
-  const int ob = old_start[oi];
-  const int oe = ob + old_count[oi];
   int k = neigh_start[i];
   for (int z = max(c.z - 1, 0); z <= min(c.z + 1, sp->grid_nz - 1); ++z)
     for (int y = max(c.y - 1, 0); y <= min(c.y + 1, sp->grid_ny - 1); ++y)
@@ -65,14 +84,16 @@ __kernel void contacts_fill(__global const SimParams* sp,
         const int cell = (z * sp->grid_ny + y) * sp->grid_nx + x;
         const int b = cell_start[cell];
         const int e = cell_start[cell + 1];
-        for (int j = b; j < e; ++j) {
-          if (j == i || !is_neighbour(sp, pi, pos[j])) continue;
+        for (int j = max(b, i + 1); j < e; ++j) {
+          if (!is_neighbour(sp, pi, pos[j])) continue;
           const int oj = perm[j];
           real3 h = (real3)(0, 0, 0);
-          int link = j;
-          for (int q = ob; q < oe; ++q)
-            if (old_index[q] == oj) { h = load_hist(old_hist, q); link = MC_LINK_TOUCHED(j); break; }
-          neigh_index[k] = link;
+          /* The old list of the lower old index held the pair. */
+          const int found = oi < oj
+              ? find_carried(oi, oj, carry_start, carry_count, carry_index, carry_hist, &h)
+              : find_carried(oj, oi, carry_start, carry_count, carry_index, carry_hist, &h);
+          if (found && oi > oj) h = -h;
+          neigh_index[k] = found ? MC_LINK_TOUCHED(j) : j;
           store_hist(h, neigh_hist, k);
           ++k;
         }
@@ -112,4 +133,53 @@ __kernel void carry_fill(int n, __global const int* neigh_start,
       ++q;
     }
   }
+}
+
+/* Incoming slots per ball, counted into in_start (zeroed first; scanned in
+ * place after). */
+__kernel void in_count(int n, __global const int* neigh_start,
+                       __global const int* neigh_count,
+                       __global const int* neigh_index,
+                       __global int* in_start) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  const int b = neigh_start[i];
+  for (int k = b; k < b + neigh_count[i]; ++k)
+    atomic_inc(&in_start[MC_LINK_PARTNER(neigh_index[k])]);
+}
+
+/* Each entry k into one of its partner's incoming slots, in any order (fill
+ * zeroed first). */
+__kernel void in_scatter(int n, __global const int* neigh_start,
+                         __global const int* neigh_count,
+                         __global const int* neigh_index,
+                         __global const int* in_start, __global int* fill,
+                         __global int* in_slot) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  const int b = neigh_start[i];
+  for (int k = b; k < b + neigh_count[i]; ++k) {
+    const int j = MC_LINK_PARTNER(neigh_index[k]);
+    in_slot[in_start[j] + atomic_inc(&fill[j])] = k;
+  }
+}
+
+/* Insertion sort of each ball's few incoming entries; then each entry learns
+ * its slot (neigh_rev). */
+__kernel void in_sort(int n, __global const int* in_start,
+                      __global int* in_slot, __global int* neigh_rev) {
+  const int j = get_global_id(0);
+  if (j >= n) return;
+  const int b = in_start[j];
+  const int e = in_start[j + 1];
+  for (int a = b + 1; a < e; ++a) {
+    const int v = in_slot[a];
+    int q = a - 1;
+    while (q >= b && in_slot[q] > v) {
+      in_slot[q + 1] = in_slot[q];
+      --q;
+    }
+    in_slot[q + 1] = v;
+  }
+  for (int q = b; q < e; ++q) neigh_rev[in_slot[q]] = q;
 }

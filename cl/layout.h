@@ -34,6 +34,11 @@
 #define MC_LINK_PARTNER(link) ((link) < 0 ? ~(link) : (link))
 #define MC_LINK_TOUCHED(j) (~(j))
 
+/* A pair's slot in its higher ball's incoming slots holds that ball's side
+ * of the pair while it touches: the force (3 reals), half the energy the
+ * contact dissipated this step (1), the torque (3). Zero while apart. */
+#define MC_SLOT_REALS 7
+
 #define MC_LAW_LINEAR 0
 #define MC_LAW_HERTZ 1
 

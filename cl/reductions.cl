@@ -46,7 +46,7 @@ void reduce_observables(__global const SimParams* sp,
     v[4] = R(0.5) * mass * dot(vn, vn);
     v[5] = R(0.5) * dot(wn, wn) / wh.w;
     v[6] = -mass * dot(xyz_of(sp->gravity), xyz_of(pos[i]));
-    v[7] = (real)neigh_count[i];
+    v[7] = (real)(2 * neigh_count[i]); /* each listed pair, from both sides */
     v[8] = mass * pos[i].x;
     v[9] = mass * pos[i].y;
     if (reset) accum[i] = make_real4(0, 0, 0, a.w);
@@ -65,7 +65,8 @@ void reduce_observables(__global const SimParams* sp,
 }
 
 /* Contacts now, for reports: counts[0] ball-ball contacts (each pair counted
- * by both balls), counts[1] wall contacts, counts[2] neighbour-list entries. */
+ * by both balls), counts[1] wall contacts, counts[2] neighbour-list entries
+ * (each listed pair counted for both balls, as full lists would hold it). */
 __kernel void count_contacts(__global const SimParams* sp,
                              __global const real4* pos,
                              __global const int* neigh_start,
@@ -89,7 +90,8 @@ __kernel void count_contacts(__global const SimParams* sp,
   int walls = 0;
   for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s)
     if (wall_key[s * n + i] != MC_WALL_NONE) ++walls;
-  atomic_add(&counts[0], touching);
+  /* Each pair is listed once; both its balls count it. */
+  atomic_add(&counts[0], 2 * touching);
   atomic_add(&counts[1], walls);
-  atomic_add(&counts[2], e - b);
+  atomic_add(&counts[2], 2 * (e - b));
 }

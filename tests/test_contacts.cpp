@@ -56,14 +56,21 @@ Scene random_packing(double r_small, double r_big, int n_big, double box, unsign
   return sc;
 }
 
+// Pairs as (lower id, higher id).
 std::set<std::pair<int, int>> brute_force(const std::vector<BallState>& balls, double skin, double guard) {
   std::set<std::pair<int, int>> out;
   for (const auto& a : balls)
     for (const auto& b : balls) {
-      if (a.id == b.id) continue;
+      if (a.id >= b.id) continue;
       const double d = (a.position - b.position).norm();
       if (d < a.radius + b.radius + skin - guard) out.insert({a.id, b.id});
     }
+  return out;
+}
+
+std::set<std::pair<int, int>> unordered(const std::vector<std::pair<int, int>>& pairs) {
+  std::set<std::pair<int, int>> out;
+  for (const auto& [a, b] : pairs) out.insert({std::min(a, b), std::max(a, b)});
   return out;
 }
 
@@ -86,8 +93,8 @@ TEST_CASE("neighbour search equals brute force on random packings", "[contacts]"
     const double skin = sc.numerics.skin;
     auto s = make_solver(context(), sc);
     const auto pairs = s->neighbour_pairs();
-    const std::set<std::pair<int, int>> listed(pairs.begin(), pairs.end());
-    CHECK(listed.size() == pairs.size());  // no duplicates
+    const std::set<std::pair<int, int>> listed = unordered(pairs);
+    CHECK(listed.size() == pairs.size());  // each pair once, in one list only
     const auto balls = s->balls();
     // Every pair inside the cutoff is listed (a float guard of 1e-6 m aside)...
     const auto must = brute_force(balls, skin, 1e-6);
@@ -102,10 +109,6 @@ TEST_CASE("neighbour search equals brute force on random packings", "[contacts]"
     CHECK(must.size() > sc.balls.size());  // the case really has neighbours
     CHECK(missing == 0);
     CHECK(extra == 0);
-    // Lists are symmetric.
-    int asym = 0;
-    for (const auto& p : listed) asym += listed.count({p.second, p.first}) == 0;
-    CHECK(asym == 0);
   }
 }
 
@@ -120,8 +123,7 @@ TEST_CASE("neighbour lists stay complete while the charge moves", "[contacts]") 
   auto s = make_solver(context(), sc);
   for (int round = 0; round < 5; ++round) {
     s->advance(2000);
-    const auto pairs = s->neighbour_pairs();
-    const std::set<std::pair<int, int>> listed(pairs.begin(), pairs.end());
+    const std::set<std::pair<int, int>> listed = unordered(s->neighbour_pairs());
     const auto touching = brute_force(s->balls(), 0.0, 0.0);
     int missing = 0;
     for (const auto& p : touching) missing += listed.count(p) == 0;

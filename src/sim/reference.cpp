@@ -20,31 +20,43 @@ struct ReferenceSolver::State {
   std::vector<int2> info;
   std::vector<int> wall_key;
   std::vector<real> wall_hist;  // packed, 3 per slot
-  std::vector<int> neigh_start, neigh_count, neigh_index;
+  std::vector<int> neigh_start, neigh_count, neigh_index;  // partners j > i
   std::vector<real> neigh_hist;  // packed, 3 per entry
+  std::vector<real> pair_out;    // the partner's side, MC_SLOT_REALS per entry
+  std::vector<int> in_start, neigh_rev;  // each ball's incoming slots (n + 1); each entry's slot
   std::map<std::pair<int, int>, real3> history;  // (i, j) → spring, by index
   int status = 0;
   double time = 0, angle = 0, omega_mill = 0;
   int n = 0;
 
   void build_lists() {
-    // Every pair within touching distance, with its spring carried over.
+    // Every pair within touching distance, once (in the lower ball's list),
+    // with its spring carried over; and the entries that hold each ball.
     neigh_index.clear();
     neigh_hist.clear();
+    std::vector<std::vector<int>> incoming(n);
     for (int i = 0; i < n; ++i) {
       neigh_start[i] = static_cast<int>(neigh_index.size());
-      for (int j = 0; j < n; ++j) {
-        if (j == i) continue;
+      for (int j = i + 1; j < n; ++j) {
         const double dx = pos[i].x - pos[j].x, dy = pos[i].y - pos[j].y, dz = pos[i].z - pos[j].z;
         const double cut = pos[i].w + pos[j].w;
         if (dx * dx + dy * dy + dz * dz >= cut * cut) continue;
         auto it = history.find({i, j});
+        incoming[j].push_back(static_cast<int>(neigh_index.size()));
         neigh_index.push_back(it != history.end() ? MC_LINK_TOUCHED(j) : j);
         const real3 h = it != history.end() ? it->second : real3{0, 0, 0};
         neigh_hist.insert(neigh_hist.end(), {h.x, h.y, h.z});
       }
       neigh_count[i] = static_cast<int>(neigh_index.size()) - neigh_start[i];
     }
+    pair_out.assign(MC_SLOT_REALS * neigh_index.size(), real{0});
+    neigh_rev.assign(neigh_index.size(), 0);
+    int q = 0;
+    for (int j = 0; j < n; ++j) {
+      in_start[j] = q;
+      for (int k : incoming[j]) neigh_rev[k] = q++;
+    }
+    in_start[n] = q;
   }
   void save_history() {
     // The springs of the pairs that touch now (the others have none).
@@ -60,8 +72,10 @@ struct ReferenceSolver::State {
     for (int i = 0; i < n; ++i)
       ball_forces(i, &sp, pairs.data(), lifters.data(), mill, pos.data(), vel.data(), omega.data(),
                   info.data(), neigh_start.data(), neigh_count.data(), neigh_index.data(),
-                  neigh_hist.data(), wall_key.data(), wall_hist.data(), force.data(), torque.data(),
-                  accum.data(), &status);
+                  neigh_hist.data(), neigh_rev.data(), pair_out.data(), wall_key.data(), wall_hist.data(), force.data(),
+                  torque.data(), accum.data(), &status);
+    for (int j = 0; j < n; ++j)
+      ball_reactions(j, in_start.data(), pair_out.data(), force.data(), torque.data(), accum.data());
     save_history();
   }
 };
@@ -83,6 +97,7 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
   s.wall_key.assign(static_cast<std::size_t>(n) * MC_MAX_WALL_CONTACTS, MC_WALL_NONE);
   s.wall_hist.assign(static_cast<std::size_t>(n) * MC_MAX_WALL_CONTACTS * 3, real{0});
   s.neigh_start.assign(n, 0); s.neigh_count.assign(n, 0);
+  s.in_start.assign(n + 1, 0);
   for (int i = 0; i < n; ++i) {
     const Ball& b = balls[i];
     const double m = ball_mass(scene, b);

@@ -91,10 +91,13 @@ class SolverImpl final : public Solver {
   void setup_params(const Scene& scene);
   void rebuild();
   void forces();
+  void index_incoming();
   void motion();
   void read_status();
   void wait_status();
   void lap(double StageTimes::*stage);
+  // Reals of pair_out_ for `entries` slots.
+  static std::size_t slot_reals(std::size_t entries) { return entries * MC_SLOT_REALS; }
   // Entries in the neighbour lists, from the host copies of starts and counts.
   std::size_t list_entries() const {
     return static_cast<std::size_t>(neigh_start_.host[n_ - 1]) + neigh_count_.host[n_ - 1];
@@ -122,18 +125,27 @@ class SolverImpl final : public Solver {
   Buffer<int2> info_;  // (id, material)
   Buffer<int> wall_key_;
   Buffer<Real> wall_hist_;  // packed springs, 3 per slot
-  // the spare the gathers write into before a swap (and the scratch of the
-  // info and wall-slot gathers)
-  Buffer<real4> spare4_;
   // binning
   // cell_start_ has n_cells + 1 entries (the last is the number of balls);
-  // while binning it first holds the counts, scanned in place.
+  // while binning it first holds the counts, scanned in place. ball_cell_
+  // and ball_rank_ are free once the balls are scattered: they then hold
+  // the carried springs' starts and counts, and count the incoming slots.
   Buffer<int> cell_start_, ball_cell_, ball_rank_, sorted_index_;
-  // neighbour lists, and the springs carried over a rebuild (compact: only
-  // pairs in contact; partner index in the old order)
+  // neighbour lists (each pair once, in the lower ball's list), and the
+  // springs carried over a rebuild (compact: only pairs in contact; partner
+  // index in the old order; starts and counts in ball_cell_, ball_rank_)
   Buffer<int> neigh_start_, neigh_count_, neigh_index_;
   Buffer<Real> neigh_hist_;  // packed springs, 3 per entry
-  Buffer<int> carry_start_, carry_count_, carry_index_;
+  // Each ball's incoming slots (one per pair a lower ball lists with it, side
+  // by side from in_start_[j] to in_start_[j + 1]) and the slot of each
+  // entry (neigh_rev_). The slots (MC_SLOT_REALS reals each) hold the
+  // partner's side of the pairs that touch, which the reactions add up.
+  // Between a force evaluation's reactions and the next rebuild the slots
+  // are free, so they are also the scratch of the rebuild: the gathers into
+  // cell order go through them, and the slot index is sorted in them.
+  Buffer<Real> pair_out_;
+  Buffer<int> in_start_, neigh_rev_;
+  Buffer<int> carry_index_;
   Buffer<Real> carry_hist_;
   // status word and reduction partials
   Buffer<int> status_;
@@ -157,7 +169,8 @@ class SolverImpl final : public Solver {
   Scan scan_;
   Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
       k_gather_wall_, k_put_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
-      k_layout_, k_profile_, k_count_contacts_, k_clear_flag_, k_carry_count_, k_carry_fill_;
+      k_layout_, k_profile_, k_count_contacts_, k_clear_flag_, k_carry_count_, k_carry_fill_, k_in_count_,
+      k_in_scatter_, k_in_sort_, k_reactions_;
   // The viewer's kernel, built on first use so that headless runs skip it.
   std::unique_ptr<compute::Program> view_program_;
   std::unique_ptr<Kernel> k_instances_;
@@ -197,7 +210,6 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       info_(ctx, n_, "ids and materials"),
       wall_key_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "wall contact keys"),
       wall_hist_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS * 3, "wall contact history"),
-      spare4_(ctx, n_, "spare real4"),
       ball_cell_(ctx, n_, "ball cell"),
       ball_rank_(ctx, n_, "ball rank in cell"),
       sorted_index_(ctx, n_, "sorted index"),
@@ -205,8 +217,9 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       neigh_count_(ctx, n_, "neighbour count"),
       neigh_index_(ctx, static_cast<std::size_t>(n_) + 64, "neighbour index"),
       neigh_hist_(ctx, (static_cast<std::size_t>(n_) + 64) * 3, "neighbour history"),
-      carry_start_(ctx, n_, "carried spring start"),
-      carry_count_(ctx, n_, "carried spring count"),
+      pair_out_(ctx, slot_reals(static_cast<std::size_t>(n_) + 64), "pair reactions"),
+      in_start_(ctx, static_cast<std::size_t>(n_) + 1, "incoming start"),
+      neigh_rev_(ctx, static_cast<std::size_t>(n_) + 64, "neighbour slot"),
       carry_index_(ctx, 1, "carried spring partner"),
       carry_hist_(ctx, 3, "carried springs"),
       status_(ctx, 1, "status"),
@@ -232,7 +245,11 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_count_contacts_(program_, "count_contacts"),
       k_clear_flag_(program_, "clear_status_flag"),
       k_carry_count_(program_, "carry_count"),
-      k_carry_fill_(program_, "carry_fill") {
+      k_carry_fill_(program_, "carry_fill"),
+      k_in_count_(program_, "in_count"),
+      k_in_scatter_(program_, "in_scatter"),
+      k_in_sort_(program_, "in_sort"),
+      k_reactions_(program_, "reactions") {
   if (n_ == 0) throw std::invalid_argument("scene: no balls");
 
   // The device's struct sizes must equal the host mirrors'.
@@ -384,31 +401,33 @@ void SolverImpl<Real>::rebuild() {
   k_bin_scatter_.args(n, ball_cell_, ball_rank_, cell_start_, sorted_index_).launch(n);
   k_bin_sort_.args(n_cells_, cell_start_, sorted_index_, info_).launch(n_cells_);
 
-  // Put the ball arrays in cell order.
+  // Put the ball arrays in cell order, each through the pair slots (free
+  // now, and at least four reals per ball) and back; the wall slots also
+  // through ball_cell_, free once the balls are scattered.
   for (Buffer<real4>* b : {&pos_, &vel_, &omega_, &accum_}) {
-    k_gather4_.args(n, sorted_index_, *b, spare4_).launch(n);
-    std::swap(*b, spare4_);
+    k_gather4_.args(n, sorted_index_, *b, pair_out_).launch(n);
+    ctx_.queue().enqueueCopyBuffer(pair_out_.device(), b->device(), 0, 0, b->bytes());
   }
-  // The ids and the wall slots go through the spare (and ball_cell_, free
-  // once the balls are scattered) and back.
-  k_gather2_.args(n, sorted_index_, info_, spare4_).launch(n);
-  ctx_.queue().enqueueCopyBuffer(spare4_.device(), info_.device(), 0, 0, info_.bytes());
+  k_gather2_.args(n, sorted_index_, info_, pair_out_).launch(n);
+  ctx_.queue().enqueueCopyBuffer(pair_out_.device(), info_.device(), 0, 0, info_.bytes());
   for (int slot = 0; slot < MC_MAX_WALL_CONTACTS; ++slot) {
-    k_gather_wall_.args(n, slot, sorted_index_, wall_key_, wall_hist_, ball_cell_, spare4_).launch(n);
-    k_put_wall_.args(n, slot, ball_cell_, spare4_, wall_key_, wall_hist_).launch(n);
+    k_gather_wall_.args(n, slot, sorted_index_, wall_key_, wall_hist_, ball_cell_, pair_out_).launch(n);
+    k_put_wall_.args(n, slot, ball_cell_, pair_out_, wall_key_, wall_hist_).launch(n);
   }
   pos_at_build_.copy_from(pos_, n);
   lap(&StageTimes::binning_s);
 
   // The springs of pairs in contact, out of the lists (in the old order).
-  k_carry_count_.args(n, neigh_start_, neigh_count_, neigh_index_, carry_count_).launch(n);
-  scan_.run(carry_count_, carry_start_, n);
+  Buffer<int>& carry_start = ball_cell_;
+  Buffer<int>& carry_count = ball_rank_;
+  k_carry_count_.args(n, neigh_start_, neigh_count_, neigh_index_, carry_count).launch(n);
+  scan_.run(carry_count, carry_start, n);
   const int carried = scan_.read_total();
   if (static_cast<std::size_t>(carried) > carry_index_.size())
     carry_index_.resize(static_cast<std::size_t>(carried) + carried / 16 + 64);
   if (static_cast<std::size_t>(carried) * 3 > carry_hist_.size())
     carry_hist_.resize(carry_index_.size() * 3);
-  k_carry_fill_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_hist_, carry_start_, carry_index_, carry_hist_)
+  k_carry_fill_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_hist_, carry_start, carry_index_, carry_hist_)
       .launch(n);
   // New lists in their place.
   k_contacts_count_.args(params_, pos_, cell_start_, neigh_count_).launch(n);
@@ -422,8 +441,9 @@ void SolverImpl<Real>::rebuild() {
     neigh_hist_.resize(cap * 3);
   }
   k_contacts_fill_.args(params_, pos_, cell_start_, neigh_start_, neigh_index_,
-                        neigh_hist_, sorted_index_, carry_start_, carry_count_, carry_index_, carry_hist_)
+                        neigh_hist_, sorted_index_, carry_start, carry_count, carry_index_, carry_hist_)
       .launch(n);
+  index_incoming();
   ++rebuilds_;
   lap(&StageTimes::contacts_s);
 }
@@ -433,10 +453,36 @@ void SolverImpl<Real>::forces() {
   k_forces_
       .args(params_, pairs_, lifters_, std::cos(mill_angle_), std::sin(mill_angle_), mill_omega_, pos_, vel_,
             omega_, info_,
-            neigh_start_, neigh_count_, neigh_index_, neigh_hist_, wall_key_, wall_hist_, force_,
+            neigh_start_, neigh_count_, neigh_index_, neigh_hist_, neigh_rev_, pair_out_, wall_key_, wall_hist_, force_,
             torque_, accum_, status_)
       .launch(n_);
+  k_reactions_.args(n_, in_start_, pair_out_, force_, torque_, accum_)
+      .launch(n_);
   lap(&StageTimes::forces_s);
+}
+
+// Each ball's incoming slots, from the lists: counted (in place in
+// in_start_), scanned, the entries scattered into their partners' slots in
+// any order (pair_out_ holds this index for now, ball_rank_ counts), sorted
+// per ball so that the order does not depend on the threads, and each
+// entry's slot noted (neigh_rev_). Then the slots are cleared: a pair that
+// touches fills its slot at the next force evaluation.
+template <class Real>
+void SolverImpl<Real>::index_incoming() {
+  const int n = n_;
+  // Sized with the lists' capacity; the slots also hold four reals per ball
+  // for the gathers.
+  if (neigh_index_.size() != neigh_rev_.size()) neigh_rev_.resize(neigh_index_.size());
+  const std::size_t reals = std::max(slot_reals(neigh_index_.size()), 4 * static_cast<std::size_t>(n));
+  if (reals != pair_out_.size()) pair_out_.resize(reals);
+  k_bin_clear_.args(in_start_, n + 1).launch(n + 1);
+  k_in_count_.args(n, neigh_start_, neigh_count_, neigh_index_, in_start_).launch(n);
+  scan_.run(in_start_, in_start_, n + 1);
+  k_bin_clear_.args(ball_rank_, n).launch(n);
+  k_in_scatter_.args(n, neigh_start_, neigh_count_, neigh_index_, in_start_, ball_rank_, pair_out_).launch(n);
+  k_in_sort_.args(n, in_start_, pair_out_, neigh_rev_).launch(n);
+  const int words = static_cast<int>(pair_out_.bytes() / sizeof(int));
+  k_bin_clear_.args(pair_out_, words).launch(words);
 }
 
 template <class Real>
@@ -658,7 +704,7 @@ SolverState SolverImpl<Real>::save_state() {
   put_array(st, "neigh_start", neigh_start_, n);
   put_array(st, "neigh_count", neigh_count_, n);
   const std::size_t entries = list_entries();
-  put_array(st, "neigh_link", neigh_index_, entries);
+  put_array(st, "neigh_half_link", neigh_index_, entries);
   put_array(st, "neigh_hist", neigh_hist_, entries * 3);
   put_array(st, "status", status_, 1);
   put_array(st, "profile", profile_, kProfileBins);
@@ -688,18 +734,38 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
   get_array(st, "neigh_start", neigh_start_, false);
   get_array(st, "neigh_count", neigh_count_, false);
   get_array(st, "neigh_hist", neigh_hist_, true);
-  if (has_array(st, "neigh_link")) {
-    get_array(st, "neigh_link", neigh_index_, true);
+  if (has_array(st, "neigh_half_link")) {
+    get_array(st, "neigh_half_link", neigh_index_, true);
   } else {
-    // Saved before the links carried the touching flag: a pair held a
-    // spring exactly when it was not zero.
-    get_array(st, "neigh_index", neigh_index_, true);
-    for (std::size_t k = 0; k < list_entries(); ++k) {
-      const Real* h = &neigh_hist_.host[3 * k];
-      if (h[0] != 0 || h[1] != 0 || h[2] != 0) neigh_index_.host[k] = MC_LINK_TOUCHED(neigh_index_.host[k]);
+    // Saved with full lists, each pair in both balls' lists: the lower
+    // ball's entry is kept.
+    if (has_array(st, "neigh_link")) {
+      get_array(st, "neigh_link", neigh_index_, true);
+    } else {
+      // Saved before the links carried the touching flag: a pair held a
+      // spring exactly when it was not zero.
+      get_array(st, "neigh_index", neigh_index_, true);
+      for (std::size_t k = 0; k < list_entries(); ++k) {
+        const Real* h = &neigh_hist_.host[3 * k];
+        if (h[0] != 0 || h[1] != 0 || h[2] != 0) neigh_index_.host[k] = MC_LINK_TOUCHED(neigh_index_.host[k]);
+      }
     }
-    neigh_index_.write_to_device();
+    std::size_t kept = 0;
+    for (int i = 0; i < n_; ++i) {
+      const int b = neigh_start_.host[i], e = b + neigh_count_.host[i];
+      neigh_start_.host[i] = static_cast<int>(kept);
+      for (int k = b; k < e; ++k) {
+        if (MC_LINK_PARTNER(neigh_index_.host[k]) < i) continue;
+        neigh_index_.host[kept] = neigh_index_.host[k];
+        for (int c = 0; c < 3; ++c) neigh_hist_.host[3 * kept + c] = neigh_hist_.host[3 * k + c];
+        ++kept;
+      }
+      neigh_count_.host[i] = static_cast<int>(kept) - neigh_start_.host[i];
+    }
+    for (auto* b : {&neigh_start_, &neigh_count_, &neigh_index_}) b->write_to_device();
+    neigh_hist_.write_to_device();
   }
+  index_incoming();
   get_array(st, "status", status_, false);
   get_array(st, "profile", profile_, false);
   time_ = st.time_s;
@@ -761,12 +827,11 @@ template <class Real>
 std::size_t SolverImpl<Real>::device_bytes() const {
   std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() + profile_.bytes() + counts_.bytes() +
                   partial_.bytes() + scan_.bytes();
-  for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_, &spare4_})
-    b += x->bytes();
-  for (const auto* x : {&wall_hist_, &neigh_hist_, &carry_hist_}) b += x->bytes();
+  for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_}) b += x->bytes();
+  for (const auto* x : {&wall_hist_, &neigh_hist_, &carry_hist_, &pair_out_}) b += x->bytes();
   for (const auto* x : {&wall_key_, &cell_start_, &ball_cell_,
                         &ball_rank_, &sorted_index_, &neigh_start_, &neigh_count_, &neigh_index_,
-                        &carry_start_, &carry_count_, &carry_index_})
+                        &carry_index_, &in_start_, &neigh_rev_})
     b += x->bytes();
   return b + info_.bytes();
 }

@@ -86,7 +86,8 @@ class Solver {
   virtual void advance(long steps) = 0;
   virtual std::vector<BallState> balls() = 0;  // sorted by id
   virtual Observables observe(bool reset = true) = 0;
-  // Each listed pair as (id, neighbour id), both directions, for tests.
+  // Each listed pair as (id, neighbour id), once (as the list holding it
+  // has it), for tests.
   virtual std::vector<std::pair<int, int>> neighbour_pairs() = 0;
   virtual void set_mill_omega(double omega_rad_s) = 0;
 
