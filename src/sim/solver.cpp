@@ -131,9 +131,10 @@ class SolverImpl final : public Solver {
   // and ball_rank_ are free once the balls are scattered: they then hold
   // the carried springs' starts and counts, and count the incoming slots.
   Buffer<int> cell_start_, ball_cell_, ball_rank_, sorted_index_;
-  // neighbour lists (each pair once, in the lower ball's list), and the
-  // springs carried over a rebuild (compact: only pairs in contact; partner
-  // index in the old order; starts and counts in ball_cell_, ball_rank_)
+  // neighbour lists (each pair once, in the lower ball's list); the springs
+  // carried over a rebuild (compact: only pairs in contact; partner index in
+  // the old order) use free arrays: starts and counts in ball_cell_ and
+  // ball_rank_, partners in neigh_rev_, springs in pair_out_
   Buffer<int> neigh_start_, neigh_count_, neigh_index_;
   Buffer<Real> neigh_hist_;  // packed springs, 3 per entry
   // Each ball's incoming slots (one per pair a lower ball lists with it, side
@@ -145,8 +146,6 @@ class SolverImpl final : public Solver {
   // cell order go through them, and the slot index is sorted in them.
   Buffer<Real> pair_out_;
   Buffer<int> in_start_, neigh_rev_;
-  Buffer<int> carry_index_;
-  Buffer<Real> carry_hist_;
   // status word and reduction partials
   Buffer<int> status_;
   Buffer<Real> partial_;
@@ -220,8 +219,6 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       pair_out_(ctx, slot_reals(static_cast<std::size_t>(n_) + 64), "pair reactions"),
       in_start_(ctx, static_cast<std::size_t>(n_) + 1, "incoming start"),
       neigh_rev_(ctx, static_cast<std::size_t>(n_) + 64, "neighbour slot"),
-      carry_index_(ctx, 1, "carried spring partner"),
-      carry_hist_(ctx, 3, "carried springs"),
       status_(ctx, 1, "status"),
       partial_(ctx, (static_cast<std::size_t>(n_) / kReduceWG + 1) * kObservables, "reduction partials"),
       profile_(ctx, kProfileBins, "contact profile"),
@@ -423,11 +420,15 @@ void SolverImpl<Real>::rebuild() {
   k_carry_count_.args(n, neigh_start_, neigh_count_, neigh_index_, carry_count).launch(n);
   scan_.run(carry_count, carry_start, n);
   const int carried = scan_.read_total();
-  if (static_cast<std::size_t>(carried) > carry_index_.size())
-    carry_index_.resize(static_cast<std::size_t>(carried) + carried / 16 + 64);
-  if (static_cast<std::size_t>(carried) * 3 > carry_hist_.size())
-    carry_hist_.resize(carry_index_.size() * 3);
-  k_carry_fill_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_hist_, carry_start, carry_index_, carry_hist_)
+  // The carried springs are a subset of the old entries: their partners go
+  // into neigh_rev_ and the springs into the pair slots, both sized with the
+  // old lists and free until the new lists are indexed.
+  if (static_cast<std::size_t>(carried) > neigh_rev_.size() ||
+      static_cast<std::size_t>(carried) * 3 > pair_out_.size())
+    throw std::logic_error("carried springs outgrow the old lists");
+  Buffer<int>& carry_index = neigh_rev_;
+  Buffer<Real>& carry_hist = pair_out_;
+  k_carry_fill_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_hist_, carry_start, carry_index, carry_hist)
       .launch(n);
   // New lists in their place.
   k_contacts_count_.args(params_, pos_, cell_start_, neigh_count_).launch(n);
@@ -441,7 +442,7 @@ void SolverImpl<Real>::rebuild() {
     neigh_hist_.resize(cap * 3);
   }
   k_contacts_fill_.args(params_, pos_, cell_start_, neigh_start_, neigh_index_,
-                        neigh_hist_, sorted_index_, carry_start, carry_count, carry_index_, carry_hist_)
+                        neigh_hist_, sorted_index_, carry_start, carry_count, carry_index, carry_hist)
       .launch(n);
   index_incoming();
   ++rebuilds_;
@@ -762,6 +763,16 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
       }
       neigh_count_.host[i] = static_cast<int>(kept) - neigh_start_.host[i];
     }
+    // Half the entries: the lists shrink to what a rebuild would give them.
+    const std::size_t cap = kept + kept / 16 + 64;
+    if (cap < neigh_index_.size()) {
+      std::vector<int> links(neigh_index_.host.begin(), neigh_index_.host.begin() + kept);
+      std::vector<Real> hist(neigh_hist_.host.begin(), neigh_hist_.host.begin() + 3 * kept);
+      neigh_index_.resize(cap);
+      neigh_hist_.resize(cap * 3);
+      std::copy(links.begin(), links.end(), neigh_index_.host.begin());
+      std::copy(hist.begin(), hist.end(), neigh_hist_.host.begin());
+    }
     for (auto* b : {&neigh_start_, &neigh_count_, &neigh_index_}) b->write_to_device();
     neigh_hist_.write_to_device();
   }
@@ -828,10 +839,10 @@ std::size_t SolverImpl<Real>::device_bytes() const {
   std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() + profile_.bytes() + counts_.bytes() +
                   partial_.bytes() + scan_.bytes();
   for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_}) b += x->bytes();
-  for (const auto* x : {&wall_hist_, &neigh_hist_, &carry_hist_, &pair_out_}) b += x->bytes();
+  for (const auto* x : {&wall_hist_, &neigh_hist_, &pair_out_}) b += x->bytes();
   for (const auto* x : {&wall_key_, &cell_start_, &ball_cell_,
                         &ball_rank_, &sorted_index_, &neigh_start_, &neigh_count_, &neigh_index_,
-                        &carry_index_, &in_start_, &neigh_rev_})
+                        &in_start_, &neigh_rev_})
     b += x->bytes();
   return b + info_.bytes();
 }
