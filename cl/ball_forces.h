@@ -286,19 +286,26 @@ MC_FN void ball_reactions(int j, MC_GLOBAL const int* in_start,
                           MC_GLOBAL real4* accum) {
   const int b = in_start[j];
   const int e = in_start[j + 1];
-  if (e == b) return;
-  real4 f = force[j];
-  real4 t = torque[j];
-  real4 a = accum[j];
+  /* Most slots of a loose charge are zero: the ball's own sums are read
+   * and written only when a slot holds a force. */
+  real3 fs = make_real3(0, 0, 0), ts = make_real3(0, 0, 0);
+  real ds = R(0.0);
+  int touching = 0;
   for (int q = b; q < e; ++q) {
     MC_GLOBAL const real* slot = pair_out + MC_SLOT_REALS * q;
-    f.x += slot[0]; f.y += slot[1]; f.z += slot[2];
-    a.z += slot[3];
-    t.x += slot[4]; t.y += slot[5]; t.z += slot[6];
+    if (slot[0] == R(0.0) && slot[1] == R(0.0) && slot[2] == R(0.0)) continue;
+    touching = 1;
+    fs.x += slot[0]; fs.y += slot[1]; fs.z += slot[2];
+    ds += slot[3];
+    ts.x += slot[4]; ts.y += slot[5]; ts.z += slot[6];
   }
-  force[j] = f;
-  torque[j] = t;
-  accum[j] = a;
+  if (!touching) return;
+  const real4 f = force[j];
+  const real4 t = torque[j];
+  const real4 a = accum[j];
+  force[j] = make_real4(f.x + fs.x, f.y + fs.y, f.z + fs.z, f.w);
+  torque[j] = make_real4(t.x + ts.x, t.y + ts.y, t.z + ts.z, t.w);
+  accum[j] = make_real4(a.x, a.y, a.z + ds, a.w);
 }
 
 #endif /* MC_BALL_FORCES_H */
