@@ -10,8 +10,9 @@
  * ball_reactions adds a ball's incoming slots, which lie side by side, after
  * every ball is done. Each ball sums in a fixed order, so there are no
  * atomics and the result does not depend on thread order. A pair's stored
- * energy is booked to the ball that lists it (only its total is reported). Walls have infinite mass
- * and turn with the mill: their velocity at the contact point is ω ẑ × r. */
+ * energy is booked to the ball that lists it (only its total is reported).
+ * Walls have infinite mass and turn with the mill: their velocity at the
+ * contact point is ω ẑ × r. */
 #ifndef MC_BALL_FORCES_H
 #define MC_BALL_FORCES_H
 
@@ -106,7 +107,8 @@ MC_FN void ball_forces(
     MC_GLOBAL const real4* omega, MC_GLOBAL const int2* info,
     MC_GLOBAL const int* neigh_start, MC_GLOBAL const int* neigh_count,
     MC_GLOBAL int* neigh_index, MC_GLOBAL real* neigh_hist,
-    MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out, MC_GLOBAL int* wall_key, MC_GLOBAL real* wall_hist,
+    MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out,
+    MC_GLOBAL int* wall_key, MC_GLOBAL real* wall_hist,
     MC_GLOBAL real4* force, MC_GLOBAL real4* torque, MC_GLOBAL real4* accum,
     MC_GLOBAL int* status) {
   const int n = sp->n_balls;
@@ -275,7 +277,6 @@ MC_FN void ball_forces(
                         a.y + torque_axis * mill.omega * dt,
                         a.z + dissipated, elastic);
 }
-
 
 /* The partners' sides of ball j's pairs: its incoming slots in_start[j] ..
  * in_start[j + 1] of pair_out, one per pair listed by a lower ball, in

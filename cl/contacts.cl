@@ -49,8 +49,8 @@ __kernel void contacts_count(__global const SimParams* sp,
   neigh_count[i] = count;
 }
 
-/* The spring of the pair (old indices a < b) from a's side, if it was
- * carried; zero and 0 if not. */
+/* Whether the pair (old indices a < b) was carried; if so its spring, seen
+ * from a, goes to *h. */
 inline int find_carried(int a, int b, __global const int* carry_start,
                         __global const int* carry_count,
                         __global const int* carry_index,

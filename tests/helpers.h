@@ -2,14 +2,26 @@
 // a few balls with or without walls.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
+#include <set>
+#include <utility>
+#include <vector>
 
 #include "compute/context.h"
 #include "core/scene.h"
 #include "sim/solver.h"
 
 namespace mc::test {
+
+// Listed pairs as (lower id, higher id): neighbour_pairs() gives each pair
+// once, in the list that holds it.
+inline std::set<std::pair<int, int>> unordered(const std::vector<std::pair<int, int>>& pairs) {
+  std::set<std::pair<int, int>> out;
+  for (const auto& [a, b] : pairs) out.insert({std::min(a, b), std::max(a, b)});
+  return out;
+}
 
 inline compute::Context& context() {
   static compute::Context ctx;  // MILLCHARGE_DEVICE picks the device

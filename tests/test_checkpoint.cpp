@@ -249,8 +249,7 @@ TEST_CASE("neighbour lists grow past their first size and drop no contact", "[fa
   auto solver = make_solver(test::context(), s);
   const auto pairs = solver->neighbour_pairs();
   CHECK(pairs.size() > 4 * s.balls.size());
-  std::set<std::pair<int, int>> listed;
-  for (const auto& [a, b] : pairs) listed.insert({std::min(a, b), std::max(a, b)});
+  const std::set<std::pair<int, int>> listed = test::unordered(pairs);
   CHECK(listed.size() == pairs.size());
   const double cut = 2 * r + default_skin(s);
   std::size_t expected = 0;

@@ -68,12 +68,6 @@ std::set<std::pair<int, int>> brute_force(const std::vector<BallState>& balls, d
   return out;
 }
 
-std::set<std::pair<int, int>> unordered(const std::vector<std::pair<int, int>>& pairs) {
-  std::set<std::pair<int, int>> out;
-  for (const auto& [a, b] : pairs) out.insert({std::min(a, b), std::max(a, b)});
-  return out;
-}
-
 }  // namespace
 
 TEST_CASE("neighbour search equals brute force on random packings", "[contacts]") {
@@ -93,7 +87,7 @@ TEST_CASE("neighbour search equals brute force on random packings", "[contacts]"
     const double skin = sc.numerics.skin;
     auto s = make_solver(context(), sc);
     const auto pairs = s->neighbour_pairs();
-    const std::set<std::pair<int, int>> listed = unordered(pairs);
+    const std::set<std::pair<int, int>> listed = test::unordered(pairs);
     CHECK(listed.size() == pairs.size());  // each pair once, in one list only
     const auto balls = s->balls();
     // Every pair inside the cutoff is listed (a float guard of 1e-6 m aside)...
@@ -123,7 +117,7 @@ TEST_CASE("neighbour lists stay complete while the charge moves", "[contacts]") 
   auto s = make_solver(context(), sc);
   for (int round = 0; round < 5; ++round) {
     s->advance(2000);
-    const std::set<std::pair<int, int>> listed = unordered(s->neighbour_pairs());
+    const std::set<std::pair<int, int>> listed = test::unordered(s->neighbour_pairs());
     const auto touching = brute_force(s->balls(), 0.0, 0.0);
     int missing = 0;
     for (const auto& p : touching) missing += listed.count(p) == 0;

@@ -72,8 +72,8 @@ struct ReferenceSolver::State {
     for (int i = 0; i < n; ++i)
       ball_forces(i, &sp, pairs.data(), lifters.data(), mill, pos.data(), vel.data(), omega.data(),
                   info.data(), neigh_start.data(), neigh_count.data(), neigh_index.data(),
-                  neigh_hist.data(), neigh_rev.data(), pair_out.data(), wall_key.data(), wall_hist.data(), force.data(),
-                  torque.data(), accum.data(), &status);
+                  neigh_hist.data(), neigh_rev.data(), pair_out.data(), wall_key.data(), wall_hist.data(),
+                  force.data(), torque.data(), accum.data(), &status);
     for (int j = 0; j < n; ++j)
       ball_reactions(j, in_start.data(), pair_out.data(), force.data(), torque.data(), accum.data());
     save_history();

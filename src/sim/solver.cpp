@@ -96,6 +96,9 @@ class SolverImpl final : public Solver {
   void read_status();
   void wait_status();
   void lap(double StageTimes::*stage);
+  // Entries the lists are given room for when they hold `entries`: a
+  // sixteenth to spare.
+  static std::size_t list_capacity(std::size_t entries) { return entries + entries / 16 + 64; }
   // Reals of pair_out_ for `entries` slots.
   static std::size_t slot_reals(std::size_t entries) { return entries * MC_SLOT_REALS; }
   // Entries in the neighbour lists, from the host copies of starts and counts.
@@ -435,9 +438,8 @@ void SolverImpl<Real>::rebuild() {
   scan_.run(neigh_count_, neigh_start_, n);
   const int total = scan_.read_total();
   if (static_cast<std::size_t>(total) > neigh_index_.size()) {
-    // The lists grow as needed (with a sixteenth to spare): no contact is
-    // ever dropped.
-    const std::size_t cap = static_cast<std::size_t>(total) + total / 16 + 64;
+    // The lists grow as needed: no contact is ever dropped.
+    const std::size_t cap = list_capacity(static_cast<std::size_t>(total));
     neigh_index_.resize(cap);
     neigh_hist_.resize(cap * 3);
   }
@@ -764,7 +766,7 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
       neigh_count_.host[i] = static_cast<int>(kept) - neigh_start_.host[i];
     }
     // Half the entries: the lists shrink to what a rebuild would give them.
-    const std::size_t cap = kept + kept / 16 + 64;
+    const std::size_t cap = list_capacity(kept);
     if (cap < neigh_index_.size()) {
       std::vector<int> links(neigh_index_.host.begin(), neigh_index_.host.begin() + kept);
       std::vector<Real> hist(neigh_hist_.host.begin(), neigh_hist_.host.begin() + 3 * kept);
