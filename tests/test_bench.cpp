@@ -42,6 +42,15 @@ TEST_CASE("bench prints one JSON line with consistent figures on the lab mill", 
   CHECK_THAT(j.at("particle_updates_per_s").get<double>(), WithinRel(n * 200.0 / wall, 1e-9));
   CHECK_THAT(j.at("bytes_per_ball").get<double>(), WithinRel(j.at("device_bytes").get<double>() / n, 1e-9));
   CHECK(j.at("bytes_per_ball").get<double>() < 1000);
+  // Ten timed parts of 20 steps: the total rate lies within their spread.
+  CHECK(j.at("parts").get<int>() == 10);
+  const auto& parts = j.at("part_updates_per_s");
+  const double slowest = parts.at("min"), typical = parts.at("median"), best = parts.at("max");
+  CHECK(slowest > 0);
+  CHECK(slowest <= typical);
+  CHECK(typical <= best);
+  CHECK(j.at("particle_updates_per_s").get<double>() >= slowest * (1 - 1e-9));
+  CHECK(j.at("particle_updates_per_s").get<double>() <= best * (1 + 1e-9));
   // The charge has fallen onto itself after 0.05 s: contacts exist, and
   // the lists hold every contact plus the skin's near misses.
   const double contacts = j.at("contacts_per_ball");

@@ -17,14 +17,16 @@
 #include <cstdlib>
 #include <iostream>
 #include <stdexcept>
+#include <string>
 
 #include "app/commands.h"
 #include "compute/context.h"
 
 namespace {
 
-void add_case_options(CLI::App* cmd, mc::app::CaseOptions& o, bool with_run_options) {
-  cmd->add_option("case", o.case_path, "case file (TOML); default: assets/cases/lab.toml");
+void add_case_options(CLI::App* cmd, mc::app::CaseOptions& o, bool with_run_options,
+                      const char* default_case = "lab.toml") {
+  cmd->add_option("case", o.case_path, std::string("case file (TOML); default: assets/cases/") + default_case);
   cmd->add_option("--set", o.overrides, "override a case key, e.g. --set mill.speed_fraction=0.8 (repeatable)")
       ->type_name("KEY=VALUE");
   if (with_run_options) {
@@ -86,7 +88,7 @@ int main(int argc, char** argv) {
 
   mc::app::BenchOptions bo;
   auto* bench = app.add_subcommand("bench", "time the solver on a turning charge; prints one JSON line");
-  add_case_options(bench, bo.c, true);
+  add_case_options(bench, bo.c, true, "bench_100k.toml");
   bench->add_option("--steps", bo.steps, "timed steps (default: about 10 s worth)")->check(CLI::PositiveNumber);
   bench->add_option("--warmup", bo.warmup,
                     "simulated seconds of the turning mill before the timing (default 0.25; 0 with --from)")
