@@ -48,13 +48,14 @@ done
 python3 - "$out" "${rows[@]}" <<'PY'
 import json, sys
 out, rows = sys.argv[1], sys.argv[2:]
-print("| case | balls | device | precision | steps/s | particle-updates/s | contacts/ball | B/ball | binning | contacts | forces | motion | reductions |")
-print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+print("| case | balls | device | precision | steps/s | particle-updates/s | its ten parts: slowest–fastest | contacts/ball | B/ball | binning | contacts | forces | motion | reductions |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 for r in rows:
     j = json.load(open(f"{out}/{r}.json"))
     s = j["stages"]
+    p = j["part_updates_per_s"]
     print(f"| {r} ({j['case']}) | {j['n_particles']:,} | {j['device']} | {j['precision']} | {j['steps_per_s']:.1f} | "
-          f"{j['particle_updates_per_s']:.3g} | {j['contacts_per_ball']:.2f} | {j['bytes_per_ball']:.0f} | "
+          f"{j['particle_updates_per_s']:.3g} | {p['min']:.3g}–{p['max']:.3g} | {j['contacts_per_ball']:.2f} | {j['bytes_per_ball']:.0f} | "
           + " | ".join(f"{100*s[k]:.0f} %" for k in ("binning", "contacts", "forces", "motion", "reductions")) + " |")
 PY
 echo "bench.sh: JSON lines in $out" >&2
