@@ -96,3 +96,30 @@ TEST_CASE("bench starts from a run's checkpoint with --from", "[bench]") {
   CHECK(j.at("list_entries_per_ball").get<double>() > 4);
   std::system(("rm -rf " + dir).c_str());
 }
+
+TEST_CASE("the law probe runs the law both ways and they agree with Hertz", "[bench]") {
+  int status = -1;
+  const std::string out = run_capture(std::string(MC_LAW_PROBE) + " --pairs 20000", status);
+  REQUIRE(status == 0);
+  // Each line: "<form>: <ns> ns per pair (mean |F| <N> N)".
+  auto figures = [&](const std::string& form, double& ns, double& force) {
+    const auto at = out.find(form + ":");
+    REQUIRE(at != std::string::npos);
+    REQUIRE(std::sscanf(out.c_str() + at + form.size() + 1, " %lf ns per pair (mean |F| %lf N)", &ns, &force) == 2);
+  };
+  double ns_one = 0, f_one = 0, ns_lanes = 0, f_lanes = 0;
+  figures("one pair at a time", ns_one, f_one);
+  figures("in SIMD lanes", ns_lanes, f_lanes);
+  CHECK(ns_one > 0);
+  CHECK(ns_lanes > 0);
+  CHECK_THAT(f_lanes, WithinRel(f_one, 1e-4));
+  // 10 mm steel balls overlapping by 0.1 mm: the Hertz force is
+  // 4/3 E* sqrt(R*) d^1.5 = 1.036e4 N along an axis; the dashpots and the
+  // tangential force of the random speeds add to the sum of |F|'s parts.
+  CHECK(f_one > 1.0e4);
+  CHECK(f_one < 1.3e4);
+  int bad = -1;
+  run_capture(std::string(MC_LAW_PROBE) + " --pairs 5", bad);
+  CHECK(WIFEXITED(bad));
+  CHECK(WEXITSTATUS(bad) == 2);
+}
