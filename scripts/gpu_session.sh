@@ -53,6 +53,7 @@ if [ "$build_root" != "$root" ]; then
 fi
 mkdir -p build/tests
 cp "$kit/bin/millcharge" build/millcharge
+cp "$kit/bin/millcharge_law_probe" build/millcharge_law_probe
 cp "$kit/bin/millcharge_tests" build/tests/millcharge_tests
 
 {
@@ -72,6 +73,7 @@ if [ -n "$rows" ]; then
   [ -n "$steps" ] && args+=(--steps "$steps")
   bash scripts/bench.sh "${args[@]}" > "$out/bench.md" 2> "$out/bench.err" || status=1
   cat "$out/bench.md"
+  build/millcharge_law_probe --device "$device" 2>&1 | tee "$out/law_probe.txt" || status=1
   dir=$(sed -n 's/^bench.sh: JSON lines in //p' "$out/bench.err" | tail -1)
   [ -n "$dir" ] && cat "$dir"/*.json > "$out/bench.jsonl"
   tail -3 "$out/bench.err" >&2
