@@ -1,9 +1,10 @@
 #!/bin/bash
 # Packs, on the Debian build machine, what a GPU machine without this
 # project's packages needs to run millcharge's tests and benchmark there:
-# the programs (millcharge, the law probe, the tests) and the shared libraries they load that are not glibc's
-# or the compiler's own (the OpenCL ICD loader above all, plus GLFW, GLEW,
-# the GL dispatch and X client libraries the viewer code links), and clinfo.
+# the programs (millcharge, the law probe, the tests) and the shared
+# libraries they load that are not glibc's or the compiler's own (the
+# OpenCL ICD loader above all, plus GLFW, GLEW, the GL dispatch and X
+# client libraries the viewer code links), and clinfo.
 #
 #   bash scripts/gpu_kit.sh          # writes gpu-kit/ (git-ignored), ~5 MB
 #

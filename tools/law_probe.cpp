@@ -17,26 +17,46 @@
 #include "compute/buffer.h"
 #include "compute/context.h"
 #include "compute/program.h"
+#include "core/scene.h"
 #include "sim/layout.hpp"
+#include "sim/tables.h"
 
 namespace {
 
 using namespace mc;
 using compute::Buffer;
 
-// A lattice of 20 mm steel balls 19.9 mm apart (every pair of neighbours
-// overlaps by 0.1 mm), random speeds and spins; `pairs` neighbour pairs in
-// the order of their lower ball, as a half list holds them.
+// Steel on steel as a case's defaults give it (Material's), Hertz, e = 0.4,
+// friction 0.4, rolling friction 0.01: the coefficients the solver derives.
+Scene steel_scene() {
+  Scene s;
+  s.materials = {Material{"steel"}};
+  s.wall_material = Material{"steel"};
+  Interaction in;
+  in.restitution = 0.4;
+  in.mu_slide = 0.4;
+  in.mu_roll = 0.01;
+  s.set_all_interactions(in);
+  s.numerics.law = ContactLaw::hertz;
+  return s;
+}
+
+// A lattice of 20 mm balls 19.9 mm apart (every pair of neighbours overlaps
+// by 0.1 mm), random speeds and spins; `pairs` neighbour pairs in the order
+// of their lower ball, as a half list holds them.
 struct Charge {
   std::vector<f32::real4> pos, vel, omega;
   std::vector<int> ball_i, ball_j;
   std::vector<float> spring;
 };
 
-Charge make_charge(int pairs) {
-  const int side = 60, layers = (pairs / 3) / (side * side) + 2;
+Charge make_charge(const Scene& scene, int pairs) {
+  const int side = 60, layers = (pairs / 3) / ((side - 1) * (side - 1)) + 2;
   const int balls = side * side * layers;
-  const float r = 0.01f, rho = 7800, m = rho * 4.0f / 3.0f * 3.14159265f * r * r * r;
+  const float r = 0.01f;
+  Ball ball;
+  ball.radius = r;
+  const float m = static_cast<float>(ball_mass(scene, ball));
   std::mt19937 rng(1);
   std::uniform_real_distribution<float> u(-1, 1);
   Charge c;
@@ -46,18 +66,23 @@ Charge make_charge(int pairs) {
     c.vel.push_back({0.5f * u(rng), 0.5f * u(rng), 0.5f * u(rng), 1 / m});
     c.omega.push_back({20 * u(rng), 20 * u(rng), 20 * u(rng), 1 / (0.4f * m * r * r)});
   }
-  const int step[3] = {1, side, side * side};
-  for (int p = 0; p < pairs; ++p) {
-    const int b = p / 3;  // each ball lists its +x, +y and +z neighbours
-    c.ball_i.push_back(b);
-    c.ball_j.push_back(b + step[p % 3]);
+  // Each ball lists its +x, +y and +z neighbours that lie in the lattice.
+  for (int b = 0; static_cast<int>(c.ball_i.size()) < pairs; ++b) {
+    const int x = b % side, y = (b / side) % side;
+    const int next[3] = {x + 1 < side ? b + 1 : -1, y + 1 < side ? b + side : -1, b + side * side};
+    for (int d = 0; d < 3 && static_cast<int>(c.ball_i.size()) < pairs; ++d)
+      if (next[d] >= 0) {
+        c.ball_i.push_back(b);
+        c.ball_j.push_back(next[d]);
+      }
   }
   c.spring.resize(3 * static_cast<std::size_t>(pairs));
   for (float& s : c.spring) s = 1e-6f * u(rng);
   return c;
 }
 
-double time_form(compute::Context& ctx, const Charge& c, bool lanes, double* force_check) {
+double time_form(compute::Context& ctx, const f64::PairParams& steel, const Charge& c, bool lanes,
+                 double* force_check) {
   compute::BuildOptions opt;
   if (lanes) opt.define("MC_PROBE_LANES");
   compute::Program prog(ctx, {"law_probe.cl"}, opt, false);
@@ -68,8 +93,8 @@ double time_form(compute::Context& ctx, const Charge& c, bool lanes, double* for
     buf.write_to_device();
   };
   Buffer<f32::PairParams> pairs(ctx, 1, "pairs");
-  // steel on steel: E* = E / (2 (1 - nu^2)), G* = E / (4 (2 - nu)(1 + nu)); damping for e ~ 0.4
-  pairs.host[0] = {0, 0, 1.0989e11f, 2.1368e10f, 0.5f, 0.4f, 0.01f, 0.4f};
+  pairs.host[0] = {float(steel.kn),      float(steel.kt_over_kn), float(steel.e_star),  float(steel.g_star),
+                   float(steel.damping), float(steel.mu_slide),   float(steel.mu_roll), float(steel.restitution)};
   pairs.write_to_device();
   Buffer<int> bi(ctx, n, "ball_i"), bj(ctx, n, "ball_j");
   Buffer<f32::real4> pos(ctx, c.pos.size(), "pos"), vel(ctx, c.pos.size(), "vel"), om(ctx, c.pos.size(), "omega");
@@ -117,10 +142,12 @@ int main(int argc, char** argv) {
   }
   try {
     compute::Context ctx(device);
-    const Charge c = make_charge(pairs);
+    const Scene scene = steel_scene();
+    const f64::PairParams steel = scene_tables(scene).pairs[0];
+    const Charge c = make_charge(scene, pairs);
     double f_one = 0, f_lanes = 0;
-    const double one = time_form(ctx, c, false, &f_one);
-    const double lanes = time_form(ctx, c, true, &f_lanes);
+    const double one = time_form(ctx, steel, c, false, &f_one);
+    const double lanes = time_form(ctx, steel, c, true, &f_lanes);
     std::printf("device: %s, %d compute units; %d touching pairs, float, Hertz\n", ctx.info().label().c_str(),
                 ctx.info().compute_units, pairs);
     std::printf("one pair at a time: %.1f ns per pair (mean |F| %.4g N)\n", 1e9 * one, f_one);
