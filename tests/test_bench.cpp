@@ -77,7 +77,7 @@ TEST_CASE("bench refuses a bad case with status 2 and a message", "[bench]") {
   CHECK(out.find("mill.diameter") != std::string::npos);
 }
 
-TEST_CASE("bench starts from a run's checkpoint with --from", "[bench]") {
+TEST_CASE("bench starts from a run's checkpoint with --from, and repeats its charge with --tile", "[bench]") {
   const std::string dir = "/tmp/millcharge-test-bench-from-" + std::to_string(::getpid());
   int status = -1;
   run_capture(std::string(MC_BINARY) + " run --quiet --force --set run.duration=0.02 --set run.settle=0.2 --set run.warmup=0 --out " +
@@ -94,6 +94,28 @@ TEST_CASE("bench starts from a run's checkpoint with --from", "[bench]") {
   // all start apart, and would touch nothing 100 steps later).
   CHECK(j.at("contacts_per_ball").get<double>() > 0.2);
   CHECK(j.at("list_entries_per_ball").get<double>() > 4);
+  CHECK(j.at("tile").get<int>() == 1);
+
+  // --tile 3: the same charge three times along a mill three times as long,
+  // still as dense (the copies keep their places, so their contacts).
+  const std::string tiled =
+      run_capture(std::string(MC_BINARY) + " bench --from " + dir + " --tile 3 --steps 50 --quiet", status);
+  REQUIRE(status == 0);
+  const auto t = nlohmann::json::parse(tiled);
+  CHECK(t.at("n_particles").get<long>() == 3 * 2714);
+  CHECK(t.at("tile").get<int>() == 3);
+  CHECK(t.at("case").get<std::string>().find("x3") != std::string::npos);
+  CHECK(t.at("contacts_per_ball").get<double>() > 0.5 * j.at("contacts_per_ball").get<double>());
+  CHECK_THAT(t.at("list_entries_per_ball").get<double>(),
+             WithinRel(j.at("list_entries_per_ball").get<double>(), 0.2));
+  CHECK(t.at("bytes_per_ball").get<double>() < 400);
+
+  // --tile needs a charge to repeat.
+  const std::string bad = run_capture(std::string(MC_BINARY) + " bench " + MC_ASSET_DIR +
+                                          "/cases/lab.toml --tile 2 --quiet 2>&1",
+                                      status);
+  CHECK(WEXITSTATUS(status) == 2);
+  CHECK(bad.find("--tile") != std::string::npos);
   std::system(("rm -rf " + dir).c_str());
 }
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "compute/context.h"
+#include "core/charge_edit.h"
 #include "core/mill_case.h"
 #include "core/morrell.h"
 #include "io/atomic_file.h"
@@ -533,6 +534,52 @@ int cmd_run(const RunOptions& o) {
   return 0;
 }
 
+// The charge of checkpoint `cp` (the run of case `p`) `tile` times end to
+// end along the mill axis, in the same mill made `tile` times as long: a
+// settled, turning charge of `tile` times the balls with the same work per
+// ball, for timing large charges without a warm-up that a small machine
+// cannot afford. The balls keep their positions (shifted by a length per
+// copy), velocities and spins; contact springs start afresh, and the end
+// plates between copies are gone.
+Prepared tile_charge(compute::Context& ctx, const Prepared& p, const io::Checkpoint& cp, int tile) {
+  std::vector<BallState> slice;
+  {
+    auto solver = make_solver(ctx, p.scene);
+    solver->restore_state(cp.solver);
+    slice = solver->balls();
+  }
+  const long total = static_cast<long>(slice.size()) * tile;
+  if (total > 500'000'000L)
+    throw std::invalid_argument("--tile " + std::to_string(tile) + ": " + thousands(total) +
+                                " balls is more than a run can hold (at most 500,000,000)");
+  Prepared t = p;
+  t.c.length = p.c.length * tile;
+  t.c.name = p.c.name + " x" + std::to_string(tile);
+  t.d = derive(t.c);
+  std::vector<Ball> balls;
+  balls.reserve(static_cast<std::size_t>(total));
+  for (int k = 0; k < tile; ++k)
+    for (const BallState& s : slice) {
+      Ball b;
+      b.id = static_cast<int>(balls.size());
+      b.material = s.material;
+      b.radius = s.radius;
+      b.position = {s.position.x, s.position.y, s.position.z + k * p.c.length};
+      b.velocity = s.velocity;
+      b.omega = s.omega;
+      balls.push_back(b);
+    }
+  ChargeEditOptions eo;
+  eo.mill_angle = cp.solver.mill_angle;
+  eo.mill_omega = t.d.omega;
+  ChargeEditResult r = edit_charge(t.c, t.d, std::move(balls), eo);
+  if (r.added != 0 || r.removed != 0 || r.moved != 0)
+    throw std::invalid_argument("--tile " + std::to_string(tile) + ": " + std::to_string(r.moved + r.removed) +
+                                " balls of " + cp.case_name + "'s charge overlap the walls of the longer mill");
+  t.scene = std::move(r.scene);
+  return t;
+}
+
 // The benchmark: the case's charge packed and turning for a warm-up, then
 // timed steps with the observers a run has (a row of observables every output
 // interval, ten contact-profile samples per row), then a shorter pass with
@@ -551,18 +598,21 @@ int cmd_bench(const BenchOptions& o) {
   } else {
     p = prepare(o.c, io::case_dir() / "bench_100k.toml");
   }
-  const MillCase& c = p.c;
-  const MillDerived& d = p.d;
+  if (o.tile > 1 && o.from.empty())
+    throw std::invalid_argument("--tile " + std::to_string(o.tile) + ": needs --from DIR (the charge to repeat)");
   compute::Context ctx(o.c.device);
   auto note = [&](const std::string& s) {
     if (!o.quiet) std::fprintf(stderr, "bench: %s\n", s.c_str());
   };
-  note(c.name + ": " + thousands(d.n_balls) + " balls on " + ctx.info().label());
+  if (o.tile > 1) p = tile_charge(ctx, p, cp, o.tile);
+  const MillCase& c = p.c;
+  const MillDerived& d = p.d;
+  const long n = static_cast<long>(p.scene.balls.size());
+  note(c.name + ": " + thousands(n) + " balls on " + ctx.info().label());
   const auto t_build = clock::now();
   auto solver = make_solver(ctx, p.scene);
-  if (!o.from.empty()) solver->restore_state(cp.solver);
+  if (!o.from.empty() && o.tile == 1) solver->restore_state(cp.solver);
   solver->set_mill_omega(d.omega);
-  const long n = d.n_balls;
   const double warmup_s = o.warmup >= 0 ? o.warmup : o.from.empty() ? 0.25 : 0.0;
   const long warmup = std::lround(warmup_s / d.dt);
   const long out_steps = std::max(1L, std::lround(c.output_interval / d.dt));
@@ -649,6 +699,7 @@ int cmd_bench(const BenchOptions& o) {
   j["bytes_per_ball"] = static_cast<double>(solver->device_bytes()) / n;
   j["warmup_steps"] = warmup;
   j["from"] = o.from.empty() ? nlohmann::json() : nlohmann::json(o.from);
+  j["tile"] = o.tile;
   j["stage_steps"] = stage_steps;
   j["stage_timed_updates_per_s"] = static_cast<double>(n) * stage_steps / total;
   j["stages"] = {{"binning", st.binning_s / total},
