@@ -5,18 +5,20 @@
 # per ball). Prints a Markdown table on stdout and keeps each JSON line in
 # runs/bench-DATE/. Usage:
 #   bash scripts/bench.sh [--device SPEC] [--only ROWS] [--steps N]
-# ROWS (default all): lab,10k-settled,100k-settled,1M-settled,10k,100k,1M,D.
-# The rows without "settled" warm up 0.25 s of simulated time first (the
+# ROWS (default all): lab,10k-settled,tile-10k,tile-100k,tile-1M,10k,100k,1M,D.
+# lab, 10k, 100k, 1M and D warm up 0.25 s of simulated time first (the
 # packed charge falls into a dense bed); on 2 CPU cores mill D takes most of
-# an hour, and the 1M row's warm-up as long. The settled rows first run the
+# an hour, and the 1M row's warm-up as long. The other rows first run the
 # 10k mill until its charge has settled and turned 0.05 s (`millcharge run`,
 # a few minutes on 2 cores), then time the steps after that from the run's
-# checkpoint (`bench --from`): as it is (10k), and repeated 10 and 100
-# times along the axis of a mill as many times as long (`--tile`: 100k and
-# 1M balls of the same settled charge, no warm-up).
+# checkpoint (`bench --from`): 10k-settled as it is; tile-10k, tile-100k
+# and tile-1M with its balls laid anew 1, 10 and 100 times along the axis
+# of a mill as many times as long (`--tile`: the same settled charge, the
+# same state per ball, no warm-up), which shows the cost per ball from 10k
+# to 1M balls.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-device=""; only="lab,10k-settled,100k-settled,1M-settled,10k,100k,1M,D"; steps=""
+device=""; only="lab,10k-settled,tile-10k,tile-100k,tile-1M,10k,100k,1M,D"; steps=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --device) device="$2"; shift 2 ;;
@@ -32,8 +34,9 @@ args=("${dev[@]}"); [ -n "$steps" ] && args+=(--steps "$steps")
 declare -A case_of=(
   [lab]="assets/cases/lab.toml"
   [10k-settled]="--from $out/settled-10k"
-  [100k-settled]="--from $out/settled-10k --tile 10"
-  [1M-settled]="--from $out/settled-10k --tile 100"
+  [tile-10k]="--from $out/settled-10k --tile 1"
+  [tile-100k]="--from $out/settled-10k --tile 10"
+  [tile-1M]="--from $out/settled-10k --tile 100"
   [10k]="assets/cases/bench_100k.toml --set mill.length=0.305"
   [100k]="assets/cases/bench_100k.toml"
   [1M]="assets/cases/bench_100k.toml --set mill.length=30.5"
@@ -42,12 +45,12 @@ declare -A case_of=(
 IFS=',' read -r -a rows <<< "$only"
 for r in "${rows[@]}"; do
   [ -n "${case_of[$r]:-}" ] || {
-    echo "bench.sh: no row '$r' (lab, 10k-settled, 100k-settled, 1M-settled, 10k, 100k, 1M, D)" >&2; exit 2; }
+    echo "bench.sh: no row '$r' (lab, 10k-settled, tile-10k, tile-100k, tile-1M, 10k, 100k, 1M, D)" >&2; exit 2; }
 done
 mkdir -p "$out"
 for r in "${rows[@]}"; do
   echo "bench.sh: $r" >&2
-  if [[ "$r" == *-settled && ! -f "$out/settled-10k/checkpoint.bin" ]]; then
+  if [[ ( "$r" == 10k-settled || "$r" == tile-* ) && ! -f "$out/settled-10k/checkpoint.bin" ]]; then
     build/millcharge run assets/cases/bench_100k.toml --set mill.length=0.305 --set run.duration=0.05 \
       --set run.warmup=0 "${dev[@]}" --out "$out/settled-10k" --quiet > "$out/settled-10k.log"
   fi

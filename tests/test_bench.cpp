@@ -94,7 +94,7 @@ TEST_CASE("bench starts from a run's checkpoint with --from, and repeats its cha
   // all start apart, and would touch nothing 100 steps later).
   CHECK(j.at("contacts_per_ball").get<double>() > 0.2);
   CHECK(j.at("list_entries_per_ball").get<double>() > 4);
-  CHECK(j.at("tile").get<int>() == 1);
+  CHECK(j.at("tile").is_null());
 
   // --tile 3: the same charge three times along a mill three times as long,
   // still as dense (the copies keep their places, so their contacts).

@@ -534,12 +534,13 @@ int cmd_run(const RunOptions& o) {
   return 0;
 }
 
-// The charge of checkpoint `cp` (the run of case `p`) `tile` times end to
-// end along the mill axis, in the same mill made `tile` times as long: a
-// settled, turning charge of `tile` times the balls with the same work per
-// ball, for timing large charges without a warm-up that a small machine
-// cannot afford. The balls keep their positions (shifted by a length per
-// copy), velocities and spins; contact springs start afresh, and the end
+// The charge of checkpoint `cp` (the run of case `p`) laid anew `tile` times
+// end to end along the mill axis, in the same mill made `tile` times as
+// long: a settled, turning charge of `tile` times the balls with the same
+// work per ball, for timing large charges without a warm-up that a small
+// machine cannot afford. The balls keep their positions (shifted by a
+// length per copy), velocities and spins; contact springs start afresh (so
+// `tile` 1 gives the same state as the others, per ball), and the end
 // plates between copies are gone.
 Prepared tile_charge(compute::Context& ctx, const Prepared& p, const io::Checkpoint& cp, int tile) {
   std::vector<BallState> slice;
@@ -554,7 +555,7 @@ Prepared tile_charge(compute::Context& ctx, const Prepared& p, const io::Checkpo
                                 " balls is more than a run can hold (at most 500,000,000)");
   Prepared t = p;
   t.c.length = p.c.length * tile;
-  t.c.name = p.c.name + " x" + std::to_string(tile);
+  if (tile > 1) t.c.name = p.c.name + " x" + std::to_string(tile);
   t.d = derive(t.c);
   std::vector<Ball> balls;
   balls.reserve(static_cast<std::size_t>(total));
@@ -598,20 +599,20 @@ int cmd_bench(const BenchOptions& o) {
   } else {
     p = prepare(o.c, io::case_dir() / "bench_100k.toml");
   }
-  if (o.tile > 1 && o.from.empty())
+  if (o.tile > 0 && o.from.empty())
     throw std::invalid_argument("--tile " + std::to_string(o.tile) + ": needs --from DIR (the charge to repeat)");
   compute::Context ctx(o.c.device);
   auto note = [&](const std::string& s) {
     if (!o.quiet) std::fprintf(stderr, "bench: %s\n", s.c_str());
   };
-  if (o.tile > 1) p = tile_charge(ctx, p, cp, o.tile);
+  if (o.tile > 0) p = tile_charge(ctx, p, cp, o.tile);
   const MillCase& c = p.c;
   const MillDerived& d = p.d;
   const long n = static_cast<long>(p.scene.balls.size());
   note(c.name + ": " + thousands(n) + " balls on " + ctx.info().label());
   const auto t_build = clock::now();
   auto solver = make_solver(ctx, p.scene);
-  if (!o.from.empty() && o.tile == 1) solver->restore_state(cp.solver);
+  if (!o.from.empty() && o.tile == 0) solver->restore_state(cp.solver);
   solver->set_mill_omega(d.omega);
   const double warmup_s = o.warmup >= 0 ? o.warmup : o.from.empty() ? 0.25 : 0.0;
   const long warmup = std::lround(warmup_s / d.dt);
@@ -699,7 +700,7 @@ int cmd_bench(const BenchOptions& o) {
   j["bytes_per_ball"] = static_cast<double>(solver->device_bytes()) / n;
   j["warmup_steps"] = warmup;
   j["from"] = o.from.empty() ? nlohmann::json() : nlohmann::json(o.from);
-  j["tile"] = o.tile;
+  j["tile"] = o.tile > 0 ? nlohmann::json(o.tile) : nlohmann::json();
   j["stage_steps"] = stage_steps;
   j["stage_timed_updates_per_s"] = static_cast<double>(n) * stage_steps / total;
   j["stages"] = {{"binning", st.binning_s / total},

@@ -32,8 +32,9 @@ struct BenchOptions {
                        // < 0: 0.25 s from a packed charge (it collapses into
                        // a dense bed), 0 from a checkpoint
   std::string from;    // --from DIR: start from the checkpoint of a run in DIR
-  int tile = 1;        // --tile N (with --from): the checkpoint's charge N times
-                       // end to end along the axis, in a mill N times as long
+  int tile = 0;        // --tile N (with --from): the checkpoint's charge laid
+                       // anew N times end to end along the axis, in a mill N
+                       // times as long; 0: not given (the checkpoint's state)
   bool quiet = false;  // no progress lines on stderr
 };
 

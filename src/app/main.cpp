@@ -96,8 +96,8 @@ int main(int argc, char** argv) {
   bench->add_option("--from", bo.from, "start from the checkpoint of a run in DIR (a settled, turning charge)")
       ->type_name("DIR");
   bench->add_option("--tile", bo.tile,
-                    "with --from: the checkpoint's charge N times end to end along the axis, in a mill N times "
-                    "as long (a settled charge of N times the balls, no warm-up)")
+                    "with --from: the checkpoint's balls laid anew (fresh contact springs) N times end to end "
+                    "along the axis, in a mill N times as long (a settled charge of N times the balls, no warm-up)")
       ->check(CLI::Range(1, 10000))
       ->type_name("N");
   bench->add_flag("--quiet", bo.quiet, "no progress lines");
