@@ -7,7 +7,8 @@
 #   bash scripts/gpu_session.sh [--tests] [--bench ROWS] [--steps N] [--device SPEC]
 #
 # --tests runs millcharge_tests (all but the viewer's) on the GPU; --bench
-# runs scripts/bench.sh for ROWS (default lab,10k,100k,1M,D). With neither,
+# runs scripts/bench.sh for ROWS (its row names, e.g.
+# lab,tile-10k,tile-100k,tile-1M,100k,D) and the law probe. With neither,
 # it only lists the devices. It finds NVIDIA's OpenCL library
 # (libnvidia-opencl.so.1; MC_OPENCL_LIB names another driver's), points an
 # ICD file of its own at it, and puts gpu-kit/lib on the library path, so
