@@ -1,6 +1,8 @@
 #include "core/restitution.h"
 
 #include <cmath>
+#include <map>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
@@ -35,10 +37,9 @@ double restitution_for_damping(ContactLaw law, double d) {
   return 0.0;  // overdamped: the ball stays
 }
 
-double damping_for_restitution(ContactLaw law, double e) {
-  if (!(e > 0.0 && e <= 1.0))
-    throw std::invalid_argument("restitution must be in (0, 1], got " + std::to_string(e));
-  if (e >= 1.0) return 0.0;
+namespace {
+
+double solve_damping(ContactLaw law, double e) {
   // The ratio falls monotonically with d; bracket then bisect.
   double lo = 0.0, hi = 1.0;
   while (restitution_for_damping(law, hi) > e) hi *= 2.0;
@@ -51,6 +52,28 @@ double damping_for_restitution(ContactLaw law, double e) {
     if (hi - lo < 1e-9 * hi) break;
   }
   return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+double damping_for_restitution(ContactLaw law, double e) {
+  if (!(e > 0.0 && e <= 1.0))
+    throw std::invalid_argument("restitution must be in (0, 1], got " + std::to_string(e));
+  if (e >= 1.0) return 0.0;
+  // The bisection integrates some thirty contacts (about 46 ms), and every
+  // scene built (a run's start, each edit in the viewer's panel) asks again
+  // for the same few materials: each (law, e) is solved once per process.
+  static std::mutex mutex;
+  static std::map<std::pair<int, double>, double> solved;
+  const std::pair<int, double> key{static_cast<int>(law), e};
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = solved.find(key); it != solved.end()) return it->second;
+  }
+  const double d = solve_damping(law, e);
+  const std::lock_guard<std::mutex> lock(mutex);
+  solved.emplace(key, d);
+  return d;
 }
 
 }  // namespace mc
