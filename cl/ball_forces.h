@@ -100,6 +100,197 @@ MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel,
   }
 }
 
+/* What a ball gathers in a step: force and torque on it, the torque of its
+ * wall contacts about the mill axis, the energy lost and the energy stored. */
+typedef struct {
+  real3 f, t;
+  real torque_axis, dissipated, elastic;
+} BallSums;
+
+/* The partner's side of a touching pair that ball i lists, into the
+ * partner's incoming slot (MC_SLOT_REALS reals): −F, half the energy lost,
+ * and its torque. j sees −n, −F and −M_roll with its own lever arm, so its
+ * tangential torque is −arm_j·(−n) × (−F) = −arm_j·n × F (n × F = n × F_t). */
+MC_FN void store_partner_side(MC_GLOBAL real* slot, ContactGeom g, ContactOut c, real r_j) {
+  const real arm_j = r_j - R(0.5) * g.overlap;
+  const v3 t_j = v3_sub(v3_scale(-arm_j, v3_cross(g.normal, c.force)), c.rolling);
+  slot[0] = -c.force.x;
+  slot[1] = -c.force.y;
+  slot[2] = -c.force.z;
+  slot[3] = R(0.5) * c.dissipated;
+  slot[4] = t_j.x;
+  slot[5] = t_j.y;
+  slot[6] = t_j.z;
+}
+
+/* A pair that opened: its spring and its reaction are gone. */
+MC_FN void pair_opened(int k, int j, MC_GLOBAL int* neigh_index, MC_GLOBAL const int* neigh_rev,
+                       MC_GLOBAL real* pair_out) {
+  neigh_index[k] = j;
+  MC_GLOBAL real* slot = pair_out + MC_SLOT_REALS * neigh_rev[k];
+  for (int r = 0; r < MC_SLOT_REALS; ++r) slot[r] = R(0.0);
+}
+
+/* One touching pair, list entry k of ball i (its position, velocity, spin,
+ * material; link: the entry as it was; pj4: the partner's position):
+ * the law, ball i's side into its sums, the partner's into its slot, the
+ * spring and the touching flag into the entry. */
+MC_FN void pair_contact(real4 pi4, real4 vi, real4 wi, int mat_i, int k, int link, real4 pj4,
+                        MC_GLOBAL const SimParams* sp, MC_GLOBAL const PairParams* pairs,
+                        MC_GLOBAL const real4* vel, MC_GLOBAL const real4* omega,
+                        MC_GLOBAL const int2* info, MC_GLOBAL int* neigh_index,
+                        MC_GLOBAL real* neigh_hist, MC_GLOBAL const int* neigh_rev,
+                        MC_GLOBAL real* pair_out, int law, BallSums* s) {
+  const int j = MC_LINK_PARTNER(link);
+  const real4 vj = vel[j], wj = omega[j];
+  const ContactGeom g = pair_geometry(v3_of(xyz_of(pi4)), pi4.w, v3_of(xyz_of(vi)), v3_of(xyz_of(wi)), vi.w, wi.w,
+                                      v3_of(xyz_of(pj4)), pj4.w, v3_of(xyz_of(vj)), v3_of(xyz_of(wj)), vj.w, wj.w);
+  const PairParams pp = pairs[MC_PAIR_INDEX(sp, mat_i, info[j].y)];
+  /* A new contact starts with no spring. */
+  const v3 spring = MC_LINK_TOUCHING(link) ? v3_of(load_hist(neigh_hist, k)) : v3_make(0, 0, 0);
+  const ContactOut c = contact_force(pp, g, spring, sp->dt, law);
+  s->f += real3_of(c.force);
+  s->t += real3_of(c.torque);
+  s->dissipated += R(0.5) * c.dissipated;
+  s->elastic += c.elastic;
+  store_partner_side(pair_out + MC_SLOT_REALS * neigh_rev[k], g, c, pj4.w);
+  store_hist(real3_of(c.spring), neigh_hist, k);
+  if (!MC_LINK_TOUCHING(link)) neigh_index[k] = MC_LINK_TOUCHED(j);
+}
+
+/* Gravity: where a ball's sums start. */
+MC_FN BallSums ball_sums_start(MC_GLOBAL const SimParams* sp, real4 vi) {
+  BallSums s;
+  s.f = (R(1.0) / vi.w) * xyz_of(sp->gravity);
+  s.t = make_real3(0, 0, 0);
+  s.torque_axis = R(0.0);
+  s.dissipated = R(0.0);
+  s.elastic = R(0.0);
+  return s;
+}
+
+/* The shell, the end plates and the lifters on ball i, in the mill frame. */
+MC_FN void ball_walls(int i, MC_GLOBAL const SimParams* sp, MC_GLOBAL const PairParams* pairs,
+                      MC_GLOBAL const LifterPolygon* lifters, MillState mill, MC_GLOBAL const real4* pos,
+                      MC_GLOBAL const real4* vel, MC_GLOBAL const real4* omega, MC_GLOBAL const int2* info,
+                      MC_GLOBAL int* wall_key, MC_GLOBAL real* wall_hist, MC_GLOBAL int* status, int law,
+                      BallSums* sums) {
+  const int n = sp->n_balls;
+  const real dt = sp->dt;
+  const real4 pi4 = pos[i];
+  const real4 vi = vel[i];
+  const real4 wi = omega[i];
+  const real3 p = xyz_of(pi4);
+  const real ri = pi4.w;
+  /* Most balls touch no wall and touched none last step; they skip the wall
+   * code. Slots fill from the first, so an empty first slot means no wall
+   * history. The tests below are margins around the exact ones inside (a
+   * ball that passes them still has to overlap). */
+  const int nl = sp->n_lifters;
+  const real rho2 = p.x * p.x + p.y * p.y;
+  const real margin = R(1e-4) * ri;
+  const real r_clear = sp->shell_radius - ri - margin;
+  const int any_old = wall_key[i] != MC_WALL_NONE;
+  const int near_shell = sp->shell_radius > R(0.0) && (r_clear <= R(0.0) || rho2 > r_clear * r_clear);
+  const int near_wall =
+      any_old || near_shell ||
+      (sp->length > R(0.0) && (p.z < ri + margin || p.z > sp->length - ri - margin)) ||
+      (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach);
+  if (!near_wall) return;
+  real3* f_sum = &sums->f;
+  real3* t_sum = &sums->t;
+  real* torque_axis = &sums->torque_axis;
+  real* dissipated = &sums->dissipated;
+  real* elastic = &sums->elastic;
+  int old_key[MC_MAX_WALL_CONTACTS];
+  real3 old_hist[MC_MAX_WALL_CONTACTS];
+  int new_key[MC_MAX_WALL_CONTACTS];
+  real3 new_hist[MC_MAX_WALL_CONTACTS];
+  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+    old_key[s] = any_old ? wall_key[s * n + i] : MC_WALL_NONE;
+    old_hist[s] = old_key[s] != MC_WALL_NONE ? load_hist(wall_hist, s * n + i) : make_real3(0, 0, 0);
+    new_key[s] = MC_WALL_NONE;
+    new_hist[s] = make_real3(0, 0, 0);
+  }
+  int n_new = 0;
+  int overflow = 0;
+  const PairParams pw = pairs[MC_PAIR_INDEX(sp, info[i].y, sp->n_materials)];
+
+  if (near_shell) { /* the root only for a ball that may reach the shell */
+    real3 nrm;
+    const real ov = shell_overlap(p, ri, sp->shell_radius, &nrm);
+    if (ov > R(0.0))
+      wall_contact(MC_WALL_SHELL, nrm, ov, p, vi, wi, ri, pw, mill, dt, law,
+                   old_key, old_hist, new_key, new_hist, &n_new, &overflow,
+                   f_sum, t_sum, torque_axis, dissipated, elastic);
+  }
+  if (sp->length > R(0.0)) {
+    const real ov_low = ri - p.z;
+    if (ov_low > R(0.0))
+      wall_contact(MC_WALL_PLATE_LOW, make_real3(0, 0, 1), ov_low, p, vi, wi, ri,
+                   pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
+                   &n_new, &overflow, f_sum, t_sum, torque_axis, dissipated,
+                   elastic);
+    const real ov_high = ri - (sp->length - p.z);
+    if (ov_high > R(0.0))
+      wall_contact(MC_WALL_PLATE_HIGH, make_real3(0, 0, -1), ov_high, p, vi, wi,
+                   ri, pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
+                   &n_new, &overflow, f_sum, t_sum, torque_axis, dissipated,
+                   elastic);
+  }
+  if (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach) {
+    const real c = mill.cos_angle, s = mill.sin_angle;
+    const real3 pm = rotate_z(p, c, -s); /* into the mill frame */
+    const int k0 = nearest_lifter(atan2_fast(pm.y, pm.x), sp->lifter_first_angle,
+                                  sp->lifter_spacing, nl);
+    const int k_lo = (nl >= 3) ? -1 : 0;
+    const int k_hi = (nl >= 3) ? 1 : nl - 1;
+    for (int dk = k_lo; dk <= k_hi; ++dk) {
+      const int k = (nl >= 3) ? (k0 + dk + nl) % nl : dk;
+      /* Most balls near the shell are clear of the bar's bounding circle. */
+      const real4 bd = lifters[k].bound;
+      const real bx = pm.x - bd.x, by = pm.y - bd.y, br = bd.z + ri;
+      if (bx * bx + by * by >= br * br) continue;
+      real2 out2;
+      const real dist =
+          polygon_signed_distance(&lifters[k], make_real2(pm.x, pm.y), &out2);
+      const real ov = ri - dist;
+      if (ov > R(0.0)) {
+        const real3 nrm = rotate_z(make_real3(out2.x, out2.y, 0), c, s);
+        wall_contact(MC_WALL_LIFTER0 + k, nrm, ov, p, vi, wi, ri, pw, mill, dt,
+                     law, old_key, old_hist, new_key, new_hist, &n_new,
+                     &overflow, f_sum, t_sum, torque_axis, dissipated,
+                     elastic);
+      }
+    }
+  }
+  /* A ball that touched no wall and touches none keeps its empty slots. */
+  if (any_old || n_new > 0)
+    for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+      wall_key[s * n + i] = new_key[s];
+      if (new_key[s] != MC_WALL_NONE) store_hist(new_hist[s], wall_hist, s * n + i);
+    }
+  if (overflow) MC_ATOMIC_OR(status, MC_FLAG_WALL_OVERFLOW);
+}
+
+/* A ball's sums into its force, torque and accumulators. */
+MC_FN void ball_store(int i, BallSums s, MillState mill, real dt, MC_GLOBAL real4* force,
+                      MC_GLOBAL real4* torque, MC_GLOBAL real4* accum) {
+  force[i] = make_real4(s.f.x, s.f.y, s.f.z, R(0.0));
+  torque[i] = make_real4(s.t.x, s.t.y, s.t.z, R(0.0));
+  const real4 a = accum[i];
+  accum[i] = make_real4(a.x + s.torque_axis * dt,
+                        a.y + s.torque_axis * mill.omega * dt,
+                        a.z + s.dissipated, s.elastic);
+}
+
+/* The law the kernels are built for (MC_LAW), or the scene's. */
+#ifdef MC_LAW
+#define MC_RUN_LAW(sp) (MC_LAW)
+#else
+#define MC_RUN_LAW(sp) ((sp)->law)
+#endif
+
 MC_FN void ball_forces(
     int i, MC_GLOBAL const SimParams* sp, MC_GLOBAL const PairParams* pairs,
     MC_GLOBAL const LifterPolygon* lifters, MillState mill,
@@ -111,26 +302,13 @@ MC_FN void ball_forces(
     MC_GLOBAL int* wall_key, MC_GLOBAL real* wall_hist,
     MC_GLOBAL real4* force, MC_GLOBAL real4* torque, MC_GLOBAL real4* accum,
     MC_GLOBAL int* status) {
-  const int n = sp->n_balls;
-  const real dt = sp->dt;
-#ifdef MC_LAW
-  const int law = MC_LAW; /* the kernels are built for the run's law */
-#else
-  const int law = sp->law;
-#endif
+  const int law = MC_RUN_LAW(sp);
   const real4 pi4 = pos[i];
   const real4 vi = vel[i];
   const real4 wi = omega[i];
-  const real3 p = xyz_of(pi4);
-  const real ri = pi4.w;
   const int mat_i = info[i].y;
-  const real mass_i = R(1.0) / vi.w;
-
-  real3 f_sum = mass_i * xyz_of(sp->gravity);
-  real3 t_sum = make_real3(0, 0, 0);
-  real torque_axis = R(0.0);
-  real dissipated = R(0.0);
-  real elastic = R(0.0);
+  const v3 p = v3_of(xyz_of(pi4));
+  BallSums s = ball_sums_start(sp, vi);
 
   /* ---- ball–ball ---- */
   /* The list holds the partners j > i. An entry's link says whether the
@@ -146,136 +324,15 @@ MC_FN void ball_forces(
     const int link = neigh_index[k];
     const int j = MC_LINK_PARTNER(link);
     const real4 pj4 = pos[j];
-    if (!pair_touches(v3_of(p), ri, v3_of(xyz_of(pj4)), pj4.w)) {
-      if (MC_LINK_TOUCHING(link)) { /* opened: the spring and the reaction are gone */
-        neigh_index[k] = j;
-        MC_GLOBAL real* slot = pair_out + MC_SLOT_REALS * neigh_rev[k];
-        for (int r = 0; r < MC_SLOT_REALS; ++r) slot[r] = R(0.0);
-      }
-      continue;
-    }
-    const real4 vj = vel[j];
-    const real4 wj = omega[j];
-    const ContactGeom g = pair_geometry(v3_of(p), ri, v3_of(xyz_of(vi)), v3_of(xyz_of(wi)), vi.w, wi.w,
-                                        v3_of(xyz_of(pj4)), pj4.w, v3_of(xyz_of(vj)), v3_of(xyz_of(wj)), vj.w, wj.w);
-    const PairParams pp = pairs[MC_PAIR_INDEX(sp, mat_i, info[j].y)];
-    /* A new contact starts with no spring. */
-    const v3 spring = MC_LINK_TOUCHING(link) ? v3_of(load_hist(neigh_hist, k)) : v3_make(0, 0, 0);
-    const ContactOut c = contact_force(pp, g, spring, dt, law);
-    f_sum += real3_of(c.force);
-    t_sum += real3_of(c.torque);
-    const real half_dissipated = R(0.5) * c.dissipated;
-    dissipated += half_dissipated;
-    elastic += c.elastic;
-    /* j sees −n, −F and −M_roll with its own lever arm: its tangential
-     * torque is −arm_j·(−n) × (−F) = −arm_j·n × F (n × F = n × F_t). */
-    const real arm_j = pj4.w - R(0.5) * g.overlap;
-    const v3 t_j = v3_sub(v3_scale(-arm_j, v3_cross(g.normal, c.force)), c.rolling);
-    MC_GLOBAL real* slot = pair_out + MC_SLOT_REALS * neigh_rev[k];
-    slot[0] = -c.force.x;
-    slot[1] = -c.force.y;
-    slot[2] = -c.force.z;
-    slot[3] = half_dissipated;
-    slot[4] = t_j.x;
-    slot[5] = t_j.y;
-    slot[6] = t_j.z;
-    store_hist(real3_of(c.spring), neigh_hist, k);
-    if (!MC_LINK_TOUCHING(link)) neigh_index[k] = MC_LINK_TOUCHED(j);
+    if (pair_touches(p, pi4.w, v3_of(xyz_of(pj4)), pj4.w))
+      pair_contact(pi4, vi, wi, mat_i, k, link, pj4, sp, pairs, vel, omega, info, neigh_index, neigh_hist,
+                   neigh_rev, pair_out, law, &s);
+    else if (MC_LINK_TOUCHING(link))
+      pair_opened(k, j, neigh_index, neigh_rev, pair_out);
   }
 
-  /* ---- walls, in the mill frame ---- */
-  /* Most balls touch no wall and touched none last step; they skip the wall
-   * code. Slots fill from the first, so an empty first slot means no wall
-   * history. The tests below are margins around the exact ones inside (a
-   * ball that passes them still has to overlap). */
-  const int nl = sp->n_lifters;
-  const real rho2 = p.x * p.x + p.y * p.y;
-  const real margin = R(1e-4) * ri;
-  const real r_clear = sp->shell_radius - ri - margin;
-  const int any_old = wall_key[i] != MC_WALL_NONE;
-  const int near_shell = sp->shell_radius > R(0.0) && (r_clear <= R(0.0) || rho2 > r_clear * r_clear);
-  const int near_wall =
-      any_old || near_shell ||
-      (sp->length > R(0.0) && (p.z < ri + margin || p.z > sp->length - ri - margin)) ||
-      (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach);
-  if (near_wall) {
-    int old_key[MC_MAX_WALL_CONTACTS];
-    real3 old_hist[MC_MAX_WALL_CONTACTS];
-    int new_key[MC_MAX_WALL_CONTACTS];
-    real3 new_hist[MC_MAX_WALL_CONTACTS];
-    for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-      old_key[s] = any_old ? wall_key[s * n + i] : MC_WALL_NONE;
-      old_hist[s] = old_key[s] != MC_WALL_NONE ? load_hist(wall_hist, s * n + i) : make_real3(0, 0, 0);
-      new_key[s] = MC_WALL_NONE;
-      new_hist[s] = make_real3(0, 0, 0);
-    }
-    int n_new = 0;
-    int overflow = 0;
-    const PairParams pw = pairs[MC_PAIR_INDEX(sp, mat_i, sp->n_materials)];
-
-    if (near_shell) { /* the root only for a ball that may reach the shell */
-      real3 nrm;
-      const real ov = shell_overlap(p, ri, sp->shell_radius, &nrm);
-      if (ov > R(0.0))
-        wall_contact(MC_WALL_SHELL, nrm, ov, p, vi, wi, ri, pw, mill, dt, law,
-                     old_key, old_hist, new_key, new_hist, &n_new, &overflow,
-                     &f_sum, &t_sum, &torque_axis, &dissipated, &elastic);
-    }
-    if (sp->length > R(0.0)) {
-      const real ov_low = ri - p.z;
-      if (ov_low > R(0.0))
-        wall_contact(MC_WALL_PLATE_LOW, make_real3(0, 0, 1), ov_low, p, vi, wi, ri,
-                     pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
-                     &n_new, &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
-                     &elastic);
-      const real ov_high = ri - (sp->length - p.z);
-      if (ov_high > R(0.0))
-        wall_contact(MC_WALL_PLATE_HIGH, make_real3(0, 0, -1), ov_high, p, vi, wi,
-                     ri, pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
-                     &n_new, &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
-                     &elastic);
-    }
-    if (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach) {
-      const real c = mill.cos_angle, s = mill.sin_angle;
-      const real3 pm = rotate_z(p, c, -s); /* into the mill frame */
-      const int k0 = nearest_lifter(atan2_fast(pm.y, pm.x), sp->lifter_first_angle,
-                                    sp->lifter_spacing, nl);
-      const int k_lo = (nl >= 3) ? -1 : 0;
-      const int k_hi = (nl >= 3) ? 1 : nl - 1;
-      for (int dk = k_lo; dk <= k_hi; ++dk) {
-        const int k = (nl >= 3) ? (k0 + dk + nl) % nl : dk;
-        /* Most balls near the shell are clear of the bar's bounding circle. */
-        const real4 bd = lifters[k].bound;
-        const real bx = pm.x - bd.x, by = pm.y - bd.y, br = bd.z + ri;
-        if (bx * bx + by * by >= br * br) continue;
-        real2 out2;
-        const real dist =
-            polygon_signed_distance(&lifters[k], make_real2(pm.x, pm.y), &out2);
-        const real ov = ri - dist;
-        if (ov > R(0.0)) {
-          const real3 nrm = rotate_z(make_real3(out2.x, out2.y, 0), c, s);
-          wall_contact(MC_WALL_LIFTER0 + k, nrm, ov, p, vi, wi, ri, pw, mill, dt,
-                       law, old_key, old_hist, new_key, new_hist, &n_new,
-                       &overflow, &f_sum, &t_sum, &torque_axis, &dissipated,
-                       &elastic);
-        }
-      }
-    }
-    /* A ball that touched no wall and touches none keeps its empty slots. */
-    if (any_old || n_new > 0)
-      for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-        wall_key[s * n + i] = new_key[s];
-        if (new_key[s] != MC_WALL_NONE) store_hist(new_hist[s], wall_hist, s * n + i);
-      }
-    if (overflow) MC_ATOMIC_OR(status, MC_FLAG_WALL_OVERFLOW);
-  }
-
-  force[i] = make_real4(f_sum.x, f_sum.y, f_sum.z, R(0.0));
-  torque[i] = make_real4(t_sum.x, t_sum.y, t_sum.z, R(0.0));
-  const real4 a = accum[i];
-  accum[i] = make_real4(a.x + torque_axis * dt,
-                        a.y + torque_axis * mill.omega * dt,
-                        a.z + dissipated, elastic);
+  ball_walls(i, sp, pairs, lifters, mill, pos, vel, omega, info, wall_key, wall_hist, status, law, &s);
+  ball_store(i, s, mill, sp->dt, force, torque, accum);
 }
 
 /* The partners' sides of ball j's pairs: its incoming slots in_start[j] ..

@@ -39,3 +39,224 @@ __kernel void reactions(int n, __global const int* in_start,
   ball_reactions(j, in_start, pair_out, force,
                  torque, accum);
 }
+
+/* ------------------------------------------------------------------------
+ * forces_grouped: the same forces, with the law of the touching pairs run
+ * side by side. A work-group of MC_FG_WG balls walks its lists one ball per
+ * work-item (the touch test, the contacts that open), queues its touching
+ * pairs in local memory, then runs the law on the group's first
+ * MC_FG_ROUNDS·MC_FG_ROUND queued pairs, one per work-item a round, with no
+ * vector values, no loop and no branch, so that PoCL puts the pairs in SIMD
+ * lanes (on a CPU the per-ball loop runs the law one pair at a time). Each
+ * ball then adds its pairs' results in list order, running any pair past
+ * those itself, and does its walls: its sums are the per-ball kernel's, bit
+ * for bit. A ball with more than MC_FG_QUEUE touching pairs in its list
+ * (only among balls of very different sizes) runs the rest in the walk and
+ * adds them after its queued ones. */
+#ifndef MC_FG_WG
+#define MC_FG_WG 64
+#endif
+#ifndef MC_FG_ROUNDS
+#define MC_FG_ROUNDS 2
+#endif
+#ifndef MC_FG_QUEUE
+#define MC_FG_QUEUE 16
+#endif
+#ifndef MC_FG_ROUND
+#define MC_FG_ROUND MC_FG_WG /* queued pairs per round; the tests set fewer */
+#endif
+#define MC_FG_PAIRS (MC_FG_ROUNDS * MC_FG_ROUND)
+#define MC_FG_OWN 8 /* reals of a ball's own side: F, T, half the loss, the stored energy */
+
+/* A real4 array read a real at a time: a vector value would keep PoCL
+ * from putting the work-items in lanes. */
+#define FG_AT(a, k, c) (((__global const real*)(a))[4 * (k) + (c)])
+
+/* The law on queued pair q of the group. Only q < total stores its
+ * results: a work-item past the end redoes the last pair, or with no pair
+ * entry 0 (whose partner is clamped, as the list may be empty), and its
+ * results are dropped. These take local reads that PoCL vectorises at 8
+ * lanes: padding the queue with dummies or a branch around the law made
+ * it choose 4. */
+MC_FN void fg_pair_law(int q, int total, int group_first, __global const SimParams* sp,
+                       __global const PairParams* pairs, __global const real4* pos,
+                       __global const real4* vel, __global const real4* omega,
+                       __global const int2* info, __global int* neigh_index,
+                       __global real* neigh_hist, __global const int* neigh_rev,
+                       __global real* pair_out, __local const int* pair_entry,
+                       __local const int* pair_ball,
+                       __local real* own, int law) {
+  const int qc = min(q, max(total - 1, 0));
+  const int k = pair_entry[qc];
+  const int link = neigh_index[k];
+  const int a = group_first + pair_ball[qc];
+  const int touched = MC_LINK_TOUCHING(link);
+  const int b = min(MC_LINK_PARTNER(link), sp->n_balls - 1);
+  const ContactGeom g = pair_geometry(
+      v3_make(FG_AT(pos, a, 0), FG_AT(pos, a, 1), FG_AT(pos, a, 2)), FG_AT(pos, a, 3),
+      v3_make(FG_AT(vel, a, 0), FG_AT(vel, a, 1), FG_AT(vel, a, 2)),
+      v3_make(FG_AT(omega, a, 0), FG_AT(omega, a, 1), FG_AT(omega, a, 2)), FG_AT(vel, a, 3),
+      FG_AT(omega, a, 3), v3_make(FG_AT(pos, b, 0), FG_AT(pos, b, 1), FG_AT(pos, b, 2)), FG_AT(pos, b, 3),
+      v3_make(FG_AT(vel, b, 0), FG_AT(vel, b, 1), FG_AT(vel, b, 2)),
+      v3_make(FG_AT(omega, b, 0), FG_AT(omega, b, 1), FG_AT(omega, b, 2)), FG_AT(vel, b, 3),
+      FG_AT(omega, b, 3));
+  __global const int* mat = (__global const int*)info;
+  const PairParams pp = pairs[MC_PAIR_INDEX(sp, mat[2 * a + 1], mat[2 * b + 1])];
+  const real h0 = neigh_hist[3 * k], h1 = neigh_hist[3 * k + 1], h2 = neigh_hist[3 * k + 2];
+  const v3 spring = v3_make(touched ? h0 : R(0.0), touched ? h1 : R(0.0), touched ? h2 : R(0.0));
+  const ContactOut c = contact_force(pp, g, spring, sp->dt, law);
+  if (q < total) {
+    store_partner_side(pair_out + MC_SLOT_REALS * neigh_rev[k], g, c, FG_AT(pos, b, 3));
+    neigh_hist[3 * k] = c.spring.x;
+    neigh_hist[3 * k + 1] = c.spring.y;
+    neigh_hist[3 * k + 2] = c.spring.z;
+    if (!touched) neigh_index[k] = MC_LINK_TOUCHED(b);
+    own[MC_FG_OWN * q + 0] = c.force.x;
+    own[MC_FG_OWN * q + 1] = c.force.y;
+    own[MC_FG_OWN * q + 2] = c.force.z;
+    own[MC_FG_OWN * q + 3] = c.torque.x;
+    own[MC_FG_OWN * q + 4] = c.torque.y;
+    own[MC_FG_OWN * q + 5] = c.torque.z;
+    own[MC_FG_OWN * q + 6] = R(0.5) * c.dissipated;
+    own[MC_FG_OWN * q + 7] = c.elastic;
+  }
+}
+
+__kernel __attribute__((reqd_work_group_size(MC_FG_WG, 1, 1)))
+void forces_grouped(__global const SimParams* sp,
+                    __global const PairParams* pairs,
+                    __global const LifterPolygon* lifters, real mill_cos,
+                    real mill_sin, real mill_omega, __global const real4* pos,
+                    __global const real4* vel, __global const real4* omega,
+                    __global const int2* info, __global const int* neigh_start,
+                    __global const int* neigh_count,
+                    __global int* neigh_index,
+                    __global real* neigh_hist, __global const int* neigh_rev,
+                    __global real* pair_out,
+                    __global int* wall_key,
+                    __global real* wall_hist, __global real4* force,
+                    __global real4* torque, __global real4* accum,
+                    __global int* status) {
+  __local int queue[MC_FG_WG * MC_FG_QUEUE]; /* list entries, per ball */
+  __local int queued[MC_FG_WG];
+  __local int first[MC_FG_WG + 1];            /* each ball's first queued pair */
+  __local int pair_entry[MC_FG_PAIRS];        /* the group's queue, in ball order */
+  __local int pair_ball[MC_FG_PAIRS];
+  __local real own[MC_FG_OWN * MC_FG_PAIRS];
+
+  const int lid = get_local_id(0);
+  const int i = get_global_id(0);
+  const int group_first = i - lid;
+  const int active = i < sp->n_balls;
+  const int law = MC_RUN_LAW(sp);
+
+  /* 1. The walk: which listed pairs touch. */
+  BallSums extra; /* pairs past the ball's queue, run here */
+  extra.f = extra.t = make_real3(0, 0, 0);
+  extra.torque_axis = extra.dissipated = extra.elastic = R(0.0);
+  int nq = 0, n_extra = 0;
+  if (active) {
+    const real4 pi4 = pos[i];
+    const v3 p = v3_of(xyz_of(pi4));
+    const int start = neigh_start[i];
+    const int count = neigh_count[i];
+    for (int k = start; k < start + count; ++k) {
+      const int link = neigh_index[k];
+      const int j = MC_LINK_PARTNER(link);
+      const real4 pj4 = pos[j];
+      if (pair_touches(p, pi4.w, v3_of(xyz_of(pj4)), pj4.w)) {
+        if (nq < MC_FG_QUEUE) {
+          queue[lid * MC_FG_QUEUE + nq++] = k;
+        } else {
+          pair_contact(pi4, vel[i], omega[i], info[i].y, k, link, pj4, sp, pairs, vel, omega, info,
+                       neigh_index, neigh_hist, neigh_rev, pair_out, law, &extra);
+          ++n_extra;
+        }
+      } else if (MC_LINK_TOUCHING(link)) {
+        pair_opened(k, j, neigh_index, neigh_rev, pair_out);
+      }
+    }
+  }
+  queued[lid] = nq;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid == 0) {
+    int s = 0;
+    for (int w = 0; w < MC_FG_WG; ++w) {
+      first[w] = s;
+      s += queued[w];
+    }
+    first[MC_FG_WG] = s;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  const int total = first[MC_FG_WG];
+  const int in_rounds = min(total, MC_FG_PAIRS); /* the rest run in step 3 */
+  {
+    const int f0 = first[lid];
+    for (int q = 0; q < nq && f0 + q < MC_FG_PAIRS; ++q) {
+      const int k = queue[lid * MC_FG_QUEUE + q];
+      pair_entry[f0 + q] = k;
+      pair_ball[f0 + q] = lid;
+    }
+    if (lid == 0 && total == 0) { /* the dummy of a group with no pair */
+      pair_entry[0] = 0;
+      pair_ball[0] = 0;
+    }
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+
+  /* 2. The law, a queued pair per work-item in each of MC_FG_ROUNDS rounds. */
+#define FG_LAW(r)                                                                                    \
+  fg_pair_law((r) * MC_FG_ROUND + lid, lid < MC_FG_ROUND ? in_rounds : 0, group_first, sp, pairs, pos, \
+              vel, omega, info, neigh_index, neigh_hist, neigh_rev, pair_out, pair_entry, pair_ball, own, law)
+  FG_LAW(0);
+#if MC_FG_ROUNDS > 1
+  barrier(CLK_LOCAL_MEM_FENCE); /* a region per round, so each is one law wide */
+  FG_LAW(1);
+#endif
+#if MC_FG_ROUNDS > 2
+  barrier(CLK_LOCAL_MEM_FENCE);
+  FG_LAW(2);
+#endif
+#if MC_FG_ROUNDS > 3
+#error "MC_FG_ROUNDS: at most 3"
+#endif
+#undef FG_LAW
+  barrier(CLK_LOCAL_MEM_FENCE);
+
+  /* 3. Each ball's sums, in list order: gravity, its queued pairs (those
+   * past the group's MC_FG_PAIRS run here), the rest, the walls. */
+  if (active) {
+    const real4 pi4 = pos[i];
+    const real4 vi = vel[i];
+    const real4 wi = omega[i];
+    const int mat_i = info[i].y;
+    BallSums s = ball_sums_start(sp, vi);
+    const int f0 = first[lid];
+    for (int q = 0; q < nq; ++q) {
+      const int fq = f0 + q;
+      if (fq < MC_FG_PAIRS) {
+        s.f += make_real3(own[MC_FG_OWN * fq + 0], own[MC_FG_OWN * fq + 1], own[MC_FG_OWN * fq + 2]);
+        s.t += make_real3(own[MC_FG_OWN * fq + 3], own[MC_FG_OWN * fq + 4], own[MC_FG_OWN * fq + 5]);
+        s.dissipated += own[MC_FG_OWN * fq + 6];
+        s.elastic += own[MC_FG_OWN * fq + 7];
+      } else {
+        const int k = queue[lid * MC_FG_QUEUE + q];
+        const int link = neigh_index[k];
+        pair_contact(pi4, vi, wi, mat_i, k, link, pos[MC_LINK_PARTNER(link)], sp, pairs, vel, omega, info,
+                     neigh_index, neigh_hist, neigh_rev, pair_out, law, &s);
+      }
+    }
+    if (n_extra > 0) {
+      s.f += extra.f;
+      s.t += extra.t;
+      s.dissipated += extra.dissipated;
+      s.elastic += extra.elastic;
+    }
+    MillState mill;
+    mill.cos_angle = mill_cos;
+    mill.sin_angle = mill_sin;
+    mill.omega = mill_omega;
+    ball_walls(i, sp, pairs, lifters, mill, pos, vel, omega, info, wall_key, wall_hist, status, law, &s);
+    ball_store(i, s, mill, sp->dt, force, torque, accum);
+  }
+}

@@ -15,7 +15,8 @@
 # and tile-1M with its balls laid anew 1, 10 and 100 times along the axis
 # of a mill as many times as long (`--tile`: the same settled charge, the
 # same state per ball, no warm-up), which shows the cost per ball from 10k
-# to 1M balls.
+# to 1M balls. MILLCHARGE_FORCES=grouped in the environment times the
+# grouped force kernel instead (the device column says so).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 device=""; only="lab,10k-settled,tile-10k,tile-100k,tile-1M,10k,100k,1M,D"; steps=""
@@ -66,7 +67,8 @@ for r in rows:
     j = json.load(open(f"{out}/{r}.json"))
     s = j["stages"]
     p = j["part_updates_per_s"]
-    print(f"| {r} ({j['case']}) | {j['n_particles']:,} | {j['device']} | {j['precision']} | {j['steps_per_s']:.1f} | "
+    dev = j['device'] + ("" if j.get('forces_kernel', 'ball') == 'ball' else f", {j['forces_kernel']} forces")
+    print(f"| {r} ({j['case']}) | {j['n_particles']:,} | {dev} | {j['precision']} | {j['steps_per_s']:.1f} | "
           f"{j['particle_updates_per_s']:.3g} | {p['min']:.3g}–{p['max']:.3g} | {j['contacts_per_ball']:.2f} | {j['bytes_per_ball']:.0f} | "
           + " | ".join(f"{100*s[k]:.0f} %" for k in ("binning", "contacts", "forces", "motion", "reductions")) + " |")
 PY

@@ -695,6 +695,7 @@ int cmd_bench(const BenchOptions& o) {
   j["compute_units"] = ctx.info().compute_units;
   j["precision"] = c.precision == Precision::double_ ? "double" : "float";
   j["law"] = c.law == ContactLaw::hertz ? "hertz" : "linear";
+  j["forces_kernel"] = solver->forces_kernel();
   j["dt_s"] = d.dt;
   j["device_bytes"] = solver->device_bytes();
   j["bytes_per_ball"] = static_cast<double>(solver->device_bytes()) / n;

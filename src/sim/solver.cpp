@@ -22,6 +22,7 @@ namespace {
 
 constexpr int kScanWG = 256;
 constexpr int kReduceWG = 64;
+constexpr int kForcesGroupWG = 64;  // balls per work-group of forces_grouped
 constexpr int kObservables = 10;
 
 // Exclusive prefix sum on the device (cl/scan.cl).
@@ -84,6 +85,7 @@ class SolverImpl final : public Solver {
   double mill_angle() const override { return mill_angle_; }
   double dt() const override { return dt_; }
   std::size_t device_bytes() const override;
+  const char* forces_kernel() const override { return grouped_forces_ ? "grouped" : "ball"; }
   const compute::DeviceInfo& device() const override { return ctx_.info(); }
 
  private:
@@ -172,7 +174,8 @@ class SolverImpl final : public Solver {
   Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
       k_gather_wall_, k_put_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
       k_layout_, k_profile_, k_count_contacts_, k_clear_flag_, k_carry_count_, k_carry_fill_, k_in_count_,
-      k_in_scatter_, k_in_sort_, k_reactions_;
+      k_in_scatter_, k_in_sort_, k_reactions_, k_forces_grouped_;
+  bool grouped_forces_ = false;
   // The viewer's kernel, built on first use so that headless runs skip it.
   std::unique_ptr<compute::Program> view_program_;
   std::unique_ptr<Kernel> k_instances_;
@@ -181,7 +184,7 @@ class SolverImpl final : public Solver {
 template <class Real>
 compute::BuildOptions SolverImpl<Real>::options(const Scene& scene) {
   compute::BuildOptions o;
-  o.define("MC_SCAN_WG", kScanWG).define("MC_REDUCE_WG", kReduceWG);
+  o.define("MC_SCAN_WG", kScanWG).define("MC_REDUCE_WG", kReduceWG).define("MC_FG_WG", kForcesGroupWG);
   // The law is fixed for a run: built in, the force kernel drops the other
   // law's arithmetic (setup_params checks that a new scene keeps it).
   o.define("MC_LAW", scene.numerics.law == ContactLaw::hertz ? MC_LAW_HERTZ : MC_LAW_LINEAR);
@@ -249,7 +252,14 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_in_count_(program_, "in_count"),
       k_in_scatter_(program_, "in_scatter"),
       k_in_sort_(program_, "in_sort"),
-      k_reactions_(program_, "reactions") {
+      k_reactions_(program_, "reactions"),
+      k_forces_grouped_(program_, "forces_grouped") {
+  if (const char* e = std::getenv("MILLCHARGE_FORCES"); e && *e) {
+    const std::string v = e;
+    if (v != "ball" && v != "grouped")
+      throw std::invalid_argument("MILLCHARGE_FORCES=" + v + ": expected ball (the default) or grouped");
+    grouped_forces_ = v == "grouped";
+  }
   if (n_ == 0) throw std::invalid_argument("scene: no balls");
 
   // The device's struct sizes must equal the host mirrors'.
@@ -453,12 +463,12 @@ void SolverImpl<Real>::rebuild() {
 
 template <class Real>
 void SolverImpl<Real>::forces() {
-  k_forces_
+  (grouped_forces_ ? k_forces_grouped_ : k_forces_)
       .args(params_, pairs_, lifters_, std::cos(mill_angle_), std::sin(mill_angle_), mill_omega_, pos_, vel_,
             omega_, info_,
             neigh_start_, neigh_count_, neigh_index_, neigh_hist_, neigh_rev_, pair_out_, wall_key_, wall_hist_, force_,
             torque_, accum_, status_)
-      .launch(n_);
+      .launch(n_, grouped_forces_ ? kForcesGroupWG : 0);
   k_reactions_.args(n_, in_start_, pair_out_, force_, torque_, accum_)
       .launch(n_);
   lap(&StageTimes::forces_s);

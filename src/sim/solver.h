@@ -125,11 +125,16 @@ class Solver {
   virtual double dt() const = 0;
   virtual std::size_t device_bytes() const = 0;
   virtual const compute::DeviceInfo& device() const = 0;
+  // Which force kernel runs: "ball" (a ball per work-item, the default) or
+  // "grouped" (a work-group's touching pairs queued and their law run a
+  // pair per work-item; MILLCHARGE_FORCES=grouped). Both give the same
+  // forces bit for bit.
+  virtual const char* forces_kernel() const = 0;
 };
 
 // Builds the kernels for the scene's precision and law, uploads the scene and
-// evaluates the first forces. Throws std::invalid_argument for a bad scene and
-// compute::Error for device trouble.
+// evaluates the first forces. Throws std::invalid_argument for a bad scene or
+// a bad MILLCHARGE_FORCES, and compute::Error for device trouble.
 std::unique_ptr<Solver> make_solver(compute::Context& ctx, const Scene& scene);
 
 // Skin used when the scene leaves it at 0: 20 % of the smallest radius (a
