@@ -158,28 +158,27 @@ MC_FN void pair_contact(real4 pi4, real4 vi, real4 wi, int mat_i, int k, int lin
   if (!MC_LINK_TOUCHING(link)) neigh_index[k] = MC_LINK_TOUCHED(j);
 }
 
+MC_FN BallSums ball_sums_zero(void) {
+  BallSums s;
+  s.f = s.t = make_real3(0, 0, 0);
+  s.torque_axis = s.dissipated = s.elastic = R(0.0);
+  return s;
+}
+
 /* Gravity: where a ball's sums start. */
 MC_FN BallSums ball_sums_start(MC_GLOBAL const SimParams* sp, real4 vi) {
-  BallSums s;
+  BallSums s = ball_sums_zero();
   s.f = (R(1.0) / vi.w) * xyz_of(sp->gravity);
-  s.t = make_real3(0, 0, 0);
-  s.torque_axis = R(0.0);
-  s.dissipated = R(0.0);
-  s.elastic = R(0.0);
   return s;
 }
 
 /* The shell, the end plates and the lifters on ball i, in the mill frame. */
-MC_FN void ball_walls(int i, MC_GLOBAL const SimParams* sp, MC_GLOBAL const PairParams* pairs,
-                      MC_GLOBAL const LifterPolygon* lifters, MillState mill, MC_GLOBAL const real4* pos,
-                      MC_GLOBAL const real4* vel, MC_GLOBAL const real4* omega, MC_GLOBAL const int2* info,
+MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL const SimParams* sp,
+                      MC_GLOBAL const PairParams* pairs, MC_GLOBAL const LifterPolygon* lifters, MillState mill,
                       MC_GLOBAL int* wall_key, MC_GLOBAL real* wall_hist, MC_GLOBAL int* status, int law,
                       BallSums* sums) {
   const int n = sp->n_balls;
   const real dt = sp->dt;
-  const real4 pi4 = pos[i];
-  const real4 vi = vel[i];
-  const real4 wi = omega[i];
   const real3 p = xyz_of(pi4);
   const real ri = pi4.w;
   /* Most balls touch no wall and touched none last step; they skip the wall
@@ -214,7 +213,7 @@ MC_FN void ball_walls(int i, MC_GLOBAL const SimParams* sp, MC_GLOBAL const Pair
   }
   int n_new = 0;
   int overflow = 0;
-  const PairParams pw = pairs[MC_PAIR_INDEX(sp, info[i].y, sp->n_materials)];
+  const PairParams pw = pairs[MC_PAIR_INDEX(sp, mat_i, sp->n_materials)];
 
   if (near_shell) { /* the root only for a ball that may reach the shell */
     real3 nrm;
@@ -331,7 +330,7 @@ MC_FN void ball_forces(
       pair_opened(k, j, neigh_index, neigh_rev, pair_out);
   }
 
-  ball_walls(i, sp, pairs, lifters, mill, pos, vel, omega, info, wall_key, wall_hist, status, law, &s);
+  ball_walls(i, pi4, vi, wi, mat_i, sp, pairs, lifters, mill, wall_key, wall_hist, status, law, &s);
   ball_store(i, s, mill, sp->dt, force, torque, accum);
 }
 

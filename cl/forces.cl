@@ -151,9 +151,7 @@ void forces_grouped(__global const SimParams* sp,
   const int law = MC_RUN_LAW(sp);
 
   /* 1. The walk: which listed pairs touch. */
-  BallSums extra; /* pairs past the ball's queue, run here */
-  extra.f = extra.t = make_real3(0, 0, 0);
-  extra.torque_axis = extra.dissipated = extra.elastic = R(0.0);
+  BallSums extra = ball_sums_zero(); /* pairs past the ball's queue, run here */
   int nq = 0, n_extra = 0;
   if (active) {
     const real4 pi4 = pos[i];
@@ -256,7 +254,7 @@ void forces_grouped(__global const SimParams* sp,
     mill.cos_angle = mill_cos;
     mill.sin_angle = mill_sin;
     mill.omega = mill_omega;
-    ball_walls(i, sp, pairs, lifters, mill, pos, vel, omega, info, wall_key, wall_hist, status, law, &s);
+    ball_walls(i, pi4, vi, wi, mat_i, sp, pairs, lifters, mill, wall_key, wall_hist, status, law, &s);
     ball_store(i, s, mill, sp->dt, force, torque, accum);
   }
 }
