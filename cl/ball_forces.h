@@ -349,19 +349,21 @@ MC_FN void ball_reactions(int j, MC_GLOBAL const int* in_start,
    * than the adds and the streamed read-modify-write (the whole step is
    * 5-10 % faster for it on the dense 100k charge). */
   if (e == b) return;
-  real3 fs = make_real3(0, 0, 0), ts = make_real3(0, 0, 0);
-  real ds = R(0.0);
+  /* Seven plain sums: kept as real3 values, the compiler packs them into
+   * vectors and reshuffles them at every slot, a chain of shuffles that the
+   * next slot waits on (the kernel is some 10 % faster without it). */
+  real fx = R(0.0), fy = R(0.0), fz = R(0.0), ds = R(0.0), tx = R(0.0), ty = R(0.0), tz = R(0.0);
   for (int q = b; q < e; ++q) {
     MC_GLOBAL const real* slot = pair_out + MC_SLOT_REALS * q;
-    fs.x += slot[0]; fs.y += slot[1]; fs.z += slot[2];
+    fx += slot[0]; fy += slot[1]; fz += slot[2];
     ds += slot[3];
-    ts.x += slot[4]; ts.y += slot[5]; ts.z += slot[6];
+    tx += slot[4]; ty += slot[5]; tz += slot[6];
   }
   const real4 f = force[j];
   const real4 t = torque[j];
   const real4 a = accum[j];
-  force[j] = make_real4(f.x + fs.x, f.y + fs.y, f.z + fs.z, f.w);
-  torque[j] = make_real4(t.x + ts.x, t.y + ts.y, t.z + ts.z, t.w);
+  force[j] = make_real4(f.x + fx, f.y + fy, f.z + fz, f.w);
+  torque[j] = make_real4(t.x + tx, t.y + ty, t.z + tz, t.w);
   accum[j] = make_real4(a.x, a.y, a.z + ds, a.w);
 }
 
