@@ -131,6 +131,20 @@ MC_FN void pair_opened(int k, int j, MC_GLOBAL int* neigh_index, MC_GLOBAL const
   for (int r = 0; r < MC_SLOT_REALS; ++r) slot[r] = R(0.0);
 }
 
+/* List entry k of a ball at p with radius r: whether the pair touches now.
+ * A pair that touched and no longer does is opened here (pair_opened). The
+ * entry's link and the partner's position are left in *link and *pj4 for
+ * pair_contact. */
+MC_FN int entry_touches(int k, v3 p, real r, MC_GLOBAL const real4* pos, MC_GLOBAL int* neigh_index,
+                        MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out, int* link, real4* pj4) {
+  *link = neigh_index[k];
+  const int j = MC_LINK_PARTNER(*link);
+  *pj4 = pos[j];
+  if (pair_touches(p, r, v3_of(xyz_of(*pj4)), (*pj4).w)) return 1;
+  if (MC_LINK_TOUCHING(*link)) pair_opened(k, j, neigh_index, neigh_rev, pair_out);
+  return 0;
+}
+
 /* One touching pair, list entry k of ball i (its position, velocity, spin,
  * material; link: the entry as it was; pj4: the partner's position):
  * the law, ball i's side into its sums, the partner's into its slot, the
@@ -320,14 +334,11 @@ MC_FN void ball_forces(
   const int start = neigh_start[i];
   const int count = neigh_count[i];
   for (int k = start; k < start + count; ++k) {
-    const int link = neigh_index[k];
-    const int j = MC_LINK_PARTNER(link);
-    const real4 pj4 = pos[j];
-    if (pair_touches(p, pi4.w, v3_of(xyz_of(pj4)), pj4.w))
+    int link;
+    real4 pj4;
+    if (entry_touches(k, p, pi4.w, pos, neigh_index, neigh_rev, pair_out, &link, &pj4))
       pair_contact(pi4, vi, wi, mat_i, k, link, pj4, sp, pairs, vel, omega, info, neigh_index, neigh_hist,
                    neigh_rev, pair_out, law, &s);
-    else if (MC_LINK_TOUCHING(link))
-      pair_opened(k, j, neigh_index, neigh_rev, pair_out);
   }
 
   ball_walls(i, pi4, vi, wi, mat_i, sp, pairs, lifters, mill, wall_key, wall_hist, status, law, &s);

@@ -159,19 +159,15 @@ void forces_grouped(__global const SimParams* sp,
     const int start = neigh_start[i];
     const int count = neigh_count[i];
     for (int k = start; k < start + count; ++k) {
-      const int link = neigh_index[k];
-      const int j = MC_LINK_PARTNER(link);
-      const real4 pj4 = pos[j];
-      if (pair_touches(p, pi4.w, v3_of(xyz_of(pj4)), pj4.w)) {
-        if (nq < MC_FG_QUEUE) {
-          queue[lid * MC_FG_QUEUE + nq++] = k;
-        } else {
-          pair_contact(pi4, vel[i], omega[i], info[i].y, k, link, pj4, sp, pairs, vel, omega, info,
-                       neigh_index, neigh_hist, neigh_rev, pair_out, law, &extra);
-          ++n_extra;
-        }
-      } else if (MC_LINK_TOUCHING(link)) {
-        pair_opened(k, j, neigh_index, neigh_rev, pair_out);
+      int link;
+      real4 pj4;
+      if (!entry_touches(k, p, pi4.w, pos, neigh_index, neigh_rev, pair_out, &link, &pj4)) continue;
+      if (nq < MC_FG_QUEUE) {
+        queue[lid * MC_FG_QUEUE + nq++] = k;
+      } else {
+        pair_contact(pi4, vel[i], omega[i], info[i].y, k, link, pj4, sp, pairs, vel, omega, info,
+                     neigh_index, neigh_hist, neigh_rev, pair_out, law, &extra);
+        ++n_extra;
       }
     }
   }
