@@ -44,24 +44,35 @@ TEST_CASE("an elastic box of bouncing balls keeps its energy", "[physics][energy
   }
 }
 
-TEST_CASE("a turning drum at steady state: torque power equals dissipation power", "[physics][power]") {
-  DrumSpec spec;  // 0.3 m drum, 8 lifters, 75 % of critical, linear law
-  spec.n_balls = 300;
-  const Scene sc = make_drum(spec);
-  auto s = make_solver(context(), sc);
-  const double rev_s = 2 * kPi / sc.mill_omega;
-  s->advance(static_cast<long>(1.5 / sc.numerics.dt));  // warm-up: charge lifted and cycling
-  const double e_start = s->observe(true).total_energy();
-  s->advance(static_cast<long>(3 * rev_s / sc.numerics.dt));  // three whole revolutions
-  const Observables o = s->observe(true);
-  const double de_dt = (o.total_energy() - e_start) / o.interval_s;
-  std::printf("drum power over %.3f s: torque %.3f W, dissipation %.3f W, dE/dt %.3f W, imbalance %.2f %%\n",
-              o.interval_s, o.torque_power_W, o.dissipation_power_W, de_dt,
-              100 * (o.torque_power_W - o.dissipation_power_W) / o.dissipation_power_W);
-  CHECK(o.torque_power_W > 1.0);
-  CHECK(std::fabs(o.torque_power_W - o.dissipation_power_W) / o.dissipation_power_W < 0.05);
-  // The charge is at steady state: its energy changes by under 2 % of the
-  // power over the window.
-  CHECK(std::fabs(de_dt) < 0.02 * o.dissipation_power_W);
-  CHECK(o.wall_torque_Nm * sc.mill_omega == Approx(o.torque_power_W).epsilon(1e-3));
+TEST_CASE("a turning drum at steady state: torque power equals dissipation power plus dE/dt", "[physics][power]") {
+  // 0.3 m drum, 8 lifters, 75 % of critical, friction and rolling
+  // resistance: the books close for both laws. Under Hertz the tangential
+  // stiffness follows the overlap, and the spring's stored energy is taken
+  // with the stiffness it had (without it the dissipation came out 12 %
+  // above the torque power); the dashpots' work is taken at the relative
+  // speed synchronised to the step (without it 2 % high).
+  for (ContactLaw law : {ContactLaw::linear, ContactLaw::hertz}) {
+    DrumSpec spec;
+    spec.n_balls = 300;
+    spec.law = law;
+    const Scene sc = make_drum(spec);
+    auto s = make_solver(context(), sc);
+    const double rev_s = 2 * kPi / sc.mill_omega;
+    s->advance(static_cast<long>(1.5 / sc.numerics.dt));  // warm-up: charge lifted and cycling
+    const double e_start = s->observe(true).total_energy();
+    s->advance(static_cast<long>(3 * rev_s / sc.numerics.dt));  // three whole revolutions
+    const Observables o = s->observe(true);
+    const double de_dt = (o.total_energy() - e_start) / o.interval_s;
+    const double imbalance = (o.torque_power_W - o.dissipation_power_W - de_dt) / o.torque_power_W;
+    std::printf("drum %-6s power over %.3f s: torque %.3f W, dissipation %.3f W, dE/dt %.3f W, imbalance %.2f %%\n",
+                law == ContactLaw::hertz ? "hertz" : "linear", o.interval_s, o.torque_power_W, o.dissipation_power_W,
+                de_dt, 100 * imbalance);
+    INFO((law == ContactLaw::hertz ? "hertz" : "linear"));
+    CHECK(o.torque_power_W > 1.0);
+    CHECK(std::fabs(imbalance) < 0.02);
+    // The charge is at steady state: its energy changes by under 2 % of the
+    // power over the window.
+    CHECK(std::fabs(de_dt) < 0.02 * o.dissipation_power_W);
+    CHECK(o.wall_torque_Nm * sc.mill_omega == Approx(o.torque_power_W).epsilon(1e-3));
+  }
 }
