@@ -12,7 +12,13 @@
  * atomics and the result does not depend on thread order. A pair's stored
  * energy is booked to the ball that lists it (only its total is reported).
  * Walls have infinite mass and turn with the mill: their velocity at the
- * contact point is ω ẑ × r. */
+ * contact point is ω ẑ × r.
+ *
+ * Each touching contact keeps a record (layout.h, books.h): its spring and
+ * what it has lost since it began; a list entry or wall slot that touches
+ * holds its record's index. When a contact opens, its record joins the
+ * collision spectra; wall contacts also book each step on the liner
+ * element under them. */
 #ifndef MC_BALL_FORCES_H
 #define MC_BALL_FORCES_H
 
@@ -58,17 +64,43 @@ MC_FN ContactGeom pair_geometry(v3 p_i, real r_i, v3 v_i, v3 w_i, real inv_m_i, 
   return g;
 }
 
-/* One wall contact: updates the ball's slot for `key` (kept in the private
- * arrays new_key/new_hist), adds force, torque and the observables. */
-MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel,
-                        real4 om, real radius, PairParams pp, MillState mill,
-                        real dt, int law, const int* old_key,
-                        const real3* old_hist, int* new_key, real3* new_hist,
-                        int* n_new, int* overflow, real3* f_sum, real3* t_sum,
-                        real* torque_axis, real* dissipated, real* elastic) {
-  real3 spring = make_real3(0, 0, 0);
+/* The wall slots of one ball while its walls are done: the old ones (key,
+ * record, whether a contact renewed it) and the new ones. */
+typedef struct {
+  int old_key[MC_MAX_WALL_CONTACTS];
+  int old_rec[MC_MAX_WALL_CONTACTS];
+  int renewed[MC_MAX_WALL_CONTACTS];
+  int new_key[MC_MAX_WALL_CONTACTS];
+  int new_rec[MC_MAX_WALL_CONTACTS];
+  int n_new;
+  int overflow;
+} WallSlots;
+
+/* What a ball gathers in a step: force and torque on it, the torque of its
+ * wall contacts about the mill axis, the energy lost and the energy stored. */
+typedef struct {
+  real3 f, t;
+  real torque_axis, dissipated, elastic;
+} BallSums;
+
+/* One wall contact: its record (the slot's with the same key, or a new
+ * one), the law, force, torque and observables into the ball's sums, the
+ * books. `out` is the direction from a lifter bar to the ball in the mill
+ * frame (unused for the other walls). */
+MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel, real4 om, real radius, int material,
+                        PairParams pp, MillState mill, MC_GLOBAL const SimParams* sp,
+                        MC_GLOBAL const LifterPolygon* lifters, int law, real2 out, WallSlots* ws, Books* books,
+                        BallSums* sums) {
+  int rec = MC_NO_RECORD;
   for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s)
-    if (old_key[s] == key) spring = old_hist[s];
+    if (ws->old_key[s] == key) {
+      rec = ws->old_rec[s];
+      ws->renewed[s] = 1;
+    }
+  /* A new contact takes a record (so does one that found the pool full, at
+   * the next try). */
+  const int fresh = rec < 0;
+  const real dt = sp->dt;
   const real arm = radius - overlap;
   const real3 rc = p - arm * n; /* contact point, world frame */
   const real3 w_mill = make_real3(0, 0, mill.omega);
@@ -83,29 +115,29 @@ MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel,
   g.m_eff = R(1.0) / vel.w;
   g.r_eff = radius;
   g.inv_inertia_sum = om.w;
-  const ContactOut c = contact_force(pp, g, v3_of(spring), dt, law);
-  *f_sum += real3_of(c.force);
-  *t_sum += real3_of(c.torque);
+  const ContactOut c = contact_force(pp, g, record_spring(books, rec), dt, law);
+  if (fresh) rec = record_take(books);
+  sums->f += real3_of(c.force);
+  sums->t += real3_of(c.torque);
   /* Torque of the wall on the ball about the mill axis: r_c × F plus the
    * rolling couple. */
-  *torque_axis += rc.x * c.force.y - rc.y * c.force.x + c.rolling.z;
-  *dissipated += c.dissipated;
-  *elastic += c.elastic;
-  if (*n_new < MC_MAX_WALL_CONTACTS) {
-    new_key[*n_new] = key;
-    new_hist[*n_new] = real3_of(c.spring);
-    *n_new += 1;
+  sums->torque_axis += rc.x * c.force.y - rc.y * c.force.x + c.rolling.z;
+  sums->dissipated += c.dissipated;
+  sums->elastic += c.elastic;
+  record_step(books, rec, fresh, v3_dot(g.v_rel, g.normal), c);
+#if MC_ENERGY_BOOKS
+  const real3 rc_mill = rotate_z(rc, mill.cos_angle, -mill.sin_angle);
+  liner_step(books, liner_element(books->bp, sp, lifters, key, rc_mill, out), fresh, c, key,
+             atan2_fast(rc.y, rc.x));
+#endif
+  if (ws->n_new < MC_MAX_WALL_CONTACTS) {
+    ws->new_key[ws->n_new] = key;
+    ws->new_rec[ws->n_new] = rec;
+    ws->n_new += 1;
   } else {
-    *overflow = 1;
+    ws->overflow = 1;
   }
 }
-
-/* What a ball gathers in a step: force and torque on it, the torque of its
- * wall contacts about the mill axis, the energy lost and the energy stored. */
-typedef struct {
-  real3 f, t;
-  real torque_axis, dissipated, elastic;
-} BallSums;
 
 /* The partner's side of a touching pair that ball i lists, into the
  * partner's incoming slot (MC_SLOT_REALS reals): −F, half the energy lost,
@@ -123,53 +155,65 @@ MC_FN void store_partner_side(MC_GLOBAL real* slot, ContactGeom g, ContactOut c,
   slot[6] = t_j.z;
 }
 
-/* A pair that opened: its spring and its reaction are gone. */
-MC_FN void pair_opened(int k, int j, MC_GLOBAL int* neigh_index, MC_GLOBAL const int* neigh_rev,
-                       MC_GLOBAL real* pair_out) {
+/* A pair that opened: its collision joins the spectra, and its reaction is
+ * gone. */
+MC_FN void pair_opened(int k, int j, int mat_i, MC_GLOBAL const SimParams* sp, MC_GLOBAL const int2* info,
+                       MC_GLOBAL int* neigh_index, MC_GLOBAL const int* neigh_rec,
+                       MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out, Books* books) {
+  record_close(books, neigh_rec[k], ball_pair_type(mat_i, info[j].y, sp->n_materials));
   neigh_index[k] = j;
   MC_GLOBAL real* slot = pair_out + MC_SLOT_REALS * neigh_rev[k];
   for (int r = 0; r < MC_SLOT_REALS; ++r) slot[r] = R(0.0);
 }
 
-/* List entry k of a ball at p with radius r: whether the pair touches now.
- * A pair that touched and no longer does is opened here (pair_opened). The
- * entry's link and the partner's position are left in *link and *pj4 for
- * pair_contact. */
-MC_FN int entry_touches(int k, v3 p, real r, MC_GLOBAL const real4* pos, MC_GLOBAL int* neigh_index,
-                        MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out, int* link, real4* pj4) {
+/* List entry k of a ball at p with radius r and material mat: whether the
+ * pair touches now. A pair that touched and no longer does is opened here
+ * (pair_opened). The entry's link and the partner's position are left in
+ * *link and *pj4 for pair_contact. */
+MC_FN int entry_touches(int k, v3 p, real r, int mat, MC_GLOBAL const SimParams* sp, MC_GLOBAL const real4* pos,
+                        MC_GLOBAL const int2* info, MC_GLOBAL int* neigh_index, MC_GLOBAL const int* neigh_rec,
+                        MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out, Books* books, int* link,
+                        real4* pj4) {
   *link = neigh_index[k];
   const int j = MC_LINK_PARTNER(*link);
   *pj4 = pos[j];
   if (pair_touches(p, r, v3_of(xyz_of(*pj4)), (*pj4).w)) return 1;
-  if (MC_LINK_TOUCHING(*link)) pair_opened(k, j, neigh_index, neigh_rev, pair_out);
+  if (MC_LINK_TOUCHING(*link)) pair_opened(k, j, mat, sp, info, neigh_index, neigh_rec, neigh_rev, pair_out, books);
   return 0;
 }
 
 /* One touching pair, list entry k of ball i (its position, velocity, spin,
  * material; link: the entry as it was; pj4: the partner's position):
  * the law, ball i's side into its sums, the partner's into its slot, the
- * spring and the touching flag into the entry. */
+ * spring and the losses into the pair's record (a new one for a pair that
+ * begins to touch), the touching flag into the entry. */
 MC_FN void pair_contact(real4 pi4, real4 vi, real4 wi, int mat_i, int k, int link, real4 pj4,
                         MC_GLOBAL const SimParams* sp, MC_GLOBAL const PairParams* pairs,
                         MC_GLOBAL const real4* vel, MC_GLOBAL const real4* omega,
                         MC_GLOBAL const int2* info, MC_GLOBAL int* neigh_index,
-                        MC_GLOBAL real* neigh_hist, MC_GLOBAL const int* neigh_rev,
-                        MC_GLOBAL real* pair_out, int law, BallSums* s) {
+                        MC_GLOBAL int* neigh_rec, MC_GLOBAL const int* neigh_rev,
+                        MC_GLOBAL real* pair_out, Books* books, int law, BallSums* s) {
   const int j = MC_LINK_PARTNER(link);
   const real4 vj = vel[j], wj = omega[j];
   const ContactGeom g = pair_geometry(v3_of(xyz_of(pi4)), pi4.w, v3_of(xyz_of(vi)), v3_of(xyz_of(wi)), vi.w, wi.w,
                                       v3_of(xyz_of(pj4)), pj4.w, v3_of(xyz_of(vj)), v3_of(xyz_of(wj)), vj.w, wj.w);
   const PairParams pp = pairs[MC_PAIR_INDEX(sp, mat_i, info[j].y)];
-  /* A new contact starts with no spring. */
-  const v3 spring = MC_LINK_TOUCHING(link) ? v3_of(load_hist(neigh_hist, k)) : v3_make(0, 0, 0);
-  const ContactOut c = contact_force(pp, g, spring, sp->dt, law);
+  /* A new contact takes a record and starts with no spring (so does one
+   * that found the pool full, at the next try). */
+  const int old_rec = MC_LINK_TOUCHING(link) ? neigh_rec[k] : MC_NO_RECORD;
+  const int fresh = old_rec < 0;
+  const ContactOut c = contact_force(pp, g, record_spring(books, old_rec), sp->dt, law);
+  const int rec = fresh ? record_take(books) : old_rec;
   s->f += real3_of(c.force);
   s->t += real3_of(c.torque);
   s->dissipated += R(0.5) * c.dissipated;
   s->elastic += c.elastic;
   store_partner_side(pair_out + MC_SLOT_REALS * neigh_rev[k], g, c, pj4.w);
-  store_hist(real3_of(c.spring), neigh_hist, k);
-  if (!MC_LINK_TOUCHING(link)) neigh_index[k] = MC_LINK_TOUCHED(j);
+  record_step(books, rec, fresh, v3_dot(g.v_rel, g.normal), c);
+  if (fresh) {
+    neigh_index[k] = MC_LINK_TOUCHED(j);
+    neigh_rec[k] = rec;
+  }
 }
 
 MC_FN BallSums ball_sums_zero(void) {
@@ -186,13 +230,12 @@ MC_FN BallSums ball_sums_start(MC_GLOBAL const SimParams* sp, real4 vi) {
   return s;
 }
 
-/* The shell, the end plates and the lifters on ball i, in the mill frame. */
+/* The shell, the end plates and the lifters on ball i, in the mill frame.
+ * A wall slot that no contact renews was a collision that ended. */
 MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL const SimParams* sp,
                       MC_GLOBAL const PairParams* pairs, MC_GLOBAL const LifterPolygon* lifters, MillState mill,
-                      MC_GLOBAL int* wall_key, MC_GLOBAL real* wall_hist, MC_GLOBAL int* status, int law,
-                      BallSums* sums) {
+                      MC_GLOBAL int* wall_key, MC_GLOBAL int* wall_rec, Books* books, int law, BallSums* sums) {
   const int n = sp->n_balls;
-  const real dt = sp->dt;
   const real3 p = xyz_of(pi4);
   const real ri = pi4.w;
   /* Most balls touch no wall and touched none last step; they skip the wall
@@ -210,46 +253,35 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
       (sp->length > R(0.0) && (p.z < ri + margin || p.z > sp->length - ri - margin)) ||
       (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach);
   if (!near_wall) return;
-  real3* f_sum = &sums->f;
-  real3* t_sum = &sums->t;
-  real* torque_axis = &sums->torque_axis;
-  real* dissipated = &sums->dissipated;
-  real* elastic = &sums->elastic;
-  int old_key[MC_MAX_WALL_CONTACTS];
-  real3 old_hist[MC_MAX_WALL_CONTACTS];
-  int new_key[MC_MAX_WALL_CONTACTS];
-  real3 new_hist[MC_MAX_WALL_CONTACTS];
+  WallSlots ws;
   for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-    old_key[s] = any_old ? wall_key[s * n + i] : MC_WALL_NONE;
-    old_hist[s] = old_key[s] != MC_WALL_NONE ? load_hist(wall_hist, s * n + i) : make_real3(0, 0, 0);
-    new_key[s] = MC_WALL_NONE;
-    new_hist[s] = make_real3(0, 0, 0);
+    ws.old_key[s] = any_old ? wall_key[s * n + i] : MC_WALL_NONE;
+    ws.old_rec[s] = ws.old_key[s] != MC_WALL_NONE ? wall_rec[s * n + i] : MC_NO_RECORD;
+    ws.renewed[s] = 0;
+    ws.new_key[s] = MC_WALL_NONE;
+    ws.new_rec[s] = MC_NO_RECORD;
   }
-  int n_new = 0;
-  int overflow = 0;
+  ws.n_new = 0;
+  ws.overflow = 0;
   const PairParams pw = pairs[MC_PAIR_INDEX(sp, mat_i, sp->n_materials)];
+  const real2 no_out = make_real2(0, 0);
 
   if (near_shell) { /* the root only for a ball that may reach the shell */
     real3 nrm;
     const real ov = shell_overlap(p, ri, sp->shell_radius, &nrm);
     if (ov > R(0.0))
-      wall_contact(MC_WALL_SHELL, nrm, ov, p, vi, wi, ri, pw, mill, dt, law,
-                   old_key, old_hist, new_key, new_hist, &n_new, &overflow,
-                   f_sum, t_sum, torque_axis, dissipated, elastic);
+      wall_contact(MC_WALL_SHELL, nrm, ov, p, vi, wi, ri, mat_i, pw, mill, sp, lifters, law, no_out, &ws, books,
+                   sums);
   }
   if (sp->length > R(0.0)) {
     const real ov_low = ri - p.z;
     if (ov_low > R(0.0))
-      wall_contact(MC_WALL_PLATE_LOW, make_real3(0, 0, 1), ov_low, p, vi, wi, ri,
-                   pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
-                   &n_new, &overflow, f_sum, t_sum, torque_axis, dissipated,
-                   elastic);
+      wall_contact(MC_WALL_PLATE_LOW, make_real3(0, 0, 1), ov_low, p, vi, wi, ri, mat_i, pw, mill, sp, lifters, law,
+                   no_out, &ws, books, sums);
     const real ov_high = ri - (sp->length - p.z);
     if (ov_high > R(0.0))
-      wall_contact(MC_WALL_PLATE_HIGH, make_real3(0, 0, -1), ov_high, p, vi, wi,
-                   ri, pw, mill, dt, law, old_key, old_hist, new_key, new_hist,
-                   &n_new, &overflow, f_sum, t_sum, torque_axis, dissipated,
-                   elastic);
+      wall_contact(MC_WALL_PLATE_HIGH, make_real3(0, 0, -1), ov_high, p, vi, wi, ri, mat_i, pw, mill, sp, lifters,
+                   law, no_out, &ws, books, sums);
   }
   if (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach) {
     const real c = mill.cos_angle, s = mill.sin_angle;
@@ -270,20 +302,23 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
       const real ov = ri - dist;
       if (ov > R(0.0)) {
         const real3 nrm = rotate_z(make_real3(out2.x, out2.y, 0), c, s);
-        wall_contact(MC_WALL_LIFTER0 + k, nrm, ov, p, vi, wi, ri, pw, mill, dt,
-                     law, old_key, old_hist, new_key, new_hist, &n_new,
-                     &overflow, f_sum, t_sum, torque_axis, dissipated,
-                     elastic);
+        wall_contact(MC_WALL_LIFTER0 + k, nrm, ov, p, vi, wi, ri, mat_i, pw, mill, sp, lifters, law, out2, &ws,
+                     books, sums);
       }
     }
   }
-  /* A ball that touched no wall and touches none keeps its empty slots. */
-  if (any_old || n_new > 0)
+  /* Collisions that ended; a ball that touched no wall and touches none
+   * keeps its empty slots. */
+  if (any_old)
+    for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s)
+      if (ws.old_key[s] != MC_WALL_NONE && !ws.renewed[s])
+        record_close(books, ws.old_rec[s], wall_pair_type(mat_i, ws.old_key[s], sp->n_materials));
+  if (any_old || ws.n_new > 0)
     for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
-      wall_key[s * n + i] = new_key[s];
-      if (new_key[s] != MC_WALL_NONE) store_hist(new_hist[s], wall_hist, s * n + i);
+      wall_key[s * n + i] = ws.new_key[s];
+      wall_rec[s * n + i] = ws.new_rec[s];
     }
-  if (overflow) MC_ATOMIC_OR(status, MC_FLAG_WALL_OVERFLOW);
+  if (ws.overflow) MC_ATOMIC_OR(books->status, MC_FLAG_WALL_OVERFLOW);
 }
 
 /* A ball's sums into its force, torque and accumulators. */
@@ -310,11 +345,11 @@ MC_FN void ball_forces(
     MC_GLOBAL const real4* pos, MC_GLOBAL const real4* vel,
     MC_GLOBAL const real4* omega, MC_GLOBAL const int2* info,
     MC_GLOBAL const int* neigh_start, MC_GLOBAL const int* neigh_count,
-    MC_GLOBAL int* neigh_index, MC_GLOBAL real* neigh_hist,
+    MC_GLOBAL int* neigh_index, MC_GLOBAL int* neigh_rec,
     MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out,
-    MC_GLOBAL int* wall_key, MC_GLOBAL real* wall_hist,
+    MC_GLOBAL int* wall_key, MC_GLOBAL int* wall_rec,
     MC_GLOBAL real4* force, MC_GLOBAL real4* torque, MC_GLOBAL real4* accum,
-    MC_GLOBAL int* status) {
+    Books* books) {
   const int law = MC_RUN_LAW(sp);
   const real4 pi4 = pos[i];
   const real4 vi = vel[i];
@@ -325,10 +360,10 @@ MC_FN void ball_forces(
 
   /* ---- ball–ball ---- */
   /* The list holds the partners j > i. An entry's link says whether the
-   * pair touched at the last evaluation (MC_LINK_*): only then is its spring
-   * live. So an apart pair, most of the list, costs its partner's position
-   * and nothing else: no spring is read or cleared, and the link changes
-   * only when a contact opens or closes. A touching pair leaves the
+   * pair touched at the last evaluation (MC_LINK_*): only then does it hold
+   * a record. So an apart pair, most of the list, costs its partner's
+   * position and nothing else, and the link changes only when a contact
+   * opens or closes. A touching pair leaves the
    * partner's side in its slot neigh_rev[k] (MC_SLOT_REALS); a pair that
    * opens clears it, so the slots of apart pairs are zero. */
   const int start = neigh_start[i];
@@ -336,12 +371,13 @@ MC_FN void ball_forces(
   for (int k = start; k < start + count; ++k) {
     int link;
     real4 pj4;
-    if (entry_touches(k, p, pi4.w, pos, neigh_index, neigh_rev, pair_out, &link, &pj4))
-      pair_contact(pi4, vi, wi, mat_i, k, link, pj4, sp, pairs, vel, omega, info, neigh_index, neigh_hist,
-                   neigh_rev, pair_out, law, &s);
+    if (entry_touches(k, p, pi4.w, mat_i, sp, pos, info, neigh_index, neigh_rec, neigh_rev, pair_out, books, &link,
+                      &pj4))
+      pair_contact(pi4, vi, wi, mat_i, k, link, pj4, sp, pairs, vel, omega, info, neigh_index, neigh_rec,
+                   neigh_rev, pair_out, books, law, &s);
   }
 
-  ball_walls(i, pi4, vi, wi, mat_i, sp, pairs, lifters, mill, wall_key, wall_hist, status, law, &s);
+  ball_walls(i, pi4, vi, wi, mat_i, sp, pairs, lifters, mill, wall_key, wall_rec, books, law, &s);
   ball_store(i, s, mill, sp->dt, force, torque, accum);
 }
 

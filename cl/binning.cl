@@ -63,24 +63,24 @@ __kernel void gather_int2(int n, __global const int* perm,
   if (i < n) dst[i] = src[perm[i]];
 }
 
-/* Wall-contact history is stored slot-major (slot s of ball i at s·n + i),
- * springs packed three reals each. One slot at a time goes through scratch
- * arrays of one entry per ball, then back: no second copy of all slots. */
+/* Wall slots are stored slot-major (slot s of ball i at s·n + i): a key
+ * and a record each. One slot at a time goes through scratch arrays of one
+ * entry per ball, then back: no second copy of all slots. */
 __kernel void gather_wall_slot(int n, int slot, __global const int* perm,
-                               __global const int* key, __global const real* hist,
-                               __global int* tmp_key, __global real* tmp_hist) {
+                               __global const int* key, __global const int* rec,
+                               __global int* tmp_key, __global int* tmp_rec) {
   const int i = get_global_id(0);
   if (i >= n) return;
   const int from = slot * n + perm[i];
   tmp_key[i] = key[from];
-  store_hist(load_hist(hist, from), tmp_hist, i);
+  tmp_rec[i] = rec[from];
 }
 
 __kernel void put_wall_slot(int n, int slot, __global const int* tmp_key,
-                            __global const real* tmp_hist, __global int* key,
-                            __global real* hist) {
+                            __global const int* tmp_rec, __global int* key,
+                            __global int* rec) {
   const int i = get_global_id(0);
   if (i >= n) return;
   key[slot * n + i] = tmp_key[i];
-  store_hist(load_hist(tmp_hist, i), hist, slot * n + i);
+  rec[slot * n + i] = tmp_rec[i];
 }

@@ -20,7 +20,8 @@
  * had then (Hertz's kt follows the overlap; with this step's kt the losses
  * came out 12 % above the torque power in a turning drum), and the normal
  * dashpot's work at the synchronised relative speed (with the half-step-old
- * one, about ζ·ω·dt too high: 2 % at 25 steps a contact).
+ * one, about ζ·ω·dt too high: 2 % at 25 steps a contact). The losses are
+ * kept apart (normal, tangential, rolling) for the collision spectra.
  *
  * Written on plain structs of three reals (v3) and with selects instead of
  * branches, so that a kernel running one contact per work-item can be put in
@@ -63,7 +64,11 @@ typedef struct {
   v3 spring;        /* updated tangential spring ξ, m */
   v3 rolling;       /* the rolling-resistance couple, part of torque */
   real normal_force; /* Fn ≥ 0, N */
-  real dissipated;  /* energy lost in this contact this step, J */
+  real dissipated;  /* energy lost in this contact this step, J: */
+  real loss_normal;     /*   in the normal dashpot (and the clip at Fn = 0) */
+  real loss_tangential; /*   in the tangential dashpot and sliding */
+  real loss_rolling;    /*   in rolling resistance */
+  real slide;       /* sliding distance this step (0 while sticking), m */
   real elastic;     /* energy stored in the contact now, J */
 } ContactOut;
 
@@ -97,7 +102,7 @@ MC_FN ContactOut contact_force(PairParams pp, ContactGeom g, v3 spring_old,
   /* The dashpot's work at the relative speed synchronised to the step,
    * vn + ½·dt·Fn/m* (the contact's own push), as the kinetic energy is. */
   const real vn_sync = vn + R(0.5) * dt * fn / g.m_eff;
-  real dissipated = (f_elastic - fn) * vn_sync * dt;
+  const real loss_normal = (f_elastic - fn) * vn_sync * dt;
 
   /* Tangential spring: rotate the old spring into the new tangent plane,
    * keeping its length. */
@@ -129,7 +134,9 @@ MC_FN ContactOut contact_force(PairParams pp, ContactGeom g, v3 spring_old,
    * the old spring's force (at its own stiffness) and the new one's: with the
    * end force a sticking spring would show ½·kt·|vt·dt|² of dissipation every
    * step that no contact loses. */
-  dissipated += -v3_dot(ft, slip) - R(0.5) * v3_dot(v3_sub(v3_scale(kt, s), v3_scale(kt_old, s_rot)), slip) - (u_t_new - u_t_old);
+  const real loss_tangential = -v3_dot(ft, slip) -
+                               R(0.5) * v3_dot(v3_sub(v3_scale(kt, s), v3_scale(kt_old, s_rot)), slip) -
+                               (u_t_new - u_t_old);
 
   /* Rolling resistance on the rolling part of the relative spin. */
   const v3 w_roll = v3_sub(g.w_rel, v3_scale(v3_dot(g.w_rel, n), n));
@@ -138,14 +145,19 @@ MC_FN ContactOut contact_force(PairParams pp, ContactGeom g, v3 spring_old,
   const real cap = w_len / (dt * g.inv_inertia_sum);
   const real m_mag = rolling ? fmin(pp.mu_roll * g.r_eff * fn, cap) : R(0.0);
   const v3 m_roll = v3_scale(rolling ? -m_mag / w_len : R(0.0), w_roll);
-  dissipated += m_mag * w_len * dt;
+  /* Its work at the relative spin synchronised to the step, as above. */
+  const real loss_rolling = m_mag * (w_len - R(0.5) * dt * m_mag * g.inv_inertia_sum) * dt;
 
   out.force = v3_add(v3_scale(fn, n), ft);
   out.torque = v3_add(v3_cross(v3_scale(-g.arm, n), ft), m_roll);
   out.spring = s;
   out.rolling = m_roll;
   out.normal_force = fn;
-  out.dissipated = dissipated;
+  out.loss_normal = loss_normal;
+  out.loss_tangential = loss_tangential;
+  out.loss_rolling = loss_rolling;
+  out.dissipated = loss_normal + loss_tangential + loss_rolling;
+  out.slide = sliding ? dt * sqrt(v3_dot(vt, vt)) : R(0.0);
   out.elastic = u_normal + u_t_new;
   return out;
 }

@@ -3,15 +3,19 @@
  * index (half lists), stored compactly (CSR: a start and a count per ball).
  * Cell c holds the balls cell_start[c] .. cell_start[c + 1]. Built in two
  * passes, count then fill, after binning has put the balls in cell order.
- * The fill pass carries each persisting pair's tangential spring over from
- * the previous list, which was written in the previous ball order: `perm`
- * maps a new index to the old one. Only the springs of pairs in contact
- * (MC_LINK_TOUCHING) are carried: before the new lists are built they are
- * copied out of the old lists into a compact carry list (carry_count, a
- * scan, carry_fill), so that the old lists need no second buffer while the
- * new ones are written. A spring is seen from the ball that lists the pair;
- * when the new order hands the pair to the other ball, the spring changes
- * sign.
+ * The fill pass carries each persisting contact's record (its spring and
+ * losses, layout.h) over from the previous list, which was written in the
+ * previous ball order: `perm` maps a new index to the old one. Only pairs in
+ * contact (MC_LINK_TOUCHING) have records: before the new lists are built
+ * their partners and records are copied out of the old lists into a
+ * compact carry list (carry_count, a scan, carry_fill), so that the old
+ * lists need no second buffer while the new ones are written. A spring is
+ * seen from the ball that lists the pair; when the new order hands the pair
+ * to the other ball, the spring changes sign.
+ *
+ * Then the records of the open contacts are packed to the front of the
+ * pool in ball order (records_count, a scan, records_pack), so that the
+ * pool holds no records of contacts that ended.
  *
  * Each ball's incoming slots (one per entry k of a lower ball's list that
  * holds it) are indexed too, for the reactions: in_count, a scan,
@@ -49,15 +53,15 @@ __kernel void contacts_count(__global const SimParams* sp,
   neigh_count[i] = count;
 }
 
-/* Whether the pair (old indices a < b) was carried; if so its spring, seen
- * from a, goes to *h. */
+/* Whether the pair (old indices a < b) was carried; if so its record goes
+ * to *rec. */
 inline int find_carried(int a, int b, __global const int* carry_start,
                         __global const int* carry_count,
                         __global const int* carry_index,
-                        __global const real* carry_hist, real3* h) {
+                        __global const int* carry_rec, int* rec) {
   const int q0 = carry_start[a];
   for (int q = q0; q < q0 + carry_count[a]; ++q)
-    if (carry_index[q] == b) { *h = load_hist(carry_hist, q); return 1; }
+    if (carry_index[q] == b) { *rec = carry_rec[q]; return 1; }
   return 0;
 }
 
@@ -66,12 +70,13 @@ __kernel void contacts_fill(__global const SimParams* sp,
                             __global const int* cell_start,
                             __global const int* neigh_start,
                             __global int* neigh_index,
-                            __global real* neigh_hist,
+                            __global int* neigh_rec,
                             __global const int* perm,
                             __global const int* carry_start,
                             __global const int* carry_count,
                             __global const int* carry_index,
-                            __global const real* carry_hist) {
+                            __global const int* carry_rec,
+                            __global real4* records) {
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
   const real4 pi = pos[i];
@@ -87,21 +92,25 @@ __kernel void contacts_fill(__global const SimParams* sp,
         for (int j = max(b, i + 1); j < e; ++j) {
           if (!is_neighbour(sp, pi, pos[j])) continue;
           const int oj = perm[j];
-          real3 h = (real3)(0, 0, 0);
+          int rec = MC_NO_RECORD;
           /* The old list of the lower old index held the pair. */
           const int found = oi < oj
-              ? find_carried(oi, oj, carry_start, carry_count, carry_index, carry_hist, &h)
-              : find_carried(oj, oi, carry_start, carry_count, carry_index, carry_hist, &h);
-          if (found && oi > oj) h = -h;
+              ? find_carried(oi, oj, carry_start, carry_count, carry_index, carry_rec, &rec)
+              : find_carried(oj, oi, carry_start, carry_count, carry_index, carry_rec, &rec);
+          if (found && oi > oj && rec >= 0) { /* now seen from the other ball */
+            const real4 h = records[2 * rec];
+            records[2 * rec] = (real4)(-h.x, -h.y, -h.z, h.w);
+          }
           neigh_index[k] = found ? MC_LINK_TOUCHED(j) : j;
-          store_hist(h, neigh_hist, k);
+          neigh_rec[k] = found ? rec : MC_NO_RECORD;
           ++k;
         }
       }
 }
 
-/* Springs to carry over (pairs touching at the last evaluation), per ball,
- * in the old order. */
+/* Records to carry over (pairs touching at the last evaluation), per ball,
+ * in the old order. A touching pair without a record (the pool was full)
+ * is carried too, and starts afresh. */
 __kernel void carry_count(int n, __global const int* neigh_start,
                           __global const int* neigh_count,
                           __global const int* neigh_index,
@@ -118,9 +127,9 @@ __kernel void carry_count(int n, __global const int* neigh_start,
 __kernel void carry_fill(int n, __global const int* neigh_start,
                          __global const int* neigh_count,
                          __global const int* neigh_index,
-                         __global const real* neigh_hist,
+                         __global const int* neigh_rec,
                          __global const int* carry_start,
-                         __global int* carry_index, __global real* carry_hist) {
+                         __global int* carry_index, __global int* carry_rec) {
   const int i = get_global_id(0);
   if (i >= n) return;
   int q = carry_start[i];
@@ -129,7 +138,7 @@ __kernel void carry_fill(int n, __global const int* neigh_start,
     const int link = neigh_index[k];
     if (MC_LINK_TOUCHING(link)) {
       carry_index[q] = MC_LINK_PARTNER(link);
-      store_hist(load_hist(neigh_hist, k), carry_hist, q);
+      carry_rec[q] = neigh_rec[k];
       ++q;
     }
   }
@@ -182,4 +191,62 @@ __kernel void in_sort(int n, __global const int* in_start,
     in_slot[q + 1] = v;
   }
   for (int q = b; q < e; ++q) neigh_rev[in_slot[q]] = q;
+}
+
+/* The pool packed: each ball's live records (its touching entries', then
+ * its wall slots') counted, then (after a scan into `first`) copied in that
+ * order into `packed` and renumbered. `pending` counts, per ball, the pairs
+ * that overlap now but hold no record yet (a charge laid anew), so that the
+ * host can size the pool before the next force evaluation takes them. */
+__kernel void records_count(__global const SimParams* sp, __global const real4* pos,
+                            __global const int* neigh_start, __global const int* neigh_count,
+                            __global const int* neigh_index, __global const int* neigh_rec,
+                            __global const int* wall_key, __global const int* wall_rec,
+                            __global int* live, __global int* pending) {
+  const int i = get_global_id(0);
+  const int n = sp->n_balls;
+  if (i >= n) return;
+  int c = 0, p = 0;
+  const real4 pi = pos[i];
+  const int b = neigh_start[i];
+  for (int k = b; k < b + neigh_count[i]; ++k) {
+    const int link = neigh_index[k];
+    if (MC_LINK_TOUCHING(link)) {
+      c += neigh_rec[k] >= 0;
+    } else {
+      const real4 pj = pos[link];
+      const real3 d = xyz_of(pi) - xyz_of(pj);
+      const real r = pi.w + pj.w;
+      p += dot(d, d) < r * r;
+    }
+  }
+  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s)
+    c += wall_key[s * n + i] != MC_WALL_NONE && wall_rec[s * n + i] >= 0;
+  live[i] = c;
+  pending[i] = p;
+}
+
+__kernel void records_pack(int n, __global const int* neigh_start, __global const int* neigh_count,
+                           __global const int* neigh_index, __global int* neigh_rec,
+                           __global const int* wall_key, __global int* wall_rec,
+                           __global const int* first, __global const real4* records,
+                           __global real4* packed) {
+  const int i = get_global_id(0);
+  if (i >= n) return;
+  int q = first[i];
+  const int b = neigh_start[i];
+  for (int k = b; k < b + neigh_count[i]; ++k) {
+    const int r = neigh_rec[k];
+    if (!MC_LINK_TOUCHING(neigh_index[k]) || r < 0) continue;
+    packed[2 * q] = records[2 * r];
+    packed[2 * q + 1] = records[2 * r + 1];
+    neigh_rec[k] = q++;
+  }
+  for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+    const int r = wall_rec[s * n + i];
+    if (wall_key[s * n + i] == MC_WALL_NONE || r < 0) continue;
+    packed[2 * q] = records[2 * r];
+    packed[2 * q + 1] = records[2 * r + 1];
+    wall_rec[s * n + i] = q++;
+  }
 }

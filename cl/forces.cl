@@ -4,7 +4,24 @@
 #include "layout.h"
 #include "contact_law.h"
 #include "walls.h"
+#include "books.h"
 #include "ball_forces.h"
+
+/* The books' arguments of both force kernels, and the struct they fill. */
+#define MC_BOOK_ARGS                                                                                      \
+  __global real4 *records, __global int *rec_state, int rec_capacity, int rec_mark, __global uint *spectra, \
+      __global uint *liner, __global uint *impact_profile, __global const BookParams *bp
+#define MC_BOOKS_INIT(b)          \
+  Books b;                        \
+  b.records = records;            \
+  b.rec_state = rec_state;        \
+  b.capacity = rec_capacity;      \
+  b.mark = rec_mark;              \
+  b.spectra = spectra;            \
+  b.liner = liner;                \
+  b.impact_profile = impact_profile; \
+  b.bp = bp;                      \
+  b.status = status
 
 __kernel void forces(__global const SimParams* sp,
                      __global const PairParams* pairs,
@@ -14,21 +31,22 @@ __kernel void forces(__global const SimParams* sp,
                      __global const int2* info, __global const int* neigh_start,
                      __global const int* neigh_count,
                      __global int* neigh_index,
-                     __global real* neigh_hist, __global const int* neigh_rev,
+                     __global int* neigh_rec, __global const int* neigh_rev,
                      __global real* pair_out,
                      __global int* wall_key,
-                     __global real* wall_hist, __global real4* force,
+                     __global int* wall_rec, __global real4* force,
                      __global real4* torque, __global real4* accum,
-                     __global int* status) {
+                     __global int* status, MC_BOOK_ARGS) {
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
   MillState mill;
   mill.cos_angle = mill_cos;
   mill.sin_angle = mill_sin;
   mill.omega = mill_omega;
+  MC_BOOKS_INIT(books);
   ball_forces(i, sp, pairs, lifters, mill, pos, vel, omega, info, neigh_start,
-              neigh_count, neigh_index, neigh_hist, neigh_rev, pair_out, wall_key, wall_hist, force,
-              torque, accum, status);
+              neigh_count, neigh_index, neigh_rec, neigh_rev, pair_out, wall_key, wall_rec, force,
+              torque, accum, &books);
 }
 
 __kernel void reactions(int n, __global const int* in_start,
@@ -82,10 +100,10 @@ MC_FN void fg_pair_law(int q, int total, int group_first, __global const SimPara
                        __global const PairParams* pairs, __global const real4* pos,
                        __global const real4* vel, __global const real4* omega,
                        __global const int2* info, __global int* neigh_index,
-                       __global real* neigh_hist, __global const int* neigh_rev,
+                       __global int* neigh_rec, __global const int* neigh_rev,
                        __global real* pair_out, __local const int* pair_entry,
                        __local const int* pair_ball,
-                       __local real* own, int law) {
+                       __local real* own, Books* books, int law) {
   const int qc = min(q, max(total - 1, 0));
   const int k = pair_entry[qc];
   const int link = neigh_index[k];
@@ -102,15 +120,19 @@ MC_FN void fg_pair_law(int q, int total, int group_first, __global const SimPara
       FG_AT(omega, b, 3));
   __global const int* mat = (__global const int*)info;
   const PairParams pp = pairs[MC_PAIR_INDEX(sp, mat[2 * a + 1], mat[2 * b + 1])];
-  const real h0 = neigh_hist[3 * k], h1 = neigh_hist[3 * k + 1], h2 = neigh_hist[3 * k + 2];
-  const v3 spring = v3_make(touched ? h0 : R(0.0), touched ? h1 : R(0.0), touched ? h2 : R(0.0));
-  const ContactOut c = contact_force(pp, g, spring, sp->dt, law);
+  /* A pair that begins to touch takes its record after the law (only the
+   * stored pairs take one), with no spring. */
+  const int rec = touched ? neigh_rec[k] : MC_NO_RECORD;
+  const ContactOut c = contact_force(pp, g, record_spring(books, rec), sp->dt, law);
   if (q < total) {
     store_partner_side(pair_out + MC_SLOT_REALS * neigh_rev[k], g, c, FG_AT(pos, b, 3));
-    neigh_hist[3 * k] = c.spring.x;
-    neigh_hist[3 * k + 1] = c.spring.y;
-    neigh_hist[3 * k + 2] = c.spring.z;
-    if (!touched) neigh_index[k] = MC_LINK_TOUCHED(b);
+    const int fresh = rec < 0;
+    const int r = fresh ? record_take(books) : rec;
+    record_step(books, r, fresh, v3_dot(g.v_rel, g.normal), c);
+    if (fresh) {
+      neigh_index[k] = MC_LINK_TOUCHED(b);
+      neigh_rec[k] = r;
+    }
     own[MC_FG_OWN * q + 0] = c.force.x;
     own[MC_FG_OWN * q + 1] = c.force.y;
     own[MC_FG_OWN * q + 2] = c.force.z;
@@ -131,12 +153,12 @@ void forces_grouped(__global const SimParams* sp,
                     __global const int2* info, __global const int* neigh_start,
                     __global const int* neigh_count,
                     __global int* neigh_index,
-                    __global real* neigh_hist, __global const int* neigh_rev,
+                    __global int* neigh_rec, __global const int* neigh_rev,
                     __global real* pair_out,
                     __global int* wall_key,
-                    __global real* wall_hist, __global real4* force,
+                    __global int* wall_rec, __global real4* force,
                     __global real4* torque, __global real4* accum,
-                    __global int* status) {
+                    __global int* status, MC_BOOK_ARGS) {
   __local int queue[MC_FG_WG * MC_FG_QUEUE]; /* list entries, per ball */
   __local int queued[MC_FG_WG];
   __local int first[MC_FG_WG + 1];            /* each ball's first queued pair */
@@ -149,6 +171,7 @@ void forces_grouped(__global const SimParams* sp,
   const int group_first = i - lid;
   const int active = i < sp->n_balls;
   const int law = MC_RUN_LAW(sp);
+  MC_BOOKS_INIT(books);
 
   /* 1. The walk: which listed pairs touch. */
   BallSums extra = ball_sums_zero(); /* pairs past the ball's queue, run here */
@@ -161,12 +184,14 @@ void forces_grouped(__global const SimParams* sp,
     for (int k = start; k < start + count; ++k) {
       int link;
       real4 pj4;
-      if (!entry_touches(k, p, pi4.w, pos, neigh_index, neigh_rev, pair_out, &link, &pj4)) continue;
+      if (!entry_touches(k, p, pi4.w, info[i].y, sp, pos, info, neigh_index, neigh_rec, neigh_rev, pair_out,
+                         &books, &link, &pj4))
+        continue;
       if (nq < MC_FG_QUEUE) {
         queue[lid * MC_FG_QUEUE + nq++] = k;
       } else {
         pair_contact(pi4, vel[i], omega[i], info[i].y, k, link, pj4, sp, pairs, vel, omega, info,
-                     neigh_index, neigh_hist, neigh_rev, pair_out, law, &extra);
+                     neigh_index, neigh_rec, neigh_rev, pair_out, &books, law, &extra);
         ++n_extra;
       }
     }
@@ -201,7 +226,7 @@ void forces_grouped(__global const SimParams* sp,
   /* 2. The law, a queued pair per work-item in each of MC_FG_ROUNDS rounds. */
 #define FG_LAW(r)                                                                                    \
   fg_pair_law((r) * MC_FG_ROUND + lid, lid < MC_FG_ROUND ? in_rounds : 0, group_first, sp, pairs, pos, \
-              vel, omega, info, neigh_index, neigh_hist, neigh_rev, pair_out, pair_entry, pair_ball, own, law)
+              vel, omega, info, neigh_index, neigh_rec, neigh_rev, pair_out, pair_entry, pair_ball, own, &books, law)
   FG_LAW(0);
 #if MC_FG_ROUNDS > 1
   barrier(CLK_LOCAL_MEM_FENCE); /* a region per round, so each is one law wide */
@@ -237,7 +262,7 @@ void forces_grouped(__global const SimParams* sp,
         const int k = queue[lid * MC_FG_QUEUE + q];
         const int link = neigh_index[k];
         pair_contact(pi4, vi, wi, mat_i, k, link, pos[MC_LINK_PARTNER(link)], sp, pairs, vel, omega, info,
-                     neigh_index, neigh_hist, neigh_rev, pair_out, law, &s);
+                     neigh_index, neigh_rec, neigh_rev, pair_out, &books, law, &s);
       }
     }
     if (n_extra > 0) {
@@ -250,7 +275,7 @@ void forces_grouped(__global const SimParams* sp,
     mill.cos_angle = mill_cos;
     mill.sin_angle = mill_sin;
     mill.omega = mill_omega;
-    ball_walls(i, pi4, vi, wi, mat_i, sp, pairs, lifters, mill, wall_key, wall_hist, status, law, &s);
+    ball_walls(i, pi4, vi, wi, mat_i, sp, pairs, lifters, mill, wall_key, wall_rec, &books, law, &s);
     ball_store(i, s, mill, sp->dt, force, torque, accum);
   }
 }

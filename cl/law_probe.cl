@@ -10,6 +10,7 @@
 #include "layout.h"
 #include "contact_law.h"
 #include "walls.h"
+#include "books.h"
 #include "ball_forces.h"
 
 #ifdef MC_PROBE_LANES

@@ -24,6 +24,8 @@
 #define MC_FLAG_WALL_OVERFLOW 2 /* more wall contacts than history slots */
 #define MC_FLAG_NOT_FINITE 4    /* NaN or Inf in a ball's state */
 #define MC_FLAG_ESCAPED 8       /* a ball wholly outside the shell or the end plates */
+#define MC_FLAG_RECORDS_FULL 16 /* a contact found the record pool full */
+#define MC_FLAG_PACK_RECORDS 32 /* the record pool is past its mark: pack it */
 
 /* A neighbour-list entry (a link) holds the partner's index j while the
  * pair is apart, and ~j (negative) while it touched at the last force
@@ -33,6 +35,61 @@
 #define MC_LINK_TOUCHING(link) ((link) < 0)
 #define MC_LINK_PARTNER(link) ((link) < 0 ? ~(link) : (link))
 #define MC_LINK_TOUCHED(j) (~(j))
+
+/* Contact records: the history of each open contact, from first touch to
+ * separation (one collision), kept in a pool that only touching contacts
+ * use. A touching list entry or wall slot holds its record's index (or
+ * MC_NO_RECORD when the pool was full). Record r is two real4s:
+ *   rec[2r]     = tangential spring ξ (xyz, m), normal impact speed at
+ *                 first touch (w, m/s)
+ *   rec[2r + 1] = energy lost so far in the normal, tangential and rolling
+ *                 parts (xyz, J), steps in contact (w)
+ * New contacts take records from the end of the pool (an atomic counter);
+ * each rebuild, and a pool past its mark, packs the records of the open
+ * contacts to the front (which moves records and changes no result). */
+#define MC_NO_RECORD (-1)
+
+/* Collision energy spectra: per pair type, energy lost per collision in
+ * log-spaced bins, 10 a decade from 1e-9 to 1e3 J, with one bin below (bin
+ * 0, also losses <= 0) and one above (the last). Each bin sums, as 64-bit
+ * integers (two uints, low word first, so that sums are exact and do not
+ * depend on the order of the atomic adds): collisions, normal, tangential
+ * and rolling losses (J, in units of the bin's lower edge · 2^-24), impact
+ * speeds (units of 2^-24 m/s) and steps in contact. */
+#define MC_SPECTRA_DECADES 12
+#define MC_SPECTRA_PER_DECADE 10
+#define MC_SPECTRA_LOG_MIN (-9)
+#define MC_SPECTRA_BINS (MC_SPECTRA_DECADES * MC_SPECTRA_PER_DECADE + 2)
+#define MC_SPECTRA_FIELDS 6
+#define MC_SPECTRA_COUNT 0
+#define MC_SPECTRA_NORMAL 1
+#define MC_SPECTRA_TANGENTIAL 2
+#define MC_SPECTRA_ROLLING 3
+#define MC_SPECTRA_SPEED 4
+#define MC_SPECTRA_STEPS 5
+#define MC_SPECTRA_SCALE 16777216.0 /* 2^24 */
+/* Wall pair types after the ball–ball ones: per ball material. */
+#define MC_WALL_TYPE_SHELL 0
+#define MC_WALL_TYPE_LIFTER 1
+#define MC_WALL_TYPE_PLATE 2
+#define MC_WALL_TYPES 3
+
+/* Liner elements sum, as 64-bit integers like the spectra: impacts
+ * (collisions that began on the element), impact energy (the normal loss,
+ * J), shear energy (the tangential loss, J), both in units of energy_unit,
+ * and Archard wear volume (units of wear_unit). */
+#define MC_LINER_FIELDS 4
+#define MC_LINER_IMPACTS 0
+#define MC_LINER_NORMAL 1
+#define MC_LINER_SHEAR 2
+#define MC_LINER_WEAR 3
+/* Faces of a lifter row, in element order. */
+#define MC_FACE_LEADING 0 /* the face ahead, counter-clockwise */
+#define MC_FACE_TOP 1
+#define MC_FACE_TRAILING 2
+/* The lab-frame profile of impact energy on the shell and the lifters, a
+ * bin a degree counter-clockwise from 3 o'clock (the impact point). */
+#define MC_IMPACT_BINS 360
 
 /* A pair's slot in its higher ball's incoming slots holds that ball's side
  * of the pair while it touches: the force (3 reals), half the energy the
@@ -63,7 +120,9 @@ typedef struct {
   real2 vertices[MC_POLY_MAX_VERTS];
   int n_vertices;
   int pad0, pad1, pad2;
-  real4 bound; /* a circle holding the polygon: centre xy, radius z */
+  real4 bound; /* a circle holding the polygon: centre xy, radius z; w the
+                  half-angle (rad) the bar covers on the shell, where the
+                  bare shell between two rows begins */
 } LifterPolygon;
 
 /* Parameters fixed for a run (changed only at a step boundary by the host). */
@@ -86,6 +145,24 @@ typedef struct {
   int law;           /* MC_LAW_LINEAR or MC_LAW_HERTZ */
   int pad_int;
 } SimParams;
+
+/* How the energy is booked: the spectra's pair types and the liner's
+ * elements (src/sim/liner.h lays them out), derived on the host. */
+typedef struct {
+  real energy_unit;     /* J per count of the liner's energy sums */
+  real wear_unit;       /* m³ per count of the liner's wear sums */
+  real wear_k;          /* Archard: volume = wear_k · Fn · sliding distance, m³/(N·m) */
+  real plate_ring_width; /* m, radial width of the end plates' rings */
+  int n_types;          /* pair types (the spectra's rows; one more row
+                           holds the losses of contacts without a record) */
+  int n_elements;       /* liner elements */
+  int shell_bins;       /* shell elements between two lifter rows (or around
+                           a smooth shell) */
+  int axial_bins;       /* of the shell and the lifters */
+  int plate_rings, plate_sectors;
+  int first_lifter_element; /* the shell's elements come first */
+  int first_plate_element;
+} BookParams;
 
 /* The pair table has (n_materials + 1)² entries, wall material last. */
 #define MC_PAIR_INDEX(params, a, b) ((a) * ((params)->n_materials + 1) + (b))

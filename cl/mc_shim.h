@@ -32,9 +32,9 @@ typedef float4 real4;
 #define xyz_of(v) ((v).xyz)
 #define R(x) ((real)(x))
 #define MC_ATOMIC_OR(ptr, bits) atomic_or((ptr), (bits))
-/* Contact springs are stored packed, three reals each (no padding). */
-#define load_hist(p, k) vload3((k), (p))
-#define store_hist(v, p, k) vstore3((v), (k), (p))
+#define MC_ATOMIC_INC(ptr) atomic_inc(ptr)
+#define MC_ATOMIC_ADD(ptr, v) atomic_add((ptr), (v))
+#define MC_ROUND_LONG(x) convert_long_rte(x)
 
 #else
 /* ------------------------------------------------------------------ host */
@@ -46,7 +46,18 @@ typedef float4 real4;
 #define MC_CONST
 #define R(x) ((real)(x))
 #define MC_ATOMIC_OR(ptr, bits) (*(ptr) |= (bits))
+#define MC_ATOMIC_INC(ptr) ((*(ptr))++)
+#define MC_ATOMIC_ADD(ptr, v) mc_add_returning_old((ptr), (v))
+#define MC_ROUND_LONG(x) static_cast<long>(std::llrint(x))
 #define MC_REAL_EPS (std::numeric_limits<real>::epsilon())
+
+typedef unsigned int uint;
+typedef unsigned long ulong;
+inline uint mc_add_returning_old(uint* p, uint v) {
+  const uint old = *p;
+  *p = old + v;
+  return old;
+}
 
 struct alignas(2 * sizeof(real)) real2 { real x, y; };
 struct alignas(4 * sizeof(real)) real4 { real x, y, z, w; };
@@ -74,10 +85,8 @@ inline real2 operator+(real2 a, real2 b) { return {a.x + b.x, a.y + b.y}; }
 inline real2 operator-(real2 a, real2 b) { return {a.x - b.x, a.y - b.y}; }
 inline real2 operator*(real s, real2 a) { return {s * a.x, s * a.y}; }
 inline real dot(real2 a, real2 b) { return a.x * b.x + a.y * b.y; }
-inline real3 load_hist(const real* p, std::size_t k) { return real3{p[3 * k], p[3 * k + 1], p[3 * k + 2]}; }
-inline void store_hist(real3 v, real* p, std::size_t k) { p[3 * k] = v.x; p[3 * k + 1] = v.y; p[3 * k + 2] = v.z; }
 using std::sqrt; using std::fabs; using std::fmin; using std::fmax; using std::pow;
-using std::sin; using std::cos; using std::atan2; using std::floor;
+using std::sin; using std::cos; using std::atan2; using std::floor; using std::log10;
 #endif
 
 #endif /* MC_SHIM_H */

@@ -28,4 +28,5 @@ __kernel void layout_sizes(__global int* out) {
   out[1] = (int)sizeof(PairParams);
   out[2] = (int)sizeof(LifterPolygon);
   out[3] = (int)sizeof(real4);
+  out[4] = (int)sizeof(BookParams);
 }

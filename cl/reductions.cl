@@ -10,13 +10,20 @@
  *   7 neighbour-list entries
  *   8 Σ m·x and 9 Σ m·y: the charge's centre of mass, for its angle and
  *     for the torque-arm power M·g·x̄·ω
+ *  10-12 what the open contacts have lost so far, normal, tangential and
+ *     rolling (J): their records, by the ball that holds each (list entries
+ *     and wall slots)
  * Velocities are stored half a step behind, so the kinetic energy uses
  * v(n) = v(n−½) + ½·dt·F(n)/m, which keeps the energy check second order.
  * With reset != 0 the accumulators 0–2 are zeroed for the next interval. */
 #include "mc_shim.h"
 #include "layout.h"
 
-#define MC_N_OBSERVABLES 10
+#ifndef MC_ENERGY_BOOKS
+#define MC_ENERGY_BOOKS 1
+#endif
+
+#define MC_N_OBSERVABLES 13
 
 __kernel __attribute__((reqd_work_group_size(MC_REDUCE_WG, 1, 1)))
 void reduce_observables(__global const SimParams* sp,
@@ -24,8 +31,10 @@ void reduce_observables(__global const SimParams* sp,
                         __global const real4* omega,
                         __global const real4* force,
                         __global const real4* torque, __global real4* accum,
-                        __global const int* neigh_count, int reset,
-                        __global real* partial) {
+                        __global const int* neigh_start, __global const int* neigh_count,
+                        __global const int* neigh_index, __global const int* neigh_rec,
+                        __global const int* wall_key, __global const int* wall_rec,
+                        __global const real4* records, int reset, __global real* partial) {
   __local real tmp[MC_REDUCE_WG * MC_N_OBSERVABLES];
   const int i = get_global_id(0);
   const int lid = get_local_id(0);
@@ -49,6 +58,24 @@ void reduce_observables(__global const SimParams* sp,
     v[7] = (real)(2 * neigh_count[i]); /* each listed pair, from both sides */
     v[8] = mass * pos[i].x;
     v[9] = mass * pos[i].y;
+#if MC_ENERGY_BOOKS
+    const int n = sp->n_balls;
+    const int b = neigh_start[i];
+    for (int k = b; k < b + neigh_count[i]; ++k) {
+      const int r = neigh_rec[k];
+      if (MC_LINK_TOUCHING(neigh_index[k]) && r >= 0) {
+        const real4 lost = records[2 * r + 1];
+        v[10] += lost.x; v[11] += lost.y; v[12] += lost.z;
+      }
+    }
+    for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+      const int r = wall_rec[s * n + i];
+      if (wall_key[s * n + i] != MC_WALL_NONE && r >= 0) {
+        const real4 lost = records[2 * r + 1];
+        v[10] += lost.x; v[11] += lost.y; v[12] += lost.z;
+      }
+    }
+#endif
     if (reset) accum[i] = make_real4(0, 0, 0, a.w);
   }
   for (int k = 0; k < MC_N_OBSERVABLES; ++k) tmp[k * MC_REDUCE_WG + lid] = v[k];

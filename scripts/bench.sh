@@ -15,8 +15,10 @@
 # and tile-1M with its balls laid anew 1, 10 and 100 times along the axis
 # of a mill as many times as long (`--tile`: the same settled charge, the
 # same state per ball, no warm-up), which shows the cost per ball from 10k
-# to 1M balls. MILLCHARGE_FORCES=grouped in the environment times the
-# grouped force kernel instead (the device column says so).
+# to 1M balls. Each row times the steps with the energy books (spectra,
+# liner sums) on and off in turn, from the same state. MILLCHARGE_FORCES=
+# grouped in the environment times the grouped force kernel instead (the
+# device column says so).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 device=""; only="lab,10k-settled,tile-10k,tile-100k,tile-1M,10k,100k,1M,D"; steps=""
@@ -61,15 +63,20 @@ done
 python3 - "$out" "${rows[@]}" <<'PY'
 import json, sys
 out, rows = sys.argv[1], sys.argv[2:]
-print("| case | balls | device | precision | steps/s | particle-updates/s | its ten parts: slowest–fastest | contacts/ball | B/ball | binning | contacts | forces | motion | reductions |")
-print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+print("| case | balls | device | precision | steps/s | particle-updates/s | its ten parts: slowest–fastest | without the energy books | books' cost (medians of parts) | contacts/ball | B/ball | binning | contacts | forces | motion | reductions |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 for r in rows:
     j = json.load(open(f"{out}/{r}.json"))
     s = j["stages"]
     p = j["part_updates_per_s"]
     dev = j['device'] + ("" if j.get('forces_kernel', 'ball') == 'ball' else f", {j['forces_kernel']} forces")
+    off = j.get('books_off') or {}
+    cost = j.get('books_cost') or {}
+    off_rate = f"{off['particle_updates_per_s']:.3g}" if off else "–"
+    cost_text = f"{100*cost['median_parts']:+.1f} %" if cost else "–"
     print(f"| {r} ({j['case']}) | {j['n_particles']:,} | {dev} | {j['precision']} | {j['steps_per_s']:.1f} | "
-          f"{j['particle_updates_per_s']:.3g} | {p['min']:.3g}–{p['max']:.3g} | {j['contacts_per_ball']:.2f} | {j['bytes_per_ball']:.0f} | "
+          f"{j['particle_updates_per_s']:.3g} | {p['min']:.3g}–{p['max']:.3g} | {off_rate} | {cost_text} | "
+          f"{j['contacts_per_ball']:.2f} | {j['bytes_per_ball']:.0f} | "
           + " | ".join(f"{100*s[k]:.0f} %" for k in ("binning", "contacts", "forces", "motion", "reductions")) + " |")
 PY
 echo "bench.sh: JSON lines in $out" >&2

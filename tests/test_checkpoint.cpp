@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstring>
@@ -287,28 +288,46 @@ void set_state_array(SolverState& st, const std::string& from, const std::string
 }
 
 // Rewrites a state of today's form (each pair once, in the lower ball's list:
-// "neigh_half_link") as the full lists earlier versions saved, each pair in
+// "neigh_half_link", springs in contact records) in the forms earlier
+// versions saved: the springs in the list entries ("neigh_hist") and wall
+// slots ("wall_hist"), no records; with `full`, in full lists, each pair in
 // both balls' lists with the spring seen from each side ("neigh_link"); with
-// `plain`, in the still earlier form without the touching flag
+// `plain` too, in the still earlier form without the touching flag
 // ("neigh_index"), where a spring of zero marked a pair apart. Returns the
 // touching pairs.
-int to_full_lists(SolverState& st, bool plain) {
+int to_old_lists(SolverState& st, bool full, bool plain) {
   const auto start = state_array<int>(st, "neigh_start");
   const auto count = state_array<int>(st, "neigh_count");
   const auto link = state_array<int>(st, "neigh_half_link");
-  const auto hist = state_array<float>(st, "neigh_hist");
+  const auto rec = state_array<int>(st, "neigh_rec");
+  const auto records = state_array<float>(st, "records");  // two float4 a record
+  const auto wall_key = state_array<int>(st, "wall_key");
+  const auto wall_rec = state_array<int>(st, "wall_rec");
+  std::vector<float> hist(3 * link.size(), 0.0f), wall_hist(3 * wall_key.size(), 0.0f);
+  for (std::size_t k = 0; k < link.size(); ++k)
+    if (link[k] < 0 && rec[k] >= 0)
+      for (int c = 0; c < 3; ++c) hist[3 * k + c] = records[8 * rec[k] + c];
+  for (std::size_t q = 0; q < wall_key.size(); ++q)
+    if (wall_key[q] != -1 && wall_rec[q] >= 0)
+      for (int c = 0; c < 3; ++c) wall_hist[3 * q + c] = records[8 * wall_rec[q] + c];
+  set_state_array(st, "wall_rec", "wall_hist", wall_hist);
+  set_state_array(st, "neigh_rec", "neigh_hist", hist);
+  for (const char* gone : {"records", "record_pool", "rec_state", "spectra", "liner", "impact_profile"})
+    st.arrays.erase(std::remove_if(st.arrays.begin(), st.arrays.end(), [&](const auto& e) { return e.first == gone; }),
+                    st.arrays.end());
+  int touching = 0;
+  for (int l : link) touching += l < 0;
+  if (!full) return touching;
   const int n = static_cast<int>(start.size());
   // Full list of ball i: the entries of lower balls that hold i, then its own.
-  std::vector<std::vector<std::pair<int, std::array<float, 3>>>> full(n);
-  int touching = 0;
+  std::vector<std::vector<std::pair<int, std::array<float, 3>>>> lists(n);
   for (int i = 0; i < n; ++i)
     for (int k = start[i]; k < start[i] + count[i]; ++k) {
       const bool touch = link[k] < 0;
       const int j = touch ? ~link[k] : link[k];
-      touching += touch;
       std::array<float, 3> h{hist[3 * k], hist[3 * k + 1], hist[3 * k + 2]};
       if (!touch) h = {0, 0, 0};
-      full[j].push_back({touch ? ~i : i, {-h[0], -h[1], -h[2]}});
+      lists[j].push_back({touch ? ~i : i, {-h[0], -h[1], -h[2]}});
     }
   std::vector<int> f_start(n), f_count(n), f_link;
   std::vector<float> f_hist;
@@ -317,11 +336,11 @@ int to_full_lists(SolverState& st, bool plain) {
       const bool touch = link[k] < 0;
       const std::array<float, 3> h =
           touch ? std::array<float, 3>{hist[3 * k], hist[3 * k + 1], hist[3 * k + 2]} : std::array<float, 3>{0, 0, 0};
-      full[i].push_back({link[k], h});
+      lists[i].push_back({link[k], h});
     }
     f_start[i] = static_cast<int>(f_link.size());
-    f_count[i] = static_cast<int>(full[i].size());
-    for (const auto& [l, h] : full[i]) {
+    f_count[i] = static_cast<int>(lists[i].size());
+    for (const auto& [l, h] : lists[i]) {
       f_link.push_back(plain && l < 0 ? ~l : l);
       f_hist.insert(f_hist.end(), h.begin(), h.end());
     }
@@ -335,20 +354,23 @@ int to_full_lists(SolverState& st, bool plain) {
 
 }  // namespace
 
-TEST_CASE("a state saved with full lists, with or without the touching flag, resumes the same run", "[checkpoint]") {
-  // Earlier checkpoints hold every pair in both balls' lists ("neigh_link"),
-  // and before that without the touching flag ("neigh_index", the flag read
-  // off the springs). Made here from a state of today's form; loading keeps
-  // each pair's entry in the lower ball's list.
+TEST_CASE("a state saved before the contact records, with half or full lists, resumes the same run", "[checkpoint]") {
+  // Earlier checkpoints hold the springs in the list entries and wall slots
+  // (no contact records); before that every pair in both balls' lists
+  // ("neigh_link"), and before that without the touching flag
+  // ("neigh_index", the flag read off the springs). Made here from a state
+  // of today's form; loading keeps each pair's entry in the lower ball's
+  // list and gives each contact a record with its spring.
   DrumSpec spec;
   spec.n_balls = 300;
   const Scene sc = make_drum(spec);
   auto a = make_solver(test::context(), sc);
   a->advance(10000);  // a bed with springs in its contacts
   const SolverState now = a->save_state();
-  for (const bool plain : {false, true}) {
+  for (const int form : {0, 1, 2}) {
+    const bool full = form > 0, plain = form > 1;
     SolverState old = now;
-    REQUIRE(to_full_lists(old, plain) > 50);  // touching pairs
+    REQUIRE(to_old_lists(old, full, plain) > 50);  // touching pairs
     auto b = make_solver(test::context(), sc);
     b->restore_state(old);
     auto c = make_solver(test::context(), sc);
@@ -362,7 +384,7 @@ TEST_CASE("a state saved with full lists, with or without the touching flag, res
       differ += !(ba[i].position.x == bb[i].position.x && ba[i].position.y == bb[i].position.y &&
                   ba[i].position.z == bb[i].position.z && ba[i].omega.x == bb[i].omega.x &&
                   ba[i].omega.y == bb[i].omega.y && ba[i].omega.z == bb[i].omega.z);
-    INFO("plain " << plain);
+    INFO("full lists " << full << ", plain " << plain);
     CHECK(differ == 0);
   }
 }

@@ -7,10 +7,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/liner.h"
 #include "core/mill_case.h"
 #include "core/morrell.h"
 #include "helpers.h"
 #include "io/case_file.h"
+#include "sim/energy_report.h"
 #include "sim/mill_run.h"
 
 namespace {
@@ -18,6 +20,7 @@ namespace {
 struct LabResult {
   mc::MillCase c;
   mc::MillDerived d;
+  mc::Scene scene;
   mc::RunSummary s;
 };
 
@@ -28,9 +31,9 @@ LabResult run_lab(double speed_fraction, double duration, double warmup, double 
                            "run.duration=" + std::to_string(duration), "run.warmup=" + std::to_string(warmup),
                            "run.output_interval=0.02"});
   r.d = mc::derive(r.c);
-  const mc::Scene scene = mc::build_scene(r.c, r.d);
-  auto solver = mc::make_solver(mc::test::context(), scene);
-  r.s = mc::run_mill(*solver, scene, r.c, r.d, {});
+  r.scene = mc::build_scene(r.c, r.d);
+  auto solver = mc::make_solver(mc::test::context(), r.scene);
+  r.s = mc::run_mill(*solver, r.scene, r.c, r.d, {});
   std::printf("lab mill at %.0f %% of critical (%ld balls): torque power %.2f W, dissipation %.2f W, "
               "imbalance %+.2f %%, torque arm %.2f W, toe %.1f, shoulder %.1f, com %.1f deg, %.2f revolutions "
               "averaged, settled in %.2f s to J %.3f\n",
@@ -69,6 +72,14 @@ TEST_CASE("lab mill at 75 % of critical: power books close and Morrell's band ho
   std::printf("Morrell C-model: power %.2f W (k x net %.2f W), toe %.1f, shoulder %.1f deg; DEM / Morrell = %.3f\n",
               m.charge_power_W, m.net_power_W, m.toe_deg, m.shoulder_deg, s.torque_power_W / m.charge_power_W);
   CHECK(s.torque_power_W == Approx(m.charge_power_W).epsilon(0.30));
+  // The energy books: the collisions that closed in the window and the
+  // change in what open contacts hold make the dissipation, within 1 %.
+  const mc::SpectraReport sp = mc::spectra_report(r.scene, s.books, s.window_s, s.open_loss_start_J,
+                                                  s.open_loss_end_J, s.dissipated_J);
+  std::printf("lab mill spectra: %.4g collisions/s, %.2f W closed + %.3f W open change against %.2f W dissipated\n",
+              sp.all.collisions_per_s, sp.closed_W, sp.open_change_W, sp.dissipation_W);
+  CHECK(sp.books_W == Approx(sp.dissipation_W).epsilon(0.01));
+  CHECK(sp.unrecorded_W == 0);
 }
 
 TEST_CASE("lab mill: power rises with speed from 50 % to 80 % of critical", "[mill][slow]") {
@@ -79,4 +90,28 @@ TEST_CASE("lab mill: power rises with speed from 50 % to 80 % of critical", "[mi
     CHECK(r.s.torque_power_W > 1.05 * last);
     last = r.s.torque_power_W;
   }
+}
+
+TEST_CASE("lab mill: at 90 % of critical more impact power lands on bare liner above the toe than at 70 %",
+          "[mill][slow][liner]") {
+  // The cataracting stream flies farther at the higher speed and lands on
+  // the liner above the toe instead of on the charge.
+  double bare[2] = {0, 0}, share[2] = {0, 0};
+  int k = 0;
+  for (double phi : {0.7, 0.9}) {
+    const LabResult r = run_lab(phi, 3.2, 1.0, 0.1);
+    REQUIRE(r.s.angles.found);
+    const mc::LinerLayout layout = mc::liner_layout(r.scene);
+    const mc::LinerReport lr =
+        mc::liner_report(r.scene, layout, r.s.books, r.s.window_s, true, r.s.angles.toe_deg, r.s.angles.shoulder_deg);
+    std::printf("lab mill at %.0f %%: liner impact %.2f W, on bare liner above the toe %.2f W (%.0f %%), impact point "
+                "%.0f deg (toe %.0f, shoulder %.0f)\n",
+                100 * phi, lr.impact_W, lr.bare_liner_impact_W, 100 * lr.bare_liner_impact_share, lr.impact_point_deg,
+                r.s.angles.toe_deg, r.s.angles.shoulder_deg);
+    bare[k] = lr.bare_liner_impact_W;
+    share[k] = lr.bare_liner_impact_share;
+    ++k;
+  }
+  CHECK(bare[1] > 1.2 * bare[0]);
+  CHECK(share[1] > share[0]);
 }

@@ -77,11 +77,17 @@ TEST_CASE("run writes summary.json, timeseries.csv, snapshots with charge.pvd an
   }
   CHECK(last == Approx(0.3).margin(d.dt));
 
-  // Snapshots at 0, 0.1, 0.2, 0.3 s, listed in charge.pvd, read back whole.
+  // Snapshots at 0, 0.1, 0.2, 0.3 s, listed in charge.pvd (part 0) with the
+  // liner turned to the mill's angle then (part 1), read back whole.
   const auto pvd = lines_of(out / "charge.pvd");
-  int listed = 0;
-  for (const auto& l : pvd) listed += l.find("<DataSet") != std::string::npos;
+  int listed = 0, liners = 0;
+  for (const auto& l : pvd) {
+    listed += l.find("<DataSet") != std::string::npos && l.find("part=\"0\"") != std::string::npos;
+    liners += l.find("<DataSet") != std::string::npos && l.find("part=\"1\"") != std::string::npos &&
+              l.find("snapshots/liner_") != std::string::npos;
+  }
   CHECK(listed == 4);
+  CHECK(liners == 4);
   const mc::io::Snapshot last_snap = mc::io::read_vtp(out / "snapshots" / "charge_000003.vtp");
   CHECK(last_snap.time_s == Approx(0.3).margin(d.dt));
   REQUIRE(static_cast<long>(last_snap.size()) == d.n_balls);
@@ -92,10 +98,29 @@ TEST_CASE("run writes summary.json, timeseries.csv, snapshots with charge.pvd an
     CHECK(std::hypot(p[0], p[1]) < 0.45);
   }
 
-  for (const char* f : {"power.png", "charge.png", "case.toml"}) {
+  for (const char* f : {"power.png", "charge.png", "case.toml", "liner.vtp", "liner.png"}) {
     INFO(f);
     CHECK(fs::file_size(out / f) > 1000);
   }
+
+  // Where the energy went: the spectra's books against the dissipation, a
+  // row per pair type and bin, a row per liner element.
+  const nlohmann::json& sp = j["spectra"];
+  CHECK(sp["total"]["collisions_per_s"].get<double>() > 0);
+  CHECK(sp["total"]["power_W"].get<double>() > 0);
+  CHECK(sp["by_pair"].size() == 4);  // steel-steel, steel-shell, steel-lifter, steel-end plate
+  CHECK(sp["books"]["spectra_W"].get<double>() ==
+        Approx(j["power_W"]["dissipation"].get<double>()).epsilon(0.01));
+  const nlohmann::json& ln = j["liner"];
+  for (const char* k : {"wear_kg_per_h", "worst_wear_mm_per_1000h", "impact_power_W", "shear_power_W",
+                        "bare_liner_impact_power_W", "bare_liner_impact_share", "impact_point_deg"}) {
+    INFO(k);
+    CHECK(ln.contains(k));
+  }
+  CHECK(ln["impact_power_W"].get<double>() > 0);
+  CHECK(ln["wear_kg_per_h"].get<double>() > 0);
+  CHECK(lines_of(out / "spectra.csv").size() == 1 + 4 * 122);
+  CHECK(static_cast<long>(lines_of(out / "wear.csv").size()) == 1 + ln["elements"].get<long>());
   // The folder holds a run now: a second run there is refused unless forced.
   CHECK_THROWS_WITH(mc::app::cmd_run(o), Catch::Contains("already holds a run"));
   fs::remove_all(out);

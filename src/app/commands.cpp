@@ -18,13 +18,16 @@
 
 #include "compute/context.h"
 #include "core/charge_edit.h"
+#include "core/liner.h"
 #include "core/mill_case.h"
 #include "core/morrell.h"
 #include "io/atomic_file.h"
 #include "io/case_file.h"
 #include "io/checkpoint.h"
+#include "io/energy_out.h"
 #include "io/png_plot.h"
 #include "io/vtk.h"
+#include "sim/energy_report.h"
 #include "sim/mill_run.h"
 #include "sim/solver.h"
 #include "viewer/viewer.h"
@@ -156,7 +159,8 @@ void make_run_dir(const fs::path& out, bool force) {
       throw std::invalid_argument("--out " + out.string() + ": already holds a run (" + f +
                                   "); choose another folder or add --force to replace it");
   if (force) {
-    for (const char* f : {"summary.json", "timeseries.csv", "charge.pvd", "power.png", "charge.png"})
+    for (const char* f : {"summary.json", "timeseries.csv", "charge.pvd", "power.png", "charge.png", "spectra.csv",
+                          "spectra.png", "wear.csv", "liner.vtp", "liner.png"})
       fs::remove(out / f, ec);
     fs::remove_all(out / "snapshots", ec);
   }
@@ -486,6 +490,15 @@ int cmd_run(const RunOptions& o) {
                   {"shoulder_deg", m.shoulder_deg},
                   {"power_with_dem_angles_W", number_or_null(m_with_dem)},
                   {"charge_density_kg_m3", mi.charge_density}};
+  // Where the energy went over the window: collision spectra and the liner.
+  const LinerLayout layout = liner_layout(p.scene);
+  const SpectraReport spectra =
+      spectra_report(p.scene, s.books, s.window_s, s.open_loss_start_J, s.open_loss_end_J, s.dissipated_J);
+  const LinerReport liner =
+      liner_report(p.scene, layout, s.books, s.window_s, s.angles.found, s.angles.toe_deg, s.angles.shoulder_deg);
+  j["spectra"] = io::spectra_json(spectra);
+  j["liner"] = io::liner_json(layout, liner, p.scene.wall_material.wear_coefficient);
+  j["contact_records_refused"] = solver->records_refused();
   j["wall_s"] = s.wall_s;
   j["particle_updates_per_s"] = s.updates_per_s;
   j["device"] = ctx.info().label();
@@ -511,11 +524,27 @@ int cmd_run(const RunOptions& o) {
     view.balls.push_back({b.position.x, b.position.y, b.position.z, b.radius, b.velocity.norm()});
   view.toe_deg = s.angles.found ? s.angles.toe_deg : -1;
   view.shoulder_deg = s.angles.found ? s.angles.shoulder_deg : -1;
+  view.impact_deg = std::isfinite(liner.impact_point_deg) ? liner.impact_point_deg : -1;
   view.has_com = true;
   const Observables now = solver->observe(false);
   view.com_x = now.com_x_m;
   view.com_y = now.com_y_m;
   io::write_end_view_png(out / "charge.png", view);
+  io::write_liner_png(out / "liner.png", c.name, layout, liner);
+  io::write_spectra_csv(out / "spectra.csv", spectra);
+  io::write_wear_csv(out / "wear.csv", layout, liner);
+  // The liner in the mill frame, and beside each snapshot turned to the
+  // mill's angle then (part 1 of the same times in charge.pvd).
+  io::write_mesh_vtp(out / "liner.vtp", io::liner_mesh(layout, &liner, 0.0, s.turning_s));
+  {
+    const std::vector<double> times = pvd.times();
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      char name[64];
+      std::snprintf(name, sizeof name, "snapshots/liner_%06zu.vtp", k);
+      io::write_mesh_vtp(out / name, io::liner_mesh(layout, &liner, p.scene.mill_angle + d.omega * times[k], times[k]));
+      pvd.add(times[k], name, 1);
+    }
+  }
   io::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
 
   std::printf("power draw      torque %.4g W, dissipation %.4g W (imbalance %+.2f %%), torque arm %.4g W\n",
@@ -525,11 +554,23 @@ int cmd_run(const RunOptions& o) {
   if (s.angles.found)
     std::printf("charge angles   toe %.1f deg, shoulder %.1f deg, centre of mass %.1f deg\n", s.angles.toe_deg,
                 s.angles.shoulder_deg, s.com_angle_deg);
+  std::printf("collisions      %.4g per s, %.4g W (normal %.4g, tangential %.4g, rolling %.4g W); spectra %.4g W "
+              "against dissipation %.4g W\n",
+              spectra.all.collisions_per_s, spectra.all.power_W, spectra.all.normal_W, spectra.all.tangential_W,
+              spectra.all.rolling_W, spectra.books_W, spectra.dissipation_W);
+  std::printf("liner           impact %.4g W, shear %.4g W, wear %.3g kg/h, worst %.3g mm per 1000 h (%s)\n",
+              liner.impact_W, liner.shear_W, liner.wear_kg_per_h, liner.worst_wear_mm_per_1000h,
+              liner.worst_element >= 0 ? io::element_name(layout, liner.worst_element).c_str() : "none");
+  if (std::isfinite(liner.impact_point_deg))
+    std::printf("impact point    %.0f deg, on the %s; %.0f %% of the liner's impact power on bare liner above the toe\n",
+                liner.impact_point_deg, liner.impact_point_on_liner ? "bare liner above the toe" : "toe",
+                100 * liner.bare_liner_impact_share);
   std::printf("morrell         power %.4g W (k %.2f x net %.4g W), toe %.1f deg, shoulder %.1f deg; DEM/model %.3f\n",
               m.charge_power_W, kMorrellK, m.net_power_W, m.toe_deg, m.shoulder_deg, s.torque_power_W / m.charge_power_W);
   std::printf("speed           %s steps in %.1f s wall, %.3g particle-updates/s\n", thousands(s.steps).c_str(),
               s.wall_s, s.updates_per_s);
-  std::printf("wrote           %s/{summary.json, timeseries.csv, charge.pvd, power.png, charge.png}\n",
+  std::printf("wrote           %s/{summary.json, timeseries.csv, charge.pvd, power.png, charge.png, spectra.csv, "
+              "wear.csv, liner.vtp}\n",
               out.string().c_str());
   return 0;
 }
@@ -611,65 +652,88 @@ int cmd_bench(const BenchOptions& o) {
   const long n = static_cast<long>(p.scene.balls.size());
   note(c.name + ": " + thousands(n) + " balls on " + ctx.info().label());
   const auto t_build = clock::now();
-  auto solver = make_solver(ctx, p.scene);
+  const bool both = o.books == "both";
+  Scene scene = p.scene;
+  scene.numerics.energy_books = o.books != "off";
+  auto solver = make_solver(ctx, scene);
   if (!o.from.empty() && o.tile == 0) solver->restore_state(cp.solver);
   solver->set_mill_omega(d.omega);
   const double warmup_s = o.warmup >= 0 ? o.warmup : o.from.empty() ? 0.25 : 0.0;
   const long warmup = std::lround(warmup_s / d.dt);
   const long out_steps = std::max(1L, std::lround(c.output_interval / d.dt));
   const long profile_every = std::max(1L, out_steps / 10);
-  long since_row = 0;
-  // Steps in chunks between the observers' calls, as run_mill makes them.
-  auto steps = [&](long count) {
+  // Steps in chunks between the observers' calls, as run_mill makes them;
+  // `since_row` counts a solver's steps since its last row.
+  auto steps = [&](Solver& sv, long& since_row, long count) {
     for (long done = 0; done < count;) {
       const long chunk = std::min(count - done, profile_every - since_row % profile_every);
-      solver->advance(chunk);
+      sv.advance(chunk);
       done += chunk;
       since_row += chunk;
-      if (since_row % profile_every == 0) solver->sample_contact_profile();
+      if (since_row % profile_every == 0) sv.sample_contact_profile();
       if (since_row >= out_steps) {
-        solver->observe(true);
-        (void)solver->take_contact_profile();
+        sv.observe(true);
+        (void)sv.take_contact_profile();
         since_row = 0;
       }
     }
     ctx.finish();
   };
+  long since_row = 0;
   const auto t_warm = clock::now();
   note("kernels built and charge uploaded in " + duration_text(std::chrono::duration<double>(t_warm - t_build).count()) +
        "; warm-up " + thousands(warmup) + " steps");
-  steps(warmup);
+  steps(*solver, since_row, warmup);
   const double warm_s = std::chrono::duration<double>(clock::now() - t_warm).count();
+  // Without the books: a second solver from the same state, timed in turn
+  // with the first, part by part, so that the machine's drift falls on both.
+  std::unique_ptr<Solver> plain;
+  long plain_since_row = since_row;
+  if (both) {
+    Scene off = p.scene;
+    off.numerics.energy_books = false;
+    plain = make_solver(ctx, off);
+    plain->restore_state(solver->save_state());
+    plain->set_mill_omega(d.omega);
+  }
   long n_steps = o.steps;
   if (n_steps <= 0) {
     const double rate = warmup > 0 && warm_s > 0 ? warmup / warm_s : 100.0;
     n_steps = std::clamp(std::lround(10.0 * rate), 100L, 100000L);
   }
-  note("timing " + thousands(n_steps) + " steps");
+  note("timing " + thousands(n_steps) + " steps" + (both ? ", with the energy books and without, in turn" : ""));
   const long rebuilds0 = solver->rebuilds();
   // Timed in ten parts, each drained: on a shared machine a neighbour's burst
   // slows some parts, so the parts' spread says how far to trust the total,
   // and the best part is the figure least disturbed.
   const int n_parts = static_cast<int>(std::min(10L, n_steps));
-  std::vector<double> part_rates;
-  double wall = 0;
+  std::vector<double> part_rates, plain_rates;
+  double wall = 0, plain_wall = 0;
+  auto timed = [&](Solver& sv, long& since, long part, double& sum) {
+    const auto t0 = clock::now();
+    steps(sv, since, part);
+    const double s = std::chrono::duration<double>(clock::now() - t0).count();
+    sum += s;
+    return s > 0 ? static_cast<double>(n) * part / s : 0.0;
+  };
   for (int k = 0; k < n_parts; ++k) {
     const long part = n_steps * (k + 1) / n_parts - n_steps * k / n_parts;
-    const auto t0 = clock::now();
-    steps(part);
-    const double s = std::chrono::duration<double>(clock::now() - t0).count();
-    wall += s;
-    part_rates.push_back(s > 0 ? static_cast<double>(n) * part / s : 0.0);
+    part_rates.push_back(timed(*solver, since_row, part, wall));
+    if (plain) plain_rates.push_back(timed(*plain, plain_since_row, part, plain_wall));
   }
   std::sort(part_rates.begin(), part_rates.end());
+  std::sort(plain_rates.begin(), plain_rates.end());
   const long rebuilds = solver->rebuilds() - rebuilds0;
   const ContactStats cs = solver->contact_stats();
+  const std::size_t plain_bytes = plain ? plain->device_bytes() : 0;
+  const std::size_t bytes = solver->device_bytes();
+  plain.reset();
 
   // The shares: a shorter pass with the queue drained after every stage.
   const long stage_steps = std::max(20L, n_steps / 4);
   note("stage timing over " + thousands(stage_steps) + " steps");
   solver->set_stage_timing(true);
-  steps(stage_steps);
+  steps(*solver, since_row, stage_steps);
   const StageTimes st = solver->stage_times();
   solver->set_stage_timing(false);
 
@@ -685,6 +749,24 @@ int cmd_bench(const BenchOptions& o) {
   j["part_updates_per_s"] = {{"min", part_rates.front()},
                              {"median", part_rates[part_rates.size() / 2]},
                              {"max", part_rates.back()}};
+  j["energy_books"] = o.books == "off" ? "off" : "on";
+  if (both) {
+    // The same steps without the books, timed in turn with the ones above.
+    const double plain_rate = static_cast<double>(n) * n_steps / plain_wall;
+    j["books_off"] = {{"particle_updates_per_s", plain_rate},
+                      {"part_updates_per_s",
+                       {{"min", plain_rates.front()},
+                        {"median", plain_rates[plain_rates.size() / 2]},
+                        {"max", plain_rates.back()}}},
+                      {"bytes_per_ball", static_cast<double>(plain_bytes) / n}};
+    // How much slower the books make a step: by the totals, and by the
+    // parts' medians (less moved by a neighbour's burst).
+    j["books_cost"] = {{"total", wall / plain_wall - 1},
+                       {"median_parts", plain_rates[plain_rates.size() / 2] / part_rates[part_rates.size() / 2] - 1}};
+  } else {
+    j["books_off"] = nullptr;
+    j["books_cost"] = nullptr;
+  }
   j["contacts_per_ball"] = cs.ball_contacts_per_ball;
   j["wall_contacts_per_ball"] = cs.wall_contacts_per_ball;
   j["list_entries_per_ball"] = cs.list_entries_per_ball;
@@ -697,8 +779,8 @@ int cmd_bench(const BenchOptions& o) {
   j["law"] = c.law == ContactLaw::hertz ? "hertz" : "linear";
   j["forces_kernel"] = solver->forces_kernel();
   j["dt_s"] = d.dt;
-  j["device_bytes"] = solver->device_bytes();
-  j["bytes_per_ball"] = static_cast<double>(solver->device_bytes()) / n;
+  j["device_bytes"] = bytes;
+  j["bytes_per_ball"] = static_cast<double>(bytes) / n;
   j["warmup_steps"] = warmup;
   j["from"] = o.from.empty() ? nlohmann::json() : nlohmann::json(o.from);
   j["tile"] = o.tile > 0 ? nlohmann::json(o.tile) : nlohmann::json();
@@ -722,6 +804,7 @@ int cmd_view(const ViewOptions& o) {
   v.steps_per_frame = o.steps_per_frame;
   v.camera = o.camera;
   v.colour = o.colour;
+  v.liner = o.liner;
   v.width = o.width;
   v.height = o.height;
   v.panel = !o.no_panel;

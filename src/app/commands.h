@@ -36,6 +36,9 @@ struct BenchOptions {
                        // anew N times end to end along the axis, in a mill N
                        // times as long; 0: not given (the checkpoint's state)
   bool quiet = false;  // no progress lines on stderr
+  // --books both|on|off: time with the energy books (collision spectra,
+  // liner sums) on, off, or both in turn from the same state (the default).
+  std::string books = "both";
 };
 
 struct ViewOptions {
@@ -45,6 +48,7 @@ struct ViewOptions {
   int steps_per_frame = 0;     // --steps-per-frame; 0: default (adaptive; 40 with --frames), −1: adaptive
   std::string camera = "end";  // --camera end|iso
   std::string colour = "speed";  // --colour speed|size|material|impact
+  std::string liner = "plain";   // --liner plain|impact|wear
   int width = 1280, height = 800;  // --size WxH
   bool no_panel = false;       // --no-panel
   std::vector<std::string> edits;  // --edit FRAME:KEY=VALUE

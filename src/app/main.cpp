@@ -3,7 +3,7 @@
 //                    [--precision float|double] [--set KEY=VALUE]... [--force] [--quiet]
 //   millcharge run   --resume DIR [--device SPEC] [--quiet]
 //   millcharge view  [CASE] [same options] [--frames N --screenshot FILE.png]
-//                    [--steps-per-frame N] [--camera end|iso] [--colour MODE] [--size WxH]
+//                    [--steps-per-frame N] [--camera end|iso] [--colour MODE] [--liner MODE] [--size WxH]
 //                    [--no-panel] [--edit FRAME:KEY=VALUE]...
 //   millcharge check CASE [--set KEY=VALUE]...
 //   millcharge bench [CASE] [--steps N] [--warmup N] [--device SPEC]
@@ -74,6 +74,9 @@ int main(int argc, char** argv) {
   view->add_option("--camera", vo.camera, "end (axial, default) or iso")->check(CLI::IsMember({"end", "iso"}));
   view->add_option("--colour", vo.colour, "colour the balls by speed, size, material or impact")
       ->check(CLI::IsMember({"speed", "size", "material", "impact"}));
+  view->add_option("--liner", vo.liner,
+                   "colour the liner plain, by impact power or by wear rate of the last two seconds")
+      ->check(CLI::IsMember({"plain", "impact", "wear"}));
   std::string size;
   view->add_option("--size", size, "window size in pixels (default 1280x800)")->type_name("WxH");
   view->add_flag("--no-panel", vo.no_panel, "draw the mill only, without the ImGui panel");
@@ -100,6 +103,9 @@ int main(int argc, char** argv) {
                     "along the axis, in a mill N times as long (a settled charge of N times the balls, no warm-up)")
       ->check(CLI::Range(1, 10000))
       ->type_name("N");
+  bench->add_option("--books", bo.books,
+                    "time with the energy books (spectra, liner sums) on, off, or both in turn (default both)")
+      ->check(CLI::IsMember({"both", "on", "off"}));
   bench->add_flag("--quiet", bo.quiet, "no progress lines");
 
   try {

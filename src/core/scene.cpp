@@ -62,6 +62,8 @@ void validate(const Scene& scene) {
     if (!(m.density > 0)) fail(where + ".density must be > 0");
     if (!(m.youngs_modulus > 0)) fail(where + ".youngs_modulus must be > 0");
     if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5)) fail(where + ".poisson_ratio must be in (-1, 0.5)");
+    if (!(m.wear_coefficient >= 0 && m.wear_coefficient < 1e-6))
+      fail(where + ".wear_coefficient must be in [0, 1e-6) m^3/(N m)");
   };
   for (std::size_t k = 0; k < scene.materials.size(); ++k)
     check_material(scene.materials[k], "materials." + scene.materials[k].name);
@@ -83,6 +85,12 @@ void validate(const Scene& scene) {
   for (const auto& poly : scene.walls.lifters) {
     if (poly.size() < 3 || poly.size() > 8) fail("lifter polygon needs 3 to 8 vertices");
   }
+  const LinerGrid& g = scene.liner;
+  if (g.shell_bins < 1 || g.shell_bins > 64) fail("liner.shell_bins must be in [1, 64]");
+  if (g.smooth_shell_bins < 4 || g.smooth_shell_bins > 720) fail("liner.smooth_shell_bins must be in [4, 720]");
+  if (g.axial_bins < 0 || g.axial_bins > 256) fail("liner.axial_bins must be in [0, 256] (0: auto)");
+  if (g.plate_rings < 1 || g.plate_rings > 64) fail("liner.plate_rings must be in [1, 64]");
+  if (g.plate_sectors < 0 || g.plate_sectors > 720) fail("liner.plate_sectors must be in [0, 720] (0: auto)");
 }
 
 }  // namespace mc

@@ -13,11 +13,32 @@ namespace mc {
 
 enum class Precision { single, double_ };
 
+// Archard's dimensional wear coefficient of a liner, m³ of liner per N of
+// normal force and m slid (k/H): three-body abrasion of steel, Archard
+// k ≈ 1e-4 to 1e-3 (Rabinowicz, Friction and Wear of Materials, 2nd ed.
+// 1995, ch. 8), over the hardness of a 350 HB Cr–Mo liner steel, 3.5 GPa.
+// An order of magnitude to calibrate against measured liner profiles.
+inline constexpr double kDefaultWearCoefficient = 1.0e-13;
+
 struct Material {
   std::string name;
   double density = 7800.0;        // kg/m³
   double youngs_modulus = 2.0e11;  // Pa
   double poisson_ratio = 0.3;
+  double wear_coefficient = kDefaultWearCoefficient;  // m³/(N·m), as a liner
+};
+
+// How the liner is cut into elements for impact and wear sums
+// (src/sim/liner.h): the shell between two lifter rows in shell_bins
+// angular bins (a smooth shell in smooth_shell_bins), shell and lifters in
+// axial_bins (0: about square shell elements, at most 32), the end plates in
+// plate_rings rings and plate_sectors sectors (0: one per lifter row, or 12).
+struct LinerGrid {
+  int shell_bins = 4;
+  int smooth_shell_bins = 36;
+  int axial_bins = 0;
+  int plate_rings = 4;
+  int plate_sectors = 0;
 };
 
 // How two materials meet. kn is used by the linear law only.
@@ -56,6 +77,9 @@ struct Numerics {
   double dt = 1e-5;      // s
   double skin = 0.0;     // m; 0: 0.2 · smallest radius (default_skin)
   Vec3 gravity{0.0, -9.81, 0.0};
+  // The energy books (collision spectra, liner sums; cl/books.h). Off only
+  // to time what they cost (bench).
+  bool energy_books = true;
 };
 
 struct Scene {
@@ -65,6 +89,7 @@ struct Scene {
   // use set_interaction to fill both (a, b) and (b, a).
   std::vector<Interaction> interactions;
   Walls walls;
+  LinerGrid liner;
   std::vector<Ball> balls;
   Numerics numerics;
   double mill_omega = 0.0;  // rad/s, counter-clockwise about +z

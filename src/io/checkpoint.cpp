@@ -75,6 +75,7 @@ class ScalarReader {
   void get(const std::string& k, long& v) const { v = integer(k); }
   void get(const std::string& k, int& v) const { v = static_cast<int>(integer(k)); }
   void get(const std::string& k, bool& v) const { v = integer(k) != 0; }
+  bool has(const std::string& k) const { return values_.count(k) != 0; }
   long integer(const std::string& k) const {
     const std::string& v = at(k);
     char* end = nullptr;
@@ -105,6 +106,7 @@ void run_fields(R& r, F&& f) {
   f("turn_start_s", r.turn_start_s);
   f("turn_step", r.turn_step);
   f("e_window_start", r.e_window_start);
+  f("open_loss_start", r.open_loss_start);
   f("e_end", r.e_end);
   f("work", r.work);
   f("diss", r.diss);
@@ -224,7 +226,11 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
   cp.case_toml = record("case.toml");
   const ScalarReader rs(record("run"), where + ": run");
   RunState& r = cp.run;
-  run_fields(r, [&](const char* k, auto& v) { rs.get(k, v); });
+  // Fields added after version 1 began keep their defaults in older files.
+  run_fields(r, [&](const char* k, auto& v) {
+    if (std::string(k) == "open_loss_start" && !rs.has(k)) return;
+    rs.get(k, v);
+  });
   const std::string& prof = record("run.window_profile");
   std::vector<std::int64_t> counts(prof.size() / sizeof(std::int64_t));
   std::memcpy(counts.data(), prof.data(), counts.size() * sizeof(std::int64_t));

@@ -459,6 +459,7 @@ void write_end_view_png(const std::filesystem::path& path, const EndView& view, 
   };
   mark(view.toe_deg, "toe", kToe);
   mark(view.shoulder_deg, "shoulder", kShoulder);
+  mark(view.impact_deg, "impact", 0xc51b8a);
 
   if (view.has_com && std::isfinite(view.com_x) && std::isfinite(view.com_y)) {
     const P c = map(view.com_x, view.com_y);
@@ -482,6 +483,121 @@ void write_end_view_png(const std::filesystem::path& path, const EndView& view, 
   }
   if (!view.title.empty()) cv.text((size - Canvas::text_width(view.title, 2)) / 2.0, 12, view.title, kInk, 2);
 
+  write_file_atomic(path, cv.png());
+}
+
+// ------------------------------------------------------------- heat maps --
+
+namespace {
+
+// The heat scale: dark blue through teal and yellow to red, t in [0, 1].
+std::uint32_t heat(double t) {
+  static const std::uint32_t table[] = {0x2c3e9e, 0x2a8fbd, 0x3fb67b, 0xb5d334, 0xfdb92e, 0xe2401c};
+  t = std::isfinite(t) ? std::clamp(t, 0.0, 1.0) * 5 : 0;
+  const int i = std::min(4, static_cast<int>(t));
+  return mix(table[i], table[i + 1], t - i);
+}
+
+void draw_heat_map(Canvas& cv, const HeatMap& m, int x, int y, int w, int h) {
+  constexpr std::uint32_t kInk = 0x222222, kFrame = 0x555555, kEmpty = 0xdddddd;
+  double hi = 0;
+  for (const HeatCell& c : m.cells)
+    if (std::isfinite(c.value)) hi = std::max(hi, c.value);
+  const int L = x + 56, T = y + 28, R = x + w - 110, B = y + h - 40;
+  auto X = [&](double v) { return L + (v - m.x_lo) / (m.x_hi - m.x_lo) * (R - L); };
+  auto Y = [&](double v) { return B - (v - m.y_lo) / (m.y_hi - m.y_lo) * (B - T); };
+  cv.clip(L, T, R, B);
+  cv.fill_rect(L, T, R, B, 0xf4f4f4);
+  for (const HeatCell& c : m.cells) {
+    const bool some = hi > 0 && c.value > 0 && std::isfinite(c.value);
+    const double t = some ? 1 + std::log10(c.value / hi) / m.decades : 0;
+    const std::uint32_t col = some ? heat(t) : kEmpty;
+    cv.polygon({{X(c.x0), Y(c.y1)}, {X(c.x1), Y(c.y1)}, {X(c.x1), Y(c.y0)}, {X(c.x0), Y(c.y0)}}, col);
+  }
+  for (const HeatCell& c : m.cells)
+    if (c.outline) {
+      const P a{X(c.x0), Y(c.y0)}, b{X(c.x1), Y(c.y0)}, d{X(c.x1), Y(c.y1)}, e{X(c.x0), Y(c.y1)};
+      for (auto [p, q] : {std::pair{a, b}, {b, d}, {d, e}, {e, a}}) cv.line(p, q, 0x111111, 1);
+    }
+  int nth = 0;  // labels one under the other, so that near marks stay legible
+  for (const auto& [mx, label] : m.marks_x) {
+    if (!std::isfinite(mx)) continue;
+    cv.line({X(mx), double(T)}, {X(mx), double(B)}, 0xc51b8a, 2);
+    const double tx = X(mx) + 4 + Canvas::text_width(label) > R ? X(mx) - 4 - Canvas::text_width(label) : X(mx) + 4;
+    cv.label(tx, T + 6 + 16 * nth++, label, 0xc51b8a);
+  }
+  cv.unclip();
+  cv.fill_rect(L, T, R, T + 1, kFrame), cv.fill_rect(L, B - 1, R, B, kFrame);
+  cv.fill_rect(L, T, L + 1, B, kFrame), cv.fill_rect(R - 1, T, R, B, kFrame);
+  const Axis ax = nice_axis(m.x_lo, m.x_hi, 0), ay = nice_axis(m.y_lo, m.y_hi, 0);
+  for (int i = 0; i < ax.ticks(); ++i) {
+    const double v = ax.tick(i);
+    if (v < m.x_lo - 1e-9 || v > m.x_hi + 1e-9) continue;
+    const std::string s = tick_label(v, ax.step);
+    cv.fill_rect(std::floor(X(v)), B, std::floor(X(v)) + 1, B + 5, kFrame);
+    cv.text(X(v) - Canvas::text_width(s) / 2.0, B + 9, s, kInk);
+  }
+  for (int i = 0; i < ay.ticks(); ++i) {
+    const double v = ay.tick(i);
+    if (v < m.y_lo - 1e-9 || v > m.y_hi + 1e-9) continue;
+    const std::string s = tick_label(v, ay.step);
+    cv.fill_rect(L - 5, std::floor(Y(v)), L, std::floor(Y(v)) + 1, kFrame);
+    cv.text(L - 8 - Canvas::text_width(s), Y(v) - 3, s, kInk);
+  }
+  if (!m.x_label.empty()) cv.text((L + R - Canvas::text_width(m.x_label)) / 2.0, B + 24, m.x_label, kInk);
+  if (!m.y_label.empty()) cv.text(x + 8, (T + B + Canvas::text_width(m.y_label)) / 2.0, m.y_label, kInk, 1, true);
+  if (!m.title.empty()) cv.text(L, y + 6, m.title, kInk, 2);
+  // The colour bar: the top decade labelled, log steps below it.
+  const double bx0 = R + 24, bx1 = R + 38;
+  for (int j = 0; j < B - T; ++j) cv.fill_rect(bx0, T + j, bx1, T + j + 1, heat(1 - (j + 0.5) / (B - T)));
+  cv.fill_rect(bx0 - 1, T - 1, bx1 + 1, T, kFrame), cv.fill_rect(bx0 - 1, B, bx1 + 1, B + 1, kFrame);
+  for (int d = 0; d <= static_cast<int>(m.decades); ++d) {
+    const double v = hi * std::pow(10.0, -d);
+    const double yy = T + (B - T) * d / m.decades;
+    cv.text(bx1 + 4, yy - 3, hi > 0 ? format("%.2g", v) : "0", kInk);
+  }
+  cv.text(bx0, T - 14, m.unit, kInk);
+}
+
+void draw_bars(Canvas& cv, const BarChart& b, int x, int y, int w, int h) {
+  constexpr std::uint32_t kInk = 0x222222, kFrame = 0x555555;
+  double hi = 0;
+  for (const auto& [name, v] : b.bars)
+    if (std::isfinite(v)) hi = std::max(hi, v);
+  const Axis ay = nice_axis(0, hi > 0 ? hi : 1, 0);
+  const int L = x + 56, T = y + 28, R = x + w - 110, B = y + h - 40;
+  auto Y = [&](double v) { return B - v / ay.hi * (B - T); };
+  for (int i = 0; i < ay.ticks(); ++i) {
+    const double v = ay.tick(i);
+    cv.fill_rect(L, std::floor(Y(v)), R, std::floor(Y(v)) + 1, 0xe8e8e8);
+    const std::string s = tick_label(v, ay.step);
+    cv.text(L - 8 - Canvas::text_width(s), Y(v) - 3, s, kInk);
+  }
+  const int n = static_cast<int>(b.bars.size());
+  for (int k = 0; k < n; ++k) {
+    const double slot = static_cast<double>(R - L) / n;
+    const double x0 = L + slot * (k + 0.2), x1 = L + slot * (k + 0.8);
+    const double v = std::isfinite(b.bars[k].second) ? b.bars[k].second : 0;
+    cv.fill_rect(x0, Y(v), x1, B, b.rgb);
+    const std::string val = format("%.3g", v);
+    cv.text((x0 + x1 - Canvas::text_width(val)) / 2, Y(v) - 12, val, kInk);
+    cv.text((x0 + x1 - Canvas::text_width(b.bars[k].first)) / 2, B + 9, b.bars[k].first, kInk);
+  }
+  cv.fill_rect(L, B - 1, R, B, kFrame), cv.fill_rect(L, T, L + 1, B, kFrame);
+  if (!b.y_label.empty()) cv.text(x + 8, (T + B + Canvas::text_width(b.y_label)) / 2.0, b.y_label, kInk, 1, true);
+  if (!b.title.empty()) cv.text(L, y + 6, b.title, kInk, 2);
+}
+
+}  // namespace
+
+void write_heat_maps_png(const std::filesystem::path& path, const std::vector<HeatMap>& maps, const BarChart& bars,
+                         int width) {
+  const int map_h = 300, bar_h = bars.bars.empty() ? 0 : 260;
+  const int height = static_cast<int>(maps.size()) * map_h + bar_h;
+  check_size(width, height);
+  Canvas cv(width, height);
+  for (std::size_t k = 0; k < maps.size(); ++k) draw_heat_map(cv, maps[k], 0, static_cast<int>(k) * map_h, width, map_h);
+  if (!bars.bars.empty()) draw_bars(cv, bars, 0, static_cast<int>(maps.size()) * map_h, width, bar_h);
   write_file_atomic(path, cv.png());
 }
 

@@ -45,11 +45,41 @@ struct EndView {
   std::vector<std::vector<Vec2>> lifters;     // lab-frame polygons
   std::vector<EndViewBall> balls;
   double toe_deg = -1, shoulder_deg = -1;     // < 0: not marked
+  double impact_deg = -1;                     // the impact point; < 0 (or NaN): not marked
   bool has_com = false;
   double com_x = 0, com_y = 0;                // centre of mass, m
   double max_speed = 0;                       // colour scale top; 0: from the balls
 };
 
 void write_end_view_png(const std::filesystem::path& path, const EndView& view, int size = 800);
+
+// A heat map of rectangles (the liner unrolled): each cell a value coloured
+// on a log scale over `decades` below the largest (a cell of 0 is grey),
+// outlined when asked (the lifters). Vertical lines mark angles.
+struct HeatCell {
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  double value = 0;
+  bool outline = false;
+};
+
+struct HeatMap {
+  std::string title, x_label, y_label, unit;
+  double x_lo = 0, x_hi = 1, y_lo = 0, y_hi = 1;
+  std::vector<HeatCell> cells;
+  double decades = 3;
+  std::vector<std::pair<double, std::string>> marks_x;  // labelled vertical lines
+};
+
+// Bars with their values written above them.
+struct BarChart {
+  std::string title, y_label;
+  std::vector<std::pair<std::string, double>> bars;
+  std::uint32_t rgb = 0x4c72b0;
+};
+
+// The maps stacked top to bottom, then the bar chart (if it has bars), in
+// one picture. Throws std::runtime_error when the file cannot be written.
+void write_heat_maps_png(const std::filesystem::path& path, const std::vector<HeatMap>& maps, const BarChart& bars,
+                         int width = 1100);
 
 }  // namespace mc::io

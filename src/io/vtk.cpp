@@ -296,6 +296,78 @@ void write_vtp(const std::filesystem::path& path, const Snapshot& s) {
   write_file_atomic(path, x);
 }
 
+void write_mesh_vtp(const std::filesystem::path& path, const PolyMesh& m) {
+  const std::uint64_t np = m.points.size(), nc = m.polygons.size();
+  std::uint64_t corners = 0;
+  for (const auto& poly : m.polygons) {
+    if (poly.size() < 3) throw std::invalid_argument("write_mesh_vtp: " + path.string() + ": a polygon of " +
+                                                     std::to_string(poly.size()) + " points");
+    for (int q : poly)
+      if (q < 0 || static_cast<std::uint64_t>(q) >= np)
+        throw std::invalid_argument("write_mesh_vtp: " + path.string() + ": a polygon names point " +
+                                    std::to_string(q) + " of " + std::to_string(np));
+    corners += poly.size();
+  }
+  for (const auto& [name, v] : m.cell_floats)
+    if (v.size() != nc) throw std::invalid_argument("write_mesh_vtp: " + path.string() + ": cell array " + name +
+                                                    " has " + std::to_string(v.size()) + " values for " +
+                                                    std::to_string(nc) + " polygons");
+  for (const auto& [name, v] : m.cell_ints)
+    if (v.size() != nc) throw std::invalid_argument("write_mesh_vtp: " + path.string() + ": cell array " + name +
+                                                    " has " + std::to_string(v.size()) + " values for " +
+                                                    std::to_string(nc) + " polygons");
+  Appended app;
+  std::string& d = app.data();
+  std::string cells;
+  const std::uint64_t off_time = app.begin(8);
+  put_f64(d, m.time_s);
+  app.end();
+  for (const auto& [name, v] : m.cell_floats) {
+    const std::uint64_t off = app.begin(nc * 4);
+    for (float x : v) put_f32(d, x);
+    app.end();
+    cells += tag("Float32", xml_escape(name).c_str(), 1, off);
+  }
+  for (const auto& [name, v] : m.cell_ints) {
+    const std::uint64_t off = app.begin(nc * 4);
+    for (int x : v) put_u32(d, static_cast<std::uint32_t>(static_cast<std::int32_t>(x)));
+    app.end();
+    cells += tag("Int32", xml_escape(name).c_str(), 1, off);
+  }
+  const std::uint64_t off_pos = app.begin(np * 12);
+  for (const auto& p : m.points)
+    for (float c : p) put_f32(d, c);
+  app.end();
+  const std::uint64_t off_conn = app.begin(corners * 8);
+  for (const auto& poly : m.polygons)
+    for (int q : poly) put_u64(d, static_cast<std::uint64_t>(q));
+  app.end();
+  const std::uint64_t off_offs = app.begin(nc * 8);
+  std::uint64_t end = 0;
+  for (const auto& poly : m.polygons) put_u64(d, end += poly.size());
+  app.end();
+
+  std::string x;
+  x += "<?xml version=\"1.0\"?>\n";
+  x += "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
+  x += "<PolyData>\n<FieldData>\n";
+  std::string t = tag("Float64", "TimeValue", 1, off_time);
+  t.insert(t.find(" format="), " NumberOfTuples=\"1\"");
+  x += t;
+  x += "</FieldData>\n";
+  x += "<Piece NumberOfPoints=\"" + std::to_string(np) +
+       "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"" + std::to_string(nc) +
+       "\">\n";
+  x += "<CellData>\n" + cells + "</CellData>\n";
+  x += "<Points>\n" + tag("Float32", "Points", 3, off_pos) + "</Points>\n";
+  x += "<Polys>\n" + tag("Int64", "connectivity", 1, off_conn) + tag("Int64", "offsets", 1, off_offs) + "</Polys>\n";
+  x += "</Piece>\n</PolyData>\n";
+  x += "<AppendedData encoding=\"raw\">\n_";
+  x += d;
+  x += "\n</AppendedData>\n</VTKFile>\n";
+  write_file_atomic(path, x);
+}
+
 Snapshot read_vtp(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) bad(path, "cannot open the file");
@@ -460,29 +532,37 @@ void PvdIndex::keep_existing(std::size_t count) {
     return true;
   };
   while (entries_.size() < count && std::getline(in, line)) {
-    std::string t, f;
+    std::string t, f, part;
     if (line.find("<DataSet") == std::string::npos || !attr(line, "timestep", t) || !attr(line, "file", f)) continue;
-    entries_.emplace_back(std::strtod(t.c_str(), nullptr), f);
+    if (attr(line, "part", part) && part != "0") continue;  // the snapshots are part 0
+    entries_.push_back({std::strtod(t.c_str(), nullptr), f, 0});
   }
   if (entries_.size() < count)
     throw std::runtime_error(path_.string() + ": lists " + std::to_string(entries_.size()) + " snapshots, the checkpoint " +
                              std::to_string(count));
 }
 
-void PvdIndex::add(double time_s, const std::string& relative_file) {
+std::vector<double> PvdIndex::times(int part) const {
+  std::vector<double> t;
+  for (const Entry& e : entries_)
+    if (e.part == part) t.push_back(e.time_s);
+  return t;
+}
+
+void PvdIndex::add(double time_s, const std::string& relative_file, int part) {
   if (!std::isfinite(time_s))
     throw std::invalid_argument("PvdIndex::add: " + path_.string() + ": time is not finite");
-  entries_.emplace_back(time_s, relative_file);
+  entries_.push_back({time_s, relative_file, part});
   std::string x;
   x += "<?xml version=\"1.0\"?>\n";
   x += "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n";
   x += "<Collection>\n";
   char t[64];
-  for (const auto& [time, file] : entries_) {
-    std::snprintf(t, sizeof t, "%.9g", time);
+  for (const Entry& e : entries_) {
+    std::snprintf(t, sizeof t, "%.9g", e.time_s);
     x += "<DataSet timestep=\"";
     x += t;
-    x += "\" group=\"\" part=\"0\" file=\"" + xml_escape(file) + "\"/>\n";
+    x += "\" group=\"\" part=\"" + std::to_string(e.part) + "\" file=\"" + xml_escape(e.file) + "\"/>\n";
   }
   x += "</Collection>\n";
   x += "</VTKFile>\n";

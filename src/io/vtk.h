@@ -23,6 +23,20 @@ struct Snapshot {
 // Writes one snapshot atomically (io/atomic_file.h). Throws std::runtime_error.
 void write_vtp(const std::filesystem::path& path, const Snapshot& s);
 
+// A surface of polygons with values per cell (the liner and its sums).
+struct PolyMesh {
+  double time_s = 0;
+  std::vector<std::array<float, 3>> points;  // m
+  std::vector<std::vector<int>> polygons;    // point indices, each at least 3
+  std::vector<std::pair<std::string, std::vector<float>>> cell_floats;  // one value per polygon
+  std::vector<std::pair<std::string, std::vector<int>>> cell_ints;
+};
+
+// Writes the mesh atomically as VTK XML PolyData. Throws std::invalid_argument
+// for a polygon or cell array that does not fit, std::runtime_error when the
+// file cannot be written.
+void write_mesh_vtp(const std::filesystem::path& path, const PolyMesh& m);
+
 // Reads a file written by write_vtp back. Throws std::runtime_error naming
 // the path and what is wrong when the file is not such a file.
 Snapshot read_vtp(const std::filesystem::path& path);
@@ -32,15 +46,23 @@ Snapshot read_vtp(const std::filesystem::path& path);
 class PvdIndex {
  public:
   explicit PvdIndex(std::filesystem::path pvd_path);
-  void add(double time_s, const std::string& relative_file);
+  // `part` tells datasets of the same time apart (0 the balls, 1 the liner):
+  // ParaView shows the parts of a time together.
+  void add(double time_s, const std::string& relative_file, int part = 0);
   // Takes the first `count` entries of the index file already at the path
   // (for a resumed run); throws std::runtime_error if it holds fewer.
   void keep_existing(std::size_t count);
   const std::filesystem::path& path() const { return path_; }
+  std::vector<double> times(int part = 0) const;  // of the datasets of a part, in order
 
  private:
   std::filesystem::path path_;
-  std::vector<std::pair<double, std::string>> entries_;
+  struct Entry {
+    double time_s;
+    std::string file;
+    int part;
+  };
+  std::vector<Entry> entries_;
 };
 
 }  // namespace mc::io

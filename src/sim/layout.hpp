@@ -23,6 +23,7 @@ using real = double;
 #include "../../cl/layout.h"
 #include "../../cl/contact_law.h"
 #include "../../cl/walls.h"
+#include "../../cl/books.h"
 #include "../../cl/ball_forces.h"
 #include "../../cl/motion.h"
 }  // namespace mc::f64
@@ -34,6 +35,7 @@ static_assert(sizeof(f64::real4) == 32 && alignof(f64::real4) == 32);
 static_assert(sizeof(f32::PairParams) == 8 * 4 && sizeof(f64::PairParams) == 8 * 8);
 static_assert(sizeof(f32::SimParams) == 2 * 16 + 8 * 4 + 8 * 4);
 static_assert(sizeof(f64::SimParams) == 2 * 32 + 8 * 8 + 8 * 4);
+static_assert(sizeof(f32::BookParams) == 4 * 4 + 8 * 4 && sizeof(f64::BookParams) == 4 * 8 + 8 * 4);
 
 // The types of one precision, for code templated on it.
 template <class Real>
@@ -46,6 +48,7 @@ struct Layout<float> {
   using SimParams = f32::SimParams;
   using PairParams = f32::PairParams;
   using LifterPolygon = f32::LifterPolygon;
+  using BookParams = f32::BookParams;
 };
 template <>
 struct Layout<double> {
@@ -55,6 +58,7 @@ struct Layout<double> {
   using SimParams = f64::SimParams;
   using PairParams = f64::PairParams;
   using LifterPolygon = f64::LifterPolygon;
+  using BookParams = f64::BookParams;
 };
 
 }  // namespace mc

@@ -183,6 +183,8 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     }
     const Observables o = solver.observe(false);
     st.e_window_start = o.total_energy();
+    st.open_loss_start = o.open_loss_J();
+    solver.reset_books();
     st.phase = 2;
   }
   const double time0 = st.turn_start_s;
@@ -216,7 +218,11 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
       r.torque_arm_power_W = omega * o.charge_mass_kg * kG * o.com_x_m;
       r.neighbours_per_ball = o.neighbours_per_ball;
       r.averaged = s > window_start;
-      if (s == window_start) st.e_window_start = o.total_energy();
+      if (s == window_start) {  // the books of the window begin
+        st.e_window_start = o.total_energy();
+        st.open_loss_start = o.open_loss_J();
+        solver.reset_books();
+      }
       if (r.averaged) {
         for (int k = 0; k < kProfileBins; ++k) st.window_profile[k] += prof[k];
         st.work += o.wall_work_J;
@@ -261,6 +267,12 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   }
   sum.imbalance = sum.torque_power_W != 0 ? (sum.torque_power_W - sum.dissipation_power_W) / sum.torque_power_W : 0;
   sum.profile = st.window_profile;
+  sum.books = solver.read_books();
+  sum.open_loss_start_J = st.open_loss_start;
+  sum.open_loss_end_J = solver.observe(false).open_loss_J();
+  sum.dissipated_J = st.diss;
+  sum.window_s = span;
+  sum.mill_angle_end = solver.mill_angle();
   sum.angles = toe_and_shoulder(st.window_profile);
   checkpoint();
   return finish(false);

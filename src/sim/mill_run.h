@@ -64,6 +64,14 @@ struct RunSummary {
   double com_angle_deg = 0;
   double neighbours_per_ball = 0;
   std::vector<long> profile;        // the window's contact counts per bin
+  // The energy books over the window: the spectra of the collisions that
+  // closed in it, the liner's sums and the impact profile (solver.h), and
+  // what the open contacts held at its start and its end.
+  BookSums books;
+  double open_loss_start_J = 0, open_loss_end_J = 0;
+  double dissipated_J = 0;          // over the window
+  double window_s = 0;              // simulated seconds of the window
+  double mill_angle_end = 0;        // rad, at the end (the liner's place in pictures)
   double wall_s = 0;                // wall time of settling and turning
   double updates_per_s = 0;         // balls × steps / wall_s
   bool interrupted = false;         // stopped on request, checkpoint written
@@ -80,6 +88,7 @@ struct RunState {
   double turn_start_s = 0;       // solver time when the mill started
   long turn_step = 0;            // steps of the turning mill done
   std::vector<long> window_profile;
+  double open_loss_start = 0;    // what the open contacts held when the window began
   double e_window_start = 0, e_end = 0, work = 0, diss = 0, torque_time = 0, arm_time = 0, span = 0,
          comx = 0, comy = 0, neigh = 0;
   long rows_in_window = 0;

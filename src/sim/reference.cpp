@@ -19,12 +19,17 @@ struct ReferenceSolver::State {
   std::vector<real4> pos, vel, omega, force, torque, accum, pos_at_build;
   std::vector<int2> info;
   std::vector<int> wall_key;
-  std::vector<real> wall_hist;  // packed, 3 per slot
+  std::vector<int> wall_rec;    // each slot's contact record
   std::vector<int> neigh_start, neigh_count, neigh_index;  // partners j > i
-  std::vector<real> neigh_hist;  // packed, 3 per entry
+  std::vector<int> neigh_rec;   // each touching entry's record
   std::vector<real> pair_out;    // the partner's side, MC_SLOT_REALS per entry
   std::vector<int> in_start, neigh_rev;  // each ball's incoming slots (n + 1); each entry's slot
-  std::map<std::pair<int, int>, real3> history;  // (i, j) → spring, by index
+  std::map<std::pair<int, int>, int> history;  // (i, j) → record, by index
+  // The books: records are never packed here (a few thousand steps at most).
+  std::vector<real4> records;
+  int rec_state[2] = {0, 0};
+  BookParams book_params{};
+  std::vector<uint> spectra, liner, impact_profile;
   int status = 0;
   double time = 0, angle = 0, omega_mill = 0;
   int n = 0;
@@ -33,7 +38,7 @@ struct ReferenceSolver::State {
     // Every pair within touching distance, once (in the lower ball's list),
     // with its spring carried over; and the entries that hold each ball.
     neigh_index.clear();
-    neigh_hist.clear();
+    neigh_rec.clear();
     std::vector<std::vector<int>> incoming(n);
     for (int i = 0; i < n; ++i) {
       neigh_start[i] = static_cast<int>(neigh_index.size());
@@ -44,8 +49,7 @@ struct ReferenceSolver::State {
         auto it = history.find({i, j});
         incoming[j].push_back(static_cast<int>(neigh_index.size()));
         neigh_index.push_back(it != history.end() ? MC_LINK_TOUCHED(j) : j);
-        const real3 h = it != history.end() ? it->second : real3{0, 0, 0};
-        neigh_hist.insert(neigh_hist.end(), {h.x, h.y, h.z});
+        neigh_rec.push_back(it != history.end() ? it->second : MC_NO_RECORD);
       }
       neigh_count[i] = static_cast<int>(neigh_index.size()) - neigh_start[i];
     }
@@ -59,21 +63,33 @@ struct ReferenceSolver::State {
     in_start[n] = q;
   }
   void save_history() {
-    // The springs of the pairs that touch now (the others have none).
+    // The records of the pairs that touch now (the others have none).
     history.clear();
     for (int i = 0; i < n; ++i)
       for (int k = neigh_start[i]; k < neigh_start[i] + neigh_count[i]; ++k)
-        if (MC_LINK_TOUCHING(neigh_index[k]))
-          history[{i, MC_LINK_PARTNER(neigh_index[k])}] = load_hist(neigh_hist.data(), k);
+        if (MC_LINK_TOUCHING(neigh_index[k])) history[{i, MC_LINK_PARTNER(neigh_index[k])}] = neigh_rec[k];
   }
   void forces() {
     build_lists();
+    // Room for every listed pair and wall slot to begin a contact.
+    const std::size_t room = rec_state[0] + neigh_index.size() + wall_key.size();
+    if (records.size() < 2 * room) records.resize(2 * room + 1024);
+    Books books;
+    books.records = records.data();
+    books.rec_state = rec_state;
+    books.capacity = static_cast<int>(records.size() / 2);
+    books.mark = books.capacity;
+    books.spectra = spectra.data();
+    books.liner = liner.data();
+    books.impact_profile = impact_profile.data();
+    books.bp = &book_params;
+    books.status = &status;
     MillState mill{std::cos(angle), std::sin(angle), omega_mill};
     for (int i = 0; i < n; ++i)
       ball_forces(i, &sp, pairs.data(), lifters.data(), mill, pos.data(), vel.data(), omega.data(),
                   info.data(), neigh_start.data(), neigh_count.data(), neigh_index.data(),
-                  neigh_hist.data(), neigh_rev.data(), pair_out.data(), wall_key.data(), wall_hist.data(),
-                  force.data(), torque.data(), accum.data(), &status);
+                  neigh_rec.data(), neigh_rev.data(), pair_out.data(), wall_key.data(), wall_rec.data(),
+                  force.data(), torque.data(), accum.data(), &books);
     for (int j = 0; j < n; ++j)
       ball_reactions(j, in_start.data(), pair_out.data(), force.data(), torque.data(), accum.data());
     save_history();
@@ -87,6 +103,10 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
   s.sp = tables.params;
   s.pairs = std::move(tables.pairs);
   s.lifters = std::move(tables.lifters);
+  s.book_params = tables.books;
+  s.spectra.assign(2 * static_cast<std::size_t>(s.book_params.n_types + 1) * MC_SPECTRA_BINS * MC_SPECTRA_FIELDS, 0u);
+  s.liner.assign(2 * static_cast<std::size_t>(s.book_params.n_elements) * MC_LINER_FIELDS, 0u);
+  s.impact_profile.assign(2 * MC_IMPACT_BINS, 0u);
   const SimParams& sp = s.sp;
 
   std::vector<Ball> balls = scene.balls;
@@ -95,7 +115,7 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
   s.pos.resize(n); s.vel.resize(n); s.omega.resize(n); s.force.resize(n); s.torque.resize(n);
   s.accum.assign(n, real4{0, 0, 0, 0}); s.pos_at_build.resize(n); s.info.resize(n);
   s.wall_key.assign(static_cast<std::size_t>(n) * MC_MAX_WALL_CONTACTS, MC_WALL_NONE);
-  s.wall_hist.assign(static_cast<std::size_t>(n) * MC_MAX_WALL_CONTACTS * 3, real{0});
+  s.wall_rec.assign(static_cast<std::size_t>(n) * MC_MAX_WALL_CONTACTS, MC_NO_RECORD);
   s.neigh_start.assign(n, 0); s.neigh_count.assign(n, 0);
   s.in_start.assign(n + 1, 0);
   for (int i = 0; i < n; ++i) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <sstream>
@@ -23,7 +24,7 @@ namespace {
 constexpr int kScanWG = 256;
 constexpr int kReduceWG = 64;
 constexpr int kForcesGroupWG = 64;  // balls per work-group of forces_grouped
-constexpr int kObservables = 10;
+constexpr int kObservables = 13;
 
 // Exclusive prefix sum on the device (cl/scan.cl).
 class Scan {
@@ -74,6 +75,12 @@ class SolverImpl final : public Solver {
   void set_stage_timing(bool on) override;
   StageTimes stage_times() const override { return stages_; }
   ContactStats contact_stats() override;
+  BookSums read_books() override;
+  void reset_books() override;
+  long records_refused() override {
+    rec_state_.read_from_device();
+    return records_refused_ + rec_state_.host[1];
+  }
   SolverState save_state() override;
   void restore_state(const SolverState& state) override;
   void poison_ball(int id) override;
@@ -94,6 +101,8 @@ class SolverImpl final : public Solver {
   void rebuild();
   void forces();
   void index_incoming();
+  void pack_records(bool in_rebuild);
+  void restore_springs(const SolverState& state);
   void motion();
   void read_status();
   void wait_status();
@@ -129,19 +138,30 @@ class SolverImpl final : public Solver {
   Buffer<real4> pos_, vel_, omega_, force_, torque_, accum_, pos_at_build_;
   Buffer<int2> info_;  // (id, material)
   Buffer<int> wall_key_;
-  Buffer<Real> wall_hist_;  // packed springs, 3 per slot
+  Buffer<int> wall_rec_;  // each slot's contact record
   // binning
   // cell_start_ has n_cells + 1 entries (the last is the number of balls);
   // while binning it first holds the counts, scanned in place. ball_cell_
   // and ball_rank_ are free once the balls are scattered: they then hold
   // the carried springs' starts and counts, and count the incoming slots.
   Buffer<int> cell_start_, ball_cell_, ball_rank_, sorted_index_;
-  // neighbour lists (each pair once, in the lower ball's list); the springs
+  // neighbour lists (each pair once, in the lower ball's list); the records
   // carried over a rebuild (compact: only pairs in contact; partner index in
   // the old order) use free arrays: starts and counts in ball_cell_ and
-  // ball_rank_, partners in neigh_rev_, springs in pair_out_
+  // ball_rank_, partners in neigh_rev_, records in pair_out_
   Buffer<int> neigh_start_, neigh_count_, neigh_index_;
-  Buffer<Real> neigh_hist_;  // packed springs, 3 per entry
+  Buffer<int> neigh_rec_;  // a touching entry's contact record
+  // The contact records (cl/layout.h): the pool, what it holds, and the
+  // books they feed: collision spectra, liner elements, the lab-frame
+  // profile of impact energy on the liner (64-bit sums as uint pairs).
+  Buffer<real4> records_;
+  Buffer<int> rec_state_;  // records taken, contacts that found the pool full
+  int rec_capacity_ = 0, rec_mark_ = 0;
+  long records_refused_ = 0;  // contacts that found the pool full, so far
+  Buffer<typename L::BookParams> book_params_;
+  Buffer<std::uint32_t> spectra_, liner_, impact_profile_;
+  int n_types_ = 0, n_elements_ = 0;
+  double energy_unit_ = 0, wear_unit_ = 0;
   // Each ball's incoming slots (one per pair a lower ball lists with it, side
   // by side from in_start_[j] to in_start_[j + 1]) and the slot of each
   // entry (neigh_rev_). The slots (MC_SLOT_REALS reals each) hold the
@@ -174,7 +194,7 @@ class SolverImpl final : public Solver {
   Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
       k_gather_wall_, k_put_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
       k_layout_, k_profile_, k_count_contacts_, k_clear_flag_, k_carry_count_, k_carry_fill_, k_in_count_,
-      k_in_scatter_, k_in_sort_, k_reactions_, k_forces_grouped_;
+      k_in_scatter_, k_in_sort_, k_reactions_, k_forces_grouped_, k_records_count_, k_records_pack_;
   bool grouped_forces_ = false;
   // The viewer's kernel, built on first use so that headless runs skip it.
   std::unique_ptr<compute::Program> view_program_;
@@ -188,6 +208,7 @@ compute::BuildOptions SolverImpl<Real>::options(const Scene& scene) {
   // The law is fixed for a run: built in, the force kernel drops the other
   // law's arithmetic (setup_params checks that a new scene keeps it).
   o.define("MC_LAW", scene.numerics.law == ContactLaw::hertz ? MC_LAW_HERTZ : MC_LAW_LINEAR);
+  o.define("MC_ENERGY_BOOKS", scene.numerics.energy_books ? 1 : 0);
   return o;
 }
 
@@ -214,14 +235,17 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       pos_at_build_(ctx, n_, "positions at list build"),
       info_(ctx, n_, "ids and materials"),
       wall_key_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "wall contact keys"),
-      wall_hist_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS * 3, "wall contact history"),
+      wall_rec_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "wall contact records"),
       ball_cell_(ctx, n_, "ball cell"),
       ball_rank_(ctx, n_, "ball rank in cell"),
       sorted_index_(ctx, n_, "sorted index"),
       neigh_start_(ctx, n_, "neighbour start"),
       neigh_count_(ctx, n_, "neighbour count"),
       neigh_index_(ctx, static_cast<std::size_t>(n_) + 64, "neighbour index"),
-      neigh_hist_(ctx, (static_cast<std::size_t>(n_) + 64) * 3, "neighbour history"),
+      neigh_rec_(ctx, static_cast<std::size_t>(n_) + 64, "neighbour records"),
+      records_(ctx, 2, "contact records"),
+      rec_state_(ctx, 2, "contact record count"),
+      book_params_(ctx, 1, "book parameters"),
       pair_out_(ctx, slot_reals(static_cast<std::size_t>(n_) + 64), "pair reactions"),
       in_start_(ctx, static_cast<std::size_t>(n_) + 1, "incoming start"),
       neigh_rev_(ctx, static_cast<std::size_t>(n_) + 64, "neighbour slot"),
@@ -253,7 +277,9 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_in_scatter_(program_, "in_scatter"),
       k_in_sort_(program_, "in_sort"),
       k_reactions_(program_, "reactions"),
-      k_forces_grouped_(program_, "forces_grouped") {
+      k_forces_grouped_(program_, "forces_grouped"),
+      k_records_count_(program_, "records_count"),
+      k_records_pack_(program_, "records_pack") {
   if (const char* e = std::getenv("MILLCHARGE_FORCES"); e && *e) {
     const std::string v = e;
     if (v != "ball" && v != "grouped")
@@ -263,13 +289,14 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
   if (n_ == 0) throw std::invalid_argument("scene: no balls");
 
   // The device's struct sizes must equal the host mirrors'.
-  Buffer<int> sizes(ctx, 4, "layout sizes");
+  Buffer<int> sizes(ctx, 5, "layout sizes");
   k_layout_.args(sizes).launch(1);
   sizes.read_from_device();
   if (sizes.host[0] != static_cast<int>(sizeof(typename L::SimParams)) ||
       sizes.host[1] != static_cast<int>(sizeof(typename L::PairParams)) ||
       sizes.host[2] != static_cast<int>(sizeof(typename L::LifterPolygon)) ||
-      sizes.host[3] != static_cast<int>(sizeof(real4)))
+      sizes.host[3] != static_cast<int>(sizeof(real4)) ||
+      sizes.host[4] != static_cast<int>(sizeof(typename L::BookParams)))
     throw compute::Error("struct layouts differ between host and device (cl/layout.h)");
 
   setup_params(scene);
@@ -287,10 +314,12 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
     info_.host[i] = {b.id, b.material};
   }
   std::fill(wall_key_.host.begin(), wall_key_.host.end(), MC_WALL_NONE);
+  std::fill(wall_rec_.host.begin(), wall_rec_.host.end(), MC_NO_RECORD);
   for (auto* b : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_}) b->write_to_device();
-  wall_hist_.write_to_device();
   info_.write_to_device();
   wall_key_.write_to_device();
+  wall_rec_.write_to_device();
+  rec_state_.write_to_device();
   // Empty lists: the first rebuild takes these as the previous lists.
   for (auto* b : {&neigh_start_, &neigh_count_}) b->write_to_device();
   status_.write_to_device();
@@ -336,6 +365,32 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
     lifters_.host[k].bound = {Real(b.x), Real(b.y), Real(b.z), Real(0)};
   }
   lifters_.write_to_device();
+
+  const f64::BookParams& tb = t.books;
+  auto& bp = book_params_.host[0];
+  bp = {};
+  bp.energy_unit = Real(tb.energy_unit);
+  bp.wear_unit = Real(tb.wear_unit);
+  bp.wear_k = Real(tb.wear_k);
+  bp.plate_ring_width = Real(tb.plate_ring_width);
+  bp.n_types = tb.n_types;
+  bp.n_elements = tb.n_elements;
+  bp.shell_bins = tb.shell_bins;
+  bp.axial_bins = tb.axial_bins;
+  bp.plate_rings = tb.plate_rings;
+  bp.plate_sectors = tb.plate_sectors;
+  bp.first_lifter_element = tb.first_lifter_element;
+  bp.first_plate_element = tb.first_plate_element;
+  book_params_.write_to_device();
+  energy_unit_ = tb.energy_unit;
+  wear_unit_ = tb.wear_unit;
+  n_types_ = tb.n_types;
+  n_elements_ = tb.n_elements;
+  spectra_ = Buffer<std::uint32_t>(ctx_, 2 * static_cast<std::size_t>(n_types_ + 1) * MC_SPECTRA_BINS * MC_SPECTRA_FIELDS,
+                                   "collision spectra");
+  liner_ = Buffer<std::uint32_t>(ctx_, 2 * static_cast<std::size_t>(n_elements_) * MC_LINER_FIELDS, "liner sums");
+  impact_profile_ = Buffer<std::uint32_t>(ctx_, 2 * MC_IMPACT_BINS, "impact profile");
+  for (auto* b : {&spectra_, &liner_, &impact_profile_}) b->write_to_device();
 
   const f64::SimParams& tp = t.params;
   auto& sp = params_.host[0];
@@ -412,8 +467,9 @@ void SolverImpl<Real>::rebuild() {
   k_bin_sort_.args(n_cells_, cell_start_, sorted_index_, info_).launch(n_cells_);
 
   // Put the ball arrays in cell order, each through the pair slots (free
-  // now, and at least four reals per ball) and back; the wall slots also
-  // through ball_cell_, free once the balls are scattered.
+  // now, and at least four reals per ball) and back; the wall slots' keys
+  // through ball_cell_, free once the balls are scattered, and their
+  // records through the pair slots.
   for (Buffer<real4>* b : {&pos_, &vel_, &omega_, &accum_}) {
     k_gather4_.args(n, sorted_index_, *b, pair_out_).launch(n);
     ctx_.queue().enqueueCopyBuffer(pair_out_.device(), b->device(), 0, 0, b->bytes());
@@ -421,27 +477,27 @@ void SolverImpl<Real>::rebuild() {
   k_gather2_.args(n, sorted_index_, info_, pair_out_).launch(n);
   ctx_.queue().enqueueCopyBuffer(pair_out_.device(), info_.device(), 0, 0, info_.bytes());
   for (int slot = 0; slot < MC_MAX_WALL_CONTACTS; ++slot) {
-    k_gather_wall_.args(n, slot, sorted_index_, wall_key_, wall_hist_, ball_cell_, pair_out_).launch(n);
-    k_put_wall_.args(n, slot, ball_cell_, pair_out_, wall_key_, wall_hist_).launch(n);
+    k_gather_wall_.args(n, slot, sorted_index_, wall_key_, wall_rec_, ball_cell_, pair_out_).launch(n);
+    k_put_wall_.args(n, slot, ball_cell_, pair_out_, wall_key_, wall_rec_).launch(n);
   }
   pos_at_build_.copy_from(pos_, n);
   lap(&StageTimes::binning_s);
 
-  // The springs of pairs in contact, out of the lists (in the old order).
+  // The records of pairs in contact, out of the lists (in the old order).
   Buffer<int>& carry_start = ball_cell_;
   Buffer<int>& carry_count = ball_rank_;
   k_carry_count_.args(n, neigh_start_, neigh_count_, neigh_index_, carry_count).launch(n);
   scan_.run(carry_count, carry_start, n);
   const int carried = scan_.read_total();
-  // The carried springs are a subset of the old entries: their partners go
-  // into neigh_rev_ and the springs into the pair slots, both sized with the
-  // old lists and free until the new lists are indexed.
+  // The carried pairs are a subset of the old entries: their partners go
+  // into neigh_rev_ and their records into the pair slots, both sized with
+  // the old lists and free until the new lists are indexed.
   if (static_cast<std::size_t>(carried) > neigh_rev_.size() ||
-      static_cast<std::size_t>(carried) * 3 > pair_out_.size())
-    throw std::logic_error("carried springs outgrow the old lists");
+      static_cast<std::size_t>(carried) > pair_out_.size())
+    throw std::logic_error("carried contacts outgrow the old lists");
   Buffer<int>& carry_index = neigh_rev_;
-  Buffer<Real>& carry_hist = pair_out_;
-  k_carry_fill_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_hist_, carry_start, carry_index, carry_hist)
+  Buffer<Real>& carry_rec = pair_out_;  // ints
+  k_carry_fill_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_rec_, carry_start, carry_index, carry_rec)
       .launch(n);
   // New lists in their place.
   k_contacts_count_.args(params_, pos_, cell_start_, neigh_count_).launch(n);
@@ -451,11 +507,12 @@ void SolverImpl<Real>::rebuild() {
     // The lists grow as needed: no contact is ever dropped.
     const std::size_t cap = list_capacity(static_cast<std::size_t>(total));
     neigh_index_.resize(cap);
-    neigh_hist_.resize(cap * 3);
+    neigh_rec_.resize(cap);
   }
-  k_contacts_fill_.args(params_, pos_, cell_start_, neigh_start_, neigh_index_,
-                        neigh_hist_, sorted_index_, carry_start, carry_count, carry_index, carry_hist)
+  k_contacts_fill_.args(params_, pos_, cell_start_, neigh_start_, neigh_index_, neigh_rec_, sorted_index_,
+                        carry_start, carry_count, carry_index, carry_rec, records_)
       .launch(n);
+  pack_records(true);
   index_incoming();
   ++rebuilds_;
   lap(&StageTimes::contacts_s);
@@ -466,12 +523,67 @@ void SolverImpl<Real>::forces() {
   (grouped_forces_ ? k_forces_grouped_ : k_forces_)
       .args(params_, pairs_, lifters_, std::cos(mill_angle_), std::sin(mill_angle_), mill_omega_, pos_, vel_,
             omega_, info_,
-            neigh_start_, neigh_count_, neigh_index_, neigh_hist_, neigh_rev_, pair_out_, wall_key_, wall_hist_, force_,
-            torque_, accum_, status_)
+            neigh_start_, neigh_count_, neigh_index_, neigh_rec_, neigh_rev_, pair_out_, wall_key_, wall_rec_, force_,
+            torque_, accum_, status_, records_, rec_state_, rec_capacity_, rec_mark_, spectra_, liner_,
+            impact_profile_, book_params_)
       .launch(n_, grouped_forces_ ? kForcesGroupWG : 0);
   k_reactions_.args(n_, in_start_, pair_out_, force_, torque_, accum_)
       .launch(n_);
   lap(&StageTimes::forces_s);
+}
+
+// The record pool packed: the records of the open contacts (touching list
+// entries and wall slots, ball by ball) to the front, in an order that does
+// not depend on the threads, through scratch (in a rebuild the pair slots,
+// free until the lists are indexed; otherwise a buffer of its own for the
+// while). The pool then holds them and room for the contacts that begin
+// before it is packed again: a margin of as many again (at least half a
+// record per ball), and the pairs that overlap now without a record (a
+// charge laid anew). A record taken past half the margin asks for a pack
+// (MC_FLAG_PACK_RECORDS); a contact that finds the pool full keeps no spring
+// until it is packed (MC_FLAG_RECORDS_FULL, counted). Packing moves records
+// and changes no result, so when it happens does not matter.
+template <class Real>
+void SolverImpl<Real>::pack_records(bool in_rebuild) {
+  const int n = n_;
+  rec_state_.read_from_device();
+  records_refused_ += rec_state_.host[1];
+  Buffer<int>& first = ball_cell_;  // free outside the binning and the carry
+  Buffer<int>& pending = ball_rank_;
+  k_records_count_
+      .args(params_, pos_, neigh_start_, neigh_count_, neigh_index_, neigh_rec_, wall_key_, wall_rec_, first, pending)
+      .launch(n);
+  scan_.run(pending, pending, n);
+  const long overlapping = scan_.read_total();
+  scan_.run(first, first, n);
+  const long live = scan_.read_total();
+  Buffer<Real> own_scratch;
+  Buffer<Real>* scratch = &pair_out_;
+  const std::size_t reals = 8 * static_cast<std::size_t>(std::max(live, 1L));
+  if (!in_rebuild) {
+    own_scratch = Buffer<Real>(ctx_, reals, "contact records, packed");
+    scratch = &own_scratch;
+  } else if (reals > pair_out_.size()) {
+    pair_out_.resize(reals);
+  }
+  k_records_pack_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_rec_, wall_key_, wall_rec_, first, records_,
+                       *scratch)
+      .launch(n);
+  const long margin = std::max<long>({live, n / 2, 1024});
+  const long capacity = live + overlapping + margin;
+  if (capacity > std::numeric_limits<int>::max() / 2)
+    throw std::runtime_error("contact records: " + std::to_string(capacity) + " do not fit the pool's index");
+  if (static_cast<std::size_t>(capacity) * 2 > records_.size() ||
+      static_cast<std::size_t>(capacity) * 2 * 3 < records_.size())
+    records_.resize(static_cast<std::size_t>(capacity) * 2);
+  if (live > 0) ctx_.queue().enqueueCopyBuffer(scratch->device(), records_.device(), 0, 0, 2 * live * sizeof(real4));
+  // The pool's size from what it holds, not from the buffer (which may be
+  // larger): the same state gives the same pool, however it came about.
+  rec_capacity_ = static_cast<int>(capacity);
+  rec_mark_ = static_cast<int>(live + overlapping + margin / 2);
+  rec_state_.host = {static_cast<int>(live), 0};
+  rec_state_.write_to_device();
+  if (!in_rebuild) ctx_.finish();  // before the scratch goes
 }
 
 // Each ball's incoming slots, from the lists: counted (in place in
@@ -581,8 +693,11 @@ void SolverImpl<Real>::advance(long steps) {
     wait_status();
     lap(&StageTimes::motion_s);
     if (pending_flags_ & MC_FLAG_REBUILD) {
-      rebuild();
-      k_clear_flag_.args(status_, MC_FLAG_REBUILD).launch(1);
+      rebuild();  // packs the records too
+      k_clear_flag_.args(status_, MC_FLAG_REBUILD | MC_FLAG_PACK_RECORDS | MC_FLAG_RECORDS_FULL).launch(1);
+    } else if (pending_flags_ & MC_FLAG_PACK_RECORDS) {
+      pack_records(false);
+      k_clear_flag_.args(status_, MC_FLAG_PACK_RECORDS | MC_FLAG_RECORDS_FULL).launch(1);
     }
     pending_flags_ = 0;
     read_status();
@@ -597,7 +712,9 @@ void SolverImpl<Real>::advance(long steps) {
 template <class Real>
 Observables SolverImpl<Real>::observe(bool reset) {
   const int groups = (n_ + kReduceWG - 1) / kReduceWG;
-  k_reduce_.args(params_, pos_, vel_, omega_, force_, torque_, accum_, neigh_count_, reset ? 1 : 0, partial_)
+  k_reduce_
+      .args(params_, pos_, vel_, omega_, force_, torque_, accum_, neigh_start_, neigh_count_, neigh_index_, neigh_rec_,
+            wall_key_, wall_rec_, records_, reset ? 1 : 0, partial_)
       .launch(static_cast<std::size_t>(groups) * kReduceWG, kReduceWG);
   partial_.read_from_device();
   lap(&StageTimes::reductions_s);
@@ -620,8 +737,64 @@ Observables SolverImpl<Real>::observe(bool reset) {
   o.charge_mass_kg = total_mass_;
   o.com_x_m = s[8] / total_mass_;
   o.com_y_m = s[9] / total_mass_;
+  o.open_loss_normal_J = s[10];
+  o.open_loss_tangential_J = s[11];
+  o.open_loss_rolling_J = s[12];
   if (reset) observed_since_ = time_;
   return o;
+}
+
+namespace {
+
+// The 64-bit integer at pair q of a uint array (low word first).
+long long u64_at(const std::vector<std::uint32_t>& a, std::size_t q) {
+  const std::uint64_t v = (static_cast<std::uint64_t>(a[2 * q + 1]) << 32) | a[2 * q];
+  return static_cast<long long>(v);
+}
+
+}  // namespace
+
+template <class Real>
+BookSums SolverImpl<Real>::read_books() {
+  wait_status();
+  for (auto* b : {&spectra_, &liner_, &impact_profile_}) b->read_from_device();
+  BookSums out;
+  out.n_types = n_types_;
+  out.n_elements = n_elements_;
+  const int rows = n_types_ + 1;
+  out.spectra.resize(static_cast<std::size_t>(rows) * MC_SPECTRA_BINS * MC_SPECTRA_FIELDS);
+  for (int r = 0; r < rows; ++r)
+    for (int b = 0; b < MC_SPECTRA_BINS; ++b) {
+      // The device's units: the bin's edge in its own precision.
+      const double e_unit = static_cast<double>(
+          std::pow(Real(10), Real(MC_SPECTRA_LOG_MIN) + Real(std::max(b, 1) - 1) / Real(MC_SPECTRA_PER_DECADE)) /
+          Real(MC_SPECTRA_SCALE));
+      for (int f = 0; f < MC_SPECTRA_FIELDS; ++f) {
+        const std::size_t q = (static_cast<std::size_t>(r) * MC_SPECTRA_BINS + b) * MC_SPECTRA_FIELDS + f;
+        const double v = static_cast<double>(u64_at(spectra_.host, q));
+        out.spectra[q] = f == MC_SPECTRA_COUNT || f == MC_SPECTRA_STEPS ? v
+                         : f == MC_SPECTRA_SPEED                        ? v / MC_SPECTRA_SCALE
+                                                                        : v * e_unit;
+      }
+    }
+  out.liner.resize(static_cast<std::size_t>(n_elements_) * MC_LINER_FIELDS);
+  for (std::size_t q = 0; q < out.liner.size(); ++q) {
+    const double v = static_cast<double>(u64_at(liner_.host, q));
+    const int f = static_cast<int>(q % MC_LINER_FIELDS);
+    out.liner[q] = f == MC_LINER_IMPACTS ? v : f == MC_LINER_WEAR ? v * wear_unit_ : v * energy_unit_;
+  }
+  out.impact_profile.resize(MC_IMPACT_BINS);
+  for (int b = 0; b < MC_IMPACT_BINS; ++b) out.impact_profile[b] = u64_at(impact_profile_.host, b) * energy_unit_;
+  return out;
+}
+
+template <class Real>
+void SolverImpl<Real>::reset_books() {
+  wait_status();
+  for (auto* b : {&spectra_, &liner_, &impact_profile_}) {
+    std::fill(b->host.begin(), b->host.end(), 0u);
+    b->write_to_device();
+  }
 }
 
 template <class Real>
@@ -655,8 +828,8 @@ std::vector<long> SolverImpl<Real>::take_contact_profile() {
 namespace {
 
 template <class T>
-void put_array(SolverState& st, const char* name, compute::Buffer<T>& b, std::size_t count) {
-  b.read_from_device();
+void put_array(SolverState& st, const char* name, compute::Buffer<T>& b, std::size_t count, bool read = true) {
+  if (read) b.read_from_device();
   const auto* p = reinterpret_cast<const unsigned char*>(b.host.data());
   st.arrays.emplace_back(name, std::vector<unsigned char>(p, p + count * sizeof(T)));
 }
@@ -692,6 +865,10 @@ void get_array(const SolverState& st, const char* name, compute::Buffer<T>& b, b
 template <class Real>
 SolverState SolverImpl<Real>::save_state() {
   wait_status();
+  // Records are taken in whatever order the threads come: packed, they lie
+  // in ball order, so that a state saved is the same, byte for byte, however
+  // the run came to it.
+  pack_records(false);
   SolverState st;
   st.real_bytes = sizeof(Real);
   st.n_balls = n_;
@@ -713,12 +890,21 @@ SolverState SolverImpl<Real>::save_state() {
   put_array(st, "pos_at_build", pos_at_build_, n);
   put_array(st, "info", info_, n);
   put_array(st, "wall_key", wall_key_, slots);
-  put_array(st, "wall_hist", wall_hist_, slots * 3);
+  put_array(st, "wall_rec", wall_rec_, slots);
   put_array(st, "neigh_start", neigh_start_, n);
   put_array(st, "neigh_count", neigh_count_, n);
   const std::size_t entries = list_entries();
   put_array(st, "neigh_half_link", neigh_index_, entries);
-  put_array(st, "neigh_hist", neigh_hist_, entries * 3);
+  put_array(st, "neigh_rec", neigh_rec_, entries);
+  put_array(st, "rec_state", rec_state_, 2);
+  const std::size_t taken = std::min<std::size_t>(std::max(rec_state_.host[0], 0), rec_capacity_);
+  put_array(st, "records", records_, 2 * taken);
+  Buffer<int> pool(ctx_, 3, "record pool");
+  pool.host = {rec_capacity_, rec_mark_, static_cast<int>(records_refused_)};
+  put_array(st, "record_pool", pool, 3, false);
+  put_array(st, "spectra", spectra_, spectra_.size());
+  put_array(st, "liner", liner_, liner_.size());
+  put_array(st, "impact_profile", impact_profile_, impact_profile_.size());
   put_array(st, "status", status_, 1);
   put_array(st, "profile", profile_, kProfileBins);
   return st;
@@ -743,50 +929,28 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
   get_array(st, "pos_at_build", pos_at_build_, false);
   get_array(st, "info", info_, false);
   get_array(st, "wall_key", wall_key_, false);
-  get_array(st, "wall_hist", wall_hist_, false);
   get_array(st, "neigh_start", neigh_start_, false);
   get_array(st, "neigh_count", neigh_count_, false);
-  get_array(st, "neigh_hist", neigh_hist_, true);
-  if (has_array(st, "neigh_half_link")) {
+  if (has_array(st, "records")) {
+    get_array(st, "wall_rec", wall_rec_, false);
     get_array(st, "neigh_half_link", neigh_index_, true);
+    get_array(st, "neigh_rec", neigh_rec_, true);
+    if (neigh_rec_.size() != neigh_index_.size())
+      throw std::invalid_argument("state arrays neigh_half_link and neigh_rec differ in length");
+    Buffer<int> pool(ctx_, 3, "record pool");
+    get_array(st, "record_pool", pool, false);
+    rec_capacity_ = pool.host[0];
+    rec_mark_ = pool.host[1];
+    records_refused_ = pool.host[2];
+    if (rec_capacity_ < 1) throw std::invalid_argument("state array record_pool: a pool of no records");
+    records_.resize(2 * static_cast<std::size_t>(rec_capacity_));
+    get_array(st, "records", records_, true);
+    get_array(st, "rec_state", rec_state_, false);
+    get_array(st, "spectra", spectra_, false);
+    get_array(st, "liner", liner_, false);
+    get_array(st, "impact_profile", impact_profile_, false);
   } else {
-    // Saved with full lists, each pair in both balls' lists: the lower
-    // ball's entry is kept.
-    if (has_array(st, "neigh_link")) {
-      get_array(st, "neigh_link", neigh_index_, true);
-    } else {
-      // Saved before the links carried the touching flag: a pair held a
-      // spring exactly when it was not zero.
-      get_array(st, "neigh_index", neigh_index_, true);
-      for (std::size_t k = 0; k < list_entries(); ++k) {
-        const Real* h = &neigh_hist_.host[3 * k];
-        if (h[0] != 0 || h[1] != 0 || h[2] != 0) neigh_index_.host[k] = MC_LINK_TOUCHED(neigh_index_.host[k]);
-      }
-    }
-    std::size_t kept = 0;
-    for (int i = 0; i < n_; ++i) {
-      const int b = neigh_start_.host[i], e = b + neigh_count_.host[i];
-      neigh_start_.host[i] = static_cast<int>(kept);
-      for (int k = b; k < e; ++k) {
-        if (MC_LINK_PARTNER(neigh_index_.host[k]) < i) continue;
-        neigh_index_.host[kept] = neigh_index_.host[k];
-        for (int c = 0; c < 3; ++c) neigh_hist_.host[3 * kept + c] = neigh_hist_.host[3 * k + c];
-        ++kept;
-      }
-      neigh_count_.host[i] = static_cast<int>(kept) - neigh_start_.host[i];
-    }
-    // Half the entries: the lists shrink to what a rebuild would give them.
-    const std::size_t cap = list_capacity(kept);
-    if (cap < neigh_index_.size()) {
-      std::vector<int> links(neigh_index_.host.begin(), neigh_index_.host.begin() + kept);
-      std::vector<Real> hist(neigh_hist_.host.begin(), neigh_hist_.host.begin() + 3 * kept);
-      neigh_index_.resize(cap);
-      neigh_hist_.resize(cap * 3);
-      std::copy(links.begin(), links.end(), neigh_index_.host.begin());
-      std::copy(hist.begin(), hist.end(), neigh_hist_.host.begin());
-    }
-    for (auto* b : {&neigh_start_, &neigh_count_, &neigh_index_}) b->write_to_device();
-    neigh_hist_.write_to_device();
+    restore_springs(st);
   }
   index_incoming();
   get_array(st, "status", status_, false);
@@ -799,6 +963,87 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
   observed_since_ = st.observed_since;
   pending_flags_ = st.pending_flags;
   ctx_.finish();
+}
+
+// A state saved before the contact records: the springs lay in the list
+// entries ("neigh_hist") and wall slots ("wall_hist"); earlier still with
+// full lists, each pair in both balls' lists ("neigh_link"), and before that
+// without the touching flag ("neigh_index", where a spring of zero marked a
+// pair apart). Each touching pair and wall contact gets a record with its
+// spring; what it lost before the save is not known (zero), nor its impact
+// speed. The sums of the books start at zero.
+template <class Real>
+void SolverImpl<Real>::restore_springs(const SolverState& st) {
+  Buffer<Real> hist(ctx_, 1, "saved springs"), wall_hist(ctx_, 1, "saved wall springs");
+  get_array(st, "neigh_hist", hist, true);
+  get_array(st, "wall_hist", wall_hist, true);
+  if (has_array(st, "neigh_half_link")) {
+    get_array(st, "neigh_half_link", neigh_index_, true);
+  } else {
+    // Saved with full lists, each pair in both balls' lists: the lower
+    // ball's entry is kept.
+    if (has_array(st, "neigh_link")) {
+      get_array(st, "neigh_link", neigh_index_, true);
+    } else {
+      get_array(st, "neigh_index", neigh_index_, true);
+      for (std::size_t k = 0; k < list_entries(); ++k) {
+        const Real* h = &hist.host[3 * k];
+        if (h[0] != 0 || h[1] != 0 || h[2] != 0) neigh_index_.host[k] = MC_LINK_TOUCHED(neigh_index_.host[k]);
+      }
+    }
+    std::size_t kept = 0;
+    for (int i = 0; i < n_; ++i) {
+      const int b = neigh_start_.host[i], e = b + neigh_count_.host[i];
+      neigh_start_.host[i] = static_cast<int>(kept);
+      for (int k = b; k < e; ++k) {
+        if (MC_LINK_PARTNER(neigh_index_.host[k]) < i) continue;
+        neigh_index_.host[kept] = neigh_index_.host[k];
+        for (int c = 0; c < 3; ++c) hist.host[3 * kept + c] = hist.host[3 * k + c];
+        ++kept;
+      }
+      neigh_count_.host[i] = static_cast<int>(kept) - neigh_start_.host[i];
+    }
+    // Half the entries: the lists shrink to what a rebuild would give them.
+    const std::size_t cap = list_capacity(kept);
+    if (cap < neigh_index_.size()) {
+      std::vector<int> links(neigh_index_.host.begin(), neigh_index_.host.begin() + kept);
+      neigh_index_.resize(cap);
+      std::copy(links.begin(), links.end(), neigh_index_.host.begin());
+    }
+    for (auto* b : {&neigh_start_, &neigh_count_}) b->write_to_device();
+  }
+  // The springs into records, ball by ball as a pack would lay them.
+  neigh_rec_.resize(neigh_index_.size());
+  std::vector<real4> recs;
+  auto add = [&](const Real* h) {
+    recs.push_back({h[0], h[1], h[2], Real(0)});
+    recs.push_back({Real(0), Real(0), Real(0), Real(0)});
+    return static_cast<int>(recs.size() / 2 - 1);
+  };
+  std::fill(neigh_rec_.host.begin(), neigh_rec_.host.end(), MC_NO_RECORD);
+  std::fill(wall_rec_.host.begin(), wall_rec_.host.end(), MC_NO_RECORD);
+  for (int i = 0; i < n_; ++i) {
+    for (int k = neigh_start_.host[i]; k < neigh_start_.host[i] + neigh_count_.host[i]; ++k)
+      if (MC_LINK_TOUCHING(neigh_index_.host[k])) neigh_rec_.host[k] = add(&hist.host[3 * k]);
+    for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
+      const std::size_t q = static_cast<std::size_t>(s) * n_ + i;
+      if (wall_key_.host[q] != MC_WALL_NONE && 3 * q + 2 < wall_hist.host.size())
+        wall_rec_.host[q] = add(&wall_hist.host[3 * q]);
+    }
+  }
+  const long live = static_cast<long>(recs.size() / 2);
+  const long margin = std::max<long>({live, n_ / 2, 1024});
+  rec_capacity_ = static_cast<int>(live + margin);
+  rec_mark_ = static_cast<int>(live + margin / 2);
+  records_.resize(2 * static_cast<std::size_t>(rec_capacity_));
+  std::copy(recs.begin(), recs.end(), records_.host.begin());
+  rec_state_.host = {static_cast<int>(live), 0};
+  for (auto* b : {&neigh_index_, &neigh_rec_, &wall_rec_, &rec_state_}) b->write_to_device();
+  records_.write_to_device();
+  for (auto* b : {&spectra_, &liner_, &impact_profile_}) {
+    std::fill(b->host.begin(), b->host.end(), 0u);
+    b->write_to_device();
+  }
 }
 
 template <class Real>
@@ -851,8 +1096,9 @@ std::size_t SolverImpl<Real>::device_bytes() const {
   std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() + profile_.bytes() + counts_.bytes() +
                   partial_.bytes() + scan_.bytes();
   for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_}) b += x->bytes();
-  for (const auto* x : {&wall_hist_, &neigh_hist_, &pair_out_}) b += x->bytes();
-  for (const auto* x : {&wall_key_, &cell_start_, &ball_cell_,
+  b += pair_out_.bytes() + records_.bytes() + book_params_.bytes() + spectra_.bytes() + liner_.bytes() +
+       impact_profile_.bytes();
+  for (const auto* x : {&wall_key_, &wall_rec_, &neigh_rec_, &rec_state_, &cell_start_, &ball_cell_,
                         &ball_rank_, &sorted_index_, &neigh_start_, &neigh_count_, &neigh_index_,
                         &in_start_, &neigh_rev_})
     b += x->bytes();
@@ -860,6 +1106,22 @@ std::size_t SolverImpl<Real>::device_bytes() const {
 }
 
 }  // namespace
+
+double BookSums::at(int row, int bin, int field) const {
+  return spectra[(static_cast<std::size_t>(row) * MC_SPECTRA_BINS + bin) * MC_SPECTRA_FIELDS + field];
+}
+
+double BookSums::closed_loss_J() const {
+  double e = 0;
+  for (int r = 0; r <= n_types; ++r)
+    for (int b = 0; b < MC_SPECTRA_BINS; ++b)
+      e += at(r, b, MC_SPECTRA_NORMAL) + at(r, b, MC_SPECTRA_TANGENTIAL) + at(r, b, MC_SPECTRA_ROLLING);
+  return e;
+}
+
+double spectra_edge_J(int bin) {
+  return std::pow(10.0, MC_SPECTRA_LOG_MIN + (std::max(bin, 1) - 1) / static_cast<double>(MC_SPECTRA_PER_DECADE));
+}
 
 void Solver::write_instances(const cl::Buffer&) {
   throw std::logic_error("this solver cannot feed the viewer (write_instances)");

@@ -38,8 +38,34 @@ struct Observables {
   double neighbours_per_ball = 0;  // list entries per ball
   double charge_mass_kg = 0;
   double com_x_m = 0, com_y_m = 0; // centre of mass in the lab frame now
+  // What the contacts open now have lost since they began (their records):
+  // with the spectra's closed collisions, the books of the dissipation.
+  double open_loss_normal_J = 0, open_loss_tangential_J = 0, open_loss_rolling_J = 0;
   double total_energy() const { return kinetic_J + rotational_J + potential_J + elastic_J; }
+  double open_loss_J() const { return open_loss_normal_J + open_loss_tangential_J + open_loss_rolling_J; }
 };
+
+// The energy books' sums since they were last reset, decoded from the
+// device's 64-bit integers (cl/books.h; layout in cl/layout.h).
+struct BookSums {
+  int n_types = 0;     // spectra rows; row n_types holds contacts without a record
+  int n_elements = 0;
+  // spectra[(row · MC_SPECTRA_BINS + bin) · MC_SPECTRA_FIELDS + field]:
+  // collisions, normal, tangential and rolling losses (J), the sum of their
+  // impact speeds (m/s) and of their steps in contact
+  std::vector<double> spectra;
+  // liner[element · MC_LINER_FIELDS + field]: impacts, impact energy (J),
+  // shear energy (J), Archard wear volume (m³)
+  std::vector<double> liner;
+  std::vector<double> impact_profile;  // J on the shell and lifters per degree, lab frame
+  double at(int row, int bin, int field) const;
+  double liner_at(int element, int field) const { return liner[static_cast<std::size_t>(element) * 4 + field]; }
+  // Closed collisions' losses in all rows (J).
+  double closed_loss_J() const;
+};
+
+// Lower edge of a spectra bin, J (cl/books.h spectra_edge).
+double spectra_edge_J(int bin);
 
 inline constexpr int kProfileBins = 360;
 
@@ -103,6 +129,15 @@ class Solver {
   virtual void set_stage_timing(bool on) = 0;
   virtual StageTimes stage_times() const = 0;
   virtual ContactStats contact_stats() = 0;
+
+  // The energy books (collision spectra of closed contacts, liner sums,
+  // impact profile) since the last reset; reset_books zeroes them (the
+  // start of an averaging window). Synchronises.
+  virtual BookSums read_books() = 0;
+  virtual void reset_books() = 0;
+  // Contacts that found the record pool full so far (each kept no spring
+  // until the pool was packed): zero in a healthy run.
+  virtual long records_refused() = 0;
 
   virtual SolverState save_state() = 0;
   // Throws std::invalid_argument when the state does not fit this solver.

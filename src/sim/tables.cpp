@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/liner.h"
+
 namespace mc {
 
 SceneTables scene_tables(const Scene& scene) {
@@ -32,7 +34,7 @@ SceneTables scene_tables(const Scene& scene) {
     double radius = 0;
     for (const auto& v : poly) radius = std::max(radius, std::hypot(v.x - cx, v.y - cy));
     // A little over, so that rounding in float never rejects a touching ball.
-    p.bound = {cx, cy, radius * (1 + 1e-4) + 1e-6, 0};
+    p.bound = {cx, cy, radius * (1 + 1e-4) + 1e-6, w.shell_radius > 0 ? lifter_half_angle(poly, w.shell_radius) : 0.0};
     t.lifters.push_back(p);
   }
   if (t.lifters.empty()) t.lifters.push_back(f64::LifterPolygon{});
@@ -52,6 +54,27 @@ SceneTables scene_tables(const Scene& scene) {
   sp.n_materials = nm;
   sp.n_lifters = nl;
   sp.law = scene.numerics.law == ContactLaw::hertz ? MC_LAW_HERTZ : MC_LAW_LINEAR;
+
+  // The books: fixed-point units from the scale of the mill (the heaviest
+  // ball lifted across the diameter), 2^-44 of it, so an element's sums hold
+  // 2^19 such lifts and resolve a part in 10^13 of one.
+  const LinerLayout liner = liner_layout(scene);
+  double m_max = 0;
+  for (const Ball& b : scene.balls) m_max = std::max(m_max, ball_mass(scene, b));
+  const double lift = std::max(m_max, 1e-6) * 9.81 * (w.shell_radius > 0 ? 2 * w.shell_radius : 1.0);
+  f64::BookParams& bp = t.books;
+  bp.energy_unit = std::ldexp(lift, -44);
+  bp.wear_k = scene.wall_material.wear_coefficient;
+  bp.wear_unit = std::max(bp.wear_k, 1e-30) * bp.energy_unit;
+  bp.plate_ring_width = (w.shell_radius > 0 ? w.shell_radius : 1.0) / liner.plate_rings;
+  bp.n_types = n_pair_types(nm);
+  bp.n_elements = liner.size();
+  bp.shell_bins = liner.shell_bins;
+  bp.axial_bins = liner.axial_bins;
+  bp.plate_rings = liner.plate_rings;
+  bp.plate_sectors = liner.plate_sectors;
+  bp.first_lifter_element = liner.first_lifter;
+  bp.first_plate_element = liner.first_plate;
   return t;
 }
 

@@ -16,6 +16,7 @@ struct SceneTables {
   f64::SimParams params{};  // grid fields left zero
   std::vector<f64::PairParams> pairs;
   std::vector<f64::LifterPolygon> lifters;  // at least one entry
+  f64::BookParams books{};                  // spectra and liner (core/liner.h)
 };
 
 SceneTables scene_tables(const Scene& scene);

@@ -17,6 +17,7 @@
 #include "viewer/charge_monitor.h"
 #include "viewer/gl.h"
 #include "viewer/instance_feed.h"
+#include "viewer/liner_monitor.h"
 #include "viewer/mill_renderer.h"
 #include "viewer/viewer.h"
 
@@ -74,6 +75,7 @@ class App {
   void panel_plots();
   void panel_output();
   void draw_labels();
+  void colour_liner();
 
   ViewOptions opt_;
   bool scripted_;
@@ -93,6 +95,10 @@ class App {
   std::unique_ptr<InstanceFeed> feed_;
   Camera camera_;
   ChargeMonitor monitor_;
+  LinerMonitor liner_;
+  int liner_colour_ = 0;    // 0 plain, 1 impact power, 2 wear rate
+  long liner_drawn_ = -1;   // the liner report's version the colours show
+  float liner_max_ = 0;     // the colour scale's top (the hottest element)
   BallStyle style_;
   float colour_lo_[4] = {0, 0, 0, -2}, colour_hi_[4] = {1, 1, 1, 2};
   bool show_shell_ = true, show_marks_ = true;

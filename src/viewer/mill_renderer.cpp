@@ -46,12 +46,87 @@ void MillRenderer::Mesh::draw() const {
   glBindVertexArray(0);
 }
 
+void MillRenderer::ColourMesh::create() {
+  glGenVertexArrays(1, &vao);
+  glGenBuffers(1, &vbo);
+  glBindVertexArray(vao);
+  glBindBuffer(GL_ARRAY_BUFFER, vbo);
+  for (GLuint a = 0; a < 3; ++a) {
+    glEnableVertexAttribArray(a);
+    glVertexAttribPointer(a, 3, GL_FLOAT, GL_FALSE, sizeof(ColourVertex),
+                          reinterpret_cast<const void*>(std::uintptr_t{a * sizeof(glm::vec3)}));
+  }
+  glBindVertexArray(0);
+}
+
+void MillRenderer::ColourMesh::destroy() {
+  glDeleteBuffers(1, &vbo);
+  glDeleteVertexArrays(1, &vao);
+}
+
+void MillRenderer::ColourMesh::upload() {
+  glBindBuffer(GL_ARRAY_BUFFER, vbo);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(ColourVertex)), vertices.data(),
+               GL_DYNAMIC_DRAW);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
+void MillRenderer::ColourMesh::draw() const {
+  if (vertices.empty()) return;
+  glBindVertexArray(vao);
+  glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(vertices.size()));
+  glBindVertexArray(0);
+}
+
 MillRenderer::MillRenderer() : shader_("mill.vert", "mill.frag") {
   for (Mesh* m : {&shell_, &plate_, &rims_, &lifters_, &marks_}) m->create();
+  for (ColourMesh* m : {&liner_shell_, &liner_parts_}) m->create();
 }
 
 MillRenderer::~MillRenderer() {
   for (Mesh* m : {&shell_, &plate_, &rims_, &lifters_, &marks_}) m->destroy();
+  for (ColourMesh* m : {&liner_shell_, &liner_parts_}) m->destroy();
+}
+
+void MillRenderer::set_liner(const LinerLayout& layout) {
+  for (ColourMesh* m : {&liner_shell_, &liner_parts_}) {
+    m->vertices.clear();
+    m->element.clear();
+  }
+  const glm::vec3 grey{0.55f, 0.56f, 0.58f};
+  for (int e = 0; e < layout.size(); ++e) {
+    const LinerElement& el = layout.elements[e];
+    if (el.part == LinerPart::plate && el.row != 0) continue;  // the front plate is left out
+    ColourMesh& m = el.part == LinerPart::shell ? liner_shell_ : liner_parts_;
+    const auto& o = el.outline;
+    for (std::size_t k = 1; k + 1 < o.size(); ++k) {
+      glm::vec3 a(o[0].x, o[0].y, o[0].z), b(o[k].x, o[k].y, o[k].z), c(o[k + 1].x, o[k + 1].y, o[k + 1].z);
+      glm::vec3 n = glm::cross(b - a, c - a);
+      if (glm::length(n) <= 0) continue;
+      n = glm::normalize(n);
+      // The shell's triangles face the axis, so that culling leaves its far half.
+      if (el.part == LinerPart::shell && glm::dot(n, -glm::vec3(a.x, a.y, 0)) < 0) {
+        std::swap(b, c);
+        n = -n;
+      }
+      for (const glm::vec3& p : {a, b, c}) {
+        m.vertices.push_back({p, n, grey});
+        m.element.push_back(e);
+      }
+    }
+  }
+  liner_shell_.upload();
+  liner_parts_.upload();
+}
+
+void MillRenderer::set_liner_colours(const std::vector<glm::vec3>& per_element) {
+  for (ColourMesh* m : {&liner_shell_, &liner_parts_}) {
+    for (std::size_t v = 0; v < m->vertices.size(); ++v) {
+      const int e = m->element[v];
+      if (e >= 0 && static_cast<std::size_t>(e) < per_element.size()) m->vertices[v].colour = per_element[e];
+    }
+    m->upload();
+  }
 }
 
 void MillRenderer::set_walls(const Walls& w) {
@@ -126,8 +201,9 @@ void MillRenderer::use_turning(const glm::mat4& view, const glm::mat4& projectio
 }
 
 void MillRenderer::draw(const glm::mat4& view, const glm::mat4& projection, bool orthographic, double mill_angle,
-                        bool show_shell) {
+                        bool show_shell, bool liner_coloured) {
   use_turning(view, projection, orthographic, mill_angle);
+  shader_.set("vertex_colour", 0);
   glEnable(GL_CULL_FACE);
   glCullFace(GL_BACK);
   if (show_shell) {
@@ -141,11 +217,28 @@ void MillRenderer::draw(const glm::mat4& view, const glm::mat4& projection, bool
   glDisable(GL_CULL_FACE);
   shader_.set("base_colour", glm::vec4(0.62f, 0.63f, 0.65f, 1.0f));
   lifters_.draw();
+  if (liner_coloured) {
+    // Over the plain parts, pulled forward in depth.
+    shader_.set("vertex_colour", 1);
+    shader_.set("base_colour", glm::vec4(1, 1, 1, 1));
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(-1.0f, -2.0f);
+    if (show_shell) {
+      glEnable(GL_CULL_FACE);
+      glCullFace(GL_BACK);
+      liner_shell_.draw();
+      glDisable(GL_CULL_FACE);
+    }
+    liner_parts_.draw();
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    shader_.set("vertex_colour", 0);
+  }
 }
 
 void MillRenderer::draw_near_shell(const glm::mat4& view, const glm::mat4& projection, bool orthographic,
                                    double mill_angle) {
   use_turning(view, projection, orthographic, mill_angle);
+  shader_.set("vertex_colour", 0);
   shader_.set("base_colour", glm::vec4(0.70f, 0.72f, 0.76f, 0.22f));
   glEnable(GL_CULL_FACE);
   glCullFace(GL_FRONT);  // the outside of the near half
@@ -177,6 +270,7 @@ void MillRenderer::draw_marks(const glm::mat4& view, const glm::mat4& projection
   shader_.set("projection", projection);
   shader_.set("model", glm::mat4(1.0f));
   shader_.set("lit", 0);
+  shader_.set("vertex_colour", 0);
   glDisable(GL_DEPTH_TEST);
   wedge(marks.toe_deg);
   marks_.upload(quads);
@@ -187,6 +281,13 @@ void MillRenderer::draw_marks(const glm::mat4& view, const glm::mat4& projection
   marks_.upload(quads);
   shader_.set("base_colour", glm::vec4(0.2f, 0.9f, 1.0f, 1.0f));  // shoulder: cyan
   marks_.draw();
+  if (marks.impact) {
+    quads.clear();
+    wedge(marks.impact_deg);
+    marks_.upload(quads);
+    shader_.set("base_colour", glm::vec4(1.0f, 0.2f, 0.85f, 1.0f));  // impact point: magenta
+    marks_.draw();
+  }
   glEnable(GL_DEPTH_TEST);
 }
 

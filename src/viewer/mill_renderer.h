@@ -10,6 +10,7 @@
 
 #include <glm/glm.hpp>
 
+#include "core/liner.h"
 #include "core/scene.h"
 #include "viewer/gl.h"
 #include "viewer/shader.h"
@@ -19,6 +20,8 @@ namespace mc::viewer {
 struct MillMarks {
   bool show = false;
   float toe_deg = 0, shoulder_deg = 0;  // counter-clockwise from 3 o'clock, lab frame
+  bool impact = false;                  // the impact point of the cataracting charge
+  float impact_deg = 0;
 };
 
 class MillRenderer {
@@ -30,9 +33,13 @@ class MillRenderer {
 
   // Rebuilds the meshes from the walls (after a lifter edit).
   void set_walls(const Walls& walls);
+  // The liner's elements (the shell's, the lifter faces', the back plate's),
+  // drawn over the plain parts in a colour each when coloured is on.
+  void set_liner(const LinerLayout& layout);
+  void set_liner_colours(const std::vector<glm::vec3>& per_element);
   // Opaque parts, before the balls.
   void draw(const glm::mat4& view, const glm::mat4& projection, bool orthographic, double mill_angle,
-            bool show_shell);
+            bool show_shell, bool liner_coloured = false);
   // The near half of the shell, translucent: after the balls.
   void draw_near_shell(const glm::mat4& view, const glm::mat4& projection, bool orthographic, double mill_angle);
   // Marks on top of everything, after the balls.
@@ -51,8 +58,22 @@ class MillRenderer {
     void upload(const std::vector<Vertex>& v);
     void draw() const;
   };
+  // A mesh with a colour per vertex, and the liner element of each vertex.
+  struct ColourVertex {
+    glm::vec3 position, normal, colour;
+  };
+  struct ColourMesh {
+    GLuint vao = 0, vbo = 0;
+    std::vector<ColourVertex> vertices;
+    std::vector<int> element;
+    void create();
+    void destroy();
+    void upload();
+    void draw() const;
+  };
   ShaderProgram shader_;
   Mesh shell_, plate_, rims_, lifters_, marks_;
+  ColourMesh liner_shell_, liner_parts_;  // culled like the shell; the rest
   float radius_ = 0, length_ = 0;
 };
 

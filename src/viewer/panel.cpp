@@ -205,6 +205,21 @@ void App::panel_view() {
     ImGui::SliderFloat("slab centre, m", &slab_centre_, 0.0f, static_cast<float>(case_.length), "%.3f");
     ImGui::SliderFloat("slab width, m", &slab_width_, 0.005f, static_cast<float>(case_.length), "%.3f");
   }
+  const char* liner_modes[] = {"plain", "impact power", "wear rate"};
+  if (ImGui::Combo("liner", &liner_colour_, liner_modes, 3)) liner_drawn_ = -1;
+  if (liner_colour_ != 0) {
+    if (!liner_.ready()) ImGui::TextDisabled("(the liner's sums come once the mill turns)");
+    else {
+      colour_bar(liner_max_ / 1000, liner_max_, liner_colour_ == 1 ? "W/m^2, log" : "mm per 1000 h, log");
+      const LinerReport& r = liner_.report();
+      ImGui::Text("liner: impact %.3g W, shear %.3g W, wear %.3g kg/h", r.impact_W, r.shear_W, r.wear_kg_per_h);
+    }
+  }
+  if (liner_.ready() && std::isfinite(liner_.report().impact_point_deg)) {
+    const LinerReport& r = liner_.report();
+    ImGui::Text("impact point %.0f deg, on the %s; %.0f %% of impact power on bare liner", r.impact_point_deg,
+                r.impact_point_on_liner ? "bare liner" : "toe", 100 * r.bare_liner_impact_share);
+  }
   ImGui::Checkbox("shell", &show_shell_);
   ImGui::SameLine();
   ImGui::Checkbox("toe/shoulder marks", &show_marks_);
@@ -261,6 +276,8 @@ void App::draw_labels() {
   };
   label(monitor_.angles().toe_deg, "toe", IM_COL32(255, 115, 25, 255));
   label(monitor_.angles().shoulder_deg, "shoulder", IM_COL32(50, 230, 255, 255));
+  if (liner_.ready() && std::isfinite(liner_.report().impact_point_deg))
+    label(liner_.report().impact_point_deg, "impact", IM_COL32(255, 50, 215, 255));
 }
 
 }  // namespace mc::viewer

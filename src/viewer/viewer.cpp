@@ -39,6 +39,17 @@ ColourBy colour_from(const std::string& s) {
   return ColourBy::speed;
 }
 
+// The panel's colour bar's ramp (blue, cyan, green, yellow, red) at t in
+// [0, 1]; below 0 (nothing on the element) a dark blue-grey.
+glm::vec3 heat_colour(double t) {
+  if (t < 0) return {0.22f, 0.24f, 0.30f};
+  static const glm::vec3 stops[5] = {
+      {0.15f, 0.30f, 0.95f}, {0.05f, 0.75f, 0.90f}, {0.25f, 0.85f, 0.25f}, {0.98f, 0.80f, 0.10f}, {0.90f, 0.15f, 0.10f}};
+  const double u = std::clamp(t, 0.0, 1.0) * 4;
+  const int k = std::min(3, static_cast<int>(u));
+  return glm::mix(stops[k], stops[k + 1], static_cast<float>(u - k));
+}
+
 }  // namespace
 
 // ------------------------------------------------------------------ window
@@ -110,6 +121,7 @@ App::App(const MillCase& c, const MillDerived& d, Scene scene, const ViewOptions
     fixed_steps_ = 40;
   }
   style_.colour_by = colour_from(opt_.colour);
+  liner_colour_ = opt_.liner == "impact" ? 1 : opt_.liner == "wear" ? 2 : 0;
   // Colour ranges: speed up to twice the tip speed (balls falling from the
   // shoulder), the case's radii, 1 mW to 30 W dissipated.
   colour_hi_[0] = static_cast<float>(2 * d.tip_speed);
@@ -180,6 +192,9 @@ void App::install_solver(Scene scene, bool settle) {
     monitor_.clear();
   }
   mill_->set_walls(scene_.walls);
+  liner_.set_scene(scene_);
+  mill_->set_liner(liner_.layout());
+  liner_drawn_ = -1;
   balls_->resize(n_balls_);
   feed_->attach(*balls_);
   instances_stale_ = true;
@@ -232,6 +247,7 @@ void App::step_frame() {
     advance_s_ = s;
     feed_->update(*solver_, *balls_);
     monitor_.after_steps(*solver_, sim_time(), !settling_);
+    liner_.after_steps(*solver_, sim_time(), !settling_, monitor_.angles());
     steps_ += steps;
     window_steps_ += steps;
     instances_stale_ = false;
@@ -372,7 +388,9 @@ void App::render() {
   glDepthFunc(GL_LESS);
   const float aspect = static_cast<float>(scene_width()) / std::max(1, opt_.height);
   const glm::mat4 view = camera_.view(), proj = camera_.projection(aspect);
-  mill_->draw(view, proj, camera_.orthographic(), solver_->mill_angle(), show_shell_);
+  colour_liner();
+  mill_->draw(view, proj, camera_.orthographic(), solver_->mill_angle(), show_shell_,
+              liner_colour_ != 0 && liner_.ready());
   style_.slab_from = slab_centre_ - 0.5f * slab_width_;
   style_.slab_to = slab_centre_ + 0.5f * slab_width_;
   const int mode = static_cast<int>(style_.colour_by);
@@ -383,9 +401,31 @@ void App::render() {
   marks.show = show_marks_ && !settling_ && monitor_.angles().found;
   marks.toe_deg = static_cast<float>(monitor_.angles().toe_deg);
   marks.shoulder_deg = static_cast<float>(monitor_.angles().shoulder_deg);
+  marks.impact = liner_.ready() && std::isfinite(liner_.report().impact_point_deg);
+  marks.impact_deg = static_cast<float>(liner_.report().impact_point_deg);
   mill_->draw_marks(view, proj, marks);
   glDisable(GL_DEPTH_TEST);
   glViewport(0, 0, fb_w, fb_h);
+}
+
+// The liner's elements coloured by impact power or wear rate of the last
+// 0.1 s (where the charge strikes as the liner turns through), on a log
+// scale over three decades below the hottest element, when the monitor has
+// new sums.
+void App::colour_liner() {
+  if (liner_colour_ == 0 || !liner_.ready() || liner_drawn_ == liner_.version()) return;
+  const LinerReport& r = liner_.recent();
+  std::vector<double> v(r.elements.size());
+  double hi = 0;
+  for (std::size_t e = 0; e < v.size(); ++e) {
+    v[e] = liner_colour_ == 1 ? r.elements[e].impact_W_m2 : r.elements[e].wear_mm_per_1000h;
+    hi = std::max(hi, v[e]);
+  }
+  liner_max_ = static_cast<float>(hi);
+  std::vector<glm::vec3> colours(v.size());
+  for (std::size_t e = 0; e < v.size(); ++e) colours[e] = heat_colour(hi > 0 && v[e] > 0 ? 1 + std::log10(v[e] / hi) / 3 : -1);
+  mill_->set_liner_colours(colours);
+  liner_drawn_ = liner_.version();
 }
 
 void App::handle_input() {

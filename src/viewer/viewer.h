@@ -17,6 +17,7 @@ struct ViewOptions {
   int steps_per_frame = 0;     // > 0: fixed; 0: adapt (scripted: 40); < 0: adapt, scripted too
   std::string camera = "end";  // "end" (axial, orthographic) or "iso"
   std::string colour = "speed";  // speed, size, material, impact
+  std::string liner = "plain";   // the liner: plain, impact (power) or wear (rate)
   int width = 1280, height = 800;
   bool panel = true;           // the ImGui panel on the left
   // Changes made as if from the panel before the given frame (0 = the first):

@@ -1,0 +1,236 @@
+#include "core/liner.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mc {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kArcSegments = 3;  // per element's arc in the outlines
+
+double wrap(double a) {
+  a = std::fmod(a, 2 * kPi);
+  return a < 0 ? a + 2 * kPi : a;
+}
+
+// Signed difference b − a of two angles, in (−π, π].
+double angle_diff(double a, double b) {
+  double d = std::fmod(b - a, 2 * kPi);
+  if (d > kPi) d -= 2 * kPi;
+  if (d <= -kPi) d += 2 * kPi;
+  return d;
+}
+
+Vec3 on_circle(double r, double theta, double z) { return {r * std::cos(theta), r * std::sin(theta), z}; }
+
+}  // namespace
+
+double lifter_half_angle(const std::vector<Vec2>& poly, double R) {
+  double cx = 0, cy = 0;
+  for (const Vec2& v : poly) {
+    cx += v.x;
+    cy += v.y;
+  }
+  const double centre = std::atan2(cy, cx);
+  double half = 0;
+  const std::size_t n = poly.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec2 a = poly[k], b = poly[(k + 1) % n];
+    // |a + t(b − a)| = R for t in [0, 1].
+    const double ex = b.x - a.x, ey = b.y - a.y;
+    const double qa = ex * ex + ey * ey, qb = 2 * (a.x * ex + a.y * ey), qc = a.x * a.x + a.y * a.y - R * R;
+    const double disc = qb * qb - 4 * qa * qc;
+    if (qa <= 0 || disc < 0) continue;
+    for (double sgn : {-1.0, 1.0}) {
+      const double t = (-qb + sgn * std::sqrt(disc)) / (2 * qa);
+      if (t < 0 || t > 1) continue;
+      half = std::max(half, std::fabs(angle_diff(centre, std::atan2(a.y + t * ey, a.x + t * ex))));
+    }
+  }
+  if (half == 0)  // wholly inside the shell: the vertices' spread
+    for (const Vec2& v : poly) half = std::max(half, std::fabs(angle_diff(centre, std::atan2(v.y, v.x))));
+  return half;
+}
+
+LinerLayout liner_layout(const Scene& scene) {
+  LinerLayout L;
+  const Walls& w = scene.walls;
+  const LinerGrid& g = scene.liner;
+  const double R = w.shell_radius;
+  L.shell_radius = R;
+  L.length = w.length;
+  L.n_lifters = static_cast<int>(w.lifters.size());
+  const int nl = L.n_lifters;
+  const double spacing = nl > 0 ? 2 * kPi / nl : 2 * kPi;
+  for (int k = 0; k < nl; ++k) {
+    L.lifter_centre.push_back(wrap(w.lifter_first_angle + k * spacing));
+    L.lifter_half_angle.push_back(R > 0 ? lifter_half_angle(w.lifters[k], R) : 0.0);
+  }
+  L.shell_bins = nl > 0 ? g.shell_bins : g.smooth_shell_bins;
+  // Axial bins: about square shell elements, at most 32.
+  double bare = 2 * kPi;
+  if (nl > 0) {
+    bare = 0;
+    for (int k = 0; k < nl; ++k) bare += spacing - L.lifter_half_angle[k] - L.lifter_half_angle[(k + 1) % nl];
+    bare /= nl;
+  }
+  const double elem_width = R * bare / L.shell_bins;
+  if (g.axial_bins > 0) L.axial_bins = g.axial_bins;
+  else if (w.length > 0 && elem_width > 0)
+    L.axial_bins = std::clamp(static_cast<int>(std::lround(w.length / elem_width)), 1, 32);
+  else
+    L.axial_bins = 1;
+  L.plate_rings = g.plate_rings;
+  L.plate_sectors = g.plate_sectors > 0 ? g.plate_sectors : nl > 0 ? nl : 12;
+  const int A = L.axial_bins;
+  const double len = w.length > 0 ? w.length : 0;
+  auto z_of = [&](int a) { return len * a / A; };
+
+  // Shell: gap by gap, bins over the bare arc, each in axial bins.
+  const int gaps = nl > 0 ? nl : 1;
+  for (int k = 0; k < gaps; ++k) {
+    const double from = nl > 0 ? L.lifter_centre[k] + L.lifter_half_angle[k] : 0.0;
+    const double to = nl > 0 ? L.lifter_centre[k] + spacing - L.lifter_half_angle[(k + 1) % nl] : 2 * kPi;
+    for (int j = 0; j < L.shell_bins; ++j)
+      for (int a = 0; a < A; ++a) {
+        LinerElement e;
+        e.part = LinerPart::shell;
+        e.row = k;
+        e.bin = j;
+        e.axial = a;
+        e.theta0 = from + (to - from) * j / L.shell_bins;
+        e.theta1 = from + (to - from) * (j + 1) / L.shell_bins;
+        e.z0 = z_of(a);
+        e.z1 = z_of(a + 1);
+        e.r0 = e.r1 = R;
+        e.area_m2 = R * (e.theta1 - e.theta0) * (e.z1 - e.z0);
+        for (int s = 0; s <= kArcSegments; ++s)
+          e.outline.push_back(on_circle(R, e.theta0 + (e.theta1 - e.theta0) * s / kArcSegments, e.z0));
+        for (int s = kArcSegments; s >= 0; --s)
+          e.outline.push_back(on_circle(R, e.theta0 + (e.theta1 - e.theta0) * s / kArcSegments, e.z1));
+        L.elements.push_back(e);
+      }
+  }
+
+  // Lifters: each row's faces, the edges of its cross-section inside the
+  // shell, sorted by where their outward normal points.
+  L.first_lifter = L.size();
+  for (int k = 0; k < nl; ++k) {
+    const std::vector<Vec2>& poly = w.lifters[k];
+    const double c = L.lifter_centre[k];
+    const Vec2 rad{std::cos(c), std::sin(c)}, ahead{-std::sin(c), std::cos(c)};
+    std::vector<Vec2> strip[3];  // the clipped edges of each face, as a polyline
+    double face_len[3] = {0, 0, 0};
+    const std::size_t n = poly.size();
+    for (std::size_t v = 0; v < n; ++v) {
+      const Vec2 a = poly[v], b = poly[(v + 1) % n];
+      const double ex = b.x - a.x, ey = b.y - a.y, el = std::hypot(ex, ey);
+      if (el <= 0) continue;
+      const Vec2 nrm{ey / el, -ex / el};  // outward for counter-clockwise vertices
+      const double radial = nrm.x * rad.x + nrm.y * rad.y, fwd = nrm.x * ahead.x + nrm.y * ahead.y;
+      if (radial > 0.5) continue;  // the base, behind the shell
+      const int face = -radial >= std::fabs(fwd) ? static_cast<int>(LifterFace::top)
+                       : fwd > 0                 ? static_cast<int>(LifterFace::leading)
+                                                 : static_cast<int>(LifterFace::trailing);
+      // The part of the edge inside the shell (the bar's base lies behind it).
+      auto inside = [&](double t) { return std::hypot(a.x + t * ex, a.y + t * ey) <= R * (1 + 1e-12) || R <= 0; };
+      double t0 = 0, t1 = 1;
+      if (!inside(0) || !inside(1)) {
+        const int steps = 64;
+        double first = -1, last = -1;
+        for (int s = 0; s <= steps; ++s)
+          if (inside(static_cast<double>(s) / steps)) {
+            if (first < 0) first = static_cast<double>(s) / steps;
+            last = static_cast<double>(s) / steps;
+          }
+        if (first < 0) continue;
+        // Refine the crossings by bisection.
+        auto refine = [&](double in, double out) {
+          for (int it = 0; it < 50; ++it) {
+            const double m = 0.5 * (in + out);
+            (inside(m) ? in : out) = m;
+          }
+          return in;
+        };
+        t0 = inside(0) ? 0.0 : refine(first, std::max(0.0, first - 1.0 / steps));
+        t1 = inside(1) ? 1.0 : refine(last, std::min(1.0, last + 1.0 / steps));
+      }
+      const Vec2 p0{a.x + t0 * ex, a.y + t0 * ey}, p1{a.x + t1 * ex, a.y + t1 * ey};
+      if (strip[face].empty()) strip[face].push_back(p0);
+      strip[face].push_back(p1);
+      face_len[face] += (t1 - t0) * el;
+    }
+    for (int f = 0; f < 3; ++f)
+      for (int a = 0; a < A; ++a) {
+        LinerElement e;
+        e.part = LinerPart::lifter;
+        e.row = k;
+        e.bin = f;
+        e.axial = a;
+        e.z0 = z_of(a);
+        e.z1 = z_of(a + 1);
+        e.theta0 = e.theta1 = c;
+        e.r0 = e.r1 = R;
+        if (!strip[f].empty()) {
+          e.r0 = 1e300;
+          e.r1 = 0;
+          for (const Vec2& p : strip[f]) {
+            e.r0 = std::min(e.r0, std::hypot(p.x, p.y));
+            e.r1 = std::max(e.r1, std::hypot(p.x, p.y));
+          }
+        }
+        e.area_m2 = face_len[f] * (e.z1 - e.z0);
+        for (const Vec2& p : strip[f]) e.outline.push_back({p.x, p.y, e.z0});
+        for (auto it = strip[f].rbegin(); it != strip[f].rend(); ++it) e.outline.push_back({it->x, it->y, e.z1});
+        L.elements.push_back(e);
+      }
+  }
+
+  // End plates: rings and sectors at z = 0, then z = length.
+  L.first_plate = L.size();
+  const double ring_w = (R > 0 ? R : 1.0) / L.plate_rings;
+  for (int plate = 0; plate < 2; ++plate)
+    for (int ring = 0; ring < L.plate_rings; ++ring)
+      for (int s = 0; s < L.plate_sectors; ++s) {
+        LinerElement e;
+        e.part = LinerPart::plate;
+        e.row = plate;
+        e.bin = ring;
+        e.sector = s;
+        e.r0 = ring * ring_w;
+        e.r1 = (ring + 1) * ring_w;
+        e.theta0 = 2 * kPi * s / L.plate_sectors;
+        e.theta1 = 2 * kPi * (s + 1) / L.plate_sectors;
+        e.z0 = e.z1 = plate == 0 ? 0.0 : len;
+        e.area_m2 = 0.5 * (e.r1 * e.r1 - e.r0 * e.r0) * (e.theta1 - e.theta0);
+        for (int q = 0; q <= kArcSegments; ++q)
+          e.outline.push_back(on_circle(e.r1, e.theta0 + (e.theta1 - e.theta0) * q / kArcSegments, e.z0));
+        for (int q = kArcSegments; q >= 0; --q)
+          e.outline.push_back(on_circle(e.r0, e.theta0 + (e.theta1 - e.theta0) * q / kArcSegments, e.z0));
+        if (plate == 1) std::reverse(e.outline.begin(), e.outline.end());
+        L.elements.push_back(e);
+      }
+  return L;
+}
+
+int n_pair_types(int nm) { return nm * (nm + 1) / 2 + 3 * nm; }
+
+bool pair_type_is_wall(int nm, int type) { return type >= nm * (nm + 1) / 2; }
+
+std::string pair_type_name(const Scene& scene, int type) {
+  const int nm = static_cast<int>(scene.materials.size());
+  const int balls = nm * (nm + 1) / 2;
+  if (type >= balls) {
+    const int m = (type - balls) / 3, w = (type - balls) % 3;
+    static const char* walls[] = {"shell", "lifter", "end plate"};
+    return scene.materials.at(m).name + "-" + walls[w];
+  }
+  for (int a = 0; a < nm; ++a)
+    for (int b = a; b < nm; ++b)
+      if (a * nm - a * (a - 1) / 2 + (b - a) == type) return scene.materials[a].name + "-" + scene.materials[b].name;
+  return "type " + std::to_string(type);
+}
+
+}  // namespace mc

@@ -1,0 +1,281 @@
+#include "io/energy_out.h"
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+
+#include "io/atomic_file.h"
+#include "io/png_plot.h"
+
+namespace mc::io {
+
+namespace {
+
+constexpr double kDeg = 180.0 / 3.14159265358979323846;
+
+nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+nlohmann::ordered_json rates_json(const CollisionRates& c) {
+  nlohmann::ordered_json j;
+  j["pair"] = c.pair;
+  j["collisions_per_s"] = num(c.collisions_per_s);
+  j["power_W"] = num(c.power_W);
+  j["normal_W"] = num(c.normal_W);
+  j["tangential_W"] = num(c.tangential_W);
+  j["rolling_W"] = num(c.rolling_W);
+  j["mean_energy_J"] = num(c.mean_energy_J);
+  j["mean_impact_speed_m_s"] = num(c.mean_impact_speed_m_s);
+  j["mean_contact_s"] = num(c.mean_contact_s);
+  return j;
+}
+
+const char* part_name(LinerPart p) {
+  return p == LinerPart::shell ? "shell" : p == LinerPart::lifter ? "lifter" : "plate";
+}
+
+const char* face_name(int f) {
+  return f == static_cast<int>(LifterFace::leading) ? "leading" : f == static_cast<int>(LifterFace::top) ? "top"
+                                                                                                         : "trailing";
+}
+
+}  // namespace
+
+void write_spectra_csv(const std::filesystem::path& path, const SpectraReport& r) {
+  std::string t =
+      "pair,bin,energy_from_J,energy_to_J,collisions_per_s,power_W,normal_W,tangential_W,rolling_W,"
+      "mean_impact_speed_m_s,mean_contact_s\n";
+  char line[512];
+  for (const SpectraBin& b : r.bins) {
+    std::snprintf(line, sizeof line, "%s,%d,%.6g,%.6g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g\n", b.rates.pair.c_str(),
+                  b.bin, b.energy_from_J, b.energy_to_J, b.rates.collisions_per_s, b.rates.power_W, b.rates.normal_W,
+                  b.rates.tangential_W, b.rates.rolling_W, b.rates.mean_impact_speed_m_s, b.rates.mean_contact_s);
+    t += line;
+  }
+  write_file_atomic(path, t);
+}
+
+std::string element_name(const LinerLayout& layout, int e) {
+  const LinerElement& el = layout.elements.at(e);
+  char b[128];
+  if (el.part == LinerPart::shell)
+    std::snprintf(b, sizeof b, "shell between rows %d and %d, bin %d, axial %d", el.row,
+                  layout.n_lifters > 0 ? (el.row + 1) % layout.n_lifters : el.row, el.bin, el.axial);
+  else if (el.part == LinerPart::lifter)
+    std::snprintf(b, sizeof b, "lifter row %d, %s face, axial %d", el.row, face_name(el.bin), el.axial);
+  else
+    std::snprintf(b, sizeof b, "end plate at z = %s, ring %d, sector %d", el.row == 0 ? "0" : "length", el.bin,
+                  el.sector);
+  return b;
+}
+
+void write_wear_csv(const std::filesystem::path& path, const LinerLayout& layout, const LinerReport& r) {
+  std::string t =
+      "element,part,row,face_or_bin,sector,axial,theta_from_deg,theta_to_deg,z_from_m,z_to_m,r_from_m,r_to_m,"
+      "area_m2,impacts_per_s,impact_W,shear_W,impact_W_per_m2,shear_W_per_m2,wear_mm_per_1000h,wear_kg_per_h\n";
+  char line[768];
+  for (std::size_t e = 0; e < layout.elements.size(); ++e) {
+    const LinerElement& el = layout.elements[e];
+    const LinerElementRates& x = r.elements.at(e);
+    const std::string bin = el.part == LinerPart::lifter ? face_name(el.bin) : std::to_string(el.bin);
+    std::snprintf(line, sizeof line, "%zu,%s,%d,%s,%d,%d,%.4f,%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n",
+                  e, part_name(el.part), el.row, bin.c_str(), el.sector, el.axial, el.theta0 * kDeg,
+                  el.theta1 * kDeg, el.z0, el.z1, el.r0, el.r1, el.area_m2, x.impacts_per_s, x.impact_W, x.shear_W,
+                  x.impact_W_m2, x.shear_W_m2, x.wear_mm_per_1000h, x.wear_kg_per_h);
+    t += line;
+  }
+  write_file_atomic(path, t);
+}
+
+nlohmann::ordered_json spectra_json(const SpectraReport& r) {
+  nlohmann::ordered_json j;
+  j["window_s"] = num(r.window_s);
+  j["total"] = rates_json(r.all);
+  j["by_pair"] = nlohmann::json::array();
+  for (const CollisionRates& c : r.types) j["by_pair"].push_back(rates_json(c));
+  nlohmann::ordered_json b;
+  b["closed_collisions_W"] = num(r.closed_W);
+  b["open_contacts_change_W"] = num(r.open_change_W);
+  b["unrecorded_W"] = num(r.unrecorded_W);
+  b["spectra_W"] = num(r.books_W);
+  b["dissipation_W"] = num(r.dissipation_W);
+  b["difference"] = r.dissipation_W != 0 ? num((r.books_W - r.dissipation_W) / r.dissipation_W) : nlohmann::json();
+  j["books"] = b;
+  return j;
+}
+
+nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& r, double wear_coefficient) {
+  nlohmann::ordered_json j;
+  j["window_s"] = num(r.window_s);
+  j["elements"] = layout.size();
+  j["wear_coefficient_m3_per_N_m"] = wear_coefficient;
+  j["impacts_per_s"] = num(r.impacts_per_s);
+  j["impact_power_W"] = num(r.impact_W);
+  j["shear_power_W"] = num(r.shear_W);
+  j["wear_kg_per_h"] = num(r.wear_kg_per_h);
+  j["worst_wear_mm_per_1000h"] = num(r.worst_wear_mm_per_1000h);
+  j["worst_element"] = r.worst_element >= 0 ? nlohmann::json(element_name(layout, r.worst_element)) : nlohmann::json();
+  j["impact_point_deg"] = num(r.impact_point_deg);
+  j["impact_point_on"] = std::isfinite(r.impact_point_deg) ? nlohmann::json(r.impact_point_on_liner ? "liner" : "toe")
+                                                           : nlohmann::json();
+  j["bare_liner_impact_power_W"] = num(r.bare_liner_impact_W);
+  j["bare_liner_impact_share"] = num(r.bare_liner_impact_share);
+  // The lab frame's impact power on the shell and lifters in 5 degree bins
+  // from 3 o'clock, counter-clockwise (W each).
+  nlohmann::json prof = nlohmann::json::array();
+  for (std::size_t b = 0; b + 5 <= r.impact_W_per_deg.size(); b += 5) {
+    double sum = 0;
+    for (std::size_t k = b; k < b + 5; ++k) sum += r.impact_W_per_deg[k];
+    prof.push_back(sum);
+  }
+  j["impact_W_by_5deg"] = prof;
+  j["parts"] = nlohmann::json::array();
+  for (const LinerPartRates& p : r.parts) {
+    nlohmann::ordered_json q;
+    q["part"] = p.name;
+    q["area_m2"] = num(p.area_m2);
+    q["impacts_per_s"] = num(p.impacts_per_s);
+    q["impact_power_W"] = num(p.impact_W);
+    q["shear_power_W"] = num(p.shear_W);
+    q["wear_kg_per_h"] = num(p.wear_kg_per_h);
+    q["mean_wear_mm_per_1000h"] = num(p.mean_wear_mm_per_1000h);
+    q["worst_wear_mm_per_1000h"] = num(p.worst_wear_mm_per_1000h);
+    j["parts"].push_back(q);
+  }
+  return j;
+}
+
+void write_liner_png(const std::filesystem::path& path, const std::string& title, const LinerLayout& layout,
+                     const LinerReport& r) {
+  // Over whole revolutions every row of a steady mill sees the same cycle,
+  // so the map is one repeat of the lifter pattern (rows whose bars cover
+  // the same arc of shell), averaged over its repeats: x the angle from
+  // the first row's centre, y the axial position.
+  const int nl = layout.n_lifters;
+  int period = 1;
+  if (nl > 0) {
+    for (period = 1; period < nl; ++period) {
+      if (nl % period != 0) continue;
+      bool repeats = true;
+      for (int k = 0; k < nl && repeats; ++k)
+        repeats = std::fabs(layout.lifter_half_angle[k] - layout.lifter_half_angle[(k + period) % nl]) < 1e-9;
+      if (repeats) break;
+    }
+  }
+  const double spacing = nl > 0 ? 360.0 / nl : 360.0;
+  const int repeats = nl > 0 ? nl / period : 1;
+  HeatMap impact, wear;
+  impact.title = title + ": impact power on the liner";
+  wear.title = "wear rate";
+  impact.unit = "W/m^2";
+  wear.unit = "mm/1000 h";
+  for (HeatMap* m : {&impact, &wear}) {
+    m->x_label = nl > 0 ? "degrees from a lifter row's centre, counter-clockwise (rows outlined: trailing | top | leading "
+                          "face), averaged over the " + std::to_string(repeats) + " repeats of the pattern"
+                        : "angle in the mill frame (deg, counter-clockwise)";
+    m->y_label = "axial position (m)";
+    m->x_lo = nl > 0 ? -layout.lifter_half_angle[0] * kDeg : 0;
+    m->x_hi = m->x_lo + period * spacing;
+    m->y_lo = 0;
+    m->y_hi = layout.length > 0 ? layout.length : 1;
+  }
+  // Cells by (row in the pattern, part, bin, axial): the mean over repeats.
+  struct Cell {
+    double x0, x1, z0, z1, impact = 0, wear = 0;
+    bool outline;
+    int count = 0;
+  };
+  std::map<std::array<int, 4>, Cell> cells;
+  for (int e = 0; e < layout.size(); ++e) {
+    const LinerElement& el = layout.elements[e];
+    if (el.part == LinerPart::plate) continue;
+    const int row = nl > 0 ? el.row % period : 0;
+    const double base = nl > 0 ? (layout.lifter_centre[el.row] - layout.lifter_centre[0]) * kDeg - spacing * (el.row - row)
+                               : 0;  // the pattern's first row at 0
+    double x0, x1;
+    if (el.part == LinerPart::shell) {
+      x0 = el.theta0 * kDeg - (nl > 0 ? layout.lifter_centre[el.row] * kDeg : 0) + base;
+      x1 = x0 + (el.theta1 - el.theta0) * kDeg;
+    } else {  // the bar's width on the shell in three: trailing, top, leading
+      const double h = layout.lifter_half_angle[el.row] * kDeg;
+      const int third = el.bin == static_cast<int>(LifterFace::trailing) ? 0
+                        : el.bin == static_cast<int>(LifterFace::top)    ? 1
+                                                                          : 2;
+      x0 = base - h + 2 * h * third / 3;
+      x1 = base - h + 2 * h * (third + 1) / 3;
+    }
+    Cell& c = cells[{row, static_cast<int>(el.part), el.bin, el.axial}];
+    c.x0 = x0, c.x1 = x1, c.z0 = el.z0, c.z1 = layout.length > 0 ? el.z1 : 1;
+    c.outline = el.part == LinerPart::lifter;
+    c.impact += r.elements.at(e).impact_W_m2;
+    c.wear += r.elements.at(e).wear_mm_per_1000h;
+    ++c.count;
+  }
+  for (const auto& [key, c] : cells) {
+    impact.cells.push_back({c.x0, c.x1, c.z0, c.z1, c.impact / c.count, c.outline});
+    wear.cells.push_back({c.x0, c.x1, c.z0, c.z1, c.wear / c.count, c.outline});
+  }
+  // Where the liner is struck, in the lab frame: impact power per degree.
+  HeatMap strike;
+  strike.title = "impact power on the shell and lifters by angle, lab frame";
+  strike.unit = "W/deg";
+  strike.x_label = "degrees counter-clockwise from 3 o'clock (the mill turns counter-clockwise)";
+  strike.x_lo = 0;
+  strike.x_hi = 360;
+  strike.y_lo = 0;
+  strike.y_hi = 1;
+  for (std::size_t b = 0; b < r.impact_W_per_deg.size(); ++b)
+    strike.cells.push_back({b * 360.0 / r.impact_W_per_deg.size(), (b + 1) * 360.0 / r.impact_W_per_deg.size(), 0, 1,
+                            r.impact_W_per_deg[b], false});
+  if (std::isfinite(r.impact_point_deg)) {
+    char s[96];
+    std::snprintf(s, sizeof s, "impact point %.0f, %.0f %% on bare liner", r.impact_point_deg,
+                  100 * r.bare_liner_impact_share);
+    strike.marks_x.push_back({r.impact_point_deg, s});
+  }
+  strike.marks_x.push_back({r.shoulder_deg, "shoulder"});
+  strike.marks_x.push_back({r.toe_deg, "toe"});
+  BarChart bars;
+  bars.title = "mean wear rate of each part (mm per 1000 h)";
+  for (const LinerPartRates& p : r.parts) bars.bars.push_back({p.name, p.mean_wear_mm_per_1000h});
+  write_heat_maps_png(path, {impact, wear, strike}, bars);
+}
+
+PolyMesh liner_mesh(const LinerLayout& layout, const LinerReport* r, double mill_angle, double time_s) {
+  PolyMesh m;
+  m.time_s = time_s;
+  const double c = std::cos(mill_angle), s = std::sin(mill_angle);
+  const std::size_t n = layout.elements.size();
+  std::vector<float> impact(n, 0), shear(n, 0), wear(n, 0), impacts(n, 0), kgh(n, 0), area(n, 0);
+  std::vector<int> part(n), row(n), bin(n);
+  for (std::size_t e = 0; e < n; ++e) {
+    const LinerElement& el = layout.elements[e];
+    std::vector<int> poly;
+    for (const Vec3& p : el.outline) {
+      poly.push_back(static_cast<int>(m.points.size()));
+      m.points.push_back({static_cast<float>(c * p.x - s * p.y), static_cast<float>(s * p.x + c * p.y),
+                          static_cast<float>(p.z)});
+    }
+    m.polygons.push_back(poly);
+    if (r) {
+      const LinerElementRates& x = r->elements.at(e);
+      impact[e] = static_cast<float>(x.impact_W_m2);
+      shear[e] = static_cast<float>(x.shear_W_m2);
+      wear[e] = static_cast<float>(x.wear_mm_per_1000h);
+      impacts[e] = static_cast<float>(x.impacts_per_s);
+      kgh[e] = static_cast<float>(x.wear_kg_per_h);
+    }
+    area[e] = static_cast<float>(el.area_m2);
+    part[e] = static_cast<int>(el.part);
+    row[e] = el.row;
+    bin[e] = el.bin;
+  }
+  m.cell_floats = {{"impact_power_W_per_m2", impact}, {"shear_power_W_per_m2", shear},
+                   {"wear_mm_per_1000h", wear},       {"impacts_per_s", impacts},
+                   {"wear_kg_per_h", kgh},            {"area_m2", area}};
+  m.cell_ints = {{"part", part}, {"row", row}, {"face_or_bin", bin}};
+  return m;
+}
+
+}  // namespace mc::io

@@ -1,0 +1,37 @@
+// The energy books of a run on disk: spectra.csv and wear.csv, the
+// `spectra` and `liner` blocks of summary.json, and the liner as a ParaView
+// mesh with its sums per cell (liner.vtp and one per snapshot, turned to the
+// mill's angle then). Pictures are in io/png_plot.h.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "core/liner.h"
+#include "io/vtk.h"
+#include "sim/energy_report.h"
+
+namespace mc::io {
+
+// Throw std::runtime_error when the file cannot be written.
+void write_spectra_csv(const std::filesystem::path& path, const SpectraReport& r);
+void write_wear_csv(const std::filesystem::path& path, const LinerLayout& layout, const LinerReport& r);
+
+nlohmann::ordered_json spectra_json(const SpectraReport& r);
+nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& r, double wear_coefficient);
+
+// The liner's elements as polygons turned by `mill_angle` (rad) about +z
+// into the lab frame, with the report's rates per cell (a null report: the
+// geometry with zeros).
+PolyMesh liner_mesh(const LinerLayout& layout, const LinerReport* r, double mill_angle, double time_s);
+
+// liner.png: the liner unrolled (mill-frame angle × axial position), impact
+// power and wear rate per element with the lifter rows outlined, and the
+// mean wear of each part.
+void write_liner_png(const std::filesystem::path& path, const std::string& title, const LinerLayout& layout,
+                     const LinerReport& r);
+
+// "shell gap 3 bin 1, axial 2" and the like.
+std::string element_name(const LinerLayout& layout, int element);
+
+}  // namespace mc::io

@@ -1,0 +1,184 @@
+#include "sim/energy_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "sim/layout.hpp"
+
+namespace mc {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Collision sums of one spectra cell (or a sum of cells) into rates.
+struct CellSums {
+  double count = 0, normal = 0, tangential = 0, rolling = 0, speed = 0, steps = 0;
+  void add(const BookSums& b, int row, int bin) {
+    count += b.at(row, bin, MC_SPECTRA_COUNT);
+    normal += b.at(row, bin, MC_SPECTRA_NORMAL);
+    tangential += b.at(row, bin, MC_SPECTRA_TANGENTIAL);
+    rolling += b.at(row, bin, MC_SPECTRA_ROLLING);
+    speed += b.at(row, bin, MC_SPECTRA_SPEED);
+    steps += b.at(row, bin, MC_SPECTRA_STEPS);
+  }
+  void add(const CellSums& o) {
+    count += o.count, normal += o.normal, tangential += o.tangential, rolling += o.rolling, speed += o.speed,
+        steps += o.steps;
+  }
+  CollisionRates rates(double window_s, double dt) const {
+    CollisionRates r;
+    const double w = window_s > 0 ? window_s : 1;
+    r.collisions_per_s = count / w;
+    r.normal_W = normal / w;
+    r.tangential_W = tangential / w;
+    r.rolling_W = rolling / w;
+    r.power_W = r.normal_W + r.tangential_W + r.rolling_W;
+    r.mean_energy_J = count > 0 ? (normal + tangential + rolling) / count : 0;
+    r.mean_impact_speed_m_s = count > 0 ? speed / count : 0;
+    r.mean_contact_s = count > 0 ? steps * dt / count : 0;
+    return r;
+  }
+};
+
+// Whether angle a (deg) lies on the counter-clockwise arc from `from` to `to`.
+bool on_arc(double a, double from, double to) {
+  auto wrap = [](double x) { return std::fmod(std::fmod(x, 360.0) + 360.0, 360.0); };
+  return wrap(a - from) < wrap(to - from);
+}
+
+}  // namespace
+
+SpectraReport spectra_report(const Scene& scene, const BookSums& books, double window_s, double open_start_J,
+                             double open_end_J, double dissipated_J) {
+  SpectraReport r;
+  r.window_s = window_s;
+  const double w = window_s > 0 ? window_s : 1;
+  const double dt = scene.numerics.dt;
+  const int nm = static_cast<int>(scene.materials.size());
+  // Types of the materials the balls are made of (a case may list others,
+  // the liner's among them).
+  std::vector<bool> used(nm, scene.balls.empty());
+  for (const Ball& b : scene.balls) used.at(b.material) = true;
+  auto type_used = [&](int t) {
+    const int balls = nm * (nm + 1) / 2;
+    if (t >= balls) return static_cast<bool>(used[(t - balls) / 3]);
+    for (int a = 0; a < nm; ++a)
+      for (int b = a; b < nm; ++b)
+        if (a * nm - a * (a - 1) / 2 + (b - a) == t) return used[a] && used[b];
+    return false;
+  };
+  CellSums all;
+  for (int t = 0; t < books.n_types; ++t) {
+    if (!type_used(t)) continue;
+    CellSums type;
+    for (int b = 0; b < MC_SPECTRA_BINS; ++b) {
+      CellSums cell;
+      cell.add(books, t, b);
+      type.add(cell);
+      SpectraBin sb;
+      sb.type = t;
+      sb.bin = b;
+      sb.energy_from_J = b == 0 ? 0.0 : spectra_edge_J(b);
+      sb.energy_to_J = b == MC_SPECTRA_BINS - 1 ? std::numeric_limits<double>::infinity() : spectra_edge_J(b + 1);
+      sb.rates = cell.rates(window_s, dt);
+      sb.rates.pair = pair_type_name(scene, t);
+      sb.rates.wall = pair_type_is_wall(nm, t);
+      r.bins.push_back(sb);
+    }
+    CollisionRates tr = type.rates(window_s, dt);
+    tr.pair = pair_type_name(scene, t);
+    tr.wall = pair_type_is_wall(nm, t);
+    r.types.push_back(tr);
+    all.add(type);
+  }
+  r.all = all.rates(window_s, dt);
+  r.all.pair = "all";
+  double unrecorded = 0;
+  for (int f : {MC_SPECTRA_NORMAL, MC_SPECTRA_TANGENTIAL, MC_SPECTRA_ROLLING})
+    unrecorded += books.at(books.n_types, 0, f);
+  r.closed_W = r.all.power_W;
+  r.open_change_W = (open_end_J - open_start_J) / w;
+  r.unrecorded_W = unrecorded / w;
+  r.books_W = r.closed_W + r.open_change_W + r.unrecorded_W;
+  r.dissipation_W = dissipated_J / w;
+  return r;
+}
+
+LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const BookSums& books, double window_s,
+                         bool angles_found, double toe_deg, double shoulder_deg) {
+  LinerReport r;
+  r.window_s = window_s;
+  r.toe_deg = angles_found ? toe_deg : kNaN;
+  r.shoulder_deg = angles_found ? shoulder_deg : kNaN;
+  const double w = window_s > 0 ? window_s : 1;
+  const double density = scene.wall_material.density;
+  const char* names[] = {"shell", "lifter leading faces", "lifter tops", "lifter trailing faces", "end plates"};
+  r.parts.resize(5);
+  for (int p = 0; p < 5; ++p) r.parts[p].name = names[p];
+  r.elements.resize(layout.elements.size());
+  for (std::size_t e = 0; e < layout.elements.size(); ++e) {
+    const LinerElement& el = layout.elements[e];
+    LinerElementRates& x = r.elements[e];
+    const int ei = static_cast<int>(e);
+    x.impacts_per_s = books.liner_at(ei, MC_LINER_IMPACTS) / w;
+    x.impact_W = books.liner_at(ei, MC_LINER_NORMAL) / w;
+    x.shear_W = books.liner_at(ei, MC_LINER_SHEAR) / w;
+    x.wear_m3_per_s = books.liner_at(ei, MC_LINER_WEAR) / w;
+    if (el.area_m2 > 0) {
+      x.impact_W_m2 = x.impact_W / el.area_m2;
+      x.shear_W_m2 = x.shear_W / el.area_m2;
+      x.wear_mm_per_1000h = x.wear_m3_per_s / el.area_m2 * 1000.0 * 3600.0 * 1000.0;
+    }
+    x.wear_kg_per_h = x.wear_m3_per_s * density * 3600.0;
+    const int part = el.part == LinerPart::shell ? 0 : el.part == LinerPart::plate ? 4 : 1 + el.bin;
+    LinerPartRates& pr = r.parts[part];
+    pr.area_m2 += el.area_m2;
+    pr.impacts_per_s += x.impacts_per_s;
+    pr.impact_W += x.impact_W;
+    pr.shear_W += x.shear_W;
+    pr.wear_kg_per_h += x.wear_kg_per_h;
+    pr.worst_wear_mm_per_1000h = std::max(pr.worst_wear_mm_per_1000h, x.wear_mm_per_1000h);
+    r.impacts_per_s += x.impacts_per_s;
+    r.impact_W += x.impact_W;
+    r.shear_W += x.shear_W;
+    r.wear_kg_per_h += x.wear_kg_per_h;
+    if (r.worst_element < 0 || x.wear_mm_per_1000h > r.worst_wear_mm_per_1000h) {
+      r.worst_element = ei;
+      r.worst_wear_mm_per_1000h = x.wear_mm_per_1000h;
+    }
+  }
+  for (LinerPartRates& pr : r.parts)
+    if (pr.area_m2 > 0) pr.mean_wear_mm_per_1000h = pr.wear_kg_per_h / density / 3600.0 / pr.area_m2 * 3.6e9;
+
+  // The lab frame: impact power per degree, the bare liner, the impact point.
+  const int nb = static_cast<int>(books.impact_profile.size());
+  r.impact_W_per_deg.resize(nb);
+  double total = 0;
+  for (int b = 0; b < nb; ++b) total += r.impact_W_per_deg[b] = books.impact_profile[b] / w;
+  if (!angles_found || nb == 0 || !(total > 0)) {
+    r.bare_liner_impact_W = r.bare_liner_impact_share = r.impact_point_deg = kNaN;
+    return r;
+  }
+  const double deg_per_bin = 360.0 / nb;
+  for (int b = 0; b < nb; ++b)
+    if (on_arc((b + 0.5) * deg_per_bin, shoulder_deg, toe_deg)) r.bare_liner_impact_W += r.impact_W_per_deg[b];
+  r.bare_liner_impact_share = r.bare_liner_impact_W / total;
+  const int half = static_cast<int>(std::lround(4.0 / deg_per_bin));
+  double best = -1;
+  for (int b = 0; b < nb; ++b) {
+    const double a = (b + 0.5) * deg_per_bin;
+    if (!on_arc(a, shoulder_deg, toe_deg + 20.0)) continue;
+    double sm = 0;
+    for (int d = -half; d <= half; ++d) sm += r.impact_W_per_deg[((b + d) % nb + nb) % nb];
+    if (sm > best) {
+      best = sm;
+      r.impact_point_deg = a;
+    }
+  }
+  r.impact_point_on_liner = on_arc(r.impact_point_deg, shoulder_deg, toe_deg);
+  return r;
+}
+
+}  // namespace mc

@@ -1,0 +1,89 @@
+// Where the energy went over a run's averaging window, from the solver's
+// books (solver.h BookSums): the collision energy spectra per pair type, the
+// liner's impact, shear and wear per element and per part, and the impact
+// point of the cataracting charge. Plain numbers for the outputs (io/) and
+// the viewer; no OpenCL, no files.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/liner.h"
+#include "core/scene.h"
+#include "sim/solver.h"
+
+namespace mc {
+
+// Rates over the window: collisions per second, power in W.
+struct CollisionRates {
+  std::string pair;             // "steel-steel", "steel-shell", ... or "all"
+  bool wall = false;
+  double collisions_per_s = 0;
+  double power_W = 0, normal_W = 0, tangential_W = 0, rolling_W = 0;
+  double mean_energy_J = 0;     // lost per collision
+  double mean_impact_speed_m_s = 0;
+  double mean_contact_s = 0;    // duration of a collision
+};
+
+struct SpectraBin {
+  int type = 0;                 // pair type (core/liner.h)
+  int bin = 0;
+  double energy_from_J = 0, energy_to_J = 0;  // bin 0: from 0 (and losses <= 0)
+  CollisionRates rates;
+};
+
+struct SpectraReport {
+  double window_s = 0;
+  std::vector<CollisionRates> types;  // one per pair type of the balls' materials
+  CollisionRates all;
+  std::vector<SpectraBin> bins;       // every type × bin, type-major
+  double closed_W = 0;                // collisions that closed in the window
+  double open_change_W = 0;           // change of what open contacts hold
+  double unrecorded_W = 0;            // contacts without a record (a full pool)
+  double books_W = 0;                 // closed + open change + unrecorded
+  double dissipation_W = 0;           // the solver's dissipation over the window
+};
+
+struct LinerElementRates {
+  double impacts_per_s = 0;
+  double impact_W = 0, shear_W = 0;          // normal and tangential losses on it
+  double impact_W_m2 = 0, shear_W_m2 = 0;
+  double wear_m3_per_s = 0;
+  double wear_mm_per_1000h = 0;              // depth worn, at this rate
+  double wear_kg_per_h = 0;
+};
+
+// Sums over a part of the liner: the shell, each lifter face over all rows,
+// the end plates.
+struct LinerPartRates {
+  std::string name;  // "shell", "lifter leading faces", "lifter tops", "lifter trailing faces", "end plates"
+  double area_m2 = 0, impacts_per_s = 0, impact_W = 0, shear_W = 0, wear_kg_per_h = 0;
+  double mean_wear_mm_per_1000h = 0, worst_wear_mm_per_1000h = 0;
+};
+
+struct LinerReport {
+  double window_s = 0;
+  std::vector<LinerElementRates> elements;  // in layout order
+  std::vector<LinerPartRates> parts;
+  double impacts_per_s = 0, impact_W = 0, shear_W = 0, wear_kg_per_h = 0;
+  int worst_element = -1;
+  double worst_wear_mm_per_1000h = 0;
+  // The lab frame: impact power on the shell and lifters per degree
+  // (counter-clockwise from 3 o'clock), its share on the bare liner between
+  // the shoulder and the toe (over the top), and the impact point: the peak
+  // of that power (smoothed over 9 degrees) from the shoulder to 20 degrees
+  // past the toe. NaN where the toe or shoulder is not known.
+  std::vector<double> impact_W_per_deg;
+  double toe_deg = 0, shoulder_deg = 0;  // the charge's, that the above are taken with
+  double bare_liner_impact_W = 0, bare_liner_impact_share = 0;
+  double impact_point_deg = 0;
+  bool impact_point_on_liner = false;  // before the toe: on bare liner above it
+};
+
+SpectraReport spectra_report(const Scene& scene, const BookSums& books, double window_s, double open_start_J,
+                             double open_end_J, double dissipated_J);
+
+LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const BookSums& books, double window_s,
+                         bool angles_found, double toe_deg, double shoulder_deg);
+
+}  // namespace mc
