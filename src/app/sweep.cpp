@@ -317,6 +317,10 @@ int cmd_sweep_run(const SweepRunOptions& o) {
   }
   const fs::path sweep_dir = fs::absolute(o.out.empty() ? fs::path("runs") / s.name : fs::path(o.out)).lexically_normal();
   std::error_code ec;
+  if ((o.slurm || o.print) && sweep_dir.string().find_first_of(" \t\n'\"") != std::string::npos)
+    throw std::invalid_argument("--out " + sweep_dir.string() +
+                                ": the job script's #SBATCH --output line cannot hold spaces or quotes; choose a "
+                                "folder without them");
   if (fs::exists(sweep_dir, ec) && !fs::is_directory(sweep_dir, ec))
     throw std::invalid_argument("--out " + sweep_dir.string() + ": exists and is not a folder");
 
