@@ -165,7 +165,7 @@ TEST_CASE("sweep file: a bad sweep is named by the file, the line and the key", 
              Catch::Contains("sweep.toml:1: case: \"no_such.toml\": no such case file"));
 }
 
-TEST_CASE("sweep check: every bad combination named by its values and key; run writes nothing", "[sweep]") {
+TEST_CASE("sweep check: every bad combination named by its values and key, run writes nothing", "[sweep]") {
   const fs::path work = temp_dir("check");
   write_text(work / "bad.toml", R"(
 case = "lab.toml"
@@ -358,7 +358,7 @@ TEST_CASE("sweep collect: a row per case, status and cause, open spectra and lin
   fs::remove_all(work);
 }
 
-TEST_CASE("sweep run --local: cases N at a time; a failed case stops no other; a rerun runs none", "[sweep]") {
+TEST_CASE("sweep run --local: cases N at a time, a failed case stops no other, a rerun runs none", "[sweep]") {
   const fs::path work = temp_dir("local");
   write_text(work / "small.toml", R"(
 name = "small"
