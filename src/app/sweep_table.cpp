@@ -280,11 +280,12 @@ io::LinePlot figure_plot(const SweepTable& t, const Lines& l, const std::string&
                          const std::string& what) {
   io::LinePlot p;
   p.title = t.name + ": " + what;
-  p.x_label = t.axes.front() + (l.numeric_x ? "" : " (" + [&] {
-                std::string s;
-                for (std::size_t i = 0; i < l.x_names.size(); ++i) s += (i ? ", " : "") + std::to_string(i) + " " + l.x_names[i];
-                return s;
-              }() + ")");
+  p.x_label = t.axes.front();
+  if (!l.numeric_x) {  // values that are not numbers sit at 0, 1, 2, ...
+    p.x_label += " (";
+    for (std::size_t i = 0; i < l.x_names.size(); ++i) p.x_label += (i ? ", " : "") + std::to_string(i) + " " + l.x_names[i];
+    p.x_label += ")";
+  }
   p.y_label = column;
   p.pad_x = true;
   std::vector<std::vector<double>> model_ys;
