@@ -294,6 +294,9 @@ int cmd_sweep_run(const SweepRunOptions& o) {
   if (modes != 1)
     throw std::invalid_argument("sweep run: give exactly one of --local [N] (here, N at a time), --slurm (submit a "
                                 "job array) and --print (write the job script only)");
+  if (o.slurm && !on_path("sbatch"))
+    throw std::runtime_error("sbatch is not on PATH: run `millcharge sweep run --slurm` on the cluster's login node, "
+                             "or use --print (the script only) or --local N");
   io::Sweep sweep = io::read_sweep(o.file);
   if (!o.device.empty()) sweep.device = o.device;
   io::SlurmSettings& sl = sweep.slurm;
@@ -416,9 +419,6 @@ int cmd_sweep_run(const SweepRunOptions& o) {
   }
   if (o.local > 0) return run_local(script, sweep_dir, k.cases, to_run, o.local, s);
 
-  if (!on_path("sbatch"))
-    throw std::runtime_error("sbatch is not on PATH: run `millcharge sweep run --slurm` on the cluster's login node, "
-                             "or use --print (the script only) or --local N");
   const std::string job = submit(script);
   nlohmann::json jobs = read_json_or(sweep_dir / "jobs.json", nlohmann::json::array());
   if (!jobs.is_array()) jobs = nlohmann::json::array();
