@@ -9,6 +9,7 @@ packages=(
   catch2 libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libfmt-dev libstb-dev
   libglfw3-dev libglew-dev libglm-dev libimgui-dev
   xvfb xauth libgl1-mesa-dri python3
+  munge slurmctld slurmd slurm-client  # the sweep tier's one-machine Slurm cluster (scripts/slurm_local.sh)
 )
 
 missing=()

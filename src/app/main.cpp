@@ -9,6 +9,7 @@
 //   millcharge bench [CASE] [--steps N] [--warmup N] [--device SPEC]
 //                    [--precision float|double] [--set KEY=VALUE]... [--quiet]
 //   millcharge devices
+//   millcharge sweep check FILE | run FILE --local [N]|--slurm|--print | collect DIR
 // Exit status: 0 done; 2 bad input (a message names the key; nothing written);
 // 1 any other failure (device, blow-up, disk).
 #include <CLI/CLI.hpp>
@@ -20,6 +21,7 @@
 #include <string>
 
 #include "app/commands.h"
+#include "app/sweep.h"
 #include "compute/context.h"
 
 namespace {
@@ -108,6 +110,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"both", "on", "off"}));
   bench->add_flag("--quiet", bo.quiet, "no progress lines");
 
+  mc::app::SweepCli sweep;
+  mc::app::add_sweep_commands(app, sweep);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -115,6 +120,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (*devices) return mc::app::cmd_devices();
+    if (int status = 0; mc::app::run_sweep(sweep, status)) return status;
     if (*check) return mc::app::cmd_check(co);
     if (*run) return mc::app::cmd_run(ro);
     if (*bench) return mc::app::cmd_bench(bo);

@@ -247,6 +247,26 @@ Axis nice_axis(double lo, double hi, double pad) {
   return a;
 }
 
+// A segment drawn as 8-pixel dashes with 5-pixel gaps; `phase` carries the
+// pattern from one segment of a polyline to the next.
+void dashed_line(Canvas& cv, P a, P b, std::uint32_t rgb, double& phase) {
+  constexpr double kOn = 8, kPeriod = 13;
+  const double len = std::hypot(b.x - a.x, b.y - a.y);
+  if (!(len > 0) || !std::isfinite(len)) return;
+  double t = 0;
+  while (t < len) {
+    const double in = std::fmod(phase + t, kPeriod);
+    const double piece = std::min(len - t, in < kOn ? kOn - in : kPeriod - in);
+    if (in < kOn) {
+      const P p{a.x + (b.x - a.x) * t / len, a.y + (b.y - a.y) * t / len};
+      const P q{a.x + (b.x - a.x) * (t + piece) / len, a.y + (b.y - a.y) * (t + piece) / len};
+      cv.line(p, q, rgb, 2);
+    }
+    t += piece;
+  }
+  phase = std::fmod(phase + len, kPeriod);
+}
+
 std::string tick_label(double v, double step) {
   if (std::abs(v) < step * 1e-6) v = 0;
   const double big = std::abs(v);
@@ -276,7 +296,7 @@ void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot
   if (span) x0 = std::min(x0, plot.span_from), x1 = std::max(x1, plot.span_to);
   if (!(x0 <= x1)) x0 = 0, x1 = 1;
   if (!(y0 <= y1)) y0 = 0, y1 = 1;
-  const Axis ax = nice_axis(x0, x1, 0), ay = nice_axis(y0, y1, 0.05);
+  const Axis ax = nice_axis(x0, x1, plot.pad_x ? 0.04 : 0), ay = nice_axis(y0, y1, 0.05);
 
   // Layout: title on top, y tick labels and y label left, x ones below.
   int ytick_w = 0;
@@ -309,13 +329,17 @@ void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot
   for (const PlotSeries& s : plot.series) {
     const std::size_t n = std::min(s.x.size(), s.y.size());
     auto ok = [&](std::size_t i) { return i < n && std::isfinite(s.x[i]) && std::isfinite(s.y[i]); };
+    double dash = 0;  // where along the dash pattern the line is
     for (std::size_t i = 0; i < n; ++i) {
       if (!ok(i)) continue;
       const P p{X(s.x[i]), Y(s.y[i])};
-      if (ok(i + 1))
+      if (ok(i + 1) && s.dashed)
+        dashed_line(cv, p, {X(s.x[i + 1]), Y(s.y[i + 1])}, s.rgb, dash);
+      else if (ok(i + 1))
         cv.line(p, {X(s.x[i + 1]), Y(s.y[i + 1])}, s.rgb, 2);
       else if (i == 0 || !ok(i - 1))
         cv.disc(p, 2.5, s.rgb);
+      if (s.markers) cv.disc(p, 3.5, s.rgb);
     }
   }
   cv.unclip();
@@ -367,7 +391,10 @@ void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot
     cv.fill_rect(bx, by, bx + 1, by + lh, 0xbbbbbb), cv.fill_rect(bx + lw - 1, by, bx + lw, by + lh, 0xbbbbbb);
     for (std::size_t k = 0; k < entries.size(); ++k) {
       const double y = by + 6 + 14.0 * k;
-      cv.line({bx + 9, y + 3.5}, {bx + 29, y + 3.5}, entries[k]->rgb, 2);
+      double dash = 0;
+      if (entries[k]->dashed) dashed_line(cv, {bx + 9, y + 3.5}, {bx + 29, y + 3.5}, entries[k]->rgb, dash);
+      else cv.line({bx + 9, y + 3.5}, {bx + 29, y + 3.5}, entries[k]->rgb, 2);
+      if (entries[k]->markers) cv.disc({bx + 19, y + 3.5}, 3.5, entries[k]->rgb);
       cv.text(bx + 8 + 22 + 6, y, entries[k]->label, kInk);
     }
   }

@@ -17,6 +17,8 @@ struct PlotSeries {
   std::string label;
   std::vector<double> x, y;
   std::uint32_t rgb = 0x1f77b4;  // 0xRRGGBB
+  bool markers = false;          // a dot at every point
+  bool dashed = false;           // a dashed line (a model beside the data)
 };
 
 struct LinePlot {
@@ -25,6 +27,7 @@ struct LinePlot {
   // Optional shaded span on the x axis (the averaging window), with a label.
   double span_from = 0, span_to = 0;
   std::string span_label;
+  bool pad_x = false;  // leave room beside the first and last x (for markers)
 };
 
 // Throws std::runtime_error when the file cannot be written.
