@@ -98,7 +98,7 @@ TEST_CASE("run writes summary.json, timeseries.csv, snapshots with charge.pvd an
     CHECK(std::hypot(p[0], p[1]) < 0.45);
   }
 
-  for (const char* f : {"power.png", "charge.png", "case.toml", "liner.vtp", "liner.png"}) {
+  for (const char* f : {"power.png", "charge.png", "case.toml", "liner.vtp", "spectra.png", "liner.png"}) {
     INFO(f);
     CHECK(fs::file_size(out / f) > 1000);
   }

@@ -531,6 +531,7 @@ int cmd_run(const RunOptions& o) {
   view.com_y = now.com_y_m;
   io::write_end_view_png(out / "charge.png", view);
   io::write_liner_png(out / "liner.png", c.name, layout, liner);
+  io::write_spectra_png(out / "spectra.png", c.name, spectra);
   io::write_spectra_csv(out / "spectra.csv", spectra);
   io::write_wear_csv(out / "wear.csv", layout, liner);
   // The liner in the mill frame, and beside each snapshot turned to the
@@ -570,7 +571,7 @@ int cmd_run(const RunOptions& o) {
   std::printf("speed           %s steps in %.1f s wall, %.3g particle-updates/s\n", thousands(s.steps).c_str(),
               s.wall_s, s.updates_per_s);
   std::printf("wrote           %s/{summary.json, timeseries.csv, charge.pvd, power.png, charge.png, spectra.csv, "
-              "wear.csv, liner.vtp}\n",
+              "spectra.png, wear.csv, liner.vtp, liner.png}\n",
               out.string().c_str());
   return 0;
 }

@@ -8,6 +8,7 @@
 
 #include "io/atomic_file.h"
 #include "io/png_plot.h"
+#include "sim/layout.hpp"
 
 namespace mc::io {
 
@@ -144,6 +145,61 @@ nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& 
     j["parts"].push_back(q);
   }
   return j;
+}
+
+void write_spectra_png(const std::filesystem::path& path, const std::string& title, const SpectraReport& r) {
+  static const std::uint32_t colours[] = {0x1f77b4, 0xd62728, 0x2ca02c, 0xff7f0e, 0x9467bd, 0x8c564b, 0xe377c2, 0x17becf};
+  LinePlot cumulative, rate;
+  cumulative.title = title + ": where the collisions' power lies";
+  cumulative.x_label = "energy lost per collision (J)";
+  cumulative.y_label = "power of collisions up to it (W)";
+  rate.title = "collisions per second in each bin (10 a decade)";
+  rate.x_label = "energy lost per collision (J)";
+  rate.y_label = "collisions per second";
+  cumulative.log_x = rate.log_x = true;
+  auto add = [&](const std::string& name, std::uint32_t rgb, auto keep) {
+    PlotSeries c{name, {}, {}, rgb}, q{name, {}, {}, rgb};
+    double sum = 0, first = -1, last = -1;
+    for (const SpectraBin& b : r.bins) {
+      if (!keep(b) || b.bin == 0 || b.bin == MC_SPECTRA_BINS - 1) continue;
+      sum += b.rates.power_W;
+      c.x.push_back(b.energy_to_J);
+      c.y.push_back(sum);
+      q.x.push_back(std::sqrt(b.energy_from_J * b.energy_to_J));
+      q.y.push_back(b.rates.collisions_per_s);
+      if (b.rates.collisions_per_s > 0) {
+        if (first < 0) first = static_cast<double>(c.x.size() - 1);
+        last = static_cast<double>(c.x.size() - 1);
+      }
+    }
+    if (first < 0) return;
+    // From a bin below the first collisions to the last's top.
+    const std::size_t from = static_cast<std::size_t>(std::max(0.0, first - 1)), to = static_cast<std::size_t>(last) + 1;
+    auto cut = [&](std::vector<double>& v) { v = std::vector<double>(v.begin() + from, v.begin() + std::min(to, v.size())); };
+    for (auto* v : {&c.x, &c.y, &q.x, &q.y}) cut(*v);
+    cumulative.series.push_back(c);
+    rate.series.push_back(q);
+  };
+  std::size_t k = 0;
+  for (const CollisionRates& t : r.types) {
+    if (t.collisions_per_s <= 0) continue;
+    add(t.pair, colours[k++ % 8], [&](const SpectraBin& b) { return b.rates.pair == t.pair; });
+  }
+  // All types together, over the span of the types' lines.
+  if (cumulative.series.size() > 1) {
+    std::vector<double> power(MC_SPECTRA_BINS, 0.0), top(MC_SPECTRA_BINS, 0.0);
+    for (const SpectraBin& b : r.bins) power[b.bin] += b.rates.power_W, top[b.bin] = b.energy_to_J;
+    double lo = INFINITY, hi = -INFINITY;
+    for (const PlotSeries& p : cumulative.series) lo = std::min(lo, p.x.front()), hi = std::max(hi, p.x.back());
+    PlotSeries all{"all", {}, {}, 0x222222};
+    double acc = 0;
+    for (int b = 1; b + 1 < MC_SPECTRA_BINS; ++b) {
+      acc += power[b];
+      if (top[b] >= lo && top[b] <= hi) all.x.push_back(top[b]), all.y.push_back(acc);
+    }
+    cumulative.series.push_back(all);
+  }
+  write_line_plots_png(path, {cumulative, rate});
 }
 
 void write_liner_png(const std::filesystem::path& path, const std::string& title, const LinerLayout& layout,

@@ -25,6 +25,11 @@ nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& 
 // geometry with zeros).
 PolyMesh liner_mesh(const LinerLayout& layout, const LinerReport* r, double mill_angle, double time_s);
 
+// spectra.png: the power of the collisions up to an energy per collision
+// (cumulative, log axis), a line per pair type and for all, and below it the
+// collision rate per bin.
+void write_spectra_png(const std::filesystem::path& path, const std::string& title, const SpectraReport& r);
+
 // liner.png: the liner unrolled (mill-frame angle × axial position), impact
 // power and wear rate per element with the lifter rows outlined, and the
 // mean wear of each part.

@@ -40,6 +40,16 @@ class Canvas {
   }
   void unclip() { cx0_ = 0, cy0_ = 0, cx1_ = w_, cy1_ = h_; }
 
+  // Another canvas's pixels, its top left at (x, y).
+  void paste(const Canvas& o, int x, int y) {
+    for (int j = 0; j < o.h_; ++j)
+      for (int i = 0; i < o.w_; ++i) {
+        if (x + i < 0 || x + i >= w_ || y + j < 0 || y + j >= h_) continue;
+        for (int c = 0; c < 3; ++c)
+          px_[(static_cast<std::size_t>(y + j) * w_ + x + i) * 3 + c] = o.px_[(static_cast<std::size_t>(j) * o.w_ + i) * 3 + c];
+      }
+  }
+
   void blend(int x, int y, std::uint32_t rgb, double a) {
     if (x < cx0_ || x >= cx1_ || y < cy0_ || y >= cy1_ || !(a > 0)) return;
     a = std::min(a, 1.0);
@@ -281,10 +291,21 @@ std::string tick_label(double v, double step) {
 
 }  // namespace
 
-void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot, int width, int height) {
+namespace {
+
+// The line plot drawn on a canvas of its own.
+Canvas render_line_plot(const LinePlot& given, int width, int height) {
   check_size(width, height);
   Canvas cv(width, height);
   constexpr std::uint32_t kInk = 0x222222, kFrame = 0x555555, kGrid = 0xe8e8e8;
+  // A log x axis: the plot of log10 x, ticks labelled with powers of ten.
+  LinePlot plot = given;
+  if (plot.log_x) {
+    for (PlotSeries& s : plot.series)
+      for (double& x : s.x) x = x > 0 ? std::log10(x) : NAN;
+    plot.span_from = plot.span_from > 0 ? std::log10(plot.span_from) : NAN;
+    plot.span_to = plot.span_to > 0 ? std::log10(plot.span_to) : NAN;
+  }
 
   // Data ranges over the finite points and the span.
   double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
@@ -349,7 +370,8 @@ void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot
   cv.fill_rect(L, T, L + 1, B, kFrame), cv.fill_rect(R - 1, T, R, B, kFrame);
   for (int i = 0; i < ax.ticks(); ++i) {
     const double x = std::floor(X(ax.tick(i)));
-    const std::string s = tick_label(ax.tick(i), ax.step);
+    const std::string s = plot.log_x ? format(ax.step >= 1 ? "%.0e" : "%.2g", std::pow(10.0, ax.tick(i)))
+                                     : tick_label(ax.tick(i), ax.step);
     cv.fill_rect(x, B, x + 1, B + 5, kFrame);
     cv.text(x + 0.5 - Canvas::text_width(s) / 2.0, B + 9, s, kInk);
   }
@@ -399,7 +421,23 @@ void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot
     }
   }
 
-  write_file_atomic(path, cv.png());
+  return cv;
+}
+
+}  // namespace
+
+void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot, int width, int height) {
+  write_file_atomic(path, render_line_plot(plot, width, height).png());
+}
+
+void write_line_plots_png(const std::filesystem::path& path, const std::vector<LinePlot>& plots, int width,
+                          int height_each) {
+  if (plots.empty()) throw std::invalid_argument("write_line_plots_png: no plots");
+  check_size(width, height_each * static_cast<int>(plots.size()));
+  Canvas all(width, height_each * static_cast<int>(plots.size()));
+  for (std::size_t k = 0; k < plots.size(); ++k)
+    all.paste(render_line_plot(plots[k], width, height_each), 0, static_cast<int>(k) * height_each);
+  write_file_atomic(path, all.png());
 }
 
 // -------------------------------------------------------------- end view --

@@ -28,11 +28,15 @@ struct LinePlot {
   double span_from = 0, span_to = 0;
   std::string span_label;
   bool pad_x = false;  // leave room beside the first and last x (for markers)
+  bool log_x = false;  // a log x axis (x <= 0 left out)
 };
 
 // Throws std::runtime_error when the file cannot be written.
 void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot, int width = 960,
                          int height = 560);
+// Several plots one under the other in one picture.
+void write_line_plots_png(const std::filesystem::path& path, const std::vector<LinePlot>& plots, int width = 960,
+                          int height_each = 420);
 
 struct EndViewBall {
   double x = 0, y = 0, z = 0;  // lab frame, m
