@@ -206,9 +206,15 @@ int cmd_devices() {
     return 1;
   }
   for (const auto& d : devices)
-    std::printf("%s\n    %s, %d compute units, %.1f GiB, fp64 %s, gl sharing %s\n", d.label().c_str(),
-                d.version.c_str(), d.compute_units, d.global_mem_bytes / 1073741824.0, d.fp64 ? "yes" : "no",
-                d.gl_sharing ? "yes" : "no");
+    std::printf("%s\n    %s, %s, %d compute units, %.1f GiB, fp64 %s, gl sharing %s\n", d.label().c_str(),
+                d.version.c_str(), d.c_version.c_str(), d.compute_units, d.global_mem_bytes / 1073741824.0,
+                d.fp64 ? "yes" : "no", d.gl_sharing ? "yes" : "no");
+  for (const auto& [index, name] : compute::platforms_without_devices()) {
+    std::printf("platform %d (%s): no devices", index, name.c_str());
+    if (name == "rusticl" && !std::getenv("RUSTICL_ENABLE"))
+      std::printf(" (Mesa's rusticl offers one when RUSTICL_ENABLE names a driver: RUSTICL_ENABLE=llvmpipe for the CPU)");
+    std::printf("\n");
+  }
   return 0;
 }
 
