@@ -7,30 +7,18 @@
 #include <cmath>
 #include <cstdio>
 
+#include "checks.h"
 #include "core/mill_case.h"
 #include "core/morrell.h"
 #include "helpers.h"
-#include "io/case_file.h"
-#include "sim/mill_run.h"
 
 namespace {
 
-struct LabResult {
-  mc::MillCase c;
-  mc::MillDerived d;
-  mc::RunSummary s;
-};
-
-LabResult run_lab(double speed_fraction, double duration, double warmup, double length) {
-  LabResult r;
-  r.c = mc::io::read_case(mc::io::default_case(),
-                          {"mill.length=" + std::to_string(length), "mill.speed_fraction=" + std::to_string(speed_fraction),
-                           "run.duration=" + std::to_string(duration), "run.warmup=" + std::to_string(warmup),
-                           "run.output_interval=0.02"});
-  r.d = mc::derive(r.c);
-  const mc::Scene scene = mc::build_scene(r.c, r.d);
-  auto solver = mc::make_solver(mc::test::context(), scene);
-  r.s = mc::run_mill(*solver, scene, r.c, r.d, {});
+mc::checks::LabRun run_lab(double speed_fraction, double duration, double warmup, double length) {
+  const mc::checks::LabRun r = mc::checks::lab_run(
+      mc::test::context(),
+      {"mill.length=" + std::to_string(length), "mill.speed_fraction=" + std::to_string(speed_fraction),
+       "run.duration=" + std::to_string(duration), "run.warmup=" + std::to_string(warmup), "run.output_interval=0.02"});
   std::printf("lab mill at %.0f %% of critical (%ld balls): torque power %.2f W, dissipation %.2f W, "
               "imbalance %+.2f %%, torque arm %.2f W, toe %.1f, shoulder %.1f, com %.1f deg, %.2f revolutions "
               "averaged, settled in %.2f s to J %.3f\n",
@@ -43,7 +31,7 @@ LabResult run_lab(double speed_fraction, double duration, double warmup, double 
 }  // namespace
 
 TEST_CASE("lab mill at 75 % of critical: power books close and Morrell's band holds", "[mill][slow]") {
-  const LabResult r = run_lab(0.75, 4.6, 1.0, 0.15);
+  const mc::checks::LabRun r = run_lab(0.75, 4.6, 1.0, 0.15);
   const mc::RunSummary& s = r.s;
   REQUIRE(s.whole_revolutions);
   CHECK(s.window_revolutions == Approx(std::floor((4.6 - 1.0) / r.d.revolution_s)).margin(0.01));
@@ -74,7 +62,7 @@ TEST_CASE("lab mill at 75 % of critical: power books close and Morrell's band ho
 TEST_CASE("lab mill: power rises with speed from 50 % to 80 % of critical", "[mill][slow]") {
   double last = 0;
   for (double phi : {0.5, 0.65, 0.8}) {
-    const LabResult r = run_lab(phi, 3.2, 1.0, 0.1);
+    const mc::checks::LabRun r = run_lab(phi, 3.2, 1.0, 0.1);
     INFO("speed fraction " << phi);
     CHECK(r.s.torque_power_W > 1.05 * last);
     last = r.s.torque_power_W;
