@@ -46,12 +46,13 @@ def liggghts_group(folder):
         os.path.join(folder, "info.txt")) else ""
     # Throughput: LIGGGHTS on its largest rank count against millcharge
     # (float), the medians of the timed repeats.
-    lg = {}
+    lg, timed_steps = {}, 0
     for name in glob.glob(os.path.join(folder, "liggghts", "timed.*.*.out")):
         text = open(name, encoding="utf-8").read()
         m = re.search(r"Loop time of ([0-9.eE+-]+) on (\d+) procs for (\d+) steps with (\d+) atoms", text)
         if m:
             procs = int(m.group(2))
+            timed_steps = int(m.group(3))
             lg.setdefault(procs, []).append(int(m.group(4)) * int(m.group(3)) / float(m.group(1)))
     mc = []
     for name in glob.glob(os.path.join(folder, "millcharge-bench-float.*.json")):
@@ -67,11 +68,16 @@ def liggghts_group(folder):
     # Power: the torque on the turning walls over the same turning phase.
     warm = os.path.join(folder, "liggghts", "warmup.out")
     summ = os.path.join(folder, "millcharge-run", "summary.json")
-    power = None
+    power, turned = None, None
     if os.path.exists(warm):
-        m = re.findall(r"^TURNED .*\bpower_W (\S+)", open(warm, encoding="utf-8").read(), re.M)
+        text = open(warm, encoding="utf-8").read()
+        m = re.findall(r"^TURNED .*\bpower_W (\S+)", text, re.M)
         if m:
             power = float(m[-1])
+        t_settled = re.findall(r"^SETTLED step \S+ time (\S+)", text, re.M)
+        t_turned = re.findall(r"^TURNED step \S+ time (\S+)", text, re.M)
+        if t_settled and t_turned:
+            turned = float(t_turned[-1]) - float(t_settled[-1])
     if power is not None and os.path.exists(summ):
         mine = json.load(open(summ, encoding="utf-8"))["power_W"]["torque"]
         rel = (mine - power) / power
@@ -86,9 +92,11 @@ def liggghts_group(folder):
     about = ("The benchmark mill (assets/cases/bench_100k.toml cut to 0.5 m: D 1.0 m, 16 lifters, 16,412 balls "
              "of 19–21 mm, J 0.30, 75 % of critical, Hertz, dt 5 µs) in LIGGGHTS 3.8 and in millcharge on the "
              "same machine, from `scripts/liggghts_compare.sh` (scripts/liggghts/README.md says how the two "
-             "setups are matched and what still differs). Both settle, then turn 0.25 s (an eighth of a "
-             "revolution, the charge still being lifted): the power is the mean over that phase; the "
-             "throughput times 10,000 steps after it.")
+             "setups are matched and what still differs). Both settle, then turn " +
+             (f"{turned:.2f} s" if turned is not None else "for the script's --turn") +
+             " (the mill's revolution takes 1.87 s: the charge is still being lifted): the power is the mean "
+             f"over that phase; the throughput times {timed_steps:,} steps after it, the median of the repeats. "
+             "Both codes share the machine's cores, so the throughput is only meaningful on a quiet machine.")
     if info:
         about += "\n\n```\n" + info.strip() + "\n```"
     return {"name": "The same mill in LIGGGHTS", "about": about, "rows": rows}
