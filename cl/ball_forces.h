@@ -155,13 +155,15 @@ MC_FN void store_partner_side(MC_GLOBAL real* slot, ContactGeom g, ContactOut c,
   slot[6] = t_j.z;
 }
 
-/* A pair that opened: its collision joins the spectra, and its reaction is
- * gone. */
+/* A pair that opened: its collision joins the spectra, the entry holds no
+ * record (an index left behind would differ from run to run, as records
+ * are taken in whatever order the threads come), and its reaction is gone. */
 MC_FN void pair_opened(int k, int j, int mat_i, MC_GLOBAL const SimParams* sp, MC_GLOBAL const int2* info,
-                       MC_GLOBAL int* neigh_index, MC_GLOBAL const int* neigh_rec,
+                       MC_GLOBAL int* neigh_index, MC_GLOBAL int* neigh_rec,
                        MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out, Books* books) {
   record_close(books, neigh_rec[k], ball_pair_type(mat_i, info[j].y, sp->n_materials));
   neigh_index[k] = j;
+  neigh_rec[k] = MC_NO_RECORD;
   MC_GLOBAL real* slot = pair_out + MC_SLOT_REALS * neigh_rev[k];
   for (int r = 0; r < MC_SLOT_REALS; ++r) slot[r] = R(0.0);
 }
@@ -171,7 +173,7 @@ MC_FN void pair_opened(int k, int j, int mat_i, MC_GLOBAL const SimParams* sp, M
  * (pair_opened). The entry's link and the partner's position are left in
  * *link and *pj4 for pair_contact. */
 MC_FN int entry_touches(int k, v3 p, real r, int mat, MC_GLOBAL const SimParams* sp, MC_GLOBAL const real4* pos,
-                        MC_GLOBAL const int2* info, MC_GLOBAL int* neigh_index, MC_GLOBAL const int* neigh_rec,
+                        MC_GLOBAL const int2* info, MC_GLOBAL int* neigh_index, MC_GLOBAL int* neigh_rec,
                         MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out, Books* books, int* link,
                         real4* pj4) {
   *link = neigh_index[k];

@@ -1,7 +1,8 @@
 #!/bin/bash
 # Packs, on the Debian build machine, what a GPU machine without this
 # project's packages needs to run millcharge's tests and benchmark there:
-# the programs (millcharge, the law probe, the tests) and the shared
+# the programs (millcharge, the law probe, the validation checks, the
+# tests) and the shared
 # libraries they load that are not glibc's or the compiler's own (the
 # OpenCL ICD loader above all, plus GLFW, GLEW, the GL dispatch and X
 # client libraries the viewer code links), and clinfo.
@@ -16,15 +17,16 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-[ -x build/millcharge ] && [ -x build/millcharge_law_probe ] && [ -x build/tests/millcharge_tests ] || bash scripts/build.sh
+[ -x build/millcharge ] && [ -x build/millcharge_law_probe ] && [ -x build/millcharge_validate ] &&
+  [ -x build/tests/millcharge_tests ] || bash scripts/build.sh
 command -v clinfo > /dev/null || bash scripts/setup.sh
 
 kit=gpu-kit
 rm -rf "$kit"
 mkdir -p "$kit/bin" "$kit/lib"
-cp build/millcharge build/millcharge_law_probe build/tests/millcharge_tests "$kit/bin/"
+cp build/millcharge build/millcharge_law_probe build/millcharge_validate build/tests/millcharge_tests "$kit/bin/"
 cp "$(command -v clinfo)" "$kit/bin/"
-progs=(build/millcharge build/millcharge_law_probe build/tests/millcharge_tests "$(command -v clinfo)")
+progs=(build/millcharge build/millcharge_law_probe build/millcharge_validate build/tests/millcharge_tests "$(command -v clinfo)")
 n=0
 for f in $(ldd "${progs[@]}" | awk '$2 == "=>" && $3 ~ /^\// {print $3}' | sort -u); do
   case "$(basename "$f")" in
@@ -38,4 +40,4 @@ done
 # The build's source root, which its compiled-in paths name.
 pwd > "$kit/build-root"
 git rev-parse --short HEAD > "$kit/commit" 2> /dev/null || true
-echo "gpu_kit.sh: $kit/ holds millcharge, millcharge_law_probe, millcharge_tests, clinfo and $n libraries ($(du -sh "$kit" | cut -f1)), built in $(cat "$kit/build-root") at $(cat "$kit/commit" 2> /dev/null || echo '?')"
+echo "gpu_kit.sh: $kit/ holds millcharge, millcharge_law_probe, millcharge_validate, millcharge_tests, clinfo and $n libraries ($(du -sh "$kit" | cut -f1)), built in $(cat "$kit/build-root") at $(cat "$kit/commit" 2> /dev/null || echo '?')"

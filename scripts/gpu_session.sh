@@ -4,9 +4,12 @@
 # (made here by scripts/gpu_kit.sh; with the device tool, name gpu-kit in
 # `carry`):
 #
-#   bash scripts/gpu_session.sh [--tests] [--bench ROWS] [--steps N] [--device SPEC]
+#   bash scripts/gpu_session.sh [--tests] [--validate] [--bench ROWS] [--steps N] [--device SPEC]
 #
-# --tests runs millcharge_tests (all but the viewer's) on the GPU; --bench
+# --tests runs millcharge_tests (all but the viewer's) on the GPU;
+# --validate runs the validation checks there (millcharge_validate, as
+# scripts/validate.sh does; validation.jsonl, and validation.md when
+# python3 is there); --bench
 # runs scripts/bench.sh for ROWS (its row names, e.g.
 # lab,tile-10k,tile-100k,tile-1M,100k,D) and the law probe. With neither,
 # it only lists the devices. It finds NVIDIA's OpenCL library
@@ -15,14 +18,16 @@
 # nothing is installed. The build's compiled-in root (gpu-kit/build-root)
 # is linked to this copy when it does not exist here. Logs go to $OUT
 # when it is set (the device tool's folder), else to runs/gpu-DATE:
-# devices.txt, tests.log, bench.md and bench.jsonl.
+# devices.txt, tests.log, validation.jsonl, validation.md, bench.md and
+# bench.jsonl.
 set -uo pipefail
 root=$(pwd)
 kit=$root/gpu-kit
-tests=0; rows=""; steps=""; device=gpu
+tests=0; validate=0; rows=""; steps=""; device=gpu
 while [ $# -gt 0 ]; do
   case "$1" in
     --tests) tests=1; shift ;;
+    --validate) validate=1; shift ;;
     --bench) rows="${2:?--bench needs rows, e.g. lab,100k,D}"; shift 2 ;;
     --steps) steps="${2:?--steps needs a number}"; shift 2 ;;
     --device) device="${2:?--device needs a spec}"; shift 2 ;;
@@ -55,6 +60,7 @@ fi
 mkdir -p build/tests
 cp "$kit/bin/millcharge" build/millcharge
 cp "$kit/bin/millcharge_law_probe" build/millcharge_law_probe
+cp "$kit/bin/millcharge_validate" build/millcharge_validate
 cp "$kit/bin/millcharge_tests" build/tests/millcharge_tests
 
 {
@@ -68,6 +74,21 @@ if [ "$tests" = 1 ]; then
   echo "gpu_session.sh: tests on --device $device" >&2
   MILLCHARGE_DEVICE=$device build/tests/millcharge_tests --durations yes > "$out/tests.log" 2>&1 || status=1
   tail -4 "$out/tests.log"
+fi
+if [ "$validate" = 1 ]; then
+  echo "gpu_session.sh: validation checks on --device $device" >&2
+  vstatus=0
+  build/millcharge_validate --device "$device" > "$out/validation.jsonl" 2> "$out/validation.err" || vstatus=$?
+  # 3: every check ran and a row fails, which the report shows.
+  [ "$vstatus" = 0 ] || [ "$vstatus" = 3 ] || status=1
+  if command -v python3 > /dev/null && [ "$vstatus" != 1 ]; then
+    python3 scripts/validation_report.py --rows "$out/validation.jsonl" \
+      --command "bash scripts/gpu_session.sh --validate --device $device" \
+      --machine "$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(nproc) CPUs" \
+      --date "$(date -u +%Y-%m-%d)" --commit "$(cat "$kit/commit" 2> /dev/null || echo '?')" \
+      --liggghts-note "not run on the GPU machine" > "$out/validation.md" || status=1
+  fi
+  tail -2 "$out/validation.err"
 fi
 if [ -n "$rows" ]; then
   args=(--device "$device" --only "$rows")

@@ -26,7 +26,9 @@
 #    "Loop time of X on P procs for N steps with M atoms" line; millcharge
 #    `bench --from` its run;
 # 6. prints a Markdown table (the median of the repeats, and their range)
-#    and the state of both charges; logs and JSON stay in --out.
+#    and the state of both charges, with the power each drew over the turn
+#    (LIGGGHTS: the torque on its meshes; millcharge: summary.json); logs
+#    and JSON stay in --out. scripts/validate.sh reads the same folder.
 #
 # Defaults: --steps 10000 (0.05 s), --turn 0.25 s, --ranks "1 2", --repeat 1,
 # --damping millcharge (LIGGGHTS gets the restitution whose damping
@@ -254,14 +256,15 @@ summ = json.load(open(f"{out}/millcharge-run/summary.json"))
 last = list(csv.DictReader(open(f"{out}/millcharge-run/timeseries.csv")))[-1]
 mc_vrms = math.sqrt(2 * float(last["kinetic_J"]) / summ["charge_mass_kg"])
 print()
-print("| code | settled after (s) | turned (s) | rms speed (m/s) | centre of mass angle (deg) |")
-print("|---|---|---|---|---|")
+print("| code | settled after (s) | turned (s) | rms speed (m/s) | centre of mass angle (deg) | power over the turn (W) |")
+print("|---|---|---|---|---|---|")
 rest = float(re.search(r"variable rest_speed +equal (\S+)", open(f"{out}/liggghts/params.in").read()).group(1))
 lg_note = "" if st["vrms"] < rest else " (not settled)"
 mc_note = "" if summ["settled"] else " (not settled)"
+lg_power = f"{tu['power_W']:.1f}" if "power_W" in tu else "not measured"
 print(f"| LIGGGHTS | {st['time']:.2f}{lg_note} | {lg_turn:.2f} | {tu['vrms']:.2f} | "
-      f"{math.degrees(math.atan2(tu['com_y'], tu['com_x'])) % 360:.1f} |")
+      f"{math.degrees(math.atan2(tu['com_y'], tu['com_x'])) % 360:.1f} | {lg_power} |")
 print(f"| millcharge | {summ['settle_s']:.2f}{mc_note} | {summ['turning_s']:.2f} | {mc_vrms:.2f} | "
-      f"{float(last['com_angle_deg']) % 360:.1f} |")
+      f"{float(last['com_angle_deg']) % 360:.1f} | {summ['power_W']['torque']:.1f} |")
 PY
 echo "liggghts_compare.sh: logs in $out" >&2

@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config
   ocl-icd-opencl-dev opencl-clhpp-headers opencl-c-headers pocl-opencl-icd clinfo
+  mesa-opencl-icd
   catch2 libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libfmt-dev libstb-dev
   libglfw3-dev libglew-dev libglm-dev libimgui-dev
   xvfb xauth libgl1-mesa-dri python3

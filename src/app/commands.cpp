@@ -210,9 +210,15 @@ int cmd_devices() {
     return 1;
   }
   for (const auto& d : devices)
-    std::printf("%s\n    %s, %d compute units, %.1f GiB, fp64 %s, gl sharing %s\n", d.label().c_str(),
-                d.version.c_str(), d.compute_units, d.global_mem_bytes / 1073741824.0, d.fp64 ? "yes" : "no",
-                d.gl_sharing ? "yes" : "no");
+    std::printf("%s\n    %s, %s, %d compute units, %.1f GiB, fp64 %s, gl sharing %s\n", d.label().c_str(),
+                d.version.c_str(), d.c_version.c_str(), d.compute_units, d.global_mem_bytes / 1073741824.0,
+                d.fp64 ? "yes" : "no", d.gl_sharing ? "yes" : "no");
+  for (const auto& [index, name] : compute::platforms_without_devices()) {
+    std::printf("platform %d (%s): no devices", index, name.c_str());
+    if (name == "rusticl" && !std::getenv("RUSTICL_ENABLE"))
+      std::printf(" (Mesa's rusticl offers one when RUSTICL_ENABLE names a driver: RUSTICL_ENABLE=llvmpipe for the CPU)");
+    std::printf("\n");
+  }
   return 0;
 }
 
@@ -495,7 +501,7 @@ int cmd_run(const RunOptions& o) {
   const SpectraReport spectra =
       spectra_report(p.scene, s.books, s.window_s, s.open_loss_start_J, s.open_loss_end_J, s.dissipated_J);
   const LinerReport liner =
-      liner_report(p.scene, layout, s.books, s.window_s, s.angles.found, s.angles.toe_deg, s.angles.shoulder_deg);
+      liner_report(p.scene, layout, s.books, s.window_s, s.profile, s.angles);
   j["spectra"] = io::spectra_json(spectra);
   j["liner"] = io::liner_json(layout, liner, p.scene.wall_material.wear_coefficient);
   j["contact_records_refused"] = solver->records_refused();
@@ -563,9 +569,9 @@ int cmd_run(const RunOptions& o) {
               liner.impact_W, liner.shear_W, liner.wear_kg_per_h, liner.worst_wear_mm_per_1000h,
               liner.worst_element >= 0 ? io::element_name(layout, liner.worst_element).c_str() : "none");
   if (std::isfinite(liner.impact_point_deg))
-    std::printf("impact point    %.0f deg, on the %s; %.0f %% of the liner's impact power on bare liner above the toe\n",
+    std::printf("impact point    %.0f deg, on the %s; %.3g W (%.0f %%) of the liner's impact power on bare liner\n",
                 liner.impact_point_deg, liner.impact_point_on_liner ? "bare liner above the toe" : "toe",
-                100 * liner.bare_liner_impact_share);
+                liner.bare_liner_impact_W, 100 * liner.bare_liner_impact_share);
   std::printf("morrell         power %.4g W (k %.2f x net %.4g W), toe %.1f deg, shoulder %.1f deg; DEM/model %.3f\n",
               m.charge_power_W, kMorrellK, m.net_power_W, m.toe_deg, m.shoulder_deg, s.torque_power_W / m.charge_power_W);
   std::printf("speed           %s steps in %.1f s wall, %.3g particle-updates/s\n", thousands(s.steps).c_str(),

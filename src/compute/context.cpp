@@ -60,6 +60,7 @@ std::vector<Found> enumerate() {
       i.name = devices[d].getInfo<CL_DEVICE_NAME>();
       i.type = type_name(devices[d].getInfo<CL_DEVICE_TYPE>());
       i.version = devices[d].getInfo<CL_DEVICE_VERSION>();
+      i.c_version = devices[d].getInfo<CL_DEVICE_OPENCL_C_VERSION>();
       const std::string ext = devices[d].getInfo<CL_DEVICE_EXTENSIONS>();
       i.fp64 = ext.find("cl_khr_fp64") != std::string::npos;
       i.gl_sharing = ext.find("cl_khr_gl_sharing") != std::string::npos;
@@ -67,7 +68,8 @@ std::vector<Found> enumerate() {
       i.max_alloc_bytes = devices[d].getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
       i.compute_units = static_cast<int>(devices[d].getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
       // Strip the padding some drivers leave in names.
-      while (!i.name.empty() && (i.name.back() == ' ' || i.name.back() == '\0')) i.name.pop_back();
+      for (std::string* t : {&i.name, &i.version, &i.c_version})
+        while (!t->empty() && (t->back() == ' ' || t->back() == '\0')) t->pop_back();
       out.push_back(std::move(f));
     }
   }
@@ -144,6 +146,26 @@ std::vector<DeviceInfo> list_devices() {
 }
 
 DeviceInfo choose_device(const std::string& spec) { return pick(spec).info; }
+
+std::vector<std::pair<int, std::string>> platforms_without_devices() {
+  std::vector<std::pair<int, std::string>> out;
+  std::vector<cl::Platform> platforms;
+  try {
+    cl::Platform::get(&platforms);
+  } catch (const cl::Error&) {
+    return out;
+  }
+  for (std::size_t p = 0; p < platforms.size(); ++p) {
+    std::vector<cl::Device> devices;
+    try {
+      platforms[p].getDevices(CL_DEVICE_TYPE_ALL, &devices);
+    } catch (const cl::Error&) {
+      devices.clear();  // CL_DEVICE_NOT_FOUND
+    }
+    if (devices.empty()) out.emplace_back(static_cast<int>(p), platforms[p].getInfo<CL_PLATFORM_NAME>());
+  }
+  return out;
+}
 
 struct Context::Ledger {
   std::atomic<std::size_t> allocated{0};

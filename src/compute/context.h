@@ -5,6 +5,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "compute/opencl.hpp"
@@ -25,6 +26,7 @@ struct DeviceInfo {
   std::string name;
   std::string type;  // "gpu", "cpu", "accelerator", "other"
   std::string version;
+  std::string c_version;  // CL_DEVICE_OPENCL_C_VERSION, e.g. "OpenCL C 1.2"
   bool fp64 = false;
   bool gl_sharing = false;
   std::size_t global_mem_bytes = 0;
@@ -35,6 +37,11 @@ struct DeviceInfo {
 
 // All devices of all platforms; empty when there is no OpenCL platform.
 std::vector<DeviceInfo> list_devices();
+
+// The platforms that offer no device, by index and name: a driver installed
+// for hardware that is not there, or Mesa's rusticl, which offers none until
+// RUSTICL_ENABLE names a driver.
+std::vector<std::pair<int, std::string>> platforms_without_devices();
 
 // What to print when list_devices() is empty: no platform (or platforms
 // without devices), and how to fix it.

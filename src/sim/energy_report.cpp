@@ -107,11 +107,11 @@ SpectraReport spectra_report(const Scene& scene, const BookSums& books, double w
 }
 
 LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const BookSums& books, double window_s,
-                         bool angles_found, double toe_deg, double shoulder_deg) {
+                         const std::vector<long>& contact_profile, const ChargeAngles& angles) {
   LinerReport r;
   r.window_s = window_s;
-  r.toe_deg = angles_found ? toe_deg : kNaN;
-  r.shoulder_deg = angles_found ? shoulder_deg : kNaN;
+  r.toe_deg = angles.found ? angles.toe_deg : kNaN;
+  r.shoulder_deg = angles.found ? angles.shoulder_deg : kNaN;
   const double w = window_s > 0 ? window_s : 1;
   const double density = scene.wall_material.density;
   const char* names[] = {"shell", "lifter leading faces", "lifter tops", "lifter trailing faces", "end plates"};
@@ -152,32 +152,43 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
   for (LinerPartRates& pr : r.parts)
     if (pr.area_m2 > 0) pr.mean_wear_mm_per_1000h = pr.wear_kg_per_h / density / 3600.0 / pr.area_m2 * 3.6e9;
 
-  // The lab frame: impact power per degree, the bare liner, the impact point.
+  // The lab frame: impact power per degree, how much of the liner the charge
+  // covers there, the bare liner's share, the impact point.
   const int nb = static_cast<int>(books.impact_profile.size());
   r.impact_W_per_deg.resize(nb);
   double total = 0;
   for (int b = 0; b < nb; ++b) total += r.impact_W_per_deg[b] = books.impact_profile[b] / w;
-  if (!angles_found || nb == 0 || !(total > 0)) {
+  r.coverage.assign(nb, 0.0);
+  const int np = static_cast<int>(contact_profile.size());
+  if (np > 0 && nb > 0) {
+    std::vector<double> s(np, 0.0);  // the profile smoothed over 5 bins, as the toe finder does
+    for (int k = 0; k < np; ++k)
+      for (int j = -2; j <= 2; ++j) s[k] += contact_profile[((k + j) % np + np) % np] / 5.0;
+    const double peak = *std::max_element(s.begin(), s.end());
+    for (int b = 0; b < nb && peak > 0; ++b) r.coverage[b] = std::min(1.0, s[static_cast<std::size_t>(b) * np / nb] / peak);
+  }
+  if (!angles.found || nb == 0 || !(total > 0)) {
     r.bare_liner_impact_W = r.bare_liner_impact_share = r.impact_point_deg = kNaN;
     return r;
   }
-  const double deg_per_bin = 360.0 / nb;
-  for (int b = 0; b < nb; ++b)
-    if (on_arc((b + 0.5) * deg_per_bin, shoulder_deg, toe_deg)) r.bare_liner_impact_W += r.impact_W_per_deg[b];
+  std::vector<double> bare(nb);
+  for (int b = 0; b < nb; ++b) {
+    bare[b] = r.impact_W_per_deg[b] * (1 - r.coverage[b]);
+    r.bare_liner_impact_W += bare[b];
+  }
   r.bare_liner_impact_share = r.bare_liner_impact_W / total;
+  const double deg_per_bin = 360.0 / nb;
   const int half = static_cast<int>(std::lround(4.0 / deg_per_bin));
   double best = -1;
+  int at = 0;
   for (int b = 0; b < nb; ++b) {
     const double a = (b + 0.5) * deg_per_bin;
-    if (!on_arc(a, shoulder_deg, toe_deg + 20.0)) continue;
+    if (!on_arc(a, r.shoulder_deg, r.toe_deg + 45.0)) continue;
     double sm = 0;
-    for (int d = -half; d <= half; ++d) sm += r.impact_W_per_deg[((b + d) % nb + nb) % nb];
-    if (sm > best) {
-      best = sm;
-      r.impact_point_deg = a;
-    }
+    for (int d = -half; d <= half; ++d) sm += bare[((b + d) % nb + nb) % nb];
+    if (sm > best) best = sm, r.impact_point_deg = a, at = b;
   }
-  r.impact_point_on_liner = on_arc(r.impact_point_deg, shoulder_deg, toe_deg);
+  r.impact_point_on_liner = r.coverage[at] < 0.5;
   return r;
 }
 

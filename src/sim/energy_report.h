@@ -10,6 +10,7 @@
 
 #include "core/liner.h"
 #include "core/scene.h"
+#include "sim/charge_profile.h"
 #include "sim/solver.h"
 
 namespace mc {
@@ -69,11 +70,17 @@ struct LinerReport {
   int worst_element = -1;
   double worst_wear_mm_per_1000h = 0;
   // The lab frame: impact power on the shell and lifters per degree
-  // (counter-clockwise from 3 o'clock), its share on the bare liner between
-  // the shoulder and the toe (over the top), and the impact point: the peak
-  // of that power (smoothed over 9 degrees) from the shoulder to 20 degrees
-  // past the toe. NaN where the toe or shoulder is not known.
+  // (counter-clockwise from 3 o'clock), and how much of the liner there the
+  // charge covers: the contact profile over its peak (the bed), at most 1.
+  // Impact power on bare liner weighs each degree's by the share left bare,
+  // 1 − coverage: the cataract's landing on liner above the toe counts, the
+  // bed's own rubbing does not. The impact point is where that bare-liner
+  // impact power peaks (smoothed over 9 degrees) from the shoulder to 45
+  // degrees past the toe; it lies on bare liner where the charge covers less
+  // than half of it, else on the toe. NaN where the toe or shoulder is not
+  // known.
   std::vector<double> impact_W_per_deg;
+  std::vector<double> coverage;  // per degree, 0..1
   double toe_deg = 0, shoulder_deg = 0;  // the charge's, that the above are taken with
   double bare_liner_impact_W = 0, bare_liner_impact_share = 0;
   double impact_point_deg = 0;
@@ -83,7 +90,9 @@ struct LinerReport {
 SpectraReport spectra_report(const Scene& scene, const BookSums& books, double window_s, double open_start_J,
                              double open_end_J, double dissipated_J);
 
+// `contact_profile`: the window's counts of balls touching the shell or a
+// lifter per degree (the run's toe and shoulder come from it), `angles` those.
 LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const BookSums& books, double window_s,
-                         bool angles_found, double toe_deg, double shoulder_deg);
+                         const std::vector<long>& contact_profile, const ChargeAngles& angles);
 
 }  // namespace mc

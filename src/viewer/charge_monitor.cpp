@@ -15,6 +15,7 @@ void ChargeMonitor::clear() {
   toe_deg_.clear();
   shoulder_deg_.clear();
   angles_ = {};
+  profile_sum_.clear();
 }
 
 void ChargeMonitor::push(std::vector<float>& v, float x) {
@@ -51,6 +52,7 @@ void ChargeMonitor::after_steps(Solver& solver, double time_s, bool turning) {
     for (const auto& p : profiles_)
       for (std::size_t k = 0; k < sum.size() && k < p.size(); ++k) sum[k] += p[k];
     angles_ = toe_and_shoulder(sum);
+    profile_sum_ = sum;
     if (angles_.found) {
       push(toe_deg_, static_cast<float>(angles_.toe_deg));
       push(shoulder_deg_, static_cast<float>(angles_.shoulder_deg));

@@ -32,6 +32,8 @@ class ChargeMonitor {
   const std::vector<float>& toe() const { return toe_deg_; }
   const std::vector<float>& shoulder() const { return shoulder_deg_; }
   const ChargeAngles& angles() const { return angles_; }
+  // The contact profiles summed for the angles (kProfileBins counts).
+  const std::vector<long>& profile() const { return profile_sum_; }
   double mean_torque_power() const;       // over the plotted history
   double mean_dissipation_power() const;
   double rms_speed() const { return rms_speed_; }
@@ -45,6 +47,7 @@ class ChargeMonitor {
   std::deque<std::vector<long>> profiles_;
   std::vector<float> torque_w_, diss_w_, toe_deg_, shoulder_deg_;
   ChargeAngles angles_;
+  std::vector<long> profile_sum_;
   double rms_speed_ = 0;
   Observables last_;
 };

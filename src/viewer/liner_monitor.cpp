@@ -18,7 +18,8 @@ void LinerMonitor::clear() {
   ++version_;
 }
 
-void LinerMonitor::after_steps(Solver& solver, double time_s, bool turning, const ChargeAngles& angles) {
+void LinerMonitor::after_steps(Solver& solver, double time_s, bool turning, const std::vector<long>& profile,
+                               const ChargeAngles& angles) {
   if (!turning) {
     if (since_ >= 0) clear();
     return;
@@ -48,7 +49,7 @@ void LinerMonitor::after_steps(Solver& solver, double time_s, bool turning, cons
       for (std::size_t q = 0; q < sum.liner.size(); ++q) sum.liner[q] += reads_[k].liner[q];
       for (std::size_t q = 0; q < sum.impact_profile.size(); ++q) sum.impact_profile[q] += reads_[k].impact_profile[q];
     }
-    return liner_report(scene_, layout_, sum, span, angles.found, angles.toe_deg, angles.shoulder_deg);
+    return liner_report(scene_, layout_, sum, span, profile, angles);
   };
   report_ = report_of(kWindow);
   recent_ = report_of(kRecent);

@@ -24,8 +24,10 @@ class LinerMonitor {
 
   void set_scene(const Scene& scene);  // the layout and materials (after an edit)
   void clear();
-  // After each frame that stepped; `angles`: the charge's toe and shoulder now.
-  void after_steps(Solver& solver, double time_s, bool turning, const ChargeAngles& angles);
+  // After each frame that stepped; the charge's contact profile and its toe
+  // and shoulder now.
+  void after_steps(Solver& solver, double time_s, bool turning, const std::vector<long>& profile,
+                   const ChargeAngles& angles);
 
   const LinerLayout& layout() const { return layout_; }
   bool ready() const { return ready_; }

@@ -247,7 +247,7 @@ void App::step_frame() {
     advance_s_ = s;
     feed_->update(*solver_, *balls_);
     monitor_.after_steps(*solver_, sim_time(), !settling_);
-    liner_.after_steps(*solver_, sim_time(), !settling_, monitor_.angles());
+    liner_.after_steps(*solver_, sim_time(), !settling_, monitor_.profile(), monitor_.angles());
     steps_ += steps;
     window_steps_ += steps;
     instances_stale_ = false;
