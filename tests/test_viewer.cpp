@@ -158,6 +158,33 @@ TEST_CASE("view --frames --screenshot draws the lab mill's charge where it shoul
   fs::remove_all(dir);
 }
 
+TEST_CASE("view --liner impact colours the liner by its impact power and marks the impact point", "[viewer]") {
+  REQUIRE(std::system("command -v xvfb-run > /dev/null 2>&1") == 0);
+  const fs::path dir = fs::temp_directory_path() / ("millcharge_view_liner_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const Shot s = shoot(dir, "liner", 60, "--liner impact");
+  INFO(s.out << s.err);
+  // The liner's sums of the turning mill, as the viewer reports them.
+  const auto at = s.out.find("liner over the last");
+  REQUIRE(at != std::string::npos);
+  double window = 0, impact = 0, shear = 0;
+  REQUIRE(std::sscanf(s.out.c_str() + at, "liner over the last %lf s: impact %lf W, shear %lf W", &window, &impact,
+                      &shear) == 3);
+  CHECK(window > 0.05);
+  CHECK(impact > 1);   // the lab mill's liner takes tens of watts of impacts
+  CHECK(shear > 1);
+  // The impact point's magenta mark beside the shell (none without it: the
+  // balls' speed ramp has no magenta).
+  long magenta = 0;
+  for (int y = 0; y < s.height; ++y)
+    for (int x = 0; x < s.width; ++x) {
+      const unsigned char* p = &s.rgb[(static_cast<std::size_t>(y) * s.width + x) * 3];
+      magenta += p[0] > 220 && p[1] < 90 && p[2] > 180;
+    }
+  CHECK(magenta > 20);
+  fs::remove_all(dir);
+}
+
 namespace {
 
 // The line the viewer prints for a scripted edit before `frame`.

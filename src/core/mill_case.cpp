@@ -304,6 +304,7 @@ Scene build_walls(const MillCase& c, const MillDerived& d) {
   s.walls.length = c.length;
   s.walls.lifter_first_angle = c.lifter_first_angle_deg * kPi / 180.0;
   s.walls.lifters = lifter_rows(R, c.lifter_rows, c.lifter_pattern, s.walls.lifter_first_angle);
+  s.liner = c.liner_grid;
   s.numerics.law = c.law;
   s.numerics.precision = c.precision;
   s.numerics.dt = d.dt;

@@ -38,6 +38,8 @@ struct MillCase {
   // [lifters]
   int lifter_rows = 0;
   std::vector<LifterProfile> lifter_pattern;  // row k has pattern[k % size]
+  // [liner]: how the liner is cut into elements for impact and wear sums
+  LinerGrid liner_grid;
   double lifter_first_angle_deg = 0;
   // [charge]
   double filling = 0;        // J: bulk charge volume / free mill volume

@@ -368,7 +368,7 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
   MillCase c;
   c.name = name;
   Section top(r, root, "");
-  top.knows({"title", "mill", "lifters", "charge", "materials", "contact", "run"});
+  top.knows({"title", "mill", "lifters", "liner", "charge", "materials", "contact", "run"});
   c.title = top.string("title", std::string());
 
   // [contact] first: the law decides which material keys are needed.
@@ -408,13 +408,17 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       const std::string mname(k.str());
       const toml::table* t = s.table(mname, true);
       Section m(r, *t, "materials." + mname);
-      m.knows({"density", "youngs_modulus", "poisson_ratio"});
+      m.knows({"density", "youngs_modulus", "poisson_ratio", "wear_coefficient"});
       Material mat;
       mat.name = mname;
       mat.density = m.number("density");
       const bool hertz = c.law == ContactLaw::hertz;
       mat.youngs_modulus = hertz ? m.number("youngs_modulus") : m.number("youngs_modulus", 2.0e11);
       mat.poisson_ratio = hertz ? m.number("poisson_ratio") : m.number("poisson_ratio", 0.3);
+      mat.wear_coefficient = m.number("wear_coefficient", kDefaultWearCoefficient);
+      if (!(mat.wear_coefficient >= 0 && mat.wear_coefficient < 1e-6))
+        r.fail("materials." + mname + ".wear_coefficient", m.node("wear_coefficient"),
+               "must be in [0, 1e-6) m^3 per N per m slid (Archard's k over the hardness; about 1e-13 for liner steel)");
       c.materials.push_back(mat);
     }
     if (c.materials.empty()) r.fail("materials", mt, "define at least one material, e.g. [materials.steel]");
@@ -454,6 +458,23 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       lp.face_angle_deg = p.number("face_angle");
       c.lifter_pattern.push_back(lp);
     }
+  }
+  if (const toml::table* lt = top.table("liner", false)) {
+    Section s(r, *lt, "liner");
+    s.knows({"shell_bins", "smooth_shell_bins", "axial_bins", "plate_rings", "plate_sectors"});
+    LinerGrid& g = c.liner_grid;
+    auto bins = [&](const char* key, int fallback, long lo, long hi) {
+      const long v = s.integer(key, fallback);
+      if (v < lo || v > hi)
+        r.fail(std::string("liner.") + key, s.node(key),
+               "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]" + (lo == 0 ? " (0: auto)" : ""));
+      return static_cast<int>(v);
+    };
+    g.shell_bins = bins("shell_bins", g.shell_bins, 1, 64);
+    g.smooth_shell_bins = bins("smooth_shell_bins", g.smooth_shell_bins, 4, 720);
+    g.axial_bins = bins("axial_bins", g.axial_bins, 0, 256);
+    g.plate_rings = bins("plate_rings", g.plate_rings, 1, 64);
+    g.plate_sectors = bins("plate_sectors", g.plate_sectors, 0, 720);
   }
   {
     Section s(r, *top.table("charge", true), "charge");
@@ -570,6 +591,12 @@ std::string case_to_toml(const MillCase& c) {
   for (const LifterProfile& p : c.lifter_pattern)
     profiles.push_back(toml::table{{"height", p.height}, {"top_width", p.top_width}, {"face_angle", p.face_angle_deg}});
   root.insert("lifters", toml::table{{"rows", c.lifter_rows}, {"first_angle", c.lifter_first_angle_deg}, {"profile", profiles}});
+  const LinerGrid& g = c.liner_grid;
+  root.insert("liner", toml::table{{"shell_bins", g.shell_bins},
+                                   {"smooth_shell_bins", g.smooth_shell_bins},
+                                   {"axial_bins", g.axial_bins},
+                                   {"plate_rings", g.plate_rings},
+                                   {"plate_sectors", g.plate_sectors}});
   toml::array sizes;
   for (const SizeClass& s : c.sizes) {
     toml::table t{{"material", s.material}, {"fraction", s.fraction}};
@@ -590,7 +617,8 @@ std::string case_to_toml(const MillCase& c) {
   for (const Material& m : c.materials)
     materials.insert(m.name, toml::table{{"density", m.density},
                                          {"youngs_modulus", m.youngs_modulus},
-                                         {"poisson_ratio", m.poisson_ratio}});
+                                         {"poisson_ratio", m.poisson_ratio},
+                                         {"wear_coefficient", m.wear_coefficient}});
   root.insert("materials", materials);
   toml::table contact = interaction(c.contact, toml::table{{"law", c.law == ContactLaw::hertz ? "hertz" : "linear"}});
   toml::array pairs;

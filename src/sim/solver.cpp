@@ -574,7 +574,7 @@ void SolverImpl<Real>::pack_records(bool in_rebuild) {
   if (capacity > std::numeric_limits<int>::max() / 2)
     throw std::runtime_error("contact records: " + std::to_string(capacity) + " do not fit the pool's index");
   if (static_cast<std::size_t>(capacity) * 2 > records_.size() ||
-      static_cast<std::size_t>(capacity) * 2 * 3 < records_.size())
+      static_cast<std::size_t>(capacity) * 2 * 3 / 2 < records_.size())
     records_.resize(static_cast<std::size_t>(capacity) * 2);
   if (live > 0) ctx_.queue().enqueueCopyBuffer(scratch->device(), records_.device(), 0, 0, 2 * live * sizeof(real4));
   // The pool's size from what it holds, not from the buffer (which may be

@@ -562,6 +562,13 @@ int App::run() {
         opt_.screenshot.c_str(), opt_.width, opt_.height, axis.x, axis.y, glm::length(rim - axis),
         settling_ ? "settling" : "turning", settling_ ? sim_time() - settle_from_ : sim_time() - turning_from_,
         100 * derived_.speed_fraction, n_balls_);
+    if (liner_.ready()) {
+      const LinerReport& r = liner_.report();
+      std::printf("millcharge view: liner over the last %.2f s: impact %.4g W, shear %.4g W, wear %.3g kg/h; impact point "
+                  "%.0f deg (%.0f %% of the impact power on bare liner)\n",
+                  r.window_s, r.impact_W, r.shear_W, r.wear_kg_per_h, r.impact_point_deg,
+                  100 * r.bare_liner_impact_share);
+    }
   }
   return 0;
 }
