@@ -8,6 +8,7 @@
 #include "core/drum.h"
 #include "helpers.h"
 #include "io/case_file.h"
+#include "sim/layout.hpp"
 
 namespace mc::checks {
 
@@ -225,6 +226,14 @@ Rolling sliding_to_rolling(compute::Context& ctx, ContactLaw law) {
   Rolling out;
   out.speed_ratio = bs[0].velocity.x / v0;
   out.slip_ratio = bs[0].omega.y * r / bs[0].velocity.x;
+  const BookSums books = s->read_books();
+  for (int e = 0; e < books.n_elements; ++e) {
+    out.shear_J += books.liner_at(e, MC_LINER_SHEAR);
+    out.wear_m3 += books.liner_at(e, MC_LINER_WEAR);
+  }
+  const double slid = v0 * v0 / (7 * in.mu_slide * 9.81);
+  out.shear_theory_J = in.mu_slide * w * slid;
+  out.wear_theory_m3 = sc.wall_material.wear_coefficient * w * slid;
   return out;
 }
 

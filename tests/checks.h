@@ -64,9 +64,14 @@ ObliqueImpact chung_ooi_4(compute::Context& ctx, const Material& m, double theta
 
 // A ball sliding on a floor (μ 0.3) from 1 m/s: after 1.5 times the
 // sliding time it rolls at 5/7 of that speed with ω r = v.
+// While it slides the contact point slips s = v0²/(7 μ g): the liner's
+// books take shear work μ m g s and Archard wear k m g s (k the floor's
+// wear_coefficient).
 struct Rolling {
   double speed_ratio = 0;  // v / v0
   double slip_ratio = 0;   // ω r / v
+  double shear_J = 0, shear_theory_J = 0;      // the floor's shear energy, and μ m g s
+  double wear_m3 = 0, wear_theory_m3 = 0;      // its Archard volume, and k m g s
 };
 Rolling sliding_to_rolling(compute::Context& ctx, ContactLaw law);
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "checks.h"
 #include "core/drum.h"
 #include "core/liner.h"
 #include "helpers.h"
@@ -214,47 +215,16 @@ TEST_CASE("a ball resting on a plate records no new collisions while it rests", 
 }
 
 TEST_CASE("a ball sliding on a plate: shear work mu m g s and Archard volume k m g s", "[books][physics][wear]") {
-  // Sliding lasts until the ball rolls; the contact point slips
-  // s = v0² / (7 μ g) on the way (a decelerates by μg, the spin's rim
-  // speed grows by 5/2 μg).
-  const Material steel{"steel", 7800, 2e11, 0.3};
+  // The sliding-to-rolling check (tests/checks.cpp): the contact point slips
+  // s = v0² / (7 μ g) before the ball rolls (it decelerates by μg while the
+  // spin's rim speed grows by 5/2 μg).
   for (ContactLaw law : {ContactLaw::linear, ContactLaw::hertz}) {
-    Interaction in;
-    in.restitution = 0.5;
-    in.mu_slide = 0.3;
-    in.mu_roll = 0;
-    in.kn = 1e6;
-    Material liner = steel;
-    liner.wear_coefficient = 2e-13;
-    Scene sc = bare_scene(steel, liner, in, law);
-    sc.numerics.gravity = {0, 0, -9.81};
-    sc.walls.length = 10.0;
-    const double r = 0.01, v0 = 1.0, g = 9.81, mu = 0.3;
-    const double m = sphere_mass(7800, r);
-    const PairCoefficients pc = pair_coefficients(sc, 0, 1);
-    const double rest = law == ContactLaw::hertz ? std::pow(m * g / (4.0 / 3.0 * pc.e_star * std::sqrt(r)), 2.0 / 3.0)
-                                                 : m * g / in.kn;
-    sc.numerics.dt = law == ContactLaw::hertz ? 2e-6 : kPi * std::sqrt(m / in.kn) / 40;
-    Ball b;
-    b.radius = r;
-    b.position = {0, 0, r - rest};
-    b.velocity = {v0, 0, 0};
-    sc.balls = {b};
-    auto s = make_solver(context(), sc);
-    s->advance(static_cast<long>(1.5 * 2 * v0 / (7 * mu * g) / sc.numerics.dt));
-    const BookSums books = s->read_books();
-    double shear = 0, wear = 0;
-    for (int e = 0; e < books.n_elements; ++e) {
-      shear += books.liner_at(e, MC_LINER_SHEAR);
-      wear += books.liner_at(e, MC_LINER_WEAR);
-    }
-    const double slid = v0 * v0 / (7 * mu * g);
+    const checks::Rolling r = checks::sliding_to_rolling(context(), law);
     std::printf("sliding %-6s: shear work %.6g J (mu m g s %.6g J), wear %.6g m^3 (k m g s %.6g m^3)\n",
-                law == ContactLaw::hertz ? "hertz" : "linear", shear, mu * m * g * slid, wear,
-                liner.wear_coefficient * m * g * slid);
+                law == ContactLaw::hertz ? "hertz" : "linear", r.shear_J, r.shear_theory_J, r.wear_m3, r.wear_theory_m3);
     INFO((law == ContactLaw::hertz ? "hertz" : "linear"));
-    CHECK(shear == Approx(mu * m * g * slid).epsilon(0.01));
-    CHECK(wear == Approx(liner.wear_coefficient * m * g * slid).epsilon(0.01));
+    CHECK(r.shear_J == Approx(r.shear_theory_J).epsilon(0.01));
+    CHECK(r.wear_m3 == Approx(r.wear_theory_m3).epsilon(0.01));
   }
 }
 

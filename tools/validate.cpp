@@ -27,6 +27,7 @@
 
 #include "checks.h"
 #include "core/morrell.h"
+#include "sim/energy_report.h"
 
 using namespace mc;
 
@@ -179,11 +180,19 @@ void single(compute::Context& ctx) {
   {
     const std::string g = "Sliding to rolling";
     about(g, "A steel ball (r 10 mm) sliding on a floor from 1 m/s with μ 0.3 (VERIFICATION.md §2): it stops "
-             "sliding at 5/7 of its start speed, then rolls with ω r = v.");
+             "sliding at 5/7 of its start speed, then rolls with ω r = v. While it slides its contact point slips "
+             "s = v0²/(7 μ g), and the floor's liner books take the shear work μ m g s and Archard's wear k m g s "
+             "(k = 10⁻¹³ m³/(N·m)).");
     for (ContactLaw law : {ContactLaw::linear, ContactLaw::hertz}) {
       const checks::Rolling r = checks::sliding_to_rolling(ctx, law);
       relative_row(g, std::string(law_name(law)) + " law: v / v0 when rolling", "5/7 = " + fmt("%.4f", 5.0 / 7.0),
                    5.0 / 7.0, fmt("%.4f", r.speed_ratio), r.speed_ratio, 0.01);
+      relative_row(g, std::string(law_name(law)) + " law: the floor's shear work while sliding",
+                   "μ m g s = " + fmt("%.5f J", r.shear_theory_J), r.shear_theory_J, fmt("%.5f J", r.shear_J),
+                   r.shear_J, 0.01);
+      relative_row(g, std::string(law_name(law)) + " law: the floor's Archard wear volume",
+                   "k m g s = " + fmt("%.4g m³", r.wear_theory_m3), r.wear_theory_m3, fmt("%.4g m³", r.wear_m3),
+                   r.wear_m3, 0.01);
     }
   }
   {
@@ -252,6 +261,14 @@ void balance(compute::Context& ctx) {
     const checks::LabRun r = lab_75(ctx);
     balance_row(g, "lab mill, linear law, " + window(r.s),
                 r.s.torque_power_W, r.s.dissipation_power_W, r.s.energy_change_W);
+    // The same dissipation booked per collision (docs/energy.md): the
+    // collisions that closed in the window plus the change of what the open
+    // contacts hold.
+    const SpectraReport sp = spectra_report(r.scene, r.s.books, r.s.window_s, r.s.open_loss_start_J,
+                                            r.s.open_loss_end_J, r.s.dissipated_J);
+    relative_row(g, "lab mill, linear law: the collision spectra against the dissipation, " + window(r.s),
+                 num(sp.dissipation_W) + " W dissipated", sp.dissipation_W,
+                 num(sp.closed_W) + fmt(" W closed %+.3g W open change", sp.open_change_W), sp.books_W, 0.01);
   }
   {
     // Hertz steps are 7 times shorter: a 0.05 m slice (905 balls) and 0.7 s
