@@ -33,6 +33,23 @@ std::vector<std::vector<Vec2>> lifter_rows(double shell_radius, int rows,
   return out;
 }
 
+std::vector<Triangle> lifter_triangles(const std::vector<std::vector<Vec2>>& bars, double length) {
+  std::vector<Triangle> out;
+  for (const auto& poly : bars) {
+    const std::size_t n = poly.size();
+    auto at = [&](std::size_t k, double z) { return Vec3{poly[k % n].x, poly[k % n].y, z}; };
+    for (std::size_t k = 0; k < n; ++k) {  // counter-clockwise polygon: (dy, -dx) points out
+      out.push_back({{at(k, 0), at(k + 1, 0), at(k + 1, length)}});
+      out.push_back({{at(k, 0), at(k + 1, length), at(k, length)}});
+    }
+    for (std::size_t k = 1; k + 1 < n; ++k) {
+      out.push_back({{at(0, 0), at(k + 1, 0), at(k, 0)}});                 // z = 0, facing -z
+      out.push_back({{at(0, length), at(k, length), at(k + 1, length)}});  // z = length, facing +z
+    }
+  }
+  return out;
+}
+
 double polygon_signed_distance(const std::vector<Vec2>& poly, double x, double y) {
   bool inside = true;
   double best = 1e300;

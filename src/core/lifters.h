@@ -25,6 +25,12 @@ std::vector<std::vector<Vec2>> lifter_rows(double shell_radius, int rows,
                                            const std::vector<LifterProfile>& pattern,
                                            double first = 0.0);
 
+// The bars of lifter_rows as closed triangle meshes from z = 0 to `length`:
+// each bar's faces (its polygon's edges extruded) and its two end caps, every
+// triangle facing out of the bar. What a CAD tool would export for the same
+// liner (an STL of the parametric lifters).
+std::vector<Triangle> lifter_triangles(const std::vector<std::vector<Vec2>>& bars, double length);
+
 // Signed distance from (x, y) to a convex counter-clockwise polygon: negative
 // inside. For packing and checks on the host (the kernels use cl/walls.h).
 double polygon_signed_distance(const std::vector<Vec2>& poly, double x, double y);

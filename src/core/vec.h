@@ -1,6 +1,7 @@
 // Plain double vectors for the host side (the kernels have their own types).
 #pragma once
 
+#include <array>
 #include <cmath>
 
 namespace mc {
@@ -16,6 +17,12 @@ struct Vec3 {
   Vec3 operator*(double s) const { return {x * s, y * s, z * s}; }
   double dot(const Vec3& o) const { return x * o.x + y * o.y + z * o.z; }
   double norm() const { return std::sqrt(dot(*this)); }
+};
+
+// A wall triangle: its vertices counter-clockwise seen from the side it
+// faces (the side its normal points to).
+struct Triangle {
+  std::array<Vec3, 3> v;
 };
 
 }  // namespace mc
