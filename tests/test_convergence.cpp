@@ -177,7 +177,7 @@ TEST_CASE("run.duration, run.tolerance and run.max_duration are read, checked an
 namespace {
 
 // A small, soft mill that turns a revolution in about a second of about 8,000
-// steps: 100 balls in a 0.3 m mill.
+// steps: 85 balls in a 0.3 m mill.
 const std::string kSmall =
     " --quiet --set mill.diameter=0.3 --set mill.length=0.05 --set contact.stiffness=1e5"
     " --set run.steps_per_contact=10 --set run.warmup=1.0 --set run.snapshot_interval=0"

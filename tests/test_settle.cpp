@@ -18,7 +18,7 @@ nlohmann::json settle_only(const std::string& damping, const std::string& name) 
   const fs::path out = fs::temp_directory_path() / ("millcharge_test_settle_" + name + std::to_string(::getpid()));
   fs::remove_all(out);
   mc::app::RunOptions o;
-  // 100 balls in a 0.3 m mill; a few turning steps after the settling.
+  // 85 balls in a 0.3 m mill; a few turning steps after the settling.
   o.c.overrides = {"mill.diameter=0.3",          "mill.length=0.05",        "contact.stiffness=1e5",
                    "run.steps_per_contact=10",   "run.warmup=0",            "run.snapshot_interval=0",
                    "run.settle_damping=" + damping};
