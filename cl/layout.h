@@ -137,7 +137,9 @@ typedef struct {
                         touch a lifter */
   real lifter_first_angle; /* centre angle of lifter 0 in the mill frame, rad */
   real lifter_spacing;     /* angle between lifter rows, rad */
-  real pad_real;
+  real velocity_damping; /* fraction of each ball's velocity and spin taken
+                            away each step (viscous damping while the charge
+                            settles); 0 while the mill turns */
   int grid_nx, grid_ny, grid_nz;
   int n_balls;
   int n_materials;   /* ball materials; the wall material has index n_materials */

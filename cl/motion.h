@@ -17,6 +17,12 @@ MC_FN int integrate_ball(int i, MC_GLOBAL const SimParams* sp,
   v.x += dt * f.x * v.w; v.y += dt * f.y * v.w; v.z += dt * f.z * v.w;
   p.x += dt * v.x; p.y += dt * v.y; p.z += dt * v.z;
   w.x += dt * t.x * w.w; w.y += dt * t.y * w.w; w.z += dt * t.z * w.w;
+  if (sp->velocity_damping > R(0.0)) { /* only while settling: the turning
+                                          mill's steps stay as they were */
+    const real keep = R(1.0) - sp->velocity_damping;
+    v.x *= keep; v.y *= keep; v.z *= keep;
+    w.x *= keep; w.y *= keep; w.z *= keep;
+  }
   vel[i] = v;
   pos[i] = p;
   omega[i] = w;

@@ -2,6 +2,7 @@
 // to rolling, and a ball carried on a turning shell.
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <cstdio>
 
 #include "checks.h"
@@ -58,5 +59,32 @@ TEST_CASE("a ball carried on a turning shell leaves where cos(alpha) = phi^2", "
     CHECK(std::fabs(f.departure_deg - f.departure_theory_deg) < 2.0);
     CHECK(std::fabs(f.landing_deg - f.landing_theory_deg) < 2.0);
     CHECK(rel_err(f.flight_s, f.flight_theory_s) < 0.015);
+  }
+}
+
+TEST_CASE("settling damping slows a free ball as exp(-rate t), and off leaves it alone", "[physics][motion]") {
+  for (Precision prec : {Precision::single, Precision::double_}) {
+    const Material steel{"steel", 7800, 2e11, 0.3};
+    Scene sc = bare_scene(steel, steel, Interaction{}, ContactLaw::hertz, prec);
+    sc.numerics.dt = 1e-4;
+    Ball b;
+    b.radius = 0.01;
+    b.velocity = {2.0, -1.0, 0.5};
+    b.omega = {0.0, 0.0, 30.0};
+    sc.balls = {b};
+    auto s = make_solver(context(), sc);
+    s->set_velocity_damping(10.0);
+    s->advance(1000);  // 0.1 s: e^-1 of the speed and spin left
+    const BallState damped = s->balls()[0];
+    const double left = std::exp(-10.0 * s->time_s());
+    INFO((prec == Precision::double_ ? "double" : "float"));
+    CHECK(damped.velocity.x == Approx(2.0 * left).epsilon(1e-4));
+    CHECK(damped.velocity.y == Approx(-1.0 * left).epsilon(1e-4));
+    CHECK(damped.omega.z == Approx(30.0 * left).epsilon(1e-4));
+    s->set_velocity_damping(0.0);
+    s->advance(1000);
+    const BallState free = s->balls()[0];
+    CHECK(free.velocity.x == damped.velocity.x);
+    CHECK(free.omega.z == damped.omega.z);
   }
 }

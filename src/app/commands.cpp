@@ -27,6 +27,7 @@
 #include "io/energy_out.h"
 #include "io/png_plot.h"
 #include "io/vtk.h"
+#include "sim/batch_means.h"
 #include "sim/energy_report.h"
 #include "sim/mill_run.h"
 #include "sim/solver.h"
@@ -51,7 +52,9 @@ Prepared prepare(const CaseOptions& o, const fs::path& default_path = io::defaul
   Prepared p;
   p.path = o.case_path.empty() ? default_path : fs::path(o.case_path);
   std::vector<std::string> overrides = o.overrides;
-  if (o.duration > 0) {
+  if (o.duration_auto) {
+    overrides.push_back("run.duration=\"auto\"");
+  } else if (o.duration > 0) {
     std::ostringstream s;
     s.precision(17);
     s << "run.duration=" << o.duration;
@@ -111,6 +114,11 @@ class ProgressPrinter {
     if (p.phase == "settle")
       std::snprintf(line, sizeof line, "settling  t %.3f s  %s steps  %.3g steps/s  %.3g updates/s", p.simulated_s,
                     thousands(p.steps).c_str(), p.steps_per_s, p.updates_per_s);
+    else if (p.relative_error >= 0)  // an auto run: its power's error so far, and the time left to its cap
+      std::snprintf(line, sizeof line,
+                    "turning   t %.3f s  rev %.2f  power \u00b1%.2f %%  %.3g steps/s  %.3g updates/s  %s left at most",
+                    p.simulated_s, p.revolutions, 100 * p.relative_error, p.steps_per_s, p.updates_per_s,
+                    duration_text(p.eta_s).c_str());
     else
       std::snprintf(line, sizeof line, "turning   t %.3f s  rev %.2f  %3.0f %%  %.3g steps/s  %.3g updates/s  %s left",
                     p.simulated_s, p.revolutions, 100 * p.done, p.steps_per_s, p.updates_per_s,
@@ -201,6 +209,51 @@ double finite_or_nan(bool ok, double v) { return ok ? v : std::nan(""); }
 
 nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
+// "873.9 ± 4.1 W": the value to the standard error's second digit; the
+// value alone (as %.4g) where there is no error.
+std::string plus_minus(double v, double sem, const char* unit) {
+  char b[128];
+  if (!std::isfinite(v)) {
+    std::snprintf(b, sizeof b, "?%s", unit);
+  } else if (!(std::isfinite(sem) && sem > 0)) {
+    std::snprintf(b, sizeof b, "%.4g%s", v, unit);
+  } else {
+    const int decimals = std::clamp(1 - static_cast<int>(std::floor(std::log10(sem))), 0, 6);
+    std::snprintf(b, sizeof b, "%.*f \u00b1 %.*f%s", decimals, v, decimals, sem, unit);
+  }
+  return b;
+}
+
+// The standard errors of a run's means, each from its revolutions' means
+// (batch means, sim/batch_means.h).
+struct Errors {
+  BatchMeans power, dissipation, torque, arm, toe, shoulder, com;
+  BatchMeans collisions, collision_power, impacts, impact, shear, wear;
+};
+
+Errors errors_of(const std::vector<RevolutionMeans>& revs) {
+  auto of = [&](double RevolutionMeans::*field) {
+    std::vector<double> v;
+    for (const RevolutionMeans& m : revs) v.push_back(m.*field);
+    return batch_means(v);
+  };
+  Errors e;
+  e.power = of(&RevolutionMeans::torque_power_W);
+  e.dissipation = of(&RevolutionMeans::dissipation_power_W);
+  e.torque = of(&RevolutionMeans::torque_Nm);
+  e.arm = of(&RevolutionMeans::torque_arm_power_W);
+  e.toe = of(&RevolutionMeans::toe_deg);
+  e.shoulder = of(&RevolutionMeans::shoulder_deg);
+  e.com = of(&RevolutionMeans::com_angle_deg);
+  e.collisions = of(&RevolutionMeans::collisions_per_s);
+  e.collision_power = of(&RevolutionMeans::collision_power_W);
+  e.impacts = of(&RevolutionMeans::liner_impacts_per_s);
+  e.impact = of(&RevolutionMeans::liner_impact_W);
+  e.shear = of(&RevolutionMeans::liner_shear_W);
+  e.wear = of(&RevolutionMeans::wear_kg_per_h);
+  return e;
+}
+
 }  // namespace
 
 int cmd_devices() {
@@ -254,10 +307,18 @@ int cmd_check(const CaseOptions& o) {
               c.law == ContactLaw::hertz ? " (impact at the tip speed)" : "");
   std::printf("dt              %.4g s (%s; %.1f steps per contact)\n", d.dt,
               d.dt_auto ? "auto" : "from the case", d.contact_time / d.dt);
-  const long steps = std::lround(c.duration / d.dt);
-  std::printf("run             settle %s, turn %.4g s = %.3g revolutions (%s steps), warm-up %.4g s, %s\n",
-              c.settle < 0 ? "auto" : (std::to_string(c.settle) + " s").c_str(), c.duration,
-              c.duration / d.revolution_s, thousands(steps).c_str(), c.warmup,
+  const long steps = std::lround(d.turn_limit_s / d.dt);
+  char turn[256];
+  if (c.duration_auto)
+    std::snprintf(turn, sizeof turn,
+                  "turn auto: until the power's standard error is %.3g %% of its mean, at most %.4g s = %.3g "
+                  "revolutions (%s steps)",
+                  100 * c.tolerance, d.turn_limit_s, d.turn_limit_s / d.revolution_s, thousands(steps).c_str());
+  else
+    std::snprintf(turn, sizeof turn, "turn %.4g s = %.3g revolutions (%s steps)", c.duration,
+                  c.duration / d.revolution_s, thousands(steps).c_str());
+  std::printf("run             settle %s (damping %.3g 1/s), %s, warm-up %.4g s, %s\n",
+              c.settle < 0 ? "auto" : (std::to_string(c.settle) + " s").c_str(), d.settle_damping, turn, c.warmup,
               c.precision == Precision::double_ ? "double" : "float");
   const MorrellResult m = morrell_c_model(morrell_input(c, d));
   std::printf("morrell c-model power %.4g W (k %.2f x net %.4g W), toe %.1f deg, shoulder %.1f deg\n",
@@ -318,7 +379,8 @@ int cmd_run(const RunOptions& o) {
   Prepared p;
   io::Checkpoint cp;
   if (resume) {
-    if (!o.c.case_path.empty() || !o.c.overrides.empty() || o.c.duration > 0 || !o.c.precision.empty())
+    if (!o.c.case_path.empty() || !o.c.overrides.empty() || o.c.duration > 0 || o.c.duration_auto ||
+        !o.c.precision.empty())
       throw std::invalid_argument("--resume " + o.resume +
                                   ": continues the run with its own case; a CASE, --set, --duration or --precision "
                                   "cannot be given with it");
@@ -472,6 +534,7 @@ int cmd_run(const RunOptions& o) {
   j["steps"] = s.steps;
   j["simulated_s"] = s.simulated_s;
   j["settle_s"] = s.settle_s;
+  j["settle_wall_s"] = s.settle_wall_s;
   j["settled"] = s.settled;
   j["turning_s"] = s.turning_s;
   j["revolutions"] = s.revolutions;
@@ -479,15 +542,36 @@ int cmd_run(const RunOptions& o) {
                   {"to_s", s.window_to_s},
                   {"revolutions", s.window_revolutions},
                   {"whole_revolutions", s.whole_revolutions}};
+  const Errors err = errors_of(s.revolutions_means);
+  const double rel_err = err.power.sem / std::fabs(err.power.mean);
   j["power_W"] = {{"torque", s.torque_power_W},
                   {"dissipation", s.dissipation_power_W},
                   {"imbalance", s.imbalance},
                   {"energy_change", s.energy_change_W},
-                  {"torque_arm", s.torque_arm_power_W}};
+                  {"torque_arm", s.torque_arm_power_W},
+                  {"torque_sem", number_or_null(err.power.sem)},
+                  {"dissipation_sem", number_or_null(err.dissipation.sem)},
+                  {"torque_arm_sem", number_or_null(err.arm.sem)}};
   j["torque_Nm"] = s.torque_Nm;
+  j["torque_Nm_sem"] = number_or_null(err.torque.sem);
   j["toe_deg"] = number_or_null(toe);
+  j["toe_deg_sem"] = number_or_null(err.toe.sem);
   j["shoulder_deg"] = number_or_null(shoulder);
+  j["shoulder_deg_sem"] = number_or_null(err.shoulder.sem);
   j["com_angle_deg"] = s.com_angle_deg;
+  j["com_angle_deg_sem"] = number_or_null(err.com.sem);
+  // How the standard errors were taken, and how the turning ended.
+  j["convergence"] = {{"duration", c.duration_auto ? "auto" : "fixed"},
+                      {"tolerance", c.tolerance},
+                      {"max_duration_s", c.duration_auto ? nlohmann::json(d.turn_limit_s) : nlohmann::json()},
+                      {"converged", c.duration_auto ? nlohmann::json(s.converged) : nlohmann::json()},
+                      {"stopped_at_cap", s.capped},
+                      {"revolutions", err.power.values},
+                      {"batches", err.power.batches},
+                      {"revolutions_per_batch", err.power.batch_length},
+                      {"lag1_autocorrelation", number_or_null(err.power.lag1)},
+                      {"batches_correlated", err.power.correlated},
+                      {"power_relative_sem", number_or_null(rel_err)}};
   j["neighbours_per_ball"] = s.neighbours_per_ball;
   j["morrell"] = {{"power_W", m.charge_power_W},
                   {"k", kMorrellK},
@@ -503,7 +587,13 @@ int cmd_run(const RunOptions& o) {
   const LinerReport liner =
       liner_report(p.scene, layout, s.books, s.window_s, s.profile, s.angles);
   j["spectra"] = io::spectra_json(spectra);
+  j["spectra"]["total"]["collisions_per_s_sem"] = number_or_null(err.collisions.sem);
+  j["spectra"]["total"]["power_W_sem"] = number_or_null(err.collision_power.sem);
   j["liner"] = io::liner_json(layout, liner, p.scene.wall_material.wear_coefficient);
+  j["liner"]["impacts_per_s_sem"] = number_or_null(err.impacts.sem);
+  j["liner"]["impact_power_W_sem"] = number_or_null(err.impact.sem);
+  j["liner"]["shear_power_W_sem"] = number_or_null(err.shear.sem);
+  j["liner"]["wear_kg_per_h_sem"] = number_or_null(err.wear.sem);
   j["contact_records_refused"] = solver->records_refused();
   j["wall_s"] = s.wall_s;
   j["particle_updates_per_s"] = s.updates_per_s;
@@ -554,19 +644,39 @@ int cmd_run(const RunOptions& o) {
   }
   io::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
 
-  std::printf("power draw      torque %.4g W, dissipation %.4g W (imbalance %+.2f %%), torque arm %.4g W\n",
-              s.torque_power_W, s.dissipation_power_W, 100 * s.imbalance, s.torque_arm_power_W);
+  std::printf("power draw      torque %s, dissipation %s (imbalance %+.2f %%), torque arm %s\n",
+              plus_minus(s.torque_power_W, err.power.sem, " W").c_str(),
+              plus_minus(s.dissipation_power_W, err.dissipation.sem, " W").c_str(), 100 * s.imbalance,
+              plus_minus(s.torque_arm_power_W, err.arm.sem, " W").c_str());
   std::printf("                averaged over %.2f revolutions from t = %.3f s to %.3f s\n", s.window_revolutions,
               s.window_from_s, s.window_to_s);
+  if (err.power.batches >= 2)
+    std::printf("                \u00b1 one standard error, from %d batch means of %d revolution%s (lag-1 "
+                "autocorrelation %.2f%s)\n",
+                err.power.batches, err.power.batch_length, err.power.batch_length == 1 ? "" : "s", err.power.lag1,
+                err.power.correlated ? ", still correlated: the errors are too small" : "");
+  if (s.duration_auto && s.converged)
+    std::printf("convergence     converged after %d revolutions: the power's standard error is %.2f %% of its mean "
+                "(run.tolerance %.3g %%)\n",
+                err.power.values, 100 * rel_err, 100 * c.tolerance);
+  else if (s.duration_auto)
+    std::printf("convergence     NOT converged: stopped at the cap (run.max_duration %.4g s) after %d revolutions; "
+                "the power's standard error is %.2f %% of its mean, run.tolerance %.3g %%\n",
+                d.turn_limit_s, err.power.values, 100 * rel_err, 100 * c.tolerance);
   if (s.angles.found)
-    std::printf("charge angles   toe %.1f deg, shoulder %.1f deg, centre of mass %.1f deg\n", s.angles.toe_deg,
-                s.angles.shoulder_deg, s.com_angle_deg);
-  std::printf("collisions      %.4g per s, %.4g W (normal %.4g, tangential %.4g, rolling %.4g W); spectra %.4g W "
+    std::printf("charge angles   toe %s, shoulder %s, centre of mass %s\n",
+                plus_minus(s.angles.toe_deg, err.toe.sem, " deg").c_str(),
+                plus_minus(s.angles.shoulder_deg, err.shoulder.sem, " deg").c_str(),
+                plus_minus(s.com_angle_deg, err.com.sem, " deg").c_str());
+  std::printf("collisions      %s per s, %s (normal %.4g, tangential %.4g, rolling %.4g W); spectra %.4g W "
               "against dissipation %.4g W\n",
-              spectra.all.collisions_per_s, spectra.all.power_W, spectra.all.normal_W, spectra.all.tangential_W,
-              spectra.all.rolling_W, spectra.books_W, spectra.dissipation_W);
-  std::printf("liner           impact %.4g W, shear %.4g W, wear %.3g kg/h, worst %.3g mm per 1000 h (%s)\n",
-              liner.impact_W, liner.shear_W, liner.wear_kg_per_h, liner.worst_wear_mm_per_1000h,
+              plus_minus(spectra.all.collisions_per_s, err.collisions.sem, "").c_str(),
+              plus_minus(spectra.all.power_W, err.collision_power.sem, " W").c_str(), spectra.all.normal_W,
+              spectra.all.tangential_W, spectra.all.rolling_W, spectra.books_W, spectra.dissipation_W);
+  std::printf("liner           impact %s, shear %s, wear %s, worst %.3g mm per 1000 h (%s)\n",
+              plus_minus(liner.impact_W, err.impact.sem, " W").c_str(),
+              plus_minus(liner.shear_W, err.shear.sem, " W").c_str(),
+              plus_minus(liner.wear_kg_per_h, err.wear.sem, " kg/h").c_str(), liner.worst_wear_mm_per_1000h,
               liner.worst_element >= 0 ? io::element_name(layout, liner.worst_element).c_str() : "none");
   if (std::isfinite(liner.impact_point_deg))
     std::printf("impact point    %.0f deg, on the %s; %.3g W (%.0f %%) of the liner's impact power on bare liner\n",
@@ -574,8 +684,10 @@ int cmd_run(const RunOptions& o) {
                 liner.bare_liner_impact_W, 100 * liner.bare_liner_impact_share);
   std::printf("morrell         power %.4g W (k %.2f x net %.4g W), toe %.1f deg, shoulder %.1f deg; DEM/model %.3f\n",
               m.charge_power_W, kMorrellK, m.net_power_W, m.toe_deg, m.shoulder_deg, s.torque_power_W / m.charge_power_W);
-  std::printf("speed           %s steps in %.1f s wall, %.3g particle-updates/s\n", thousands(s.steps).c_str(),
-              s.wall_s, s.updates_per_s);
+  std::printf("speed           %s steps in %.1f s wall (settling %.3g s simulated in %.1f s wall, %.0f %%), %.3g "
+              "particle-updates/s\n",
+              thousands(s.steps).c_str(), s.wall_s, s.settle_s, s.settle_wall_s,
+              s.wall_s > 0 ? 100 * s.settle_wall_s / s.wall_s : 0.0, s.updates_per_s);
   std::printf("wrote           %s/{summary.json, timeseries.csv, charge.pvd, power.png, charge.png, spectra.csv, "
               "spectra.png, wear.csv, liner.vtp, liner.png}\n",
               out.string().c_str());

@@ -14,6 +14,7 @@ struct CaseOptions {
   std::string device;                 // --device
   std::string precision;              // --precision, empty: the case's
   double duration = 0;                // --duration, 0: the case's
+  bool duration_auto = false;         // --duration auto
 };
 
 struct RunOptions {

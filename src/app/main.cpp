@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -32,8 +33,26 @@ void add_case_options(CLI::App* cmd, mc::app::CaseOptions& o, bool with_run_opti
   cmd->add_option("--set", o.overrides, "override a case key, e.g. --set mill.speed_fraction=0.8 (repeatable)")
       ->type_name("KEY=VALUE");
   if (with_run_options) {
-    cmd->add_option("--duration", o.duration, "seconds of turning (overrides run.duration)")
-        ->check(CLI::PositiveNumber);
+    cmd->add_option_function<std::string>(
+           "--duration",
+           [&o](const std::string& v) {
+             if (v == "auto") {
+               o.duration_auto = true;
+               return;
+             }
+             std::size_t used = 0;
+             double s = 0;
+             try {
+               s = std::stod(v, &used);
+             } catch (const std::exception&) {
+               used = 0;
+             }
+             if (used != v.size() || !(s > 0) || !std::isfinite(s))
+               throw CLI::ValidationError("--duration", "expected seconds > 0 or \"auto\", got \"" + v + "\"");
+             o.duration = s;
+           },
+           "seconds of turning, or auto: until the power converges (overrides run.duration)")
+        ->type_name("S|auto");
     cmd->add_option("--device", o.device, "OpenCL device: auto, gpu, cpu, P:D or part of a name");
     cmd->add_option("--precision", o.precision, "float or double (overrides run.precision)")
         ->check(CLI::IsMember({"float", "double"}));

@@ -105,7 +105,7 @@ CaseCheck check_case(const io::Sweep& s, const io::SweepCase& sc) {
     r.balls = d.n_balls;
     // As run_mill bounds an automatic settle: 2 s + 4 sqrt(D/g).
     const double settle = c.settle < 0 ? 2.0 + 4.0 * std::sqrt(c.diameter / 9.81) : c.settle;
-    r.steps = std::round((settle + c.duration) / d.dt);
+    r.steps = std::round((settle + d.turn_limit_s) / d.dt);  // an auto run at its cap
     r.settle_auto = c.settle < 0;
     r.resolved = io::case_to_toml(c);
   } catch (const std::invalid_argument& e) {

@@ -38,6 +38,12 @@ const std::vector<std::pair<std::string, std::string>> kSummaryFields = {
     {"morrell.power_W", "/morrell/power_W"},
     {"morrell.toe_deg", "/morrell/toe_deg"},
     {"morrell.shoulder_deg", "/morrell/shoulder_deg"},
+    // standard errors (batch means over whole revolutions); empty in
+    // summaries written before they were
+    {"power_W.torque_sem", "/power_W/torque_sem"},
+    {"torque_Nm_sem", "/torque_Nm_sem"},
+    {"toe_deg_sem", "/toe_deg_sem"},
+    {"shoulder_deg_sem", "/shoulder_deg_sem"},
 };
 // Blocks whose numeric scalars all become columns "BLOCK.FIELD".
 const std::vector<std::string> kOpenBlocks = {"spectra.total", "liner"};

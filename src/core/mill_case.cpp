@@ -267,20 +267,37 @@ MillDerived derive(const MillCase& c) {
     fail("run.dt", num(c.dt) + " s is too large for the contact stiffness: the shortest contact lasts " +
                        num(d.contact_time) + " s and needs at least 8 steps (dt <= " + num(d.contact_time / 8) +
                        " s); use dt = \"auto\" or a softer contact");
-  if (!(c.duration > 0)) fail("run.duration", "must be > 0 s (got " + num(c.duration) + ")");
-  if (!(c.warmup >= 0 && c.warmup < c.duration))
-    fail("run.warmup", "must be in [0, duration = " + num(c.duration) + " s) (got " + num(c.warmup) + ")");
+  if (!(c.tolerance > 0 && c.tolerance < 1))
+    fail("run.tolerance", "must be in (0, 1), the standard error of the power's mean relative to it, e.g. 0.01 "
+                          "for 1 % (got " + num(c.tolerance) + ")");
+  if (!(c.settle_damping <= 200))
+    fail("run.settle_damping", "must be at most 200 1/s or \"auto\" (got " + num(c.settle_damping) + ")");
+  if (c.duration_auto) {
+    if (!(c.warmup >= 0 && c.warmup <= 1e6)) fail("run.warmup", "must be >= 0 s (got " + num(c.warmup) + ")");
+    if (c.max_duration >= 0 && !(c.max_duration >= c.warmup + d.revolution_s))
+      fail("run.max_duration", "must leave at least one revolution (" + num(d.revolution_s) +
+                                   " s) after the warm-up of " + num(c.warmup) + " s (got " + num(c.max_duration) +
+                                   " s)");
+    d.turn_limit_s = c.max_duration >= 0 ? c.max_duration : c.warmup + kAutoRevolutions * d.revolution_s;
+  } else {
+    if (!(c.duration > 0)) fail("run.duration", "must be > 0 s or \"auto\" (got " + num(c.duration) + ")");
+    if (!(c.warmup >= 0 && c.warmup < c.duration))
+      fail("run.warmup", "must be in [0, duration = " + num(c.duration) + " s) (got " + num(c.warmup) + ")");
+    d.turn_limit_s = c.duration;
+  }
+  d.settle_damping = c.settle_damping >= 0 ? c.settle_damping : kSettleDamping * std::sqrt(9.81 / c.diameter);
   if (!(c.output_interval >= d.dt)) fail("run.output_interval", "must be at least one step (" + num(d.dt) + " s)");
   if (c.snapshot_interval < 0) fail("run.snapshot_interval", "must be >= 0 s (0: no snapshots)");
   if (!(c.checkpoint_interval >= 0))
     fail("run.checkpoint_interval", "must be >= 0 s (0: checkpoints only on a signal and at the end)");
   if (c.settle > 60) fail("run.settle", "must be at most 60 s or \"auto\"");
-  const double steps = (c.duration + std::max(c.settle, 0.0)) / d.dt;
+  const char* turn_key = c.duration_auto ? "run.max_duration" : "run.duration";
+  const double steps = (d.turn_limit_s + std::max(c.settle, 0.0)) / d.dt;
   if (!(steps <= kMaxSteps))
-    fail("run.duration", num(c.duration) + " s at dt " + num(d.dt) + " s is " + num(steps) +
-                             " steps, more than 1e11: shorten the run, or raise run.dt or soften the contacts");
-  if (c.snapshot_interval > 0 && !(c.duration / c.snapshot_interval <= 1e5))
-    fail("run.snapshot_interval", num(c.snapshot_interval) + " s gives " + num(c.duration / c.snapshot_interval) +
+    fail(turn_key, num(d.turn_limit_s) + " s at dt " + num(d.dt) + " s is " + num(steps) +
+                       " steps, more than 1e11: shorten the run, or raise run.dt or soften the contacts");
+  if (c.snapshot_interval > 0 && !(d.turn_limit_s / c.snapshot_interval <= 1e5))
+    fail("run.snapshot_interval", num(c.snapshot_interval) + " s gives " + num(d.turn_limit_s / c.snapshot_interval) +
                                       " snapshots, more than 100000");
   return d;
 }

@@ -54,9 +54,19 @@ struct MillCase {
   Interaction contact;       // defaults for every pair
   std::vector<PairOverride> pairs;
   // [run]
-  double duration = 0;       // s of the turning mill, after settling
+  double duration = 0;       // s of the turning mill, after settling; with
+                             // duration_auto 0 (derive() gives the cap)
+  bool duration_auto = false; // "auto": turn until the power's mean converges
+  double tolerance = 0.01;   // an auto run stops at this standard error of the
+                             // power's mean, relative to it
+  double max_duration = -1;  // s, the cap of an auto run; < 0: the warm-up
+                             // and kAutoRevolutions revolutions
   double warmup = 0;         // s excluded from the averages
   double settle = -1;        // s before the mill turns; < 0: until the charge is at rest
+  double settle_damping = 0;  // 1/s, viscous damping of the balls while they
+                              // settle; < 0: "auto" (kSettleDamping sqrt(g/D));
+                              // 0, the default: none (it did not settle the
+                              // shipped mills sooner: docs/performance.md)
   double dt = 0;             // s; 0: auto
   double steps_per_contact = 25;  // auto dt = shortest contact time / this
   double output_interval = 0.01;  // s between timeseries rows
@@ -84,7 +94,16 @@ struct MillDerived {
   double contact_time = 0;           // s, shortest ball–ball contact
   double dt = 0;                     // s, used
   bool dt_auto = true;
+  double turn_limit_s = 0;           // the case's duration, or an auto run's cap
+  double settle_damping = 0;         // 1/s while settling
 };
+
+// Revolutions after the warm-up an automatic run turns at most by default.
+inline constexpr double kAutoRevolutions = 40;
+// Damping of the balls while they settle, in units of sqrt(g/D): the charge
+// falls and slumps over times of order sqrt(D/g), and damps out over a fifth
+// of that.
+inline constexpr double kSettleDamping = 5;
 
 // Checks what the case reader cannot check key by key (cross-key rules) and
 // derives the values; throws std::invalid_argument naming the key.

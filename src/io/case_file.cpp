@@ -507,11 +507,23 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
   }
   {
     Section s(r, *top.table("run", true), "run");
-    s.knows({"duration", "warmup", "settle", "dt", "steps_per_contact", "output_interval", "snapshot_interval",
-             "checkpoint_interval", "precision"});
-    c.duration = s.number("duration");
+    s.knows({"duration", "tolerance", "max_duration", "warmup", "settle", "settle_damping", "dt", "steps_per_contact",
+             "output_interval", "snapshot_interval", "checkpoint_interval", "precision"});
+    if (const toml::node* n = s.node("duration"); n && n->is_string()) {
+      const std::string v = *n->value<std::string>();
+      if (v != "auto")
+        r.fail("run.duration", n, "expected a number of seconds or \"auto\" (turn until the power converges), got \"" +
+                                      v + "\"");
+      c.duration_auto = true;
+      c.duration = 0;
+    } else {
+      c.duration = s.number("duration");
+    }
+    c.tolerance = s.number("tolerance", 0.01);
+    c.max_duration = s.number_or_auto("max_duration", -1);
     c.warmup = s.number("warmup", 0.0);
     c.settle = s.number_or_auto("settle", -1);
+    c.settle_damping = s.number_or_auto("settle_damping", 0.0);
     const double dt = s.number_or_auto("dt", -1);
     if (dt == 0) r.fail("run.dt", s.node("dt"), "must be > 0 s or \"auto\"");
     c.dt = dt < 0 ? 0 : dt;
@@ -626,15 +638,21 @@ std::string case_to_toml(const MillCase& c) {
     pairs.push_back(interaction(p.interaction, toml::table{{"materials", toml::array{p.a, p.b}}}));
   if (!pairs.empty()) contact.insert("pair", pairs);
   root.insert("contact", contact);
-  toml::table run{{"duration", c.duration},
+  toml::table run{{"tolerance", c.tolerance},
                   {"warmup", c.warmup},
                   {"steps_per_contact", c.steps_per_contact},
                   {"output_interval", c.output_interval},
                   {"snapshot_interval", c.snapshot_interval},
                   {"checkpoint_interval", c.checkpoint_interval},
                   {"precision", c.precision == Precision::double_ ? "double" : "float"}};
+  if (c.duration_auto) run.insert("duration", "auto");
+  else run.insert("duration", c.duration);
+  if (c.max_duration >= 0) run.insert("max_duration", c.max_duration);
+  else run.insert("max_duration", "auto");
   if (c.settle >= 0) run.insert("settle", c.settle);
   else run.insert("settle", "auto");
+  if (c.settle_damping >= 0) run.insert("settle_damping", c.settle_damping);
+  else run.insert("settle_damping", "auto");
   if (c.dt > 0) run.insert("dt", c.dt);
   else run.insert("dt", "auto");
   root.insert("run", run);

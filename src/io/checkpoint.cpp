@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 
@@ -120,6 +121,18 @@ void run_fields(R& r, F&& f) {
   f("rows", r.rows);
   f("snapshots", r.snapshots);
   f("wall_s", r.wall_s);
+  f("stop_step", r.stop_step);
+  f("settle_wall_s", r.settle_wall_s);
+}
+
+// Doubles as raw bytes (every bit kept).
+std::string doubles_bytes(const std::vector<double>& v) {
+  return std::string(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(double));
+}
+std::vector<double> bytes_doubles(const std::string& b) {
+  std::vector<double> v(b.size() / sizeof(double));
+  std::memcpy(v.data(), b.data(), v.size() * sizeof(double));
+  return v;
 }
 
 template <class S, class F>
@@ -149,6 +162,20 @@ void write_checkpoint(const std::filesystem::path& path, const Checkpoint& cp) {
   std::vector<std::int64_t> prof(r.window_profile.begin(), r.window_profile.end());
   put_record(payload, "run.window_profile", reinterpret_cast<const char*>(prof.data()),
              prof.size() * sizeof(std::int64_t));
+
+  // The window's revolutions, the open one's sums and contact profile.
+  std::vector<double> revs;
+  for (const RevolutionMeans& m : r.revolutions)
+    for (auto field : kRevolutionFields) revs.push_back(m.*field);
+  const std::string revs_bytes = doubles_bytes(revs);
+  put_record(payload, "run.revolutions", revs_bytes.data(), revs_bytes.size());
+  std::vector<double> tally;
+  for (auto field : kTallyFields) tally.push_back(r.revolution.*field);
+  const std::string tally_bytes = doubles_bytes(tally);
+  put_record(payload, "run.revolution", tally_bytes.data(), tally_bytes.size());
+  std::vector<std::int64_t> rprof(r.revolution_profile.begin(), r.revolution_profile.end());
+  put_record(payload, "run.revolution_profile", reinterpret_cast<const char*>(rprof.data()),
+             rprof.size() * sizeof(std::int64_t));
 
   const SolverState& s = cp.solver;
   Scalars ss;
@@ -228,13 +255,38 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
   RunState& r = cp.run;
   // Fields added after version 1 began keep their defaults in older files.
   run_fields(r, [&](const char* k, auto& v) {
-    if (std::string(k) == "open_loss_start" && !rs.has(k)) return;
+    const std::string key(k);
+    if ((key == "open_loss_start" || key == "stop_step" || key == "settle_wall_s") && !rs.has(k)) return;
     rs.get(k, v);
   });
   const std::string& prof = record("run.window_profile");
   std::vector<std::int64_t> counts(prof.size() / sizeof(std::int64_t));
   std::memcpy(counts.data(), prof.data(), counts.size() * sizeof(std::int64_t));
   r.window_profile.assign(counts.begin(), counts.end());
+  // Revolutions: absent from files written before the standard errors (the
+  // run then goes on with the revolutions still to come).
+  constexpr std::size_t kRevFields = std::size(kRevolutionFields), kTally = std::size(kTallyFields);
+  if (records.count("run.revolutions")) {
+    const std::vector<double> v = bytes_doubles(records["run.revolutions"]);
+    if (v.size() % kRevFields != 0) throw CheckpointError(where + ": run.revolutions has a partial revolution");
+    for (std::size_t i = 0; i < v.size(); i += kRevFields) {
+      RevolutionMeans m;
+      for (std::size_t f = 0; f < kRevFields; ++f) m.*kRevolutionFields[f] = v[i + f];
+      r.revolutions.push_back(m);
+    }
+  }
+  if (records.count("run.revolution")) {
+    const std::vector<double> v = bytes_doubles(records["run.revolution"]);
+    if (v.size() != kTally) throw CheckpointError(where + ": run.revolution has " + std::to_string(v.size()) +
+                                                  " numbers, not " + std::to_string(kTally));
+    for (std::size_t f = 0; f < kTally; ++f) r.revolution.*kTallyFields[f] = v[f];
+  }
+  if (records.count("run.revolution_profile")) {
+    const std::string& b = records["run.revolution_profile"];
+    std::vector<std::int64_t> rc(b.size() / sizeof(std::int64_t));
+    std::memcpy(rc.data(), b.data(), rc.size() * sizeof(std::int64_t));
+    r.revolution_profile.assign(rc.begin(), rc.end());
+  }
 
   const ScalarReader ss(record("solver"), where + ": solver");
   SolverState& s = cp.solver;

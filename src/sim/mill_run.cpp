@@ -2,7 +2,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <climits>
 #include <cmath>
+#include <limits>
+
+#include "sim/batch_means.h"
+#include "sim/energy_report.h"
+#include "sim/layout.hpp"
 
 namespace mc {
 
@@ -50,8 +56,35 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   const auto wall0 = Clock::now();
   Rate rate;
   double last_report = -1e9;
-  const long turn_steps = std::max(1L, std::lround(c.duration / dt));
   if (st.window_profile.empty()) st.window_profile.assign(kProfileBins, 0);
+  if (st.revolution_profile.empty()) st.revolution_profile.assign(kProfileBins, 0);
+
+  // The turning: a fixed duration averaged over the largest whole number of
+  // revolutions that end with it, or (auto) revolutions from the end of the
+  // warm-up until the power's mean converges, at most as many as the cap
+  // holds. Revolution k of the window ends at step window_start + k·rev_steps.
+  const double rev_steps = d.revolution_s / dt;
+  long turn_steps, warm_steps, window_start, revs;
+  if (c.duration_auto) {
+    warm_steps = static_cast<long>(std::ceil(c.warmup / dt));
+    const long limit = std::lround(d.turn_limit_s / dt);
+    revs = std::max(1L, static_cast<long>(std::floor((limit - warm_steps) / rev_steps + 1e-9)));
+    window_start = warm_steps;
+    turn_steps = window_start + std::lround(revs * rev_steps);
+    sum.whole_revolutions = true;
+  } else {
+    turn_steps = std::max(1L, std::lround(c.duration / dt));
+    warm_steps = std::min(turn_steps, static_cast<long>(std::ceil(c.warmup / dt)));
+    revs = static_cast<long>(std::floor((turn_steps - warm_steps) / rev_steps));
+    if (revs >= 1) {
+      window_start = turn_steps - std::lround(revs * rev_steps);
+      sum.whole_revolutions = true;
+    } else {
+      window_start = warm_steps;
+      revs = 0;
+    }
+  }
+  if (st.stop_step >= 0) turn_steps = st.stop_step;  // resumed after an auto run stopped
 
   auto report = [&](const char* phase, double sim, double revs, double done, bool force) {
     const double wall = seconds_since(wall0);
@@ -68,6 +101,12 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     p.done = done;
     const long left = std::max(0L, static_cast<long>((1 - done) * turn_steps));
     p.eta_s = rate.per_s() > 0 ? left / rate.per_s() : 0;
+    if (c.duration_auto && st.revolutions.size() >= 2) {
+      std::vector<double> power;
+      for (const RevolutionMeans& m : st.revolutions) power.push_back(m.torque_power_W);
+      const BatchMeans b = batch_means(power);
+      if (b.mean != 0) p.relative_error = b.sem / std::fabs(b.mean);
+    }
     hooks.on_progress(p);
   };
 
@@ -122,6 +161,9 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     st.phase = 1;
   }
   if (st.phase == 1) {
+    // Viscous damping while the mill is at rest brings the charge to rest
+    // sooner; the turning mill has none (set again on a resumed run).
+    solver.set_velocity_damping(d.settle_damping);
     const double t_start = st.settle_start_s;
     while (solver.time_s() - t_start < max_settle - 0.5 * dt) {
       const long left = std::lround((max_settle - (solver.time_s() - t_start)) / dt);
@@ -135,7 +177,9 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
       }
       if (after_chunk()) return finish(true);
     }
+    solver.set_velocity_damping(0.0);
     st.settle_s = solver.time_s() - t_start;
+    st.settle_wall_s = st.wall_s + seconds_since(wall0);
     if (!auto_settle) st.settled = true;
     {  // the filling the settled bed reaches
       const auto balls = solver.balls();
@@ -146,21 +190,12 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     }
   }
   sum.settle_s = st.settle_s;
+  sum.settle_wall_s = st.settle_wall_s;
   sum.settled = st.settled;
   sum.settled_filling = st.settled_filling;
 
   // ---- turn ----
   const long out_steps = std::max(1L, std::lround(c.output_interval / dt));
-  const long warm_steps = std::min(turn_steps, static_cast<long>(std::ceil(c.warmup / dt)));
-  const double rev_steps = d.revolution_s / dt;
-  const long whole = static_cast<long>(std::floor((turn_steps - warm_steps) / rev_steps));
-  long window_start;
-  if (whole >= 1) {
-    window_start = turn_steps - std::lround(whole * rev_steps);
-    sum.whole_revolutions = true;
-  } else {
-    window_start = warm_steps;
-  }
   const long profile_every = std::max(1L, out_steps / 10);
   const long snap_steps = c.snapshot_interval > 0 ? std::max(1L, std::lround(c.snapshot_interval / dt)) : 0;
   // Row boundaries fall on window_start + k·out_steps, so the window starts
@@ -170,6 +205,12 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     long b = window_start + k * out_steps;
     while (b <= s) b += out_steps;
     return std::min(b, turn_steps);
+  };
+  // The end of the revolution being turned (none before the window, or when
+  // the window holds no whole revolution).
+  auto revolution_end = [&]() {
+    const long k = static_cast<long>(st.revolutions.size()) + 1;
+    return k <= revs ? window_start + std::lround(k * rev_steps) : LONG_MAX;
   };
 
   if (st.phase == 1) {
@@ -190,9 +231,126 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   const double time0 = st.turn_start_s;
 
   long& s = st.turn_step;
+  RevolutionTally& rev = st.revolution;
+  // The revolution's share of the row so far, from the row's running sums.
+  auto add_row_share = [&](double span, double work, double diss, double torque_time) {
+    rev.span += span - rev.row_span;
+    rev.work += work - rev.row_work;
+    rev.diss += diss - rev.row_diss;
+    rev.torque_time += torque_time - rev.row_torque_time;
+    rev.row_span = span, rev.row_work = work, rev.row_diss = diss, rev.row_torque_time = torque_time;
+  };
+  auto end_row = [&]() {
+    const Observables o = solver.observe(true);
+    const std::vector<long> prof = solver.take_contact_profile();
+    TimeRow r;
+    r.time_s = solver.time_s() - time0;
+    r.revolutions = r.time_s / d.revolution_s;
+    r.interval_s = o.interval_s;
+    r.torque_Nm = o.wall_torque_Nm;
+    r.torque_power_W = o.torque_power_W;
+    r.dissipation_power_W = o.dissipation_power_W;
+    r.kinetic_J = o.kinetic_J;
+    r.rotational_J = o.rotational_J;
+    r.potential_J = o.potential_J;
+    r.elastic_J = o.elastic_J;
+    r.angles = toe_and_shoulder(prof);
+    r.com_angle_deg = angle_deg(o.com_x_m, o.com_y_m);
+    r.torque_arm_power_W = omega * o.charge_mass_kg * kG * o.com_x_m;
+    r.neighbours_per_ball = o.neighbours_per_ball;
+    r.averaged = s > window_start;
+    if (s == window_start) {  // the books of the window begin
+      st.e_window_start = o.total_energy();
+      st.open_loss_start = o.open_loss_J();
+      solver.reset_books();
+    }
+    if (r.averaged) {
+      for (int k = 0; k < kProfileBins; ++k) st.window_profile[k] += prof[k];
+      st.work += o.wall_work_J;
+      st.diss += o.dissipated_J;
+      st.torque_time += o.wall_torque_Nm * o.interval_s;
+      st.arm_time += r.torque_arm_power_W * o.interval_s;
+      st.span += o.interval_s;
+      st.comx += o.com_x_m;
+      st.comy += o.com_y_m;
+      st.neigh += o.neighbours_per_ball;
+      ++st.rows_in_window;
+      if (revs >= 1) {  // the row ends in the open revolution
+        add_row_share(o.interval_s, o.wall_work_J, o.dissipated_J, o.wall_torque_Nm * o.interval_s);
+        rev.row_span = rev.row_work = rev.row_diss = rev.row_torque_time = 0;
+        for (int k = 0; k < kProfileBins; ++k) st.revolution_profile[k] += prof[k];
+        rev.arm_time += r.torque_arm_power_W * o.interval_s;
+        rev.rows_span += o.interval_s;
+        rev.comx += o.com_x_m;
+        rev.comy += o.com_y_m;
+        rev.rows += 1;
+      }
+    }
+    st.e_end = o.total_energy();
+    ++st.rows;
+    if (hooks.on_row) hooks.on_row(r);
+  };
+  // A revolution ends: its means, and (auto) whether the run stops here.
+  auto end_revolution = [&]() {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    RevolutionMeans m;
+    const double span = rev.span > 0 ? rev.span : 1.0;
+    m.span_s = rev.span;
+    m.torque_power_W = rev.work / span;
+    m.dissipation_power_W = rev.diss / span;
+    m.torque_Nm = rev.torque_time / span;
+    m.torque_arm_power_W = rev.rows_span > 0 ? rev.arm_time / rev.rows_span : nan;
+    const ChargeAngles a = toe_and_shoulder(st.revolution_profile);
+    m.toe_deg = a.found ? a.toe_deg : nan;
+    m.shoulder_deg = a.found ? a.shoulder_deg : nan;
+    m.com_angle_deg = rev.rows > 0 ? angle_deg(rev.comx / rev.rows, rev.comy / rev.rows) : nan;
+    // The books' totals since the window began; this revolution's part.
+    const BookSums books = solver.read_books();
+    const CollisionRates all = spectra_report(scene, books, 1.0, 0, 0, 0).all;  // per 1 s: totals
+    double impacts = 0, impact_J = 0, shear_J = 0, wear_m3 = 0;
+    for (int e = 0; e < books.n_elements; ++e) {
+      impacts += books.liner_at(e, MC_LINER_IMPACTS);
+      impact_J += books.liner_at(e, MC_LINER_NORMAL);
+      shear_J += books.liner_at(e, MC_LINER_SHEAR);
+      wear_m3 += books.liner_at(e, MC_LINER_WEAR);
+    }
+    m.collisions_per_s = (all.collisions_per_s - rev.collisions) / span;
+    m.collision_power_W = (all.power_W - rev.collision_J) / span;
+    m.liner_impacts_per_s = (impacts - rev.impacts) / span;
+    m.liner_impact_W = (impact_J - rev.impact_J) / span;
+    m.liner_shear_W = (shear_J - rev.shear_J) / span;
+    m.wear_kg_per_h = (wear_m3 - rev.wear_m3) / span * scene.wall_material.density * 3600.0;
+    st.revolutions.push_back(m);
+    // The next revolution begins with the row's sums at this cut and the
+    // books' totals now.
+    RevolutionTally next;
+    next.row_span = rev.row_span, next.row_work = rev.row_work, next.row_diss = rev.row_diss;
+    next.row_torque_time = rev.row_torque_time;
+    next.collisions = all.collisions_per_s, next.collision_J = all.power_W;
+    next.impacts = impacts, next.impact_J = impact_J, next.shear_J = shear_J, next.wear_m3 = wear_m3;
+    rev = next;
+    std::fill(st.revolution_profile.begin(), st.revolution_profile.end(), 0L);
+    if (c.duration_auto) {
+      std::vector<double> power;
+      for (const RevolutionMeans& x : st.revolutions) power.push_back(x.torque_power_W);
+      if (converged(batch_means(power), c.tolerance)) {
+        st.stop_step = s;
+        turn_steps = s;
+      }
+    }
+  };
+
+  // A checkpoint written before runs kept their revolutions: those already
+  // turned count as unknown.
+  while (st.phase == 2 && revolution_end() != LONG_MAX && revolution_end() <= s) {
+    RevolutionMeans unknown;
+    for (auto field : kRevolutionFields) unknown.*field = std::numeric_limits<double>::quiet_NaN();
+    st.revolutions.push_back(unknown);
+  }
   while (st.phase == 2 && s < turn_steps) {
     const long row_end = next_boundary(s);
-    long next = row_end;
+    const long rev_end = revolution_end();
+    long next = std::min(row_end, rev_end);
     const long next_profile = (s / profile_every + 1) * profile_every;
     next = std::min(next, next_profile);
     if (snap_steps > 0) next = std::min(next, (s / snap_steps + 1) * snap_steps);
@@ -200,45 +358,13 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     s = next;
     if (s % profile_every == 0) solver.sample_contact_profile();
     if (s == row_end) {
-      const Observables o = solver.observe(true);
-      const std::vector<long> prof = solver.take_contact_profile();
-      TimeRow r;
-      r.time_s = solver.time_s() - time0;
-      r.revolutions = r.time_s / d.revolution_s;
-      r.interval_s = o.interval_s;
-      r.torque_Nm = o.wall_torque_Nm;
-      r.torque_power_W = o.torque_power_W;
-      r.dissipation_power_W = o.dissipation_power_W;
-      r.kinetic_J = o.kinetic_J;
-      r.rotational_J = o.rotational_J;
-      r.potential_J = o.potential_J;
-      r.elastic_J = o.elastic_J;
-      r.angles = toe_and_shoulder(prof);
-      r.com_angle_deg = angle_deg(o.com_x_m, o.com_y_m);
-      r.torque_arm_power_W = omega * o.charge_mass_kg * kG * o.com_x_m;
-      r.neighbours_per_ball = o.neighbours_per_ball;
-      r.averaged = s > window_start;
-      if (s == window_start) {  // the books of the window begin
-        st.e_window_start = o.total_energy();
-        st.open_loss_start = o.open_loss_J();
-        solver.reset_books();
-      }
-      if (r.averaged) {
-        for (int k = 0; k < kProfileBins; ++k) st.window_profile[k] += prof[k];
-        st.work += o.wall_work_J;
-        st.diss += o.dissipated_J;
-        st.torque_time += o.wall_torque_Nm * o.interval_s;
-        st.arm_time += r.torque_arm_power_W * o.interval_s;
-        st.span += o.interval_s;
-        st.comx += o.com_x_m;
-        st.comy += o.com_y_m;
-        st.neigh += o.neighbours_per_ball;
-        ++st.rows_in_window;
-      }
-      st.e_end = o.total_energy();
-      ++st.rows;
-      if (hooks.on_row) hooks.on_row(r);
+      end_row();
+    } else if (s == rev_end) {  // inside a row: the row's sums so far, left running
+      const Observables o = solver.observe(false);
+      add_row_share(o.interval_s, o.wall_work_J, o.dissipated_J, o.wall_torque_Nm * o.interval_s);
     }
+    if (s == rev_end) end_revolution();
+    if (s != row_end && s == turn_steps) end_row();  // stopped inside a row: a short last row
     if (hooks.on_snapshot && snap_steps > 0 && (s % snap_steps == 0 || s == turn_steps)) {
       hooks.on_snapshot(solver.time_s() - time0);
       ++st.snapshots;
@@ -274,6 +400,10 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   sum.window_s = span;
   sum.mill_angle_end = solver.mill_angle();
   sum.angles = toe_and_shoulder(st.window_profile);
+  sum.revolutions_means = st.revolutions;
+  sum.duration_auto = c.duration_auto;
+  sum.converged = c.duration_auto && st.stop_step >= 0;
+  sum.capped = c.duration_auto && st.stop_step < 0;
   checkpoint();
   return finish(false);
 }

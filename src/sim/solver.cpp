@@ -70,6 +70,10 @@ class SolverImpl final : public Solver {
   Observables observe(bool reset) override;
   std::vector<std::pair<int, int>> neighbour_pairs() override;
   void set_mill_omega(double w) override { mill_omega_ = w; }
+  void set_velocity_damping(double rate_per_s) override {
+    params_.host[0].velocity_damping = Real(rate_per_s > 0 ? -std::expm1(-rate_per_s * dt_) : 0.0);
+    params_.write_to_device();
+  }
   void sample_contact_profile() override;
   std::vector<long> take_contact_profile() override;
   void set_stage_timing(bool on) override;

@@ -116,6 +116,10 @@ class Solver {
   // has it), for tests.
   virtual std::vector<std::pair<int, int>> neighbour_pairs() = 0;
   virtual void set_mill_omega(double omega_rad_s) = 0;
+  // Viscous damping of every ball's velocity and spin, dv/dt = -rate·v, for
+  // settling the charge (0, the default: none). Not part of SolverState:
+  // whoever restores a state sets it again.
+  virtual void set_velocity_damping(double rate_per_s) = 0;
 
   // Where the charge touches the mill: each call adds, for every ball now
   // touching the shell or a lifter, one count to the bin of its lab-frame
