@@ -137,7 +137,9 @@ typedef struct {
                         touch a lifter */
   real lifter_first_angle; /* centre angle of lifter 0 in the mill frame, rad */
   real lifter_spacing;     /* angle between lifter rows, rad */
-  real pad_real;
+  real period;       /* > 0: a periodic slice, z taken modulo period over
+                        [0, period), no end plates (length is 0); the grid's
+                        z cells tile the period (periodic.h) */
   int grid_nx, grid_ny, grid_nz;
   int n_balls;
   int n_materials;   /* ball materials; the wall material has index n_materials */

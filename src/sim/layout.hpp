@@ -24,6 +24,7 @@ using real = double;
 #include "../../cl/contact_law.h"
 #include "../../cl/walls.h"
 #include "../../cl/books.h"
+#include "../../cl/periodic.h"
 #include "../../cl/ball_forces.h"
 #include "../../cl/motion.h"
 }  // namespace mc::f64
