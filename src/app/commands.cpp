@@ -227,8 +227,16 @@ int cmd_check(const CaseOptions& o) {
   const MillCase& c = p.c;
   const MillDerived& d = p.d;
   std::printf("case            %s%s%s\n", p.path.string().c_str(), c.title.empty() ? "" : ": ", c.title.c_str());
-  std::printf("mill            D %.4g m x L %.4g m, %d lifter rows, liner \"%s\"\n", c.diameter, c.length,
-              c.lifter_rows, c.liner.c_str());
+  std::printf("mill            D %.4g m x L %.4g m%s, %d lifter rows, liner \"%s\"\n", c.diameter, c.length,
+              c.periodic ? " (a periodic slice)" : "", c.lifter_rows, c.liner.c_str());
+  if (c.periodic)
+    std::printf("ends            periodic (mill.ends): no end plates, a ball leaving one end enters at the other; "
+                "shortest slice %.4g m (%.0f largest balls); power, torque, spectra and wear also per metre\n",
+                d.shortest_slice, kSliceDiameters);
+  else
+    std::printf("ends            end plates at z = 0 and %.4g m (mill.ends = \"periodic\" would make a slice: at "
+                "least %.4g m)\n",
+                c.length, d.shortest_slice);
   std::printf("critical speed  %.2f rpm  (42.3/sqrt(D - d), d = largest ball %.4g mm)\n", d.critical_rpm,
               1000 * d.largest_ball_diameter);
   std::printf("speed           %.2f rpm = %.1f %% of critical  (%.4g rad/s, %.4g s per revolution, tip %.3g m/s)\n",
@@ -485,6 +493,12 @@ int cmd_run(const RunOptions& o) {
                   {"energy_change", s.energy_change_W},
                   {"torque_arm", s.torque_arm_power_W}};
   j["torque_Nm"] = s.torque_Nm;
+  // Per metre of mill, which a slice stands for (sweep collect reads it).
+  j["ends"] = c.periodic ? "periodic" : "plates";
+  j["length_m"] = c.length;
+  j["power_per_metre_W"] = {{"torque", s.torque_power_W / c.length},
+                            {"dissipation", s.dissipation_power_W / c.length}};
+  j["torque_per_metre_Nm"] = s.torque_Nm / c.length;
   j["toe_deg"] = number_or_null(toe);
   j["shoulder_deg"] = number_or_null(shoulder);
   j["com_angle_deg"] = s.com_angle_deg;
@@ -504,6 +518,7 @@ int cmd_run(const RunOptions& o) {
       liner_report(p.scene, layout, s.books, s.window_s, s.profile, s.angles);
   j["spectra"] = io::spectra_json(spectra);
   j["liner"] = io::liner_json(layout, liner, p.scene.wall_material.wear_coefficient);
+  j["per_metre"] = io::per_metre_json(c.length, s.torque_power_W, s.dissipation_power_W, s.torque_Nm, spectra, liner);
   j["contact_records_refused"] = solver->records_refused();
   j["wall_s"] = s.wall_s;
   j["particle_updates_per_s"] = s.updates_per_s;
@@ -558,6 +573,9 @@ int cmd_run(const RunOptions& o) {
               s.torque_power_W, s.dissipation_power_W, 100 * s.imbalance, s.torque_arm_power_W);
   std::printf("                averaged over %.2f revolutions from t = %.3f s to %.3f s\n", s.window_revolutions,
               s.window_from_s, s.window_to_s);
+  std::printf("per metre       torque %.4g W/m, dissipation %.4g W/m, torque %.4g N m/m over %.4g m%s\n",
+              s.torque_power_W / c.length, s.dissipation_power_W / c.length, s.torque_Nm / c.length, c.length,
+              c.periodic ? " of periodic slice" : " between the end plates");
   if (s.angles.found)
     std::printf("charge angles   toe %.1f deg, shoulder %.1f deg, centre of mass %.1f deg\n", s.angles.toe_deg,
                 s.angles.shoulder_deg, s.com_angle_deg);
