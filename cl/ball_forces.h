@@ -8,7 +8,9 @@
  * side (−F, its torque, half the dissipation) goes into the partner's
  * incoming slot of pair_out (neigh_rev[k] says which; MC_SLOT_REALS), and
  * ball_reactions adds a ball's incoming slots, which lie side by side, after
- * every ball is done. Each ball sums in a fixed order, so there are no
+ * every ball is done. In a periodic slice a pair is seen through the
+ * partner's nearest image along z (periodic.h), so a pair across the seam
+ * is evaluated, and keeps its spring, as any other. Each ball sums in a fixed order, so there are no
  * atomics and the result does not depend on thread order. A pair's stored
  * energy is booked to the ball that lists it (only its total is reported).
  * Walls have infinite mass and turn with the mill: their velocity at the
@@ -170,22 +172,24 @@ MC_FN void pair_opened(int k, int j, int mat_i, MC_GLOBAL const SimParams* sp, M
 
 /* List entry k of a ball at p with radius r and material mat: whether the
  * pair touches now. A pair that touched and no longer does is opened here
- * (pair_opened). The entry's link and the partner's position are left in
- * *link and *pj4 for pair_contact. */
+ * (pair_opened). The entry's link and the partner's position (its nearest
+ * image in a periodic slice, periodic.h) are left in *link and *pj4 for
+ * pair_contact. */
 MC_FN int entry_touches(int k, v3 p, real r, int mat, MC_GLOBAL const SimParams* sp, MC_GLOBAL const real4* pos,
                         MC_GLOBAL const int2* info, MC_GLOBAL int* neigh_index, MC_GLOBAL int* neigh_rec,
                         MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out, Books* books, int* link,
                         real4* pj4) {
   *link = neigh_index[k];
   const int j = MC_LINK_PARTNER(*link);
-  *pj4 = pos[j];
+  *pj4 = image_of(sp, pos[j], p.z); /* across the seam of a slice, its nearest image */
   if (pair_touches(p, r, v3_of(xyz_of(*pj4)), (*pj4).w)) return 1;
   if (MC_LINK_TOUCHING(*link)) pair_opened(k, j, mat, sp, info, neigh_index, neigh_rec, neigh_rev, pair_out, books);
   return 0;
 }
 
 /* One touching pair, list entry k of ball i (its position, velocity, spin,
- * material; link: the entry as it was; pj4: the partner's position):
+ * material; link: the entry as it was; pj4: the partner's position, its
+ * nearest image in a periodic slice):
  * the law, ball i's side into its sums, the partner's into its slot, the
  * spring and the losses into the pair's record (a new one for a pair that
  * begins to touch), the touching flag into the entry. */

@@ -155,8 +155,9 @@ MC_FN int liner_element(MC_GLOBAL const BookParams* bp, MC_GLOBAL const SimParam
   const real two_pi = R(6.283185307179586);
   const int nl = sp->n_lifters;
   int axial = 0;
-  if (sp->length > R(0.0)) {
-    axial = (int)floor(rc.z / sp->length * (real)bp->axial_bins);
+  const real span = sp->length > R(0.0) ? sp->length : sp->period; /* a slice's elements span its period */
+  if (span > R(0.0)) {
+    axial = (int)floor(rc.z / span * (real)bp->axial_bins);
     axial = axial < 0 ? 0 : axial >= bp->axial_bins ? bp->axial_bins - 1 : axial;
   }
   real theta = atan2_fast(rc.y, rc.x);

@@ -25,9 +25,13 @@
 #include "mc_shim.h"
 #include "layout.h"
 #include "grid.h"
+#include "periodic.h"
 
+/* Whether a and b are within r_a + r_b + skin (the minimum image along a
+ * periodic axis). */
 inline int is_neighbour(__global const SimParams* sp, real4 a, real4 b) {
-  const real3 d = xyz_of(a) - xyz_of(b);
+  real3 d = xyz_of(a) - xyz_of(b);
+  d.z = image_dz(sp, d.z);
   const real cut = a.w + b.w + sp->skin;
   return dot(d, d) < cut * cut;
 }
@@ -41,7 +45,11 @@ __kernel void contacts_count(__global const SimParams* sp,
   const real4 pi = pos[i];
   const int4 c = grid_cell_of(sp, xyz_of(pi));
   int count = 0;
-  for (int z = max(c.z - 1, 0); z <= min(c.z + 1, sp->grid_nz - 1); ++z)
+  const int periodic = sp->period > R(0.0);
+  const int z_lo = periodic ? c.z - 1 : max(c.z - 1, 0);
+  const int z_hi = periodic ? c.z + 1 : min(c.z + 1, sp->grid_nz - 1);
+  for (int zs = z_lo; zs <= z_hi; ++zs) {
+    const int z = periodic ? grid_wrap(zs, sp->grid_nz) : zs;
     for (int y = max(c.y - 1, 0); y <= min(c.y + 1, sp->grid_ny - 1); ++y)
       for (int x = max(c.x - 1, 0); x <= min(c.x + 1, sp->grid_nx - 1); ++x) {
         const int cell = (z * sp->grid_ny + y) * sp->grid_nx + x;
@@ -50,6 +58,7 @@ __kernel void contacts_count(__global const SimParams* sp,
         for (int j = max(b, i + 1); j < e; ++j)
           if (is_neighbour(sp, pi, pos[j])) ++count;
       }
+  }
   neigh_count[i] = count;
 }
 
@@ -83,7 +92,11 @@ __kernel void contacts_fill(__global const SimParams* sp,
   const int4 c = grid_cell_of(sp, xyz_of(pi));
   const int oi = perm[i];
   int k = neigh_start[i];
-  for (int z = max(c.z - 1, 0); z <= min(c.z + 1, sp->grid_nz - 1); ++z)
+  const int periodic = sp->period > R(0.0);
+  const int z_lo = periodic ? c.z - 1 : max(c.z - 1, 0);
+  const int z_hi = periodic ? c.z + 1 : min(c.z + 1, sp->grid_nz - 1);
+  for (int zs = z_lo; zs <= z_hi; ++zs) {
+    const int z = periodic ? grid_wrap(zs, sp->grid_nz) : zs;
     for (int y = max(c.y - 1, 0); y <= min(c.y + 1, sp->grid_ny - 1); ++y)
       for (int x = max(c.x - 1, 0); x <= min(c.x + 1, sp->grid_nx - 1); ++x) {
         const int cell = (z * sp->grid_ny + y) * sp->grid_nx + x;
@@ -106,6 +119,7 @@ __kernel void contacts_fill(__global const SimParams* sp,
           ++k;
         }
       }
+  }
 }
 
 /* Records to carry over (pairs touching at the last evaluation), per ball,
@@ -215,7 +229,8 @@ __kernel void records_count(__global const SimParams* sp, __global const real4* 
       c += neigh_rec[k] >= 0;
     } else {
       const real4 pj = pos[link];
-      const real3 d = xyz_of(pi) - xyz_of(pj);
+      real3 d = xyz_of(pi) - xyz_of(pj);
+      d.z = image_dz(sp, d.z);
       const real r = pi.w + pj.w;
       p += dot(d, d) < r * r;
     }

@@ -5,6 +5,7 @@
 #include "contact_law.h"
 #include "walls.h"
 #include "books.h"
+#include "periodic.h"
 #include "ball_forces.h"
 
 /* The books' arguments of both force kernels, and the struct they fill. */
@@ -110,11 +111,12 @@ MC_FN void fg_pair_law(int q, int total, int group_first, __global const SimPara
   const int a = group_first + pair_ball[qc];
   const int touched = MC_LINK_TOUCHING(link);
   const int b = min(MC_LINK_PARTNER(link), sp->n_balls - 1);
+  const real z_b = image_z(sp, FG_AT(pos, b, 2), FG_AT(pos, a, 2)); /* nearest image, periodic.h */
   const ContactGeom g = pair_geometry(
       v3_make(FG_AT(pos, a, 0), FG_AT(pos, a, 1), FG_AT(pos, a, 2)), FG_AT(pos, a, 3),
       v3_make(FG_AT(vel, a, 0), FG_AT(vel, a, 1), FG_AT(vel, a, 2)),
       v3_make(FG_AT(omega, a, 0), FG_AT(omega, a, 1), FG_AT(omega, a, 2)), FG_AT(vel, a, 3),
-      FG_AT(omega, a, 3), v3_make(FG_AT(pos, b, 0), FG_AT(pos, b, 1), FG_AT(pos, b, 2)), FG_AT(pos, b, 3),
+      FG_AT(omega, a, 3), v3_make(FG_AT(pos, b, 0), FG_AT(pos, b, 1), z_b), FG_AT(pos, b, 3),
       v3_make(FG_AT(vel, b, 0), FG_AT(vel, b, 1), FG_AT(vel, b, 2)),
       v3_make(FG_AT(omega, b, 0), FG_AT(omega, b, 1), FG_AT(omega, b, 2)), FG_AT(vel, b, 3),
       FG_AT(omega, b, 3));
@@ -261,7 +263,8 @@ void forces_grouped(__global const SimParams* sp,
       } else {
         const int k = queue[lid * MC_FG_QUEUE + q];
         const int link = neigh_index[k];
-        pair_contact(pi4, vi, wi, mat_i, k, link, pos[MC_LINK_PARTNER(link)], sp, pairs, vel, omega, info,
+        pair_contact(pi4, vi, wi, mat_i, k, link, image_of(sp, pos[MC_LINK_PARTNER(link)], pi4.z), sp, pairs, vel,
+                     omega, info,
                      neigh_index, neigh_rec, neigh_rev, pair_out, &books, law, &s);
       }
     }

@@ -11,6 +11,7 @@
 #include "contact_law.h"
 #include "walls.h"
 #include "books.h"
+#include "periodic.h"
 #include "ball_forces.h"
 
 #ifdef MC_PROBE_LANES

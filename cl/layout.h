@@ -140,12 +140,14 @@ typedef struct {
   real velocity_damping; /* fraction of each ball's velocity and spin taken
                             away each step (viscous damping while the charge
                             settles); 0 while the mill turns */
+  real period;       /* > 0: a periodic slice, z taken modulo period over
+                        [0, period), no end plates (length is 0); the grid's
+                        z cells tile the period (periodic.h) */
   int grid_nx, grid_ny, grid_nz;
   int n_balls;
   int n_materials;   /* ball materials; the wall material has index n_materials */
   int n_lifters;
   int law;           /* MC_LAW_LINEAR or MC_LAW_HERTZ */
-  int pad_int;
 } SimParams;
 
 /* How the energy is booked: the spectra's pair types and the liner's

@@ -5,6 +5,7 @@
  * neighbour lists were built, and the not-finite flag on NaN or Inf. */
 #include "mc_shim.h"
 #include "layout.h"
+#include "periodic.h"
 #include "motion.h"
 
 __kernel void motion(__global const SimParams* sp, __global real4* pos,

@@ -1,5 +1,6 @@
 /* motion.h — the leapfrog update of one ball, shared by motion.cl and the CPU
- * reference. Returns the status flags it raises. */
+ * reference. Returns the status flags it raises. Needs periodic.h: in a
+ * slice the ball's z is wrapped into the period after the drift. */
 #ifndef MC_MOTION_H
 #define MC_MOTION_H
 
@@ -16,6 +17,7 @@ MC_FN int integrate_ball(int i, MC_GLOBAL const SimParams* sp,
   const real4 t = torque[i];
   v.x += dt * f.x * v.w; v.y += dt * f.y * v.w; v.z += dt * f.z * v.w;
   p.x += dt * v.x; p.y += dt * v.y; p.z += dt * v.z;
+  p.z = wrap_z(sp, p.z); /* a slice: leaving one end is entering at the other */
   w.x += dt * t.x * w.w; w.y += dt * t.y * w.w; w.z += dt * t.z * w.w;
   if (sp->velocity_damping > R(0.0)) { /* only while settling: the turning
                                           mill's steps stay as they were */
@@ -28,7 +30,7 @@ MC_FN int integrate_ball(int i, MC_GLOBAL const SimParams* sp,
   omega[i] = w;
   int flags = 0;
   const real4 b = pos_at_build[i];
-  const real dx = p.x - b.x, dy = p.y - b.y, dz = p.z - b.z;
+  const real dx = p.x - b.x, dy = p.y - b.y, dz = image_dz(sp, p.z - b.z); /* wrapped or not */
   /* The host acts on this flag one step later (it reads the status word
    * without stalling the queue), so the ball must still be inside half the
    * skin after one more step: the flag goes up two steps' travel early. */

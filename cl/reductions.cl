@@ -18,6 +18,7 @@
  * With reset != 0 the accumulators 0–2 are zeroed for the next interval. */
 #include "mc_shim.h"
 #include "layout.h"
+#include "periodic.h"
 
 #ifndef MC_ENERGY_BOOKS
 #define MC_ENERGY_BOOKS 1
@@ -110,7 +111,8 @@ __kernel void count_contacts(__global const SimParams* sp,
   const int e = b + neigh_count[i];
   for (int k = b; k < e; ++k) {
     const real4 pj = pos[MC_LINK_PARTNER(neigh_index[k])];
-    const real3 d = xyz_of(pi) - xyz_of(pj);
+    real3 d = xyz_of(pi) - xyz_of(pj);
+    d.z = image_dz(sp, d.z);
     const real r = pi.w + pj.w;
     if (dot(d, d) < r * r) ++touching;
   }

@@ -280,8 +280,16 @@ int cmd_check(const CaseOptions& o) {
   const MillCase& c = p.c;
   const MillDerived& d = p.d;
   std::printf("case            %s%s%s\n", p.path.string().c_str(), c.title.empty() ? "" : ": ", c.title.c_str());
-  std::printf("mill            D %.4g m x L %.4g m, %d lifter rows, liner \"%s\"\n", c.diameter, c.length,
-              c.lifter_rows, c.liner.c_str());
+  std::printf("mill            D %.4g m x L %.4g m%s, %d lifter rows, liner \"%s\"\n", c.diameter, c.length,
+              c.periodic ? " (a periodic slice)" : "", c.lifter_rows, c.liner.c_str());
+  if (c.periodic)
+    std::printf("ends            periodic (mill.ends): no end plates, a ball leaving one end enters at the other; "
+                "shortest slice %.4g m (%.0f largest balls); power, torque, spectra and wear also per metre\n",
+                d.shortest_slice, kSliceDiameters);
+  else
+    std::printf("ends            end plates at z = 0 and %.4g m (mill.ends = \"periodic\" would make a slice: at "
+                "least %.4g m)\n",
+                c.length, d.shortest_slice);
   std::printf("critical speed  %.2f rpm  (42.3/sqrt(D - d), d = largest ball %.4g mm)\n", d.critical_rpm,
               1000 * d.largest_ball_diameter);
   std::printf("speed           %.2f rpm = %.1f %% of critical  (%.4g rad/s, %.4g s per revolution, tip %.3g m/s)\n",
@@ -554,6 +562,14 @@ int cmd_run(const RunOptions& o) {
                   {"torque_arm_sem", number_or_null(err.arm.sem)}};
   j["torque_Nm"] = s.torque_Nm;
   j["torque_Nm_sem"] = number_or_null(err.torque.sem);
+  // Per metre of mill, which a slice stands for (sweep collect reads it).
+  j["ends"] = c.periodic ? "periodic" : "plates";
+  j["length_m"] = c.length;
+  j["power_per_metre_W"] = {{"torque", s.torque_power_W / c.length},
+                            {"dissipation", s.dissipation_power_W / c.length}};
+  j["torque_per_metre_Nm"] = s.torque_Nm / c.length;
+  j["power_per_metre_W"]["torque_sem"] = number_or_null(err.power.sem / c.length);
+  j["power_per_metre_W"]["dissipation_sem"] = number_or_null(err.dissipation.sem / c.length);
   j["toe_deg"] = number_or_null(toe);
   j["toe_deg_sem"] = number_or_null(err.toe.sem);
   j["shoulder_deg"] = number_or_null(shoulder);
@@ -594,6 +610,7 @@ int cmd_run(const RunOptions& o) {
   j["liner"]["impact_power_W_sem"] = number_or_null(err.impact.sem);
   j["liner"]["shear_power_W_sem"] = number_or_null(err.shear.sem);
   j["liner"]["wear_kg_per_h_sem"] = number_or_null(err.wear.sem);
+  j["per_metre"] = io::per_metre_json(c.length, s.torque_power_W, s.dissipation_power_W, s.torque_Nm, spectra, liner);
   j["contact_records_refused"] = solver->records_refused();
   j["wall_s"] = s.wall_s;
   j["particle_updates_per_s"] = s.updates_per_s;
@@ -650,6 +667,10 @@ int cmd_run(const RunOptions& o) {
               plus_minus(s.torque_arm_power_W, err.arm.sem, " W").c_str());
   std::printf("                averaged over %.2f revolutions from t = %.3f s to %.3f s\n", s.window_revolutions,
               s.window_from_s, s.window_to_s);
+  std::printf("per metre       torque %s, dissipation %s, torque %.4g N m/m over %.4g m%s\n",
+              plus_minus(s.torque_power_W / c.length, err.power.sem / c.length, " W/m").c_str(),
+              plus_minus(s.dissipation_power_W / c.length, err.dissipation.sem / c.length, " W/m").c_str(),
+              s.torque_Nm / c.length, c.length, c.periodic ? " of periodic slice" : " between the end plates");
   if (err.power.batches >= 2)
     std::printf("                \u00b1 one standard error, from %d batch means of %d revolution%s (lag-1 "
                 "autocorrelation %.2f%s)\n",

@@ -14,51 +14,71 @@ namespace mc {
 namespace {
 
 // Balls in a hash grid of cells at least one largest diameter wide, for
-// overlap queries while balls are added and removed.
+// overlap queries while balls are added and removed. Along the axis of a
+// periodic slice (period > 0) the cells tile the period and distances are
+// taken to the nearest image.
 class BallGrid {
  public:
-  BallGrid(double cell, const std::vector<Ball>& balls) : cell_(cell) {
+  BallGrid(double cell, const std::vector<Ball>& balls, double period = 0) : cell_(cell), period_(period) {
+    if (period_ > 0) {
+      nz_ = std::max(1L, static_cast<long>(std::floor(period_ / cell_)));
+      cell_z_ = period_ / nz_;
+    }
     for (std::size_t k = 0; k < balls.size(); ++k) insert(static_cast<int>(k), balls[k]);
   }
   void insert(int k, const Ball& b) { cells_[key(b.position)].push_back(k); }
   // Whether a ball of radius r at p keeps `gap` from every listed ball.
   bool clear(const std::vector<Ball>& balls, const Vec3& p, double r, double gap, int skip = -1) const {
-    const long ix = cell_index(p.x), iy = cell_index(p.y), iz = cell_index(p.z);
-    for (long dz = -1; dz <= 1; ++dz)
-      for (long dy = -1; dy <= 1; ++dy)
-        for (long dx = -1; dx <= 1; ++dx) {
-          auto it = cells_.find(pack(ix + dx, iy + dy, iz + dz));
-          if (it == cells_.end()) continue;
-          for (int j : it->second) {
-            if (j == skip) continue;
-            const Ball& o = balls[j];
-            const double reach = r + o.radius + gap;
-            const Vec3 d = p - o.position;
-            if (d.dot(d) < reach * reach) return false;
-          }
-        }
-    return true;
+    bool ok = true;
+    for_near(p, [&](int j) {
+      if (j == skip || !ok) return;
+      const Ball& o = balls[j];
+      const double reach = r + o.radius + gap;
+      const Vec3 d = separation(p, o.position);
+      if (d.dot(d) < reach * reach) ok = false;
+    });
+    return ok;
   }
   template <class F>
   void for_near(const Vec3& p, F f) const {
-    const long ix = cell_index(p.x), iy = cell_index(p.y), iz = cell_index(p.z);
-    for (long dz = -1; dz <= 1; ++dz)
+    const long ix = cell_index(p.x), iy = cell_index(p.y), iz = z_index(p.z);
+    long zs[3];
+    int n_zs = 0;
+    if (period_ > 0 && nz_ < 3) {
+      for (long k = 0; k < nz_; ++k) zs[n_zs++] = k;
+    } else {
+      for (long k = -1; k <= 1; ++k) zs[n_zs++] = period_ > 0 ? ((iz + k) % nz_ + nz_) % nz_ : iz + k;
+    }
+    for (int q = 0; q < n_zs; ++q)
       for (long dy = -1; dy <= 1; ++dy)
         for (long dx = -1; dx <= 1; ++dx) {
-          auto it = cells_.find(pack(ix + dx, iy + dy, iz + dz));
+          auto it = cells_.find(pack(ix + dx, iy + dy, zs[q]));
           if (it != cells_.end())
             for (int j : it->second) f(j);
         }
   }
+  // a − b, the nearest image along a periodic axis.
+  Vec3 separation(const Vec3& a, const Vec3& b) const {
+    Vec3 d = a - b;
+    if (period_ > 0) d.z -= period_ * std::floor(d.z / period_ + 0.5);
+    return d;
+  }
 
  private:
   long cell_index(double v) const { return static_cast<long>(std::floor(v / cell_)); }
+  long z_index(double z) const {
+    if (period_ <= 0) return cell_index(z);
+    const long k = static_cast<long>(std::floor(z / cell_z_)) % nz_;
+    return k < 0 ? k + nz_ : k;
+  }
   static long long pack(long x, long y, long z) {
     return ((static_cast<long long>(x) & 0x1fffff) << 42) | ((static_cast<long long>(y) & 0x1fffff) << 21) |
            (static_cast<long long>(z) & 0x1fffff);
   }
-  long long key(const Vec3& p) const { return pack(cell_index(p.x), cell_index(p.y), cell_index(p.z)); }
+  long long key(const Vec3& p) const { return pack(cell_index(p.x), cell_index(p.y), z_index(p.z)); }
   double cell_;
+  double period_ = 0, cell_z_ = 0;
+  long nz_ = 1;
   std::unordered_map<long long, std::vector<int>> cells_;
 };
 
@@ -72,7 +92,7 @@ class WallProbe {
   double clearance(const Vec3& p, double r) const {
     double gap = 1e300;
     if (w_.shell_radius > 0) gap = std::min(gap, w_.shell_radius - std::hypot(p.x, p.y) - r);
-    if (w_.length > 0) gap = std::min({gap, p.z - r, w_.length - p.z - r});
+    if (w_.has_end_plates()) gap = std::min({gap, p.z - r, w_.length - p.z - r});
     const double mx = c_ * p.x - s_ * p.y, my = s_ * p.x + c_ * p.y;  // mill frame
     for (const auto& poly : w_.lifters) gap = std::min(gap, polygon_signed_distance(poly, mx, my) - r);
     return gap;
@@ -220,7 +240,7 @@ ChargeEditResult edit_charge(const MillCase& c, const MillDerived& d, std::vecto
     std::sort(sites.begin(), sites.end(), [&](const Site& a, const Site& b) {
       return a.p.y + 0.5 * pitch * a.jitter < b.p.y + 0.5 * pitch * b.jitter;
     });
-    BallGrid grid(2 * rmax + 2 * gap, kept);
+    BallGrid grid(2 * rmax + 2 * gap, kept, s.walls.periodic ? s.walls.length : 0.0);
     std::size_t next_site = 0;
     for (Ball& b : to_add) {
       // Relocated balls keep their ids until the renumbering; new ones have −1.
@@ -248,7 +268,7 @@ double deepest_overlap(const Scene& scene) {
   double rmax = 0;
   for (const Ball& b : scene.balls) rmax = std::max(rmax, b.radius);
   if (scene.balls.empty()) return 0;
-  const BallGrid grid(2 * rmax, scene.balls);
+  const BallGrid grid(2 * rmax, scene.balls, scene.walls.periodic ? scene.walls.length : 0.0);
   const WallProbe walls(scene.walls, scene.mill_angle);
   for (std::size_t k = 0; k < scene.balls.size(); ++k) {
     const Ball& b = scene.balls[k];
@@ -256,7 +276,7 @@ double deepest_overlap(const Scene& scene) {
     grid.for_near(b.position, [&](int j) {
       if (j <= static_cast<int>(k)) return;
       const Ball& o = scene.balls[j];
-      const double dist = (b.position - o.position).norm();
+      const double dist = grid.separation(b.position, o.position).norm();
       worst = std::max(worst, (b.radius + o.radius - dist) / std::min(b.radius, o.radius));
     });
   }

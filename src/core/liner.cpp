@@ -188,10 +188,12 @@ LinerLayout liner_layout(const Scene& scene) {
       }
   }
 
-  // End plates: rings and sectors at z = 0, then z = length.
+  // End plates: rings and sectors at z = 0, then z = length (a periodic
+  // slice has none).
   L.first_plate = L.size();
   const double ring_w = (R > 0 ? R : 1.0) / L.plate_rings;
-  for (int plate = 0; plate < 2; ++plate)
+  const int plates = w.periodic ? 0 : 2;
+  for (int plate = 0; plate < plates; ++plate)
     for (int ring = 0; ring < L.plate_rings; ++ring)
       for (int s = 0; s < L.plate_sectors; ++s) {
         LinerElement e;

@@ -1,9 +1,10 @@
 // The liner as surface elements in the mill frame: the shell between two
 // lifter rows in angular bins over its bare arc, each lifter row's leading
 // face, top and trailing face, both in axial bins, and the end plates in
-// rings and sectors. The force kernels sum impacts, impact and shear energy
-// and wear on these elements (cl/books.h, in the same order); the outputs
-// and the viewer draw them. Also the spectra's pair types. No OpenCL.
+// rings and sectors (none in a periodic slice). The force kernels sum
+// impacts, impact and shear energy and wear on these elements (cl/books.h,
+// in the same order); the outputs and the viewer draw them. Also the
+// spectra's pair types. No OpenCL.
 #pragma once
 
 #include <string>

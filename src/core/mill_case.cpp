@@ -102,6 +102,11 @@ MillDerived derive(const MillCase& c) {
     fail("charge.size", "the largest ball (" + num(dmax) + " m) is more than a quarter of the mill diameter");
   if (dmax * 1.05 > c.length)
     fail("mill.length", "the mill (" + num(c.length) + " m) is shorter than the largest ball (" + num(dmax) + " m)");
+  d.shortest_slice = kSliceDiameters * dmax;
+  if (c.periodic && c.length < d.shortest_slice)
+    fail("mill.length", "a periodic slice (mill.ends = \"periodic\") must be at least " + num(kSliceDiameters) +
+                            " largest-ball diameters long, " + num(d.shortest_slice) + " m for " + num(1000 * dmax) +
+                            " mm balls (got " + num(c.length) + " m): lengthen the slice or use mill.ends = \"plates\"");
 
   // Speed.
   d.critical_rpm = 42.3 / std::sqrt(c.diameter - dmax);
@@ -319,6 +324,7 @@ Scene build_walls(const MillCase& c, const MillDerived& d) {
   const double R = 0.5 * c.diameter;
   s.walls.shell_radius = R;
   s.walls.length = c.length;
+  s.walls.periodic = c.periodic;
   s.walls.lifter_first_angle = c.lifter_first_angle_deg * kPi / 180.0;
   s.walls.lifters = lifter_rows(R, c.lifter_rows, c.lifter_pattern, s.walls.lifter_first_angle);
   s.liner = c.liner_grid;
@@ -338,6 +344,12 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
   // diameter) and rest where they first touch nothing: above the balls already
   // placed (checked exactly through a cell grid), inside the shell, clear of
   // the lifters and the end plates. The charge fills the mill from the bottom.
+  // A periodic slice has no end plates: its columns tile the period, a ball
+  // may straddle the seam (its z is wrapped), and balls are kept apart
+  // across the seam through the minimum image.
+  const bool periodic = c.periodic;
+  const double L = c.length;
+  auto image_dz = [&](double dz) { return periodic ? dz - L * std::floor(dz / L + 0.5) : dz; };
   std::mt19937_64 rng(c.seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   struct Pending {
@@ -365,12 +377,14 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
   };
   std::vector<Column> columns;
   const int nx = static_cast<int>(std::floor((2 * R - 2 * gap) / pitch));
-  const int nz = std::max(1, static_cast<int>(std::floor((c.length - 2 * gap) / pitch)));
-  const double z0 = 0.5 * (c.length - (nz - 1) * pitch);
+  const int nz = periodic ? std::max(1, static_cast<int>(std::floor(L / pitch)))
+                          : std::max(1, static_cast<int>(std::floor((c.length - 2 * gap) / pitch)));
+  const double pitch_z = periodic ? L / nz : pitch;
+  const double z0 = periodic ? 0.5 * pitch_z : 0.5 * (c.length - (nz - 1) * pitch);
   for (int ix = 0; ix < nx; ++ix) {
     const double x = -0.5 * (nx - 1) * pitch + ix * pitch;
     if (std::abs(x) + rmin + gap >= R) continue;
-    for (int iz = 0; iz < nz; ++iz) columns.push_back({x, z0 + iz * pitch, -R});
+    for (int iz = 0; iz < nz; ++iz) columns.push_back({x, z0 + iz * pitch_z, -R});
   }
   // The lowest column first; stale heap entries are skipped.
   using Entry = std::pair<double, int>;
@@ -381,7 +395,10 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
   // Placed balls in a cell grid (cells 2·rmax wide) for the exact overlap test.
   const double cell = 2 * rmax + 2 * gap;
   const int gx = static_cast<int>(std::ceil(2 * R / cell)) + 1;
-  const int gz = static_cast<int>(std::ceil(c.length / cell)) + 1;
+  // A slice's z cells tile the period (taken modulo gz).
+  const int gz = periodic ? std::max(1, static_cast<int>(std::floor(L / cell)))
+                          : static_cast<int>(std::ceil(c.length / cell)) + 1;
+  const double cell_z = periodic ? L / gz : cell;
   // Each cell holds the first and last of its balls, next_in_cell links them
   // in the order placed (8 bytes a cell: derive() bounds the cells).
   std::vector<int> grid(static_cast<std::size_t>(gx) * gx * gz, -1), grid_last(grid.size(), -1);
@@ -389,6 +406,23 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
   next_in_cell.reserve(pending.size());
   auto cell_of = [&](double v, double lo, int n) {
     return static_cast<int>(std::clamp(std::floor((v - lo) / cell), 0.0, static_cast<double>(n - 1)));
+  };
+  auto cell_z_of = [&](double z) {
+    if (!periodic) return cell_of(z, 0.0, gz);
+    const int k = static_cast<int>(std::floor(z / cell_z)) % gz;
+    return k < 0 ? k + gz : k;
+  };
+  // The z cells next to cell iz (itself included), each once.
+  auto z_neighbours = [&](int iz, int* out) {
+    int n = 0;
+    if (periodic && gz < 3) {
+      for (int k = 0; k < gz; ++k) out[n++] = k;
+    } else if (periodic) {
+      for (int k = -1; k <= 1; ++k) out[n++] = (iz + k + gz) % gz;
+    } else {
+      for (int k = std::max(0, iz - 1); k <= std::min(gz - 1, iz + 1); ++k) out[n++] = k;
+    }
+    return n;
   };
   auto cell_index = [&](int ix, int iy, int iz) { return (static_cast<std::size_t>(iz) * gx + iy) * gx + ix; };
   auto grid_at = [&](int ix, int iy, int iz) { return grid[cell_index(ix, iy, iz)]; };
@@ -417,14 +451,16 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
     double y = y0;
     for (bool moved = true; moved;) {
       moved = false;
-      const int ix = cell_of(x, -R, gx), iy = cell_of(y, -R, gx), iz = cell_of(z, 0.0, gz);
-      for (int cz = std::max(0, iz - 1); cz <= std::min(gz - 1, iz + 1); ++cz)
+      const int ix = cell_of(x, -R, gx), iy = cell_of(y, -R, gx);
+      int zs[3];
+      const int n_zs = z_neighbours(cell_z_of(z), zs);
+      for (int q = 0; q < n_zs; ++q)
         for (int cy = std::max(0, iy - 1); cy <= std::min(gx - 1, iy + 1); ++cy)
           for (int cx = std::max(0, ix - 1); cx <= std::min(gx - 1, ix + 1); ++cx)
-            for (int j = grid_at(cx, cy, cz); j >= 0; j = next_in_cell[j]) {
+            for (int j = grid_at(cx, cy, zs[q]); j >= 0; j = next_in_cell[j]) {
               const Ball& b = s.balls[j];
               const double reach = r + b.radius + gap;
-              const double dx = x - b.position.x, dz = z - b.position.z, dy = y - b.position.y;
+              const double dx = x - b.position.x, dz = image_dz(z - b.position.z), dy = y - b.position.y;
               if (dx * dx + dy * dy + dz * dz >= reach * reach) continue;
               const double h2 = reach * reach - dx * dx - dz * dz;
               y = b.position.y + std::sqrt(std::max(0.0, h2)) + 1e-9 * R;
@@ -444,8 +480,9 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
       const Column& col = columns[k];
       const double ring = R - p.radius - gap;  // centre circle clear of the shell
       const double x = col.x + 0.1 * pitch * (2 * unit(rng) - 1);
-      const double z = std::clamp(col.z + 0.1 * pitch * (2 * unit(rng) - 1), p.radius + gap,
-                                  c.length - p.radius - gap);
+      const double z_jittered = col.z + 0.1 * pitch * (2 * unit(rng) - 1);
+      const double z = periodic ? z_jittered - L * std::floor(z_jittered / L)
+                                : std::clamp(z_jittered, p.radius + gap, c.length - p.radius - gap);
       if (std::abs(x) >= ring) {
         closed[k] = 1;
         continue;
@@ -466,7 +503,7 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
       b.material = p.material;
       b.radius = p.radius;
       b.position = {x, y, z};
-      const std::size_t at = cell_index(cell_of(x, -R, gx), cell_of(y, -R, gx), cell_of(z, 0.0, gz));
+      const std::size_t at = cell_index(cell_of(x, -R, gx), cell_of(y, -R, gx), cell_z_of(z));
       next_in_cell.push_back(-1);
       if (grid_last[at] >= 0) next_in_cell[grid_last[at]] = b.id;
       else grid[at] = b.id;

@@ -31,7 +31,11 @@ struct MillCase {
   std::string title;
   // [mill]
   double diameter = 0;       // m, inside the liners
-  double length = 0;         // m, between the end plates
+  double length = 0;         // m, between the end plates (or of the slice)
+  // mill.ends = "periodic": a slice of `length` with no end plates, standing
+  // for the middle of a long mill (cl/periodic.h); "plates" (the default):
+  // a whole mill closed by its end plates.
+  bool periodic = false;
   double speed_fraction = 0; // of critical; 0 when the case gives rpm
   double speed_rpm = 0;      // 0 when the case gives the fraction
   std::string liner;         // material of shell, end plates and lifters
@@ -78,6 +82,8 @@ struct MillCase {
 // Everything derived from a case, computed in one place.
 struct MillDerived {
   double largest_ball_diameter = 0;  // m
+  double shortest_slice = 0;         // m, the shortest periodic slice allowed
+                                     // (kSliceDiameters largest balls)
   double critical_rpm = 0;           // 42.3 / sqrt(D − d), d the largest ball
   double speed_rpm = 0;
   double speed_fraction = 0;
@@ -104,6 +110,11 @@ inline constexpr double kAutoRevolutions = 40;
 // falls and slumps over times of order sqrt(D/g), and damps out over a fifth
 // of that.
 inline constexpr double kSettleDamping = 5;
+// The shortest periodic slice, in largest-ball diameters: the neighbour
+// grid needs 3 cells of 2 r_max + skin along the axis (3.3 diameters at
+// most), and a shorter slice would let a ball meet its own image's
+// neighbours across both seams at once.
+inline constexpr double kSliceDiameters = 4.0;
 
 // Checks what the case reader cannot check key by key (cross-key rules) and
 // derives the values; throws std::invalid_argument naming the key.

@@ -82,6 +82,7 @@ void validate(const Scene& scene) {
     if (b.material < 0 || b.material >= scene.wall_index())
       fail("ball " + std::to_string(b.id) + ": unknown material " + std::to_string(b.material));
   }
+  if (scene.walls.periodic && !(scene.walls.length > 0)) fail("walls.length: a periodic slice needs a length > 0");
   for (const auto& poly : scene.walls.lifters) {
     if (poly.size() < 3 || poly.size() > 8) fail("lifter polygon needs 3 to 8 vertices");
   }

@@ -65,6 +65,10 @@ struct Ball {
 struct Walls {
   double shell_radius = 0.0;  // inside radius of the shell; 0: no shell
   double length = 0.0;        // end plates at z = 0 and z = length; 0: none
+  // A periodic slice of `length` (cl/periodic.h): no end plates, z taken
+  // modulo the length, contacts across the seam as any other.
+  bool periodic = false;
+  bool has_end_plates() const { return length > 0 && !periodic; }
   // Lifter cross-sections in the mill frame, counter-clockwise convex
   // polygons, one per row, rows evenly spaced starting at lifter_first_angle.
   std::vector<std::vector<Vec2>> lifters;

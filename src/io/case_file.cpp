@@ -425,9 +425,10 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
   }
   {
     Section s(r, *top.table("mill", true), "mill");
-    s.knows({"diameter", "length", "speed_fraction", "speed_rpm", "liner"});
+    s.knows({"diameter", "length", "ends", "speed_fraction", "speed_rpm", "liner"});
     c.diameter = s.number("diameter");
     c.length = s.number("length");
+    c.periodic = s.string("ends", std::string("plates"), {"plates", "periodic"}) == "periodic";
     const bool frac = s.has("speed_fraction"), rpm = s.has("speed_rpm");
     if (frac == rpm)
       r.fail(frac ? "mill.speed_rpm" : "mill.speed_fraction", frac ? s.node("speed_rpm") : s.self_node(),
@@ -595,7 +596,8 @@ std::string case_to_toml(const MillCase& c) {
   };
   toml::table root;
   if (!c.title.empty()) root.insert("title", c.title);
-  toml::table mill{{"diameter", c.diameter}, {"length", c.length}, {"liner", c.liner}};
+  toml::table mill{{"diameter", c.diameter}, {"length", c.length}, {"ends", c.periodic ? "periodic" : "plates"},
+                   {"liner", c.liner}};
   if (c.speed_rpm > 0) mill.insert("speed_rpm", c.speed_rpm);
   else mill.insert("speed_fraction", c.speed_fraction);
   root.insert("mill", mill);

@@ -147,6 +147,32 @@ nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& 
   return j;
 }
 
+nlohmann::ordered_json per_metre_json(double length_m, double torque_power_W, double dissipation_power_W,
+                                      double torque_Nm, const SpectraReport& spectra, const LinerReport& liner) {
+  const double L = length_m > 0 ? length_m : std::nan("");
+  nlohmann::ordered_json j;
+  j["length_m"] = num(length_m);
+  j["power_W"] = {{"torque", num(torque_power_W / L)}, {"dissipation", num(dissipation_power_W / L)}};
+  j["torque_Nm"] = num(torque_Nm / L);
+  j["collisions_per_s"] = num(spectra.all.collisions_per_s / L);
+  j["collision_power_W"] = num(spectra.all.power_W / L);
+  j["liner_impact_power_W"] = num(liner.impact_W / L);
+  j["liner_shear_power_W"] = num(liner.shear_W / L);
+  j["wear_kg_per_h"] = num(liner.wear_kg_per_h / L);
+  // The parts' power per metre: a whole mill's end plates against its
+  // shell and lifters (a slice has no end plates).
+  j["parts"] = nlohmann::json::array();
+  for (const LinerPartRates& p : liner.parts) {
+    nlohmann::ordered_json q;
+    q["part"] = p.name;
+    q["impact_power_W"] = num(p.impact_W / L);
+    q["shear_power_W"] = num(p.shear_W / L);
+    q["wear_kg_per_h"] = num(p.wear_kg_per_h / L);
+    j["parts"].push_back(q);
+  }
+  return j;
+}
+
 void write_spectra_png(const std::filesystem::path& path, const std::string& title, const SpectraReport& r) {
   static const std::uint32_t colours[] = {0x1f77b4, 0xd62728, 0x2ca02c, 0xff7f0e, 0x9467bd, 0x8c564b, 0xe377c2, 0x17becf};
   LinePlot cumulative, rate;

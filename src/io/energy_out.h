@@ -19,6 +19,11 @@ void write_wear_csv(const std::filesystem::path& path, const LinerLayout& layout
 
 nlohmann::ordered_json spectra_json(const SpectraReport& r);
 nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& r, double wear_coefficient);
+// summary.json's `per_metre` block: a run's power, torque, collisions and
+// liner sums over its length (a periodic slice's, or a whole mill's between
+// its end plates), per metre of mill.
+nlohmann::ordered_json per_metre_json(double length_m, double torque_power_W, double dissipation_power_W,
+                                      double torque_Nm, const SpectraReport& spectra, const LinerReport& liner);
 
 // The liner's elements as polygons turned by `mill_angle` (rad) about +z
 // into the lab frame, with the report's rates per cell (a null report: the

@@ -24,6 +24,7 @@ using real = double;
 #include "../../cl/contact_law.h"
 #include "../../cl/walls.h"
 #include "../../cl/books.h"
+#include "../../cl/periodic.h"
 #include "../../cl/ball_forces.h"
 #include "../../cl/motion.h"
 }  // namespace mc::f64
@@ -33,8 +34,10 @@ namespace mc {
 static_assert(sizeof(f32::real4) == 16 && alignof(f32::real4) == 16);
 static_assert(sizeof(f64::real4) == 32 && alignof(f64::real4) == 32);
 static_assert(sizeof(f32::PairParams) == 8 * 4 && sizeof(f64::PairParams) == 8 * 8);
-static_assert(sizeof(f32::SimParams) == 2 * 16 + 8 * 4 + 8 * 4);
-static_assert(sizeof(f64::SimParams) == 2 * 32 + 8 * 8 + 8 * 4);
+// Nine reals and seven ints after the two 4-vectors; in double the struct
+// ends padded to its 32-byte alignment (OpenCL C pads it the same way).
+static_assert(sizeof(f32::SimParams) == 2 * 16 + 9 * 4 + 7 * 4);
+static_assert(sizeof(f64::SimParams) == 2 * 32 + 9 * 8 + 7 * 4 + 28);
 static_assert(sizeof(f32::BookParams) == 4 * 4 + 8 * 4 && sizeof(f64::BookParams) == 4 * 8 + 8 * 4);
 
 // The types of one precision, for code templated on it.

@@ -43,7 +43,8 @@ struct ReferenceSolver::State {
     for (int i = 0; i < n; ++i) {
       neigh_start[i] = static_cast<int>(neigh_index.size());
       for (int j = i + 1; j < n; ++j) {
-        const double dx = pos[i].x - pos[j].x, dy = pos[i].y - pos[j].y, dz = pos[i].z - pos[j].z;
+        const double dx = pos[i].x - pos[j].x, dy = pos[i].y - pos[j].y;
+        const double dz = image_dz(&sp, pos[i].z - pos[j].z);  // the minimum image in a slice
         const double cut = pos[i].w + pos[j].w;
         if (dx * dx + dy * dy + dz * dz >= cut * cut) continue;
         auto it = history.find({i, j});
@@ -121,7 +122,7 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
   for (int i = 0; i < n; ++i) {
     const Ball& b = balls[i];
     const double m = ball_mass(scene, b);
-    s.pos[i] = {b.position.x, b.position.y, b.position.z, b.radius};
+    s.pos[i] = {b.position.x, b.position.y, wrap_z(&s.sp, b.position.z), b.radius};
     s.vel[i] = {b.velocity.x, b.velocity.y, b.velocity.z, 1.0 / m};
     s.omega[i] = {b.omega.x, b.omega.y, b.omega.z, 1.0 / (0.4 * m * b.radius * b.radius)};
     s.info[i] = {b.id, b.material};

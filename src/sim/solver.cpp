@@ -312,7 +312,10 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
     const double m = ball_mass(scene, b);
     const double inertia = 0.4 * m * b.radius * b.radius;
     total_mass_ += m;
-    pos_.host[i] = {Real(b.position.x), Real(b.position.y), Real(b.position.z), Real(b.radius)};
+    // A slice keeps its balls in [0, period) (cl/periodic.h).
+    const double z = scene.walls.periodic ? b.position.z - scene.walls.length * std::floor(b.position.z / scene.walls.length)
+                                          : b.position.z;
+    pos_.host[i] = {Real(b.position.x), Real(b.position.y), Real(z), Real(b.radius)};
     vel_.host[i] = {Real(b.velocity.x), Real(b.velocity.y), Real(b.velocity.z), Real(1.0 / m)};
     omega_.host[i] = {Real(b.omega.x), Real(b.omega.y), Real(b.omega.z), Real(1.0 / inertia)};
     info_.host[i] = {b.id, b.material};
@@ -407,6 +410,7 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   sp.lifter_reach = Real(tp.lifter_reach);
   sp.lifter_first_angle = Real(tp.lifter_first_angle);
   sp.lifter_spacing = Real(tp.lifter_spacing);
+  sp.period = Real(tp.period);
   sp.n_balls = tp.n_balls;
   sp.n_materials = tp.n_materials;
   sp.n_lifters = tp.n_lifters;
@@ -426,7 +430,10 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
 
   // Grid over the mill (or the balls when there is no mill), one cell of
   // margin; cells at least 2·r_max + skin wide. A cap on the cell count keeps
-  // memory bounded for balls spread far apart (clamping stays correct).
+  // memory bounded for balls spread far apart (clamping stays correct). In a
+  // periodic slice the z cells tile the period exactly from z = 0, and there
+  // are at least 3 of them, so that the stencil visits no cell twice (the
+  // case's shortest slice, core/mill_case.h, keeps to this).
   if (w.shell_radius > 0) {
     lo.x = std::min(lo.x, -w.shell_radius);
     lo.y = std::min(lo.y, -w.shell_radius);
@@ -437,19 +444,33 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
     lo.z = std::min(lo.z, 0.0);
     hi.z = std::max(hi.z, w.length);
   }
+  const double period = tp.period;
+  auto z_cells = [&](double c) { return static_cast<long>(std::floor(period / c)); };
   double cell = 2.0 * r_max + skin;
+  if (period > 0) {
+    if (z_cells(cell) < 3) {
+      std::ostringstream m;
+      m << "mill.length: a periodic slice of " << period << " m holds " << z_cells(cell)
+        << " grid cells of 2 r_max + skin = " << cell << " m along the axis and needs at least 3: make it at least "
+        << 3 * cell << " m long";
+      throw std::invalid_argument(m.str());
+    }
+    cell = period / z_cells(cell);
+  }
   auto dims = [&](double c) {
     return std::array<long, 3>{static_cast<long>(std::ceil((hi.x - lo.x) / c)) + 3,
                                static_cast<long>(std::ceil((hi.y - lo.y) / c)) + 3,
-                               static_cast<long>(std::ceil((hi.z - lo.z) / c)) + 3};
+                               period > 0 ? z_cells(c) : static_cast<long>(std::ceil((hi.z - lo.z) / c)) + 3};
   };
   const long max_cells = std::max<long>(4L * n_, 1L << 16);
   auto d = dims(cell);
   while (d[0] * d[1] * d[2] > max_cells) {
+    if (period > 0 && z_cells(cell * 1.25) < 3) break;  // the slice keeps its 3 cells
     cell *= 1.25;
+    if (period > 0) cell = period / z_cells(cell);
     d = dims(cell);
   }
-  sp.grid_origin = {Real(lo.x - cell), Real(lo.y - cell), Real(lo.z - cell), Real(cell)};
+  sp.grid_origin = {Real(lo.x - cell), Real(lo.y - cell), Real(period > 0 ? 0.0 : lo.z - cell), Real(cell)};
   sp.grid_nx = static_cast<int>(d[0]);
   sp.grid_ny = static_cast<int>(d[1]);
   sp.grid_nz = static_cast<int>(d[2]);

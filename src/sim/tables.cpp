@@ -45,7 +45,8 @@ SceneTables scene_tables(const Scene& scene) {
   sp.dt = scene.numerics.dt;
   sp.skin = scene.numerics.skin > 0 ? scene.numerics.skin : default_skin(scene);
   sp.shell_radius = w.shell_radius;
-  sp.length = w.length;
+  sp.length = w.has_end_plates() ? w.length : 0.0;
+  sp.period = w.periodic ? w.length : 0.0;
   // A ball centre farther than this from the axis may touch a lifter.
   sp.lifter_reach = std::max(0.0, reach - 1.01 * r_max);
   sp.lifter_first_angle = w.lifter_first_angle;

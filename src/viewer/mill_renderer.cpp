@@ -132,6 +132,7 @@ void MillRenderer::set_liner_colours(const std::vector<glm::vec3>& per_element) 
 void MillRenderer::set_walls(const Walls& w) {
   radius_ = static_cast<float>(w.shell_radius);
   length_ = static_cast<float>(w.length);
+  end_plates_ = !w.periodic;
   const float R = radius_, L = length_;
   auto at = [](float r, float a, float z) { return glm::vec3(r * std::cos(a), r * std::sin(a), z); };
 
@@ -210,8 +211,10 @@ void MillRenderer::draw(const glm::mat4& view, const glm::mat4& projection, bool
     shader_.set("base_colour", glm::vec4(0.55f, 0.56f, 0.58f, 1.0f));
     shell_.draw();
   }
-  shader_.set("base_colour", glm::vec4(0.24f, 0.25f, 0.27f, 1.0f));
-  plate_.draw();
+  if (end_plates_) {  // a slice is open at both ends
+    shader_.set("base_colour", glm::vec4(0.24f, 0.25f, 0.27f, 1.0f));
+    plate_.draw();
+  }
   shader_.set("base_colour", glm::vec4(0.40f, 0.41f, 0.43f, 1.0f));
   rims_.draw();
   glDisable(GL_CULL_FACE);

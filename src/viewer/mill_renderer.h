@@ -1,7 +1,8 @@
 // The mill, cut away so that the charge shows: the far half of the shell
 // (back faces culled: only the inside facing the eye is drawn; the near half
 // translucent over the balls), the back end
-// plate (the front one is left out), the lifter bars as extruded polygons,
+// plate (the front one is left out; a periodic slice has none), the lifter
+// bars as extruded polygons,
 // dark rims at both ends that outline the shell in the end view, and marks
 // for the toe and the shoulder just outside the shell.
 #pragma once
@@ -75,6 +76,7 @@ class MillRenderer {
   Mesh shell_, plate_, rims_, lifters_, marks_;
   ColourMesh liner_shell_, liner_parts_;  // culled like the shell; the rest
   float radius_ = 0, length_ = 0;
+  bool end_plates_ = true;  // false for a periodic slice
 };
 
 }  // namespace mc::viewer

@@ -284,7 +284,7 @@ bool same_sizes(const MillCase& a, const MillCase& b) {
       return false;
   for (std::size_t k = 0; k < a.materials.size(); ++k)
     if (a.materials[k].name != b.materials[k].name || a.materials[k].density != b.materials[k].density) return false;
-  return a.diameter == b.diameter && a.length == b.length;
+  return a.diameter == b.diameter && a.length == b.length && a.periodic == b.periodic;
 }
 
 }  // namespace
