@@ -671,11 +671,15 @@ int cmd_run(const RunOptions& o) {
               plus_minus(s.torque_power_W / c.length, err.power.sem / c.length, " W/m").c_str(),
               plus_minus(s.dissipation_power_W / c.length, err.dissipation.sem / c.length, " W/m").c_str(),
               s.torque_Nm / c.length, c.length, c.periodic ? " of periodic slice" : " between the end plates");
-  if (err.power.batches >= 2)
+  if (err.power.batches >= 2 && std::isfinite(err.power.lag1))
     std::printf("                \u00b1 one standard error, from %d batch means of %d revolution%s (lag-1 "
                 "autocorrelation %.2f%s)\n",
                 err.power.batches, err.power.batch_length, err.power.batch_length == 1 ? "" : "s", err.power.lag1,
                 err.power.correlated ? ", still correlated: the errors are too small" : "");
+  else if (err.power.batches >= 2)
+    std::printf("                \u00b1 one standard error, from %d batch means of %d revolution%s (too few to "
+                "test their correlation: a rough error)\n",
+                err.power.batches, err.power.batch_length, err.power.batch_length == 1 ? "" : "s");
   if (s.duration_auto && s.converged)
     std::printf("convergence     converged after %d revolutions: the power's standard error is %.2f %% of its mean "
                 "(run.tolerance %.3g %%)\n",
