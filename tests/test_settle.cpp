@@ -34,7 +34,7 @@ nlohmann::json settle_only(const std::string& damping, const std::string& name) 
 
 }  // namespace
 
-TEST_CASE("settling with damping comes to rest in the same bed; its wall time is recorded", "[settle]") {
+TEST_CASE("settling with damping comes to rest in the same bed and records its wall time", "[settle]") {
   const nlohmann::json plain = settle_only("0", "plain"), damped = settle_only("auto", "damped");
   const double t0 = plain["settle_s"].get<double>(), t1 = damped["settle_s"].get<double>();
   INFO("settled in " << t0 << " s without damping, " << t1 << " s with");
