@@ -15,17 +15,12 @@
 #include "core/mill_case.h"
 #include "io/case_file.h"
 
+#include "text_file.h"
+
 namespace fs = std::filesystem;
 using mc::io::CaseError;
 
 namespace {
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 std::string error_of(const std::string& text, const std::vector<std::string>& sets = {}) {
   try {

@@ -18,6 +18,8 @@
 #include "compute/program.h"
 #include "helpers.h"
 
+#include "text_file.h"
+
 namespace fs = std::filesystem;
 using mc::compute::Error;
 
@@ -28,13 +30,6 @@ fs::path temp_dir(const std::string& name) {
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
-}
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 struct Outcome {

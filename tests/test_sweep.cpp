@@ -23,6 +23,8 @@
 #include "io/case_file.h"
 #include "io/sweep_file.h"
 
+#include "text_file.h"
+
 namespace fs = std::filesystem;
 using namespace mc;
 
@@ -33,13 +35,6 @@ fs::path temp_dir(const std::string& name) {
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
-}
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 void write_text(const fs::path& p, const std::string& text) {

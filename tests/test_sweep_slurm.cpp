@@ -23,17 +23,12 @@
 
 #include "io/checkpoint.h"
 
+#include "text_file.h"
+
 namespace fs = std::filesystem;
 using namespace mc;
 
 namespace {
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 struct Outcome {
   int status = -1;

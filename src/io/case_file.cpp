@@ -2,6 +2,8 @@
 
 #include <toml++/toml.h>
 
+#include "io/toml_names.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -29,18 +31,6 @@ std::size_t distance(const std::string& a, const std::string& b) {
     }
   }
   return row[b.size()];
-}
-
-std::string type_name(const toml::node& n) {
-  switch (n.type()) {
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a number";
-    case toml::node_type::boolean: return "a boolean";
-    default: return "a date or time";
-  }
 }
 
 // Reads one case: remembers where each key came from (file:line or the

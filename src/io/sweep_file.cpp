@@ -2,6 +2,8 @@
 
 #include <toml++/toml.h>
 
+#include "io/toml_names.h"
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -35,18 +37,6 @@ class Reader {
  private:
   std::string source_;
 };
-
-std::string type_name(const toml::node& n) {
-  switch (n.type()) {
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a number";
-    case toml::node_type::boolean: return "a boolean";
-    default: return "a date or time";
-  }
-}
 
 // The shortest text that reads back as `v`; a TOML float keeps a point.
 std::string float_text(double v, bool toml_float) {
