@@ -85,19 +85,43 @@ typedef struct {
   real torque_axis, dissipated, elastic;
 } BallSums;
 
-/* One wall contact: its record (the slot's with the same key, or a new
- * one), the law, force, torque and observables into the ball's sums, the
- * books. `out` is the direction from a lifter bar to the ball in the mill
- * frame (unused for the other walls). */
-MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel, real4 om, real radius, int material,
-                        PairParams pp, MillState mill, MC_GLOBAL const SimParams* sp,
+/* Which wall a contact touches, as wall_contact books it. */
+typedef struct {
+  int key;      /* the slot's key from this step on */
+  int match;    /* the old slot it continues: the same key, or a mesh
+                   contact of the same smooth patch that it follows */
+  int element;  /* its liner element; < 0: from the geometry (liner_element) */
+  int type;     /* MC_WALL_TYPE_*, for the impact profile */
+  int turning;  /* 1: the wall turns with the mill; 0: it stands still
+                   (no velocity, no torque on the mill) */
+  real wear_k;  /* Archard's coefficient of its material, m³/(N·m) */
+} WallRef;
+
+/* The reference of a shell, end-plate or lifter contact. */
+MC_FN WallRef analytic_wall(int key, Books* books) {
+  WallRef w;
+  w.key = w.match = key;
+  w.element = -1;
+  w.type = key == MC_WALL_SHELL ? MC_WALL_TYPE_SHELL : key >= MC_WALL_LIFTER0 ? MC_WALL_TYPE_LIFTER : MC_WALL_TYPE_PLATE;
+  w.turning = 1;
+  w.wear_k = books->bp->wear_k;
+  return w;
+}
+
+/* One wall contact: its record (the slot's with the key it continues, or a
+ * new one), the law, force, torque and observables into the ball's sums,
+ * the books. `out` is the direction from a lifter bar to the ball in the
+ * mill frame (unused for the other walls). */
+MC_FN void wall_contact(WallRef wr, real3 n, real overlap, real3 p, real4 vel, real4 om, real radius, PairParams pp,
+                        MillState mill, MC_GLOBAL const SimParams* sp,
                         MC_GLOBAL const LifterPolygon* lifters, int law, real2 out, WallSlots* ws, Books* books,
                         BallSums* sums) {
   int rec = MC_NO_RECORD;
   for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s)
-    if (ws->old_key[s] == key) {
+    if (ws->old_key[s] == wr.match && !ws->renewed[s]) {
       rec = ws->old_rec[s];
       ws->renewed[s] = 1;
+      break;
     }
   /* A new contact takes a record (so does one that found the pool full, at
    * the next try). */
@@ -105,7 +129,8 @@ MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel, real
   const real dt = sp->dt;
   const real arm = radius - overlap;
   const real3 rc = p - arm * n; /* contact point, world frame */
-  const real3 w_mill = make_real3(0, 0, mill.omega);
+  const real omega = wr.turning ? mill.omega : R(0.0);
+  const real3 w_mill = make_real3(0, 0, omega);
   const real3 v_wall = cross(w_mill, rc);
   const real3 w_ball = xyz_of(om);
   ContactGeom g;
@@ -122,22 +147,67 @@ MC_FN void wall_contact(int key, real3 n, real overlap, real3 p, real4 vel, real
   sums->f += real3_of(c.force);
   sums->t += real3_of(c.torque);
   /* Torque of the wall on the ball about the mill axis: r_c × F plus the
-   * rolling couple. */
-  sums->torque_axis += rc.x * c.force.y - rc.y * c.force.x + c.rolling.z;
+   * rolling couple (a wall standing still drives nothing). */
+  if (wr.turning) sums->torque_axis += rc.x * c.force.y - rc.y * c.force.x + c.rolling.z;
   sums->dissipated += c.dissipated;
   sums->elastic += c.elastic;
   record_step(books, rec, fresh, v3_dot(g.v_rel, g.normal), c);
 #if MC_ENERGY_BOOKS
-  const real3 rc_mill = rotate_z(rc, mill.cos_angle, -mill.sin_angle);
-  liner_step(books, liner_element(books->bp, sp, lifters, key, rc_mill, out), fresh, c, key,
-             atan2_fast(rc.y, rc.x));
+  int element = wr.element;
+  if (element < 0) element = liner_element(books->bp, sp, lifters, wr.key, rotate_z(rc, mill.cos_angle, -mill.sin_angle), out);
+  liner_step(books, element, fresh, c, wr.wear_k, wr.type != MC_WALL_TYPE_PLATE, atan2_fast(rc.y, rc.x));
 #endif
   if (ws->n_new < MC_MAX_WALL_CONTACTS) {
-    ws->new_key[ws->n_new] = key;
+    ws->new_key[ws->n_new] = wr.key;
     ws->new_rec[ws->n_new] = rec;
     ws->n_new += 1;
   } else {
     ws->overflow = 1;
+  }
+}
+
+/* The mesh walls on a ball at p (lab frame): each set's candidates in the
+ * ball's cell, Hu et al.'s rule (mesh.h), and each contact through
+ * wall_contact, keyed by its feature and continuing the slot of the same
+ * feature or, failing that, of its smooth patch. */
+MC_FN void mesh_walls(const Meshes* m, real3 p, real4 vi, real4 wi, real ri, int mat_i, MillState mill,
+                      MC_GLOBAL const SimParams* sp, MC_GLOBAL const LifterPolygon* lifters, int law, WallSlots* ws,
+                      Books* books, BallSums* sums) {
+  for (int set = 0; set < MC_MESH_SETS; ++set) {
+    const int turning = set == 0;
+    const real c = mill.cos_angle, s = mill.sin_angle;
+    const real3 q = turning ? rotate_z(p, c, -s) : p;
+    MeshHit hits[MC_MESH_HITS];
+    const int nh = mesh_candidates(m, set, q, ri, hits, &ws->overflow);
+    if (nh == 0) continue;
+    int keep[MC_MESH_HITS];
+    mesh_keep(m, hits, nh, keep);
+    for (int h = 0; h < nh; ++h) {
+      if (!keep[h]) continue;
+      MC_GLOBAL const MeshTriangle* tr = m->tris + hits[h].tri;
+      WallRef wr;
+      wr.key = MC_WALL_MESH0 + hits[h].feature;
+      const int2 fi = m->feature[hits[h].feature];
+      wr.match = wr.key;
+      int exact = 0;
+      for (int k = 0; k < MC_MAX_WALL_CONTACTS; ++k) exact |= ws->old_key[k] == wr.key && !ws->renewed[k];
+      if (!exact)
+        for (int k = 0; k < MC_MAX_WALL_CONTACTS; ++k) {
+          const int ok = ws->old_key[k];
+          if (ok >= MC_WALL_MESH0 && !ws->renewed[k] && m->feature[ok - MC_WALL_MESH0].x == fi.x) {
+            wr.match = ok;
+            break;
+          }
+        }
+      wr.element = tr->element;
+      wr.type = fi.y;
+      wr.turning = turning;
+      wr.wear_k = tr->a.w;
+      const real3 nrm = turning ? rotate_z(hits[h].normal, c, s) : hits[h].normal;
+      const PairParams pp = m->pairs[tr->pair_row + mat_i];
+      wall_contact(wr, nrm, ri - hits[h].dist, p, vi, wi, ri, pp, mill, sp, lifters, law, make_real2(0, 0), ws,
+                   books, sums);
+    }
   }
 }
 
@@ -239,8 +309,9 @@ MC_FN BallSums ball_sums_start(MC_GLOBAL const SimParams* sp, real4 vi) {
 /* The shell, the end plates and the lifters on ball i, in the mill frame.
  * A wall slot that no contact renews was a collision that ended. */
 MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL const SimParams* sp,
-                      MC_GLOBAL const PairParams* pairs, MC_GLOBAL const LifterPolygon* lifters, MillState mill,
-                      MC_GLOBAL int* wall_key, MC_GLOBAL int* wall_rec, Books* books, int law, BallSums* sums) {
+                      MC_GLOBAL const PairParams* pairs, MC_GLOBAL const LifterPolygon* lifters, const Meshes* meshes,
+                      MillState mill, MC_GLOBAL int* wall_key, MC_GLOBAL int* wall_rec, Books* books, int law,
+                      BallSums* sums) {
   const int n = sp->n_balls;
   const real3 p = xyz_of(pi4);
   const real ri = pi4.w;
@@ -257,7 +328,7 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
   const int near_wall =
       any_old || near_shell ||
       (sp->length > R(0.0) && (p.z < ri + margin || p.z > sp->length - ri - margin)) ||
-      (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach);
+      (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach) || mesh_near(meshes, rho2, p.z);
   if (!near_wall) return;
   WallSlots ws;
   for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
@@ -276,17 +347,17 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
     real3 nrm;
     const real ov = shell_overlap(p, ri, sp->shell_radius, &nrm);
     if (ov > R(0.0))
-      wall_contact(MC_WALL_SHELL, nrm, ov, p, vi, wi, ri, mat_i, pw, mill, sp, lifters, law, no_out, &ws, books,
+      wall_contact(analytic_wall(MC_WALL_SHELL, books), nrm, ov, p, vi, wi, ri, pw, mill, sp, lifters, law, no_out, &ws, books,
                    sums);
   }
   if (sp->length > R(0.0)) {
     const real ov_low = ri - p.z;
     if (ov_low > R(0.0))
-      wall_contact(MC_WALL_PLATE_LOW, make_real3(0, 0, 1), ov_low, p, vi, wi, ri, mat_i, pw, mill, sp, lifters, law,
+      wall_contact(analytic_wall(MC_WALL_PLATE_LOW, books), make_real3(0, 0, 1), ov_low, p, vi, wi, ri, pw, mill, sp, lifters, law,
                    no_out, &ws, books, sums);
     const real ov_high = ri - (sp->length - p.z);
     if (ov_high > R(0.0))
-      wall_contact(MC_WALL_PLATE_HIGH, make_real3(0, 0, -1), ov_high, p, vi, wi, ri, mat_i, pw, mill, sp, lifters,
+      wall_contact(analytic_wall(MC_WALL_PLATE_HIGH, books), make_real3(0, 0, -1), ov_high, p, vi, wi, ri, pw, mill, sp, lifters,
                    law, no_out, &ws, books, sums);
   }
   if (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach) {
@@ -308,17 +379,19 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
       const real ov = ri - dist;
       if (ov > R(0.0)) {
         const real3 nrm = rotate_z(make_real3(out2.x, out2.y, 0), c, s);
-        wall_contact(MC_WALL_LIFTER0 + k, nrm, ov, p, vi, wi, ri, mat_i, pw, mill, sp, lifters, law, out2, &ws,
+        wall_contact(analytic_wall(MC_WALL_LIFTER0 + k, books), nrm, ov, p, vi, wi, ri, pw, mill, sp, lifters, law, out2, &ws,
                      books, sums);
       }
     }
   }
+  mesh_walls(meshes, p, vi, wi, ri, mat_i, mill, sp, lifters, law, &ws, books, sums);
   /* Collisions that ended; a ball that touched no wall and touches none
    * keeps its empty slots. */
   if (any_old)
     for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s)
       if (ws.old_key[s] != MC_WALL_NONE && !ws.renewed[s])
-        record_close(books, ws.old_rec[s], wall_pair_type(mat_i, ws.old_key[s], sp->n_materials));
+        record_close(books, ws.old_rec[s],
+                     wall_type_pair(mat_i, wall_type_of(meshes, ws.old_key[s]), sp->n_materials));
   if (any_old || ws.n_new > 0)
     for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
       wall_key[s * n + i] = ws.new_key[s];
@@ -355,7 +428,7 @@ MC_FN void ball_forces(
     MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out,
     MC_GLOBAL int* wall_key, MC_GLOBAL int* wall_rec,
     MC_GLOBAL real4* force, MC_GLOBAL real4* torque, MC_GLOBAL real4* accum,
-    Books* books) {
+    Books* books, const Meshes* meshes) {
   const int law = MC_RUN_LAW(sp);
   const real4 pi4 = pos[i];
   const real4 vi = vel[i];
@@ -383,7 +456,7 @@ MC_FN void ball_forces(
                    neigh_rev, pair_out, books, law, &s);
   }
 
-  ball_walls(i, pi4, vi, wi, mat_i, sp, pairs, lifters, mill, wall_key, wall_rec, books, law, &s);
+  ball_walls(i, pi4, vi, wi, mat_i, sp, pairs, lifters, meshes, mill, wall_key, wall_rec, books, law, &s);
   ball_store(i, s, mill, sp->dt, force, torque, accum);
 }
 

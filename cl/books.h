@@ -87,10 +87,16 @@ MC_FN int ball_pair_type(int a, int b, int n_materials) {
   return lo * n_materials - lo * (lo - 1) / 2 + (hi - lo);
 }
 
+/* The spectra's row of a ball material's contacts with a wall type. */
+MC_FN int wall_type_pair(int material, int wall_type, int n_materials) {
+  return n_materials * (n_materials + 1) / 2 + MC_WALL_TYPES * material + wall_type;
+}
+
+/* ... with the analytic wall of a slot key (shell, end plate, lifter). */
 MC_FN int wall_pair_type(int material, int key, int n_materials) {
   const int w = key == MC_WALL_SHELL ? MC_WALL_TYPE_SHELL
                 : key >= MC_WALL_LIFTER0 ? MC_WALL_TYPE_LIFTER : MC_WALL_TYPE_PLATE;
-  return n_materials * (n_materials + 1) / 2 + MC_WALL_TYPES * material + w;
+  return wall_type_pair(material, w, n_materials);
 }
 
 MC_FN MC_GLOBAL uint* spectra_cell(Books* b, int type, int bin) {
@@ -196,9 +202,10 @@ MC_FN int liner_element(MC_GLOBAL const BookParams* bp, MC_GLOBAL const SimParam
 }
 
 /* A wall contact's step on its element: an impact when it began, its normal
- * loss, its tangential loss and Archard's wear volume; on the shell and the
- * lifters also the normal loss at its lab-frame angle (`lab_angle`, rad). */
-MC_FN void liner_step(Books* b, int element, int fresh, ContactOut c, int key, real lab_angle) {
+ * loss, its tangential loss and Archard's wear volume (coefficient wear_k);
+ * on the shell and the lifters (`profile`) also the normal loss at its
+ * lab-frame angle (`lab_angle`, rad). */
+MC_FN void liner_step(Books* b, int element, int fresh, ContactOut c, real wear_k, int profile, real lab_angle) {
 #if MC_ENERGY_BOOKS
   MC_GLOBAL const BookParams* bp = b->bp;
   MC_GLOBAL uint* cell = b->liner + 2 * MC_LINER_FIELDS * element;
@@ -207,8 +214,8 @@ MC_FN void liner_step(Books* b, int element, int fresh, ContactOut c, int key, r
   add_u64(cell + 2 * MC_LINER_NORMAL, fixed_of(c.loss_normal, inv_e));
   add_u64(cell + 2 * MC_LINER_SHEAR, fixed_of(c.loss_tangential, inv_e));
   if (c.slide > R(0.0))
-    add_u64(cell + 2 * MC_LINER_WEAR, fixed_of(bp->wear_k * c.normal_force * c.slide, R(1.0) / bp->wear_unit));
-  if (key == MC_WALL_SHELL || key >= MC_WALL_LIFTER0) {
+    add_u64(cell + 2 * MC_LINER_WEAR, fixed_of(wear_k * c.normal_force * c.slide, R(1.0) / bp->wear_unit));
+  if (profile) {
     const real two_pi = R(6.283185307179586);
     real a = lab_angle < R(0.0) ? lab_angle + two_pi : lab_angle;
     int bin = (int)floor(a / two_pi * (real)MC_IMPACT_BINS);

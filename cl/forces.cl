@@ -6,6 +6,7 @@
 #include "walls.h"
 #include "books.h"
 #include "periodic.h"
+#include "mesh.h"
 #include "ball_forces.h"
 
 /* The books' arguments of both force kernels, and the struct they fill. */
@@ -24,6 +25,20 @@
   b.bp = bp;                      \
   b.status = status
 
+/* The mesh walls' arguments of both force kernels (mesh.h Meshes). */
+#define MC_MESH_ARGS                                                                                  \
+  __global const MeshGrid *mesh_grid, __global const MeshTriangle *mesh_tris,                         \
+      __global const int2 *mesh_feature, __global const int *mesh_cell_start,                        \
+      __global const int *mesh_cell_tris, __global const PairParams *mesh_pairs
+#define MC_MESHES_INIT(m)            \
+  Meshes m;                          \
+  m.grid = mesh_grid;                \
+  m.tris = mesh_tris;                \
+  m.feature = mesh_feature;          \
+  m.cell_start = mesh_cell_start;    \
+  m.cell_tris = mesh_cell_tris;      \
+  m.pairs = mesh_pairs
+
 __kernel void forces(__global const SimParams* sp,
                      __global const PairParams* pairs,
                      __global const LifterPolygon* lifters, real mill_cos,
@@ -37,7 +52,7 @@ __kernel void forces(__global const SimParams* sp,
                      __global int* wall_key,
                      __global int* wall_rec, __global real4* force,
                      __global real4* torque, __global real4* accum,
-                     __global int* status, MC_BOOK_ARGS) {
+                     __global int* status, MC_BOOK_ARGS, MC_MESH_ARGS) {
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
   MillState mill;
@@ -45,9 +60,10 @@ __kernel void forces(__global const SimParams* sp,
   mill.sin_angle = mill_sin;
   mill.omega = mill_omega;
   MC_BOOKS_INIT(books);
+  MC_MESHES_INIT(meshes);
   ball_forces(i, sp, pairs, lifters, mill, pos, vel, omega, info, neigh_start,
               neigh_count, neigh_index, neigh_rec, neigh_rev, pair_out, wall_key, wall_rec, force,
-              torque, accum, &books);
+              torque, accum, &books, &meshes);
 }
 
 __kernel void reactions(int n, __global const int* in_start,
@@ -160,7 +176,7 @@ void forces_grouped(__global const SimParams* sp,
                     __global int* wall_key,
                     __global int* wall_rec, __global real4* force,
                     __global real4* torque, __global real4* accum,
-                    __global int* status, MC_BOOK_ARGS) {
+                    __global int* status, MC_BOOK_ARGS, MC_MESH_ARGS) {
   __local int queue[MC_FG_WG * MC_FG_QUEUE]; /* list entries, per ball */
   __local int queued[MC_FG_WG];
   __local int first[MC_FG_WG + 1];            /* each ball's first queued pair */
@@ -278,7 +294,8 @@ void forces_grouped(__global const SimParams* sp,
     mill.cos_angle = mill_cos;
     mill.sin_angle = mill_sin;
     mill.omega = mill_omega;
-    ball_walls(i, pi4, vi, wi, mat_i, sp, pairs, lifters, mill, wall_key, wall_rec, &books, law, &s);
+    MC_MESHES_INIT(meshes);
+    ball_walls(i, pi4, vi, wi, mat_i, sp, pairs, lifters, &meshes, mill, wall_key, wall_rec, &books, law, &s);
     ball_store(i, s, mill, sp->dt, force, torque, accum);
   }
 }

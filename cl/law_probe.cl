@@ -12,6 +12,7 @@
 #include "walls.h"
 #include "books.h"
 #include "periodic.h"
+#include "mesh.h"
 #include "ball_forces.h"
 
 #ifdef MC_PROBE_LANES

@@ -18,6 +18,10 @@
 #define MC_WALL_PLATE_LOW 1  /* z = 0 */
 #define MC_WALL_PLATE_HIGH 2 /* z = length */
 #define MC_WALL_LIFTER0 3    /* lifter k has key 3 + k */
+/* A contact with a mesh wall is keyed by the mesh feature it touches (a
+ * triangle's face, an edge or a vertex: cl/mesh.h) as MC_WALL_MESH0 + its
+ * feature index. Lifter keys stay below it (lifters.rows <= 400). */
+#define MC_WALL_MESH0 (1 << 20)
 
 /* Bits of the status word the kernels raise. */
 #define MC_FLAG_REBUILD 1       /* a ball moved more than half the skin */
@@ -167,6 +171,37 @@ typedef struct {
   int first_lifter_element; /* the shell's elements come first */
   int first_plate_element;
 } BookParams;
+
+/* Mesh walls (cl/mesh.h, src/core/wall_mesh.h): triangles in the frame of
+ * their set, the mill frame for the meshes that turn with the mill, the lab
+ * frame for those that stand still. Each triangle's normal faces the charge;
+ * a ball touches a triangle only from that side. Features: triangle t is
+ * feature t, edge e is n_triangles + e, vertex v is n_triangles + n_edges + v
+ * (edges and vertices shared by the triangles of one mesh). */
+#define MC_MESH_SETS 2     /* set 0 turns with the mill, set 1 stands still */
+#define MC_MESH_HITS 16    /* candidate contacts of one ball with one set */
+typedef struct {
+  real4 a, b, c;   /* vertices, m; a.w: Archard wear coefficient, m³/(N·m) */
+  real4 n;         /* unit normal towards the charge */
+  int feat[6];     /* features of the edges ab, bc, ca and the vertices a, b, c */
+  int pair_row;    /* its material's row of the mesh pair table (× n_materials) */
+  int element;     /* its liner element (the books') */
+} MeshTriangle;
+
+/* The grid of one set's triangles, in the set's frame: cell c lists every
+ * triangle within reach (the largest ball radius) of some point of the
+ * cell, so a ball centre in c needs that cell alone. The core is a cylinder
+ * about the axis no triangle reaches: balls inside it skip the grid. */
+typedef struct {
+  real4 origin;        /* lower corner xyz; w: cell size, m */
+  real core_r2;        /* squared radius of the core, m² */
+  real core_z0, core_z1; /* its axial extent, m */
+  real reach;          /* m: the largest ball radius the cells were filled for */
+  int nx, ny, nz;
+  int first_cell;      /* this set's first entry in cell_start (n cells + 1) */
+  int n_triangles;     /* 0: an empty set */
+  int pad0, pad1, pad2;
+} MeshGrid;
 
 /* The pair table has (n_materials + 1)² entries, wall material last. */
 #define MC_PAIR_INDEX(params, a, b) ((a) * ((params)->n_materials + 1) + (b))

@@ -30,4 +30,6 @@ __kernel void layout_sizes(__global int* out) {
   out[2] = (int)sizeof(LifterPolygon);
   out[3] = (int)sizeof(real4);
   out[4] = (int)sizeof(BookParams);
+  out[5] = (int)sizeof(MeshTriangle);
+  out[6] = (int)sizeof(MeshGrid);
 }

@@ -349,8 +349,12 @@ PowerBalance drum_power_balance(compute::Context& ctx, ContactLaw law) {
 }
 
 LabRun lab_run(compute::Context& ctx, const std::vector<std::string>& overrides) {
+  return case_run(ctx, io::default_case(), overrides);
+}
+
+LabRun case_run(compute::Context& ctx, const std::filesystem::path& file, const std::vector<std::string>& overrides) {
   LabRun r;
-  r.c = io::read_case(io::default_case(), overrides);
+  r.c = io::read_case(file, overrides);
   r.d = derive(r.c);
   r.scene = build_scene(r.c, r.d);
   auto solver = make_solver(ctx, r.scene);

@@ -6,6 +6,7 @@
 // rows. One setup, so the report shows what the tests test.
 #pragma once
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -121,5 +122,7 @@ struct LabRun {
   RunSummary s;
 };
 LabRun lab_run(compute::Context& ctx, const std::vector<std::string>& overrides);
+// The same for any case file.
+LabRun case_run(compute::Context& ctx, const std::filesystem::path& file, const std::vector<std::string>& overrides);
 
 }  // namespace mc::checks

@@ -18,14 +18,17 @@
 
 #include "compute/context.h"
 #include "core/charge_edit.h"
+#include "core/lifters.h"
 #include "core/liner.h"
 #include "core/mill_case.h"
+#include "core/wall_mesh.h"
 #include "core/morrell.h"
 #include "io/atomic_file.h"
 #include "io/case_file.h"
 #include "io/checkpoint.h"
 #include "io/energy_out.h"
 #include "io/png_plot.h"
+#include "io/stl.h"
 #include "io/vtk.h"
 #include "sim/batch_means.h"
 #include "sim/energy_report.h"
@@ -305,6 +308,39 @@ int cmd_check(const CaseOptions& o) {
     else std::snprintf(dia, sizeof dia, "%.4g-%.4g mm", 1000 * s.diameter_min, 1000 * s.diameter_max);
     std::printf("  size %-9zu %s %s: %s balls, %s fraction %.3f\n", k, dia, s.material.c_str(),
                 thousands(d.class_counts[k]).c_str(), c.number_fractions ? "number" : "mass", s.fraction);
+  }
+  if (c.ends.cones())
+    std::printf("cones           %.4g deg from the end plane, trunnion %.4g m: each head %.4g m deep (the mill "
+                "%.4g m long on the axis)\n",
+                c.ends.cone_angle_deg, c.ends.trunnion_diameter, cone_depth(c.ends, 0.5 * c.diameter),
+                c.length + 2 * cone_depth(c.ends, 0.5 * c.diameter));
+  if (!c.meshes.empty() || c.ends.cones() || c.ends.lifter_rows > 0) {
+    const std::vector<WallMesh> meshes = place_meshes(c);
+    const MeshTopology topo = mesh_topology(meshes);
+    for (std::size_t k = 0; k < meshes.size(); ++k) {
+      const WallMesh& m = meshes[k];
+      const char* part = m.part == MeshPart::shell ? "shell" : m.part == MeshPart::ends ? "ends" : "lifters";
+      char vol[96];
+      if (m.volume > 0) std::snprintf(vol, sizeof vol, "closed, %.4g m^3 taken from the mill", m.volume);
+      else std::snprintf(vol, sizeof vol, "open (its volume is not taken from the mill)");
+      const std::string name = k < c.meshes.size() ? c.meshes[k].path : m.name;
+      std::printf("mesh %-10zu %s: %s triangles, %s, %s, part \"%s\", material \"%s\"\n", k, name.c_str(),
+                  thousands(static_cast<long>(m.triangles.size())).c_str(), vol,
+                  m.turning ? "turning with the mill" : "standing still", part, m.material.name.c_str());
+    }
+    std::printf("meshes          %s triangles, %d edges, %d vertices in %d smooth surfaces (cl/mesh.h)\n",
+                thousands(topo.n_triangles).c_str(), topo.n_edges, topo.n_vertices, topo.n_patches);
+  }
+  if (!o.write_lifters.empty()) {
+    // The parametric bars cut at the shell, as an STL: a start for CAD, or a
+    // [[walls.mesh]] that stands for them.
+    const Scene w = build_walls(c, d);
+    if (w.walls.lifters.empty())
+      throw std::invalid_argument("--write-lifters: the case has no lifter bars (lifters.rows = 0)");
+    const auto tris = lifter_triangles(bars_on_shell(w.walls.lifters, w.walls.shell_radius), c.length);
+    io::write_file_atomic(o.write_lifters, io::stl_binary(tris, c.name + " lifters, m"));
+    std::printf("lifters         %d bars as %s triangles (binary STL, metres, mill frame at t = 0): %s\n",
+                c.lifter_rows, thousands(static_cast<long>(tris.size())).c_str(), o.write_lifters.c_str());
   }
   std::ostringstream stiffness;
   if (c.law == ContactLaw::linear) stiffness << ", kn " << c.contact.kn << " N/m";

@@ -15,6 +15,7 @@ struct CaseOptions {
   std::string precision;              // --precision, empty: the case's
   double duration = 0;                // --duration, 0: the case's
   bool duration_auto = false;         // --duration auto
+  std::string write_lifters;          // check --write-lifters FILE: the lifter bars as STL
 };
 
 struct RunOptions {

@@ -109,6 +109,10 @@ int main(int argc, char** argv) {
   mc::app::CaseOptions co;
   auto* check = app.add_subcommand("check", "validate a case and print its derived values");
   add_case_options(check, co, false);
+  check->add_option("--write-lifters", co.write_lifters,
+                    "write the case's lifter bars, cut at the shell, as a binary STL (metres, mill frame): a start "
+                    "for CAD, or a [[walls.mesh]] file")
+      ->type_name("FILE");
 
   mc::app::BenchOptions bo;
   auto* bench = app.add_subcommand("bench", "time the solver on a turning charge; prints one JSON line");

@@ -50,6 +50,31 @@ std::vector<Triangle> lifter_triangles(const std::vector<std::vector<Vec2>>& bar
   return out;
 }
 
+std::vector<std::vector<Vec2>> bars_on_shell(const std::vector<std::vector<Vec2>>& bars, double R) {
+  std::vector<std::vector<Vec2>> out;
+  auto inside = [&](Vec2 v) { return std::hypot(v.x, v.y) <= R; };
+  auto crossing = [&](Vec2 a, Vec2 b) {  // |a + t(b − a)| = R, t in [0, 1]
+    const double ex = b.x - a.x, ey = b.y - a.y;
+    const double qa = ex * ex + ey * ey, qb = 2 * (a.x * ex + a.y * ey), qc = a.x * a.x + a.y * a.y - R * R;
+    const double disc = std::max(0.0, qb * qb - 4 * qa * qc);
+    double t = (-qb + std::sqrt(disc)) / (2 * qa);
+    if (t < 0 || t > 1) t = (-qb - std::sqrt(disc)) / (2 * qa);
+    t = std::clamp(t, 0.0, 1.0);
+    return Vec2{a.x + t * ex, a.y + t * ey};
+  };
+  for (const auto& poly : bars) {
+    std::vector<Vec2> clipped;
+    const std::size_t n = poly.size();
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vec2 a = poly[k], b = poly[(k + 1) % n];
+      if (inside(a)) clipped.push_back(a);
+      if (inside(a) != inside(b)) clipped.push_back(crossing(a, b));
+    }
+    out.push_back(clipped);
+  }
+  return out;
+}
+
 double polygon_signed_distance(const std::vector<Vec2>& poly, double x, double y) {
   bool inside = true;
   double best = 1e300;

@@ -31,6 +31,11 @@ std::vector<std::vector<Vec2>> lifter_rows(double shell_radius, int rows,
 // liner (an STL of the parametric lifters).
 std::vector<Triangle> lifter_triangles(const std::vector<std::vector<Vec2>>& bars, double length);
 
+// The bars cut where they enter the shell of radius R (the part behind the
+// shell dropped; a chord closes each): the cross-sections a CAD model of
+// lifters bolted to the shell has, for lifter_triangles.
+std::vector<std::vector<Vec2>> bars_on_shell(const std::vector<std::vector<Vec2>>& bars, double R);
+
 // Signed distance from (x, y) to a convex counter-clockwise polygon: negative
 // inside. For packing and checks on the host (the kernels use cl/walls.h).
 double polygon_signed_distance(const std::vector<Vec2>& poly, double x, double y);

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/wall_mesh.h"
+
 namespace mc {
 
 namespace {
@@ -192,7 +194,7 @@ LinerLayout liner_layout(const Scene& scene) {
   // slice has none).
   L.first_plate = L.size();
   const double ring_w = (R > 0 ? R : 1.0) / L.plate_rings;
-  const int plates = w.periodic ? 0 : 2;
+  const int plates = w.periodic || !w.end_plates ? 0 : 2;  // a slice or cone heads have none
   for (int plate = 0; plate < plates; ++plate)
     for (int ring = 0; ring < L.plate_rings; ++ring)
       for (int s = 0; s < L.plate_sectors; ++s) {
@@ -214,6 +216,34 @@ LinerLayout liner_layout(const Scene& scene) {
         if (plate == 1) std::reverse(e.outline.begin(), e.outline.end());
         L.elements.push_back(e);
       }
+
+  // Mesh triangles, one element each, in the device order.
+  L.first_mesh = L.size();
+  for (const MeshTriangleRef& ref : mesh_device_order(w.meshes)) {
+    const WallMesh& m = w.meshes[ref.mesh];
+    const Triangle& t = m.triangles[ref.triangle];
+    LinerElement e;
+    e.part = LinerPart::mesh;
+    e.row = ref.mesh;
+    e.bin = ref.triangle;
+    e.still = !m.turning;
+    e.density = m.material.density;
+    const Vec3 ab = t.v[1] - t.v[0], ac = t.v[2] - t.v[0];
+    const Vec3 n{ab.y * ac.z - ab.z * ac.y, ab.z * ac.x - ab.x * ac.z, ab.x * ac.y - ab.y * ac.x};
+    e.area_m2 = 0.5 * n.norm();
+    const Vec3 c = (t.v[0] + t.v[1] + t.v[2]) * (1.0 / 3.0);
+    e.theta0 = e.theta1 = wrap(std::atan2(c.y, c.x));
+    e.z0 = std::min({t.v[0].z, t.v[1].z, t.v[2].z});
+    e.z1 = std::max({t.v[0].z, t.v[1].z, t.v[2].z});
+    e.r0 = 1e300;
+    e.r1 = 0;
+    for (const Vec3& v : t.v) {
+      e.r0 = std::min(e.r0, std::hypot(v.x, v.y));
+      e.r1 = std::max(e.r1, std::hypot(v.x, v.y));
+    }
+    e.outline = {t.v[0], t.v[1], t.v[2]};
+    L.elements.push_back(e);
+  }
   return L;
 }
 
@@ -226,7 +256,7 @@ std::string pair_type_name(const Scene& scene, int type) {
   const int balls = nm * (nm + 1) / 2;
   if (type >= balls) {
     const int m = (type - balls) / 3, w = (type - balls) % 3;
-    static const char* walls[] = {"shell", "lifter", "end plate"};
+    static const char* walls[] = {"shell", "lifter", "end plate"};  // mesh walls book as their part
     return scene.materials.at(m).name + "-" + walls[w];
   }
   for (int a = 0; a < nm; ++a)

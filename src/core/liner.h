@@ -14,18 +14,22 @@
 
 namespace mc {
 
-enum class LinerPart { shell, lifter, plate };
+enum class LinerPart { shell, lifter, plate, mesh };
 
 // Lifter faces in element order (cl/layout.h MC_FACE_*).
 enum class LifterFace { leading = 0, top = 1, trailing = 2 };
 
 struct LinerElement {
   LinerPart part = LinerPart::shell;
-  int row = 0;      // shell: the gap from row `row` to the next; lifter: its row; plate: 0 (z = 0) or 1
-  int bin = 0;      // shell: angular bin in the gap; lifter: the face (LifterFace); plate: ring
+  int row = 0;      // shell: the gap from row `row` to the next; lifter: its row; plate: 0 (z = 0) or 1;
+                    // mesh: the mesh (Walls::meshes)
+  int bin = 0;      // shell: angular bin in the gap; lifter: the face (LifterFace); plate: ring;
+                    // mesh: the triangle in its mesh
   int sector = 0;   // plate: sector
   int axial = 0;    // shell and lifter: axial bin
   double area_m2 = 0;
+  double density = 0;  // kg/m³ of its material, for wear in kg (0: the liner's)
+  bool still = false;  // a mesh triangle that stands still (its outline in the lab frame)
   // Where it lies, mill frame: angles (rad, counter-clockwise from +x at
   // mill angle 0), axial span, radii.
   double theta0 = 0, theta1 = 0, z0 = 0, z1 = 0, r0 = 0, r1 = 0;
@@ -42,6 +46,7 @@ struct LinerLayout {
   int plate_rings = 1, plate_sectors = 1;
   int first_lifter = 0;  // index of the first lifter element
   int first_plate = 0;
+  int first_mesh = 0;    // the mesh triangles, one element each, in the device order (core/wall_mesh.h)
   std::vector<double> lifter_centre;      // rad, mill frame
   std::vector<double> lifter_half_angle;  // rad the bar covers on the shell
   std::vector<LinerElement> elements;

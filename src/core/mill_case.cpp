@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "core/drum.h"
+#include "core/wall_mesh.h"
 #include "core/morrell.h"
 
 namespace mc {
@@ -156,7 +157,32 @@ MillDerived derive(const MillCase& c) {
     }
   }
   d.lifter_volume = lifter_area * c.length;
+  // Closed meshes of liners and lifters that turn with the mill take their
+  // volume from the mill's (open ones cannot say what they enclose).
+  const EndsSpec& e = c.ends;
+  if (e.cones() && !(e.trunnion_diameter < c.diameter - 2 * d.largest_ball_diameter))
+    fail("mill.trunnion_diameter", num(e.trunnion_diameter) + " m leaves the cones no room: it must be less than "
+                                   "the mill diameter less two largest balls (" +
+                                       num(c.diameter - 2 * d.largest_ball_diameter) + " m)");
+  if (e.lifter_rows > 0) {
+    if (c.periodic) fail("end_lifters.rows", "a periodic slice (mill.ends = \"periodic\") has no ends to carry lifters");
+    if (!(e.lifter_height < 0.25 * c.length))
+      fail("end_lifters.height", num(e.lifter_height) + " m is more than a quarter of the mill's length");
+    if (!(e.lifter_inner_diameter < c.diameter - 2 * e.lifter_height))
+      fail("end_lifters.inner_diameter", "must be less than the diameter less twice the bars' height");
+    if (!(e.lifter_width * e.lifter_rows < kPi * std::max(e.lifter_inner_diameter, e.cones() ? e.trunnion_diameter : c.diameter / 3)))
+      fail("end_lifters.rows", std::to_string(e.lifter_rows) + " bars " + num(e.lifter_width) +
+                                   " m wide overlap towards the axis: use fewer or narrower bars");
+  }
+  if (!c.meshes.empty() || e.cones() || e.lifter_rows > 0)
+    for (const WallMesh& m : place_meshes(c))
+      if (m.turning && m.part != MeshPart::ends) d.lifter_volume += m.volume;
   d.mill_volume = kPi * R * R * c.length - d.lifter_volume;
+  // Cone heads add two frusta, from the shell to the trunnion.
+  if (e.cones()) {
+    const double rt = 0.5 * e.trunnion_diameter, h = cone_depth(e, R);
+    d.mill_volume += 2 * kPi * h / 3 * (R * R + R * rt + rt * rt);
+  }
   if (!(d.mill_volume > 0 && std::isfinite(d.mill_volume)))
     fail("lifters.profile", "the lifters leave no room in the mill (free volume " + num(d.mill_volume) + " m³)");
 
@@ -307,6 +333,93 @@ MillDerived derive(const MillCase& c) {
   return d;
 }
 
+std::vector<WallMesh> place_meshes(const MillCase& c) {
+  std::vector<WallMesh> out;
+  const int nm = static_cast<int>(c.materials.size());
+  for (std::size_t k = 0; k < c.meshes.size(); ++k) {
+    const MeshSpec& spec = c.meshes[k];
+    const std::string key = "walls.mesh[" + std::to_string(k) + "]";
+    WallMesh m;
+    m.name = spec.file;
+    m.turning = spec.turning;
+    m.part = spec.part;
+    const std::string mat = spec.material.empty() ? c.liner : spec.material;
+    const int mi = material_index(c, mat);
+    if (mi < 0) fail(key + ".material", "unknown material \"" + mat + "\"");
+    m.material = c.materials[mi];
+    for (int a = 0; a < nm; ++a) {
+      Interaction in = c.contact;
+      for (const PairOverride& p : c.pairs)
+        if ((p.a == c.materials[a].name && p.b == mat) || (p.b == c.materials[a].name && p.a == mat)) in = p.interaction;
+      m.interactions.push_back(in);
+    }
+    const double th = spec.angle_deg * kPi / 180.0, ct = std::cos(th), st = std::sin(th);
+    const double z_tol = 1e-6 * std::max(1.0, c.length);
+    std::vector<Triangle> placed;
+    for (const Triangle& t0 : spec.triangles) {
+      Triangle t = t0;
+      if (spec.flip) std::swap(t.v[1], t.v[2]);
+      for (Vec3& v : t.v) v = Vec3{ct * v.x - st * v.y, st * v.x + ct * v.y, v.z} + spec.offset;
+      placed.push_back(t);
+    }
+    m.volume = closed_mesh_volume(placed);
+    for (const Triangle& t : placed) {
+      if (c.periodic) {  // caps on the seams are inside the repeating slice
+        bool low = true, high = true;
+        for (const Vec3& v : t.v) {
+          low = low && std::fabs(v.z) <= z_tol;
+          high = high && std::fabs(v.z - c.length) <= z_tol;
+        }
+        if (low || high) continue;
+      }
+      m.triangles.push_back(t);
+    }
+    out.push_back(std::move(m));
+  }
+  // The ends (mill.ends = "cones", [end_lifters]): cone heads with their trunnion discs, and end
+  // lifters, in the liner's material, turning with the mill.
+  const double R = 0.5 * c.diameter;
+  const int li = material_index(c, c.liner);
+  auto end_mesh = [&](const char* name, std::vector<Triangle> t) {
+    WallMesh m;
+    m.name = name;
+    m.part = MeshPart::ends;
+    m.material = c.materials[li];
+    for (int a = 0; a < nm; ++a) {
+      Interaction in = c.contact;
+      for (const PairOverride& p : c.pairs)
+        if ((p.a == c.materials[a].name && p.b == c.liner) || (p.b == c.materials[a].name && p.a == c.liner))
+          in = p.interaction;
+      m.interactions.push_back(in);
+    }
+    m.triangles = std::move(t);
+    m.volume = 0;
+    out.push_back(std::move(m));
+  };
+  EndsSpec ends = c.ends;
+  ends.lifter_first_angle_deg = c.lifter_first_angle_deg;
+  if (ends.cones())
+    end_mesh("cone ends", cone_triangles(ends, R, c.length, std::clamp(4 * c.lifter_rows, 96, 256)));
+  if (ends.lifter_rows > 0) end_mesh("end lifters", end_lifter_triangles(ends, R, c.length));
+  Walls w;
+  w.shell_radius = R;
+  w.length = c.length;
+  w.periodic = c.periodic;
+  w.end_plates = !ends.cones();
+  w.meshes = out;
+  try {
+    check_meshes(w);
+  } catch (const std::invalid_argument& e) {
+    // Name the key of the mesh at fault (check_meshes names its file).
+    const std::string msg = e.what();
+    for (std::size_t k = 0; k < out.size(); ++k)
+      if (msg.rfind(out[k].name + ":", 0) == 0)
+        fail(k < c.meshes.size() ? "walls.mesh[" + std::to_string(k) + "]" : std::string("ends"), msg);
+    throw;
+  }
+  return out;
+}
+
 Scene build_walls(const MillCase& c, const MillDerived& d) {
   Scene s;
   // Ball materials are the case's materials; the liner is the wall material.
@@ -327,6 +440,8 @@ Scene build_walls(const MillCase& c, const MillDerived& d) {
   s.walls.periodic = c.periodic;
   s.walls.lifter_first_angle = c.lifter_first_angle_deg * kPi / 180.0;
   s.walls.lifters = lifter_rows(R, c.lifter_rows, c.lifter_pattern, s.walls.lifter_first_angle);
+  s.walls.meshes = place_meshes(c);
+  s.walls.end_plates = !c.ends.cones();
   s.liner = c.liner_grid;
   s.numerics.law = c.law;
   s.numerics.precision = c.precision;
@@ -438,7 +553,27 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
     for (const Vec2& v : poly) r = std::max(r, std::hypot(v.x - cx, v.y - cy));
     bounds.push_back({cx, cy, r});
   }
+  // Mesh walls: balls are placed inside the radius the liner and lifter
+  // meshes leave free, and clear of the end meshes' reach into the mill
+  // (the charge settles into what is left).
+  double mesh_ring = R, mesh_z_lo = 0, mesh_z_hi = c.length;
+  for (const WallMesh& m : s.walls.meshes)
+    for (const Triangle& t : m.triangles) {
+      if (m.part != MeshPart::ends) {
+        for (int e = 0; e < 3; ++e) {  // the triangle's nearest approach to the axis, over its edges
+          const Vec3 a = t.v[e], b = t.v[(e + 1) % 3];
+          const double ex = b.x - a.x, ey = b.y - a.y, l2 = ex * ex + ey * ey;
+          const double u = l2 > 0 ? std::clamp(-(a.x * ex + a.y * ey) / l2, 0.0, 1.0) : 0.0;
+          mesh_ring = std::min(mesh_ring, std::hypot(a.x + u * ex, a.y + u * ey));
+        }
+      } else {
+        const double zmin = std::min({t.v[0].z, t.v[1].z, t.v[2].z}), zmax = std::max({t.v[0].z, t.v[1].z, t.v[2].z});
+        if (zmax <= 0.5 * c.length) mesh_z_lo = std::max(mesh_z_lo, zmax);
+        else if (zmin >= 0.5 * c.length) mesh_z_hi = std::min(mesh_z_hi, zmin);
+      }
+    }
   auto clear_of_lifters = [&](double x, double y, double r) {
+    if (std::hypot(x, y) + r + gap > mesh_ring) return false;
     for (std::size_t k = 0; k < bounds.size(); ++k) {
       if (std::hypot(x - bounds[k].cx, y - bounds[k].cy) > bounds[k].r + r + gap) continue;
       if (polygon_signed_distance(s.walls.lifters[k], x, y) < r + gap) return false;
@@ -482,7 +617,7 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
       const double x = col.x + 0.1 * pitch * (2 * unit(rng) - 1);
       const double z_jittered = col.z + 0.1 * pitch * (2 * unit(rng) - 1);
       const double z = periodic ? z_jittered - L * std::floor(z_jittered / L)
-                                : std::clamp(z_jittered, p.radius + gap, c.length - p.radius - gap);
+                                : std::clamp(z_jittered, mesh_z_lo + p.radius + gap, mesh_z_hi - p.radius - gap);
       if (std::abs(x) >= ring) {
         closed[k] = 1;
         continue;

@@ -11,6 +11,7 @@
 #include "core/lifters.h"
 #include "core/morrell.h"
 #include "core/scene.h"
+#include "core/wall_mesh.h"
 
 namespace mc {
 
@@ -24,6 +25,22 @@ struct SizeClass {
 struct PairOverride {
   std::string a, b;         // material names
   Interaction interaction;  // complete: the case's defaults with this pair's keys applied
+};
+
+// One [[walls.mesh]]: a wall of triangles from an STL file (io reads it:
+// the triangles here are in metres, as the file gives them times the units,
+// not yet placed).
+struct MeshSpec {
+  std::string file;          // as the case gives it
+  std::string path;          // the file found: relative paths from the case file's folder
+  std::string units = "m";   // "m" or "mm"
+  std::string material;      // "" : the liner's (mill.liner)
+  bool turning = true;       // false: it stands still (a chute, a trommel)
+  MeshPart part = MeshPart::lifters;
+  Vec3 offset;               // m, added after the turn
+  double angle_deg = 0;      // turned about the mill axis (+z), counter-clockwise
+  bool flip = false;         // the charge is on the other side of every triangle
+  std::vector<Triangle> triangles;
 };
 
 struct MillCase {
@@ -42,6 +59,11 @@ struct MillCase {
   // [lifters]
   int lifter_rows = 0;
   std::vector<LifterProfile> lifter_pattern;  // row k has pattern[k % size]
+  // [[walls.mesh]]: walls of triangles besides the shell, plates and lifters
+  std::vector<MeshSpec> meshes;
+  // mill.ends = "cones" (cone_angle, trunnion_diameter) and [end_lifters]: the ends, built
+  // as meshes (core/wall_mesh.h)
+  EndsSpec ends;
   // [liner]: how the liner is cut into elements for impact and wear sums
   LinerGrid liner_grid;
   double lifter_first_angle_deg = 0;
@@ -130,6 +152,12 @@ Scene build_walls(const MillCase& c, const MillDerived& d);
 // The mill turns at the case's speed (the run may hold it still to settle).
 // Throws std::invalid_argument when the charge does not fit.
 Scene build_scene(const MillCase& c, const MillDerived& d);
+
+// The case's mesh walls placed in the mill (turned, offset, flipped; in a
+// periodic slice the caps on its seams dropped) with their materials and
+// interactions. Throws std::invalid_argument naming the key
+// ("walls.mesh[0].material: ...") or the file and the triangle.
+std::vector<WallMesh> place_meshes(const MillCase& c);
 
 // The index of a material name in c.materials, or −1.
 int material_index(const MillCase& c, const std::string& name);

@@ -62,17 +62,41 @@ struct Ball {
   Vec3 position, velocity, omega;
 };
 
+// What a mesh wall stands for in the books (the spectra's wall types, the
+// impact profile): shell liner, lifters, or the ends (cl/layout.h
+// MC_WALL_TYPE_*, in the same order).
+enum class MeshPart { shell = 0, lifters = 1, ends = 2 };
+
+// A wall of triangles (core/wall_mesh.h): metres, in the mill frame when it
+// turns with the mill, in the lab frame when it stands still; each triangle
+// faces the charge from the side its vertex order makes counter-clockwise.
+struct WallMesh {
+  std::string name;                 // the file, or what built it
+  std::vector<Triangle> triangles;
+  bool turning = true;
+  MeshPart part = MeshPart::lifters;
+  Material material;
+  // How each ball material (Scene::materials order) meets this mesh.
+  std::vector<Interaction> interactions;
+  // m³ the mesh encloses when it is closed (every edge shared by two
+  // triangles), as placed before a slice's caps were dropped; 0 when open.
+  double volume = 0;
+};
+
 struct Walls {
   double shell_radius = 0.0;  // inside radius of the shell; 0: no shell
   double length = 0.0;        // end plates at z = 0 and z = length; 0: none
   // A periodic slice of `length` (cl/periodic.h): no end plates, z taken
   // modulo the length, contacts across the seam as any other.
   bool periodic = false;
-  bool has_end_plates() const { return length > 0 && !periodic; }
+  // false: the ends are meshes (cone heads) instead of flat plates.
+  bool end_plates = true;
+  bool has_end_plates() const { return length > 0 && !periodic && end_plates; }
   // Lifter cross-sections in the mill frame, counter-clockwise convex
   // polygons, one per row, rows evenly spaced starting at lifter_first_angle.
   std::vector<std::vector<Vec2>> lifters;
   double lifter_first_angle = 0.0;  // rad
+  std::vector<WallMesh> meshes;      // in addition to the shell, plates and lifters
 };
 
 struct Numerics {

@@ -2,6 +2,7 @@
 
 #include <toml++/toml.h>
 
+#include "io/stl.h"
 #include "io/toml_names.h"
 
 #include <algorithm>
@@ -95,6 +96,27 @@ class Section {
       return *v;
     }
     r_.fail(key(k), n, "expected a number, got " + type_name(*n));
+  }
+  bool boolean(const std::string& k, bool fallback) {
+    const toml::node* n = node(k);
+    if (!n) return fallback;
+    if (auto v = n->value<bool>(); v && n->is_boolean()) return *v;
+    r_.fail(key(k), n, "expected true or false, got " + type_name(*n));
+  }
+  // Three numbers, e.g. [0.0, 0.0, 0.1].
+  Vec3 vec3(const std::string& k, Vec3 fallback) {
+    const toml::node* n = node(k);
+    if (!n) return fallback;
+    const toml::array* a = n->as_array();
+    if (!a || a->size() != 3) r_.fail(key(k), n, "expected three numbers [x, y, z], got " + type_name(*n));
+    double v[3];
+    for (int i = 0; i < 3; ++i) {
+      const auto x = (*a)[i].value<double>();
+      if (!x || !((*a)[i].is_floating_point() || (*a)[i].is_integer()) || !std::isfinite(*x))
+        r_.fail(key(k), n, "expected three finite numbers [x, y, z]");
+      v[i] = *x;
+    }
+    return {v[0], v[1], v[2]};
   }
   // A number or the string "auto" (returned as −1).
   double number_or_auto(const std::string& k, double fallback) {
@@ -358,7 +380,7 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
   MillCase c;
   c.name = name;
   Section top(r, root, "");
-  top.knows({"title", "mill", "lifters", "liner", "charge", "materials", "contact", "run"});
+  top.knows({"title", "mill", "lifters", "end_lifters", "liner", "walls", "charge", "materials", "contact", "run"});
   c.title = top.string("title", std::string());
 
   // [contact] first: the law decides which material keys are needed.
@@ -415,10 +437,22 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
   }
   {
     Section s(r, *top.table("mill", true), "mill");
-    s.knows({"diameter", "length", "ends", "speed_fraction", "speed_rpm", "liner"});
+    s.knows({"diameter", "length", "ends", "cone_angle", "trunnion_diameter", "speed_fraction", "speed_rpm", "liner"});
     c.diameter = s.number("diameter");
     c.length = s.number("length");
-    c.periodic = s.string("ends", std::string("plates"), {"plates", "periodic"}) == "periodic";
+    const std::string ends = s.string("ends", std::string("plates"), {"plates", "periodic", "cones"});
+    c.periodic = ends == "periodic";
+    if (ends == "cones") {
+      c.ends.cone_angle_deg = s.number("cone_angle");
+      if (!(c.ends.cone_angle_deg > 0 && c.ends.cone_angle_deg < 60))
+        r.fail("mill.cone_angle", s.node("cone_angle"), "must be in (0, 60) degrees from the end plane");
+      c.ends.trunnion_diameter = s.number("trunnion_diameter");
+      if (!(c.ends.trunnion_diameter > 0))
+        r.fail("mill.trunnion_diameter", s.node("trunnion_diameter"), "must be > 0 m");
+    } else {
+      for (const char* k : {"cone_angle", "trunnion_diameter"})
+        if (s.has(k)) r.fail(std::string("mill.") + k, s.node(k), "only with mill.ends = \"cones\"");
+    }
     const bool frac = s.has("speed_fraction"), rpm = s.has("speed_rpm");
     if (frac == rpm)
       r.fail(frac ? "mill.speed_rpm" : "mill.speed_fraction", frac ? s.node("speed_rpm") : s.self_node(),
@@ -448,6 +482,43 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       lp.top_width = p.number("top_width");
       lp.face_angle_deg = p.number("face_angle");
       c.lifter_pattern.push_back(lp);
+    }
+  }
+  if (const toml::table* et = top.table("end_lifters", false)) {
+    Section s(r, *et, "end_lifters");
+    s.knows({"rows", "height", "width", "inner_diameter"});
+    const long rows = s.integer("rows");
+    if (rows < 0 || rows > 400) r.fail("end_lifters.rows", s.node("rows"), "must be in [0, 400]");
+    c.ends.lifter_rows = static_cast<int>(rows);
+    if (rows > 0) {
+      c.ends.lifter_height = s.number("height");
+      c.ends.lifter_width = s.number("width");
+      if (!(c.ends.lifter_height > 0)) r.fail("end_lifters.height", s.node("height"), "must be > 0 m");
+      if (!(c.ends.lifter_width > 0)) r.fail("end_lifters.width", s.node("width"), "must be > 0 m");
+    }
+    c.ends.lifter_inner_diameter = s.number("inner_diameter", 0.0);
+    if (!(c.ends.lifter_inner_diameter >= 0))
+      r.fail("end_lifters.inner_diameter", s.node("inner_diameter"), "must be >= 0 m (0: the trunnion, or D/3)");
+  }
+  if (const toml::table* wt = top.table("walls", false)) {
+    Section s(r, *wt, "walls");
+    s.knows({"mesh"});
+    const auto meshes = s.tables("mesh");
+    for (std::size_t k = 0; k < meshes.size(); ++k) {
+      Section m(r, *meshes[k], "walls.mesh[" + std::to_string(k) + "]");
+      m.knows({"file", "units", "material", "turning", "part", "offset", "angle", "flip"});
+      MeshSpec spec;
+      spec.file = m.string("file");
+      if (spec.file.empty()) r.fail(m.key("file"), m.node("file"), "must name an STL file");
+      spec.units = m.string("units", std::string("m"), {"m", "mm"});
+      spec.material = m.string("material", std::string());
+      spec.turning = m.boolean("turning", true);
+      const std::string part = m.string("part", std::string("lifters"), {"lifters", "shell", "ends"});
+      spec.part = part == "shell" ? MeshPart::shell : part == "ends" ? MeshPart::ends : MeshPart::lifters;
+      spec.offset = m.vec3("offset", Vec3{});
+      spec.angle_deg = m.number("angle", 0.0);
+      spec.flip = m.boolean("flip", false);
+      c.meshes.push_back(spec);
     }
   }
   if (const toml::table* lt = top.table("liner", false)) {
@@ -549,6 +620,21 @@ MillCase parse_case(std::string_view text, const std::string& source, const std:
   Reader r(source, overridden);
   std::string name = std::filesystem::path(source).stem().string();
   MillCase c = read_document(root, r, name);
+  // The mesh walls' files, relative to the case file's folder.
+  const std::filesystem::path base = std::filesystem::path(source).parent_path();
+  for (std::size_t k = 0; k < c.meshes.size(); ++k) {
+    MeshSpec& m = c.meshes[k];
+    const std::string key = "walls.mesh[" + std::to_string(k) + "].file";
+    std::filesystem::path p(m.file);
+    if (p.is_relative()) p = base / p;
+    p = p.lexically_normal();
+    m.path = p.string();
+    try {
+      m.triangles = read_stl(p, m.units == "mm" ? 1e-3 : 1.0).triangles;
+    } catch (const MeshError& e) {
+      throw CaseError(r.located(key) + ": " + key + ": " + e.what());
+    }
+  }
   try {
     derive(c);
   } catch (const std::invalid_argument& e) {
@@ -586,8 +672,14 @@ std::string case_to_toml(const MillCase& c) {
   };
   toml::table root;
   if (!c.title.empty()) root.insert("title", c.title);
-  toml::table mill{{"diameter", c.diameter}, {"length", c.length}, {"ends", c.periodic ? "periodic" : "plates"},
+  toml::table mill{{"diameter", c.diameter},
+                   {"length", c.length},
+                   {"ends", c.periodic ? "periodic" : c.ends.cones() ? "cones" : "plates"},
                    {"liner", c.liner}};
+  if (c.ends.cones()) {
+    mill.insert("cone_angle", c.ends.cone_angle_deg);
+    mill.insert("trunnion_diameter", c.ends.trunnion_diameter);
+  }
   if (c.speed_rpm > 0) mill.insert("speed_rpm", c.speed_rpm);
   else mill.insert("speed_fraction", c.speed_fraction);
   root.insert("mill", mill);
@@ -595,6 +687,26 @@ std::string case_to_toml(const MillCase& c) {
   for (const LifterProfile& p : c.lifter_pattern)
     profiles.push_back(toml::table{{"height", p.height}, {"top_width", p.top_width}, {"face_angle", p.face_angle_deg}});
   root.insert("lifters", toml::table{{"rows", c.lifter_rows}, {"first_angle", c.lifter_first_angle_deg}, {"profile", profiles}});
+  if (c.ends.lifter_rows > 0)
+    root.insert("end_lifters", toml::table{{"rows", c.ends.lifter_rows},
+                                          {"height", c.ends.lifter_height},
+                                          {"width", c.ends.lifter_width},
+                                          {"inner_diameter", c.ends.lifter_inner_diameter}});
+  if (!c.meshes.empty()) {
+    toml::array meshes;
+    for (const MeshSpec& m : c.meshes) {
+      toml::table t{{"file", std::filesystem::absolute(m.path).string()},
+                    {"units", m.units},
+                    {"turning", m.turning},
+                    {"part", m.part == MeshPart::shell ? "shell" : m.part == MeshPart::ends ? "ends" : "lifters"},
+                    {"offset", toml::array{m.offset.x, m.offset.y, m.offset.z}},
+                    {"angle", m.angle_deg},
+                    {"flip", m.flip}};
+      if (!m.material.empty()) t.insert("material", m.material);
+      meshes.push_back(t);
+    }
+    root.insert("walls", toml::table{{"mesh", meshes}});
+  }
   const LinerGrid& g = c.liner_grid;
   root.insert("liner", toml::table{{"shell_bins", g.shell_bins},
                                    {"smooth_shell_bins", g.smooth_shell_bins},

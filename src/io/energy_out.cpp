@@ -33,7 +33,7 @@ nlohmann::ordered_json rates_json(const CollisionRates& c) {
 }
 
 const char* part_name(LinerPart p) {
-  return p == LinerPart::shell ? "shell" : p == LinerPart::lifter ? "lifter" : "plate";
+  return p == LinerPart::shell ? "shell" : p == LinerPart::lifter ? "lifter" : p == LinerPart::mesh ? "mesh" : "plate";
 }
 
 const char* face_name(int f) {
@@ -65,6 +65,8 @@ std::string element_name(const LinerLayout& layout, int e) {
                   layout.n_lifters > 0 ? (el.row + 1) % layout.n_lifters : el.row, el.bin, el.axial);
   else if (el.part == LinerPart::lifter)
     std::snprintf(b, sizeof b, "lifter row %d, %s face, axial %d", el.row, face_name(el.bin), el.axial);
+  else if (el.part == LinerPart::mesh)
+    std::snprintf(b, sizeof b, "mesh %d, triangle %d", el.row + 1, el.bin + 1);
   else
     std::snprintf(b, sizeof b, "end plate at z = %s, ring %d, sector %d", el.row == 0 ? "0" : "length", el.bin,
                   el.sector);
@@ -271,7 +273,7 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
   std::map<std::array<int, 4>, Cell> cells;
   for (int e = 0; e < layout.size(); ++e) {
     const LinerElement& el = layout.elements[e];
-    if (el.part == LinerPart::plate) continue;
+    if (el.part == LinerPart::plate || el.part == LinerPart::mesh) continue;
     const int row = nl > 0 ? el.row % period : 0;
     const double base = nl > 0 ? (layout.lifter_centre[el.row] - layout.lifter_centre[0]) * kDeg - spacing * (el.row - row)
                                : 0;  // the pattern's first row at 0
@@ -334,9 +336,10 @@ PolyMesh liner_mesh(const LinerLayout& layout, const LinerReport* r, double mill
   for (std::size_t e = 0; e < n; ++e) {
     const LinerElement& el = layout.elements[e];
     std::vector<int> poly;
+    const double ce = el.still ? 1.0 : c, se = el.still ? 0.0 : s;  // a still mesh is in the lab frame
     for (const Vec3& p : el.outline) {
       poly.push_back(static_cast<int>(m.points.size()));
-      m.points.push_back({static_cast<float>(c * p.x - s * p.y), static_cast<float>(s * p.x + c * p.y),
+      m.points.push_back({static_cast<float>(ce * p.x - se * p.y), static_cast<float>(se * p.x + ce * p.y),
                           static_cast<float>(p.z)});
     }
     m.polygons.push_back(poly);

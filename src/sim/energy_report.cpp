@@ -114,9 +114,11 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
   r.shoulder_deg = angles.found ? angles.shoulder_deg : kNaN;
   const double w = window_s > 0 ? window_s : 1;
   const double density = scene.wall_material.density;
-  const char* names[] = {"shell", "lifter leading faces", "lifter tops", "lifter trailing faces", "end plates"};
-  r.parts.resize(5);
-  for (int p = 0; p < 5; ++p) r.parts[p].name = names[p];
+  const char* names[] = {"shell", "lifter leading faces", "lifter tops", "lifter trailing faces", "end plates",
+                         "mesh walls"};
+  const int n_parts = layout.first_mesh < layout.size() ? 6 : 5;  // meshes only where there are some
+  r.parts.resize(n_parts);
+  for (int p = 0; p < n_parts; ++p) r.parts[p].name = names[p];
   r.elements.resize(layout.elements.size());
   for (std::size_t e = 0; e < layout.elements.size(); ++e) {
     const LinerElement& el = layout.elements[e];
@@ -131,8 +133,8 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
       x.shear_W_m2 = x.shear_W / el.area_m2;
       x.wear_mm_per_1000h = x.wear_m3_per_s / el.area_m2 * 1000.0 * 3600.0 * 1000.0;
     }
-    x.wear_kg_per_h = x.wear_m3_per_s * density * 3600.0;
-    const int part = el.part == LinerPart::shell ? 0 : el.part == LinerPart::plate ? 4 : 1 + el.bin;
+    x.wear_kg_per_h = x.wear_m3_per_s * (el.density > 0 ? el.density : density) * 3600.0;
+    const int part = el.part == LinerPart::shell ? 0 : el.part == LinerPart::plate ? 4 : el.part == LinerPart::mesh ? 5 : 1 + el.bin;
     LinerPartRates& pr = r.parts[part];
     pr.area_m2 += el.area_m2;
     pr.impacts_per_s += x.impacts_per_s;

@@ -25,6 +25,7 @@ using real = double;
 #include "../../cl/walls.h"
 #include "../../cl/books.h"
 #include "../../cl/periodic.h"
+#include "../../cl/mesh.h"
 #include "../../cl/ball_forces.h"
 #include "../../cl/motion.h"
 }  // namespace mc::f64
@@ -38,6 +39,8 @@ static_assert(sizeof(f32::PairParams) == 8 * 4 && sizeof(f64::PairParams) == 8 *
 // ends padded to its 32-byte alignment (OpenCL C pads it the same way).
 static_assert(sizeof(f32::SimParams) == 2 * 16 + 9 * 4 + 7 * 4);
 static_assert(sizeof(f64::SimParams) == 2 * 32 + 9 * 8 + 7 * 4 + 28);
+static_assert(sizeof(f32::MeshTriangle) == 4 * 16 + 8 * 4 && sizeof(f64::MeshTriangle) == 4 * 32 + 8 * 4);
+static_assert(sizeof(f32::MeshGrid) == 16 + 4 * 4 + 8 * 4 && sizeof(f64::MeshGrid) == 32 + 4 * 8 + 8 * 4);
 static_assert(sizeof(f32::BookParams) == 4 * 4 + 8 * 4 && sizeof(f64::BookParams) == 4 * 8 + 8 * 4);
 
 // The types of one precision, for code templated on it.
@@ -52,6 +55,8 @@ struct Layout<float> {
   using PairParams = f32::PairParams;
   using LifterPolygon = f32::LifterPolygon;
   using BookParams = f32::BookParams;
+  using MeshTriangle = f32::MeshTriangle;
+  using MeshGrid = f32::MeshGrid;
 };
 template <>
 struct Layout<double> {
@@ -62,6 +67,8 @@ struct Layout<double> {
   using PairParams = f64::PairParams;
   using LifterPolygon = f64::LifterPolygon;
   using BookParams = f64::BookParams;
+  using MeshTriangle = f64::MeshTriangle;
+  using MeshGrid = f64::MeshGrid;
 };
 
 }  // namespace mc

@@ -1,6 +1,7 @@
 #include "sim/reference.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -16,6 +17,12 @@ struct ReferenceSolver::State {
   SimParams sp{};
   std::vector<PairParams> pairs;
   std::vector<LifterPolygon> lifters;
+  // Mesh walls, their cells binned on the host (core/wall_mesh.h)
+  std::array<MeshGrid, MC_MESH_SETS> mesh_grid{};
+  std::vector<MeshTriangle> mesh_tris;
+  std::vector<int2> mesh_feature;
+  std::vector<int> mesh_cell_start, mesh_cell_tris;
+  std::vector<PairParams> mesh_pairs;
   std::vector<real4> pos, vel, omega, force, torque, accum, pos_at_build;
   std::vector<int2> info;
   std::vector<int> wall_key;
@@ -86,11 +93,18 @@ struct ReferenceSolver::State {
     books.bp = &book_params;
     books.status = &status;
     MillState mill{std::cos(angle), std::sin(angle), omega_mill};
+    Meshes meshes;
+    meshes.grid = mesh_grid.data();
+    meshes.tris = mesh_tris.data();
+    meshes.feature = mesh_feature.data();
+    meshes.cell_start = mesh_cell_start.data();
+    meshes.cell_tris = mesh_cell_tris.data();
+    meshes.pairs = mesh_pairs.data();
     for (int i = 0; i < n; ++i)
       ball_forces(i, &sp, pairs.data(), lifters.data(), mill, pos.data(), vel.data(), omega.data(),
                   info.data(), neigh_start.data(), neigh_count.data(), neigh_index.data(),
                   neigh_rec.data(), neigh_rev.data(), pair_out.data(), wall_key.data(), wall_rec.data(),
-                  force.data(), torque.data(), accum.data(), &books);
+                  force.data(), torque.data(), accum.data(), &books, &meshes);
     for (int j = 0; j < n; ++j)
       ball_reactions(j, in_start.data(), pair_out.data(), force.data(), torque.data(), accum.data());
     save_history();
@@ -104,6 +118,12 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
   s.sp = tables.params;
   s.pairs = std::move(tables.pairs);
   s.lifters = std::move(tables.lifters);
+  s.mesh_grid = tables.mesh_grid;
+  s.mesh_tris = tables.mesh_tris;
+  s.mesh_feature = tables.mesh_feature;
+  s.mesh_pairs = tables.mesh_pairs;
+  mesh_cells_host(tables, s.mesh_cell_start, s.mesh_cell_tris);
+  if (s.mesh_cell_tris.empty()) s.mesh_cell_tris.push_back(0);
   s.book_params = tables.books;
   s.spectra.assign(2 * static_cast<std::size_t>(s.book_params.n_types + 1) * MC_SPECTRA_BINS * MC_SPECTRA_FIELDS, 0u);
   s.liner.assign(2 * static_cast<std::size_t>(s.book_params.n_elements) * MC_LINER_FIELDS, 0u);

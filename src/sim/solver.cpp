@@ -1,6 +1,7 @@
 #include "sim/solver.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -102,6 +103,7 @@ class SolverImpl final : public Solver {
  private:
   static compute::BuildOptions options(const Scene& scene);
   void setup_params(const Scene& scene);
+  void setup_meshes(const SceneTables& t);
   void rebuild();
   void forces();
   void index_incoming();
@@ -138,6 +140,14 @@ class SolverImpl final : public Solver {
   Buffer<typename L::SimParams> params_;
   Buffer<typename L::PairParams> pairs_;
   Buffer<typename L::LifterPolygon> lifters_;
+  // Mesh walls (cl/mesh.h): each set's grid, the triangles, each feature's
+  // (patch, wall type), the cells (starts, then triangles; filled by
+  // mesh_bin.cl when the walls are set), ball × mesh material pairs.
+  Buffer<typename L::MeshGrid> mesh_grid_;
+  Buffer<typename L::MeshTriangle> mesh_tris_;
+  Buffer<int2> mesh_feature_;
+  Buffer<int> mesh_cell_start_, mesh_cell_tris_;
+  Buffer<typename L::PairParams> mesh_pairs_;
   // ball state, in cell order after each rebuild
   Buffer<real4> pos_, vel_, omega_, force_, torque_, accum_, pos_at_build_;
   Buffer<int2> info_;  // (id, material)
@@ -198,7 +208,8 @@ class SolverImpl final : public Solver {
   Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
       k_gather_wall_, k_put_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
       k_layout_, k_profile_, k_count_contacts_, k_clear_flag_, k_carry_count_, k_carry_fill_, k_in_count_,
-      k_in_scatter_, k_in_sort_, k_reactions_, k_forces_grouped_, k_records_count_, k_records_pack_;
+      k_in_scatter_, k_in_sort_, k_reactions_, k_forces_grouped_, k_records_count_, k_records_pack_, k_mesh_bin_,
+      k_mesh_copy_, k_mesh_sort_;
   bool grouped_forces_ = false;
   // The viewer's kernel, built on first use so that headless runs skip it.
   std::unique_ptr<compute::Program> view_program_;
@@ -220,7 +231,8 @@ template <class Real>
 SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
     : ctx_(ctx),
       program_(ctx,
-               {"scan.cl", "binning.cl", "contacts.cl", "forces.cl", "motion.cl", "reductions.cl", "profile.cl"},
+               {"scan.cl", "binning.cl", "contacts.cl", "forces.cl", "motion.cl", "reductions.cl", "profile.cl",
+                "mesh_bin.cl"},
                options(scene), std::is_same_v<Real, double>),
       n_(static_cast<int>(scene.balls.size())),
       law_(scene.numerics.law),
@@ -230,6 +242,12 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       params_(ctx, 1, "params"),
       pairs_(ctx, 1, "pairs"),
       lifters_(ctx, 1, "lifters"),
+      mesh_grid_(ctx, MC_MESH_SETS, "mesh grids"),
+      mesh_tris_(ctx, 1, "mesh triangles"),
+      mesh_feature_(ctx, 1, "mesh features"),
+      mesh_cell_start_(ctx, 2, "mesh cell starts"),
+      mesh_cell_tris_(ctx, 1, "mesh cell triangles"),
+      mesh_pairs_(ctx, 1, "mesh pairs"),
       pos_(ctx, n_, "positions"),
       vel_(ctx, n_, "velocities"),
       omega_(ctx, n_, "angular velocities"),
@@ -283,7 +301,10 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_reactions_(program_, "reactions"),
       k_forces_grouped_(program_, "forces_grouped"),
       k_records_count_(program_, "records_count"),
-      k_records_pack_(program_, "records_pack") {
+      k_records_pack_(program_, "records_pack"),
+      k_mesh_bin_(program_, "mesh_bin"),
+      k_mesh_copy_(program_, "mesh_copy"),
+      k_mesh_sort_(program_, "mesh_sort_cells") {
   if (const char* e = std::getenv("MILLCHARGE_FORCES"); e && *e) {
     const std::string v = e;
     if (v != "ball" && v != "grouped")
@@ -293,14 +314,16 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
   if (n_ == 0) throw std::invalid_argument("scene: no balls");
 
   // The device's struct sizes must equal the host mirrors'.
-  Buffer<int> sizes(ctx, 5, "layout sizes");
+  Buffer<int> sizes(ctx, 7, "layout sizes");
   k_layout_.args(sizes).launch(1);
   sizes.read_from_device();
   if (sizes.host[0] != static_cast<int>(sizeof(typename L::SimParams)) ||
       sizes.host[1] != static_cast<int>(sizeof(typename L::PairParams)) ||
       sizes.host[2] != static_cast<int>(sizeof(typename L::LifterPolygon)) ||
       sizes.host[3] != static_cast<int>(sizeof(real4)) ||
-      sizes.host[4] != static_cast<int>(sizeof(typename L::BookParams)))
+      sizes.host[4] != static_cast<int>(sizeof(typename L::BookParams)) ||
+      sizes.host[5] != static_cast<int>(sizeof(typename L::MeshTriangle)) ||
+      sizes.host[6] != static_cast<int>(sizeof(typename L::MeshGrid)))
     throw compute::Error("struct layouts differ between host and device (cl/layout.h)");
 
   setup_params(scene);
@@ -372,6 +395,7 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
     lifters_.host[k].bound = {Real(b.x), Real(b.y), Real(b.z), Real(0)};
   }
   lifters_.write_to_device();
+  setup_meshes(t);
 
   const f64::BookParams& tb = t.books;
   auto& bp = book_params_.host[0];
@@ -444,6 +468,13 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
     lo.z = std::min(lo.z, 0.0);
     hi.z = std::max(hi.z, w.length);
   }
+  if (tp.period <= 0)  // the grid spans the meshes too (cone ends reach past the belly)
+    for (const WallMesh& m : w.meshes)
+      for (const Triangle& tri : m.triangles)
+        for (const Vec3& v : tri.v) {
+          lo.z = std::min(lo.z, v.z);
+          hi.z = std::max(hi.z, v.z);
+        }
   const double period = tp.period;
   auto z_cells = [&](double c) { return static_cast<long>(std::floor(period / c)); };
   double cell = 2.0 * r_max + skin;
@@ -543,6 +574,87 @@ void SolverImpl<Real>::rebuild() {
   lap(&StageTimes::contacts_s);
 }
 
+// The mesh walls' tables, and their triangles binned on the device (they do
+// not move in their set's frame, so this is done when the walls are set).
+template <class Real>
+void SolverImpl<Real>::setup_meshes(const SceneTables& t) {
+  const std::size_t n_tris = t.mesh_tris.size();
+  // What the device must hold for them (the cells' lists, sized after
+  // counting, at least one entry a triangle): refused, naming the count,
+  // when that alone exceeds what is left of the device's memory.
+  const std::size_t need = n_tris * (sizeof(typename L::MeshTriangle) + 4 + 3 * sizeof(int2)) +
+                           (static_cast<std::size_t>(t.mesh_cells) + 1) * sizeof(int);
+  const std::size_t have = ctx_.memory_bytes() > ctx_.allocated_bytes() ? ctx_.memory_bytes() - ctx_.allocated_bytes() : 0;
+  if (t.mesh_grid[0].n_triangles + t.mesh_grid[1].n_triangles > 0 && need > have) {
+    char m[320];
+    std::snprintf(m, sizeof m,
+                  "walls.mesh: %zu triangles need %.1f MiB of device memory and %s has %.1f MiB left after the "
+                  "balls; use coarser meshes (fewer triangles) or a device with more memory",
+                  n_tris, need / 1048576.0, ctx_.info().name.c_str(), have / 1048576.0);
+    throw std::invalid_argument(m);
+  }
+  mesh_grid_.resize(MC_MESH_SETS);
+  for (int s = 0; s < MC_MESH_SETS; ++s) {
+    const f64::MeshGrid& g = t.mesh_grid[s];
+    auto& d = mesh_grid_.host[s];
+    d = {};
+    d.origin = {Real(g.origin.x), Real(g.origin.y), Real(g.origin.z), Real(g.origin.w)};
+    d.core_r2 = Real(g.core_r2);
+    d.core_z0 = Real(std::clamp(g.core_z0, -1e30, 1e30));
+    d.core_z1 = Real(std::clamp(g.core_z1, -1e30, 1e30));
+    d.reach = Real(g.reach);
+    d.nx = g.nx;
+    d.ny = g.ny;
+    d.nz = g.nz;
+    d.first_cell = g.first_cell;
+    d.n_triangles = g.n_triangles;
+  }
+  mesh_grid_.write_to_device();
+  mesh_tris_.resize(n_tris);
+  for (std::size_t k = 0; k < n_tris; ++k) {
+    const f64::MeshTriangle& m = t.mesh_tris[k];
+    auto& d = mesh_tris_.host[k];
+    d.a = {Real(m.a.x), Real(m.a.y), Real(m.a.z), Real(m.a.w)};
+    d.b = {Real(m.b.x), Real(m.b.y), Real(m.b.z), Real(0)};
+    d.c = {Real(m.c.x), Real(m.c.y), Real(m.c.z), Real(0)};
+    d.n = {Real(m.n.x), Real(m.n.y), Real(m.n.z), Real(0)};
+    for (int f = 0; f < 6; ++f) d.feat[f] = m.feat[f];
+    d.pair_row = m.pair_row;
+    d.element = m.element;
+  }
+  mesh_tris_.write_to_device();
+  mesh_feature_.resize(t.mesh_feature.size());
+  for (std::size_t k = 0; k < t.mesh_feature.size(); ++k) mesh_feature_.host[k] = {t.mesh_feature[k].x, t.mesh_feature[k].y};
+  mesh_feature_.write_to_device();
+  mesh_pairs_.resize(t.mesh_pairs.size());
+  for (std::size_t k = 0; k < t.mesh_pairs.size(); ++k) {
+    const f64::PairParams& c = t.mesh_pairs[k];
+    mesh_pairs_.host[k] = {Real(c.kn),      Real(c.kt_over_kn), Real(c.e_star),  Real(c.g_star),
+                           Real(c.damping), Real(c.mu_slide),   Real(c.mu_roll), Real(c.restitution)};
+  }
+  mesh_pairs_.write_to_device();
+
+  const int n_cells = t.mesh_cells;
+  mesh_cell_start_.resize(static_cast<std::size_t>(n_cells) + 1);
+  const int n_real = t.mesh_grid[0].n_triangles + t.mesh_grid[1].n_triangles;
+  if (n_real == 0) {
+    std::fill(mesh_cell_start_.host.begin(), mesh_cell_start_.host.end(), 0);
+    mesh_cell_start_.write_to_device();
+    return;
+  }
+  const int n_first = t.mesh_grid[0].n_triangles;
+  k_bin_clear_.args(mesh_cell_start_, n_cells + 1).launch(n_cells + 1);
+  k_mesh_bin_.args(mesh_grid_, mesh_tris_, n_real, n_first, 0, mesh_cell_start_, mesh_cell_tris_).launch(n_real);
+  scan_.run(mesh_cell_start_, mesh_cell_start_, n_cells + 1);
+  const int total = scan_.read_total();
+  mesh_cell_tris_.resize(std::max(total, 1));
+  Buffer<int> cursor(ctx_, static_cast<std::size_t>(n_cells) + 1, "mesh cell cursors");
+  k_mesh_copy_.args(n_cells + 1, mesh_cell_start_, cursor).launch(n_cells + 1);
+  k_mesh_bin_.args(mesh_grid_, mesh_tris_, n_real, n_first, 1, cursor, mesh_cell_tris_).launch(n_real);
+  k_mesh_sort_.args(n_cells, mesh_cell_start_, mesh_cell_tris_).launch(n_cells);
+  ctx_.queue().finish();
+}
+
 template <class Real>
 void SolverImpl<Real>::forces() {
   (grouped_forces_ ? k_forces_grouped_ : k_forces_)
@@ -550,7 +662,8 @@ void SolverImpl<Real>::forces() {
             omega_, info_,
             neigh_start_, neigh_count_, neigh_index_, neigh_rec_, neigh_rev_, pair_out_, wall_key_, wall_rec_, force_,
             torque_, accum_, status_, records_, rec_state_, rec_capacity_, rec_mark_, spectra_, liner_,
-            impact_profile_, book_params_)
+            impact_profile_, book_params_, mesh_grid_, mesh_tris_, mesh_feature_, mesh_cell_start_, mesh_cell_tris_,
+            mesh_pairs_)
       .launch(n_, grouped_forces_ ? kForcesGroupWG : 0);
   k_reactions_.args(n_, in_start_, pair_out_, force_, torque_, accum_)
       .launch(n_);
@@ -1118,7 +1231,8 @@ std::vector<std::pair<int, int>> SolverImpl<Real>::neighbour_pairs() {
 
 template <class Real>
 std::size_t SolverImpl<Real>::device_bytes() const {
-  std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + status_.bytes() + profile_.bytes() + counts_.bytes() +
+  std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + mesh_grid_.bytes() + mesh_tris_.bytes() +
+                  mesh_feature_.bytes() + mesh_cell_start_.bytes() + mesh_cell_tris_.bytes() + mesh_pairs_.bytes() + status_.bytes() + profile_.bytes() + counts_.bytes() +
                   partial_.bytes() + scan_.bytes();
   for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_}) b += x->bytes();
   b += pair_out_.bytes() + records_.bytes() + book_params_.bytes() + spectra_.bytes() + liner_.bytes() +
@@ -1153,9 +1267,25 @@ void Solver::write_instances(const cl::Buffer&) {
 }
 
 double default_skin(const Scene& scene) {
-  double r_min = std::numeric_limits<double>::max();
-  for (const Ball& b : scene.balls) r_min = std::min(r_min, b.radius);
-  return scene.balls.empty() ? 0.0 : 0.2 * r_min;
+  if (scene.balls.empty()) return 0.0;
+  double r_min = std::numeric_limits<double>::max(), r_max = 0;
+  for (const Ball& b : scene.balls) {
+    r_min = std::min(r_min, b.radius);
+    r_max = std::max(r_max, b.radius);
+  }
+  // The lists are rebuilt when a ball has moved half the skin. In a big mill
+  // at the seed's step a ball thrown from the shoulder crosses 20 % of a
+  // radius in a few steps (mill D: a rebuild every 9 steps, 38 % of the
+  // time), so the skin also allows kSkinSteps steps at the speed of a ball
+  // fallen across the mill, sqrt(2 g D), up to the smallest radius (the
+  // lists grow as the skin's cube). In a periodic slice the grid keeps its
+  // 3 cells along the axis.
+  const Vec3 g = scene.numerics.gravity;
+  const double fall = scene.walls.shell_radius > 0 ? std::sqrt(2 * g.norm() * 2 * scene.walls.shell_radius) : 0.0;
+  double skin = std::clamp(2 * kSkinSteps * fall * scene.numerics.dt, 0.2 * r_min, r_min);
+  if (scene.walls.periodic && scene.walls.length > 0)
+    skin = std::max(0.2 * r_min, std::min(skin, 0.99 * (scene.walls.length / 3 - 2 * r_max)));
+  return skin;
 }
 
 std::unique_ptr<Solver> make_solver(compute::Context& ctx, const Scene& scene) {

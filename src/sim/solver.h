@@ -178,7 +178,12 @@ std::unique_ptr<Solver> make_solver(compute::Context& ctx, const Scene& scene);
 
 // Skin used when the scene leaves it at 0: 20 % of the smallest radius (a
 // thinner skin lists fewer pairs and rebuilds more often; at 20 % a dense
-// charge rebuilds every 25-100 steps and lists about 6 pairs per ball).
+// charge rebuilds every 25-100 steps and lists about 6 pairs per ball), or
+// more in a big mill: room for kSkinSteps steps between rebuilds at
+// sqrt(2 g D), at most the smallest radius (mill D's 0.26 m slice at the
+// seed's dt: 0.72 of the smallest radius, a rebuild every ~40 steps instead
+// of 9, 1.2 to 1.9 times the steps per second).
+inline constexpr double kSkinSteps = 30;
 double default_skin(const Scene& scene);
 
 }  // namespace mc

@@ -6,6 +6,81 @@
 #include "core/liner.h"
 
 namespace mc {
+namespace {
+
+// The mesh walls' tables (SceneTables), the liner's elements already laid out.
+void mesh_tables(const Scene& scene, const LinerLayout& liner, double r_max, SceneTables& t) {
+  const std::vector<WallMesh>& meshes = scene.walls.meshes;
+  const std::vector<MeshTriangleRef> order = mesh_device_order(meshes);
+  const MeshTopology topo = mesh_topology(meshes);
+  const int nm = scene.wall_index();
+  // The pair table: a row of n_materials entries per mesh (its material and
+  // its interactions with the ball materials).
+  std::vector<int> row(meshes.size(), 0);
+  for (std::size_t m = 0; m < meshes.size(); ++m) {
+    Scene s = scene;
+    s.wall_material = meshes[m].material;
+    for (int a = 0; a < nm; ++a) s.set_interaction(a, nm, meshes[m].interactions.at(a));
+    row[m] = static_cast<int>(t.mesh_pairs.size());
+    for (int a = 0; a < nm; ++a) {
+      const PairCoefficients c = pair_coefficients(s, a, nm);
+      t.mesh_pairs.push_back({c.kn, c.kt_over_kn, c.e_star, c.g_star, c.damping, c.mu_slide, c.mu_roll,
+                              c.restitution});
+    }
+  }
+  if (t.mesh_pairs.empty()) t.mesh_pairs.push_back(f64::PairParams{});
+  const int T = topo.n_triangles, E = topo.n_edges;
+  for (int k = 0; k < T; ++k) {
+    const WallMesh& m = meshes[order[k].mesh];
+    const Triangle& tri = m.triangles[order[k].triangle];
+    f64::MeshTriangle d{};
+    d.a = {tri.v[0].x, tri.v[0].y, tri.v[0].z, m.material.wear_coefficient};
+    d.b = {tri.v[1].x, tri.v[1].y, tri.v[1].z, 0};
+    d.c = {tri.v[2].x, tri.v[2].y, tri.v[2].z, 0};
+    const Vec3 n = triangle_unit_normal(tri);
+    d.n = {n.x, n.y, n.z, 0};
+    for (int e = 0; e < 3; ++e) d.feat[e] = T + topo.edges[k][e];
+    for (int v = 0; v < 3; ++v) d.feat[3 + v] = T + E + topo.vertices[k][v];
+    d.pair_row = row[order[k].mesh];
+    d.element = liner.first_mesh + k;
+    t.mesh_tris.push_back(d);
+    t.mesh_set_triangles[m.turning ? 0 : 1].push_back(tri);
+  }
+  if (t.mesh_tris.empty()) t.mesh_tris.push_back(f64::MeshTriangle{});
+  // Each feature's patch and wall type (that of the mesh of a triangle
+  // holding it; a feature belongs to one mesh).
+  t.mesh_feature.assign(std::max(topo.features(), 1), f64::int2{0, 0});
+  for (int k = 0; k < T; ++k) {
+    const int type = static_cast<int>(meshes[order[k].mesh].part);
+    t.mesh_feature[k] = {topo.patch[k], type};
+    for (int e = 0; e < 3; ++e) t.mesh_feature[T + topo.edges[k][e]] = {topo.patch[T + topo.edges[k][e]], type};
+    for (int v = 0; v < 3; ++v)
+      t.mesh_feature[T + E + topo.vertices[k][v]] = {topo.patch[T + E + topo.vertices[k][v]], type};
+  }
+  // The grids: reach the largest ball radius (and a little: rounding in
+  // float must not drop a triangle that touches).
+  const double reach = r_max * (1 + 1e-4) + 1e-6;
+  int first_cell = 0;
+  for (int s = 0; s < MC_MESH_SETS; ++s) {
+    const MeshGridSpec g = mesh_grid_spec(t.mesh_set_triangles[s], reach);
+    t.mesh_grid_specs[s] = g;
+    f64::MeshGrid& d = t.mesh_grid[s];
+    d.origin = {g.origin.x, g.origin.y, g.origin.z, g.cell};
+    d.core_r2 = g.core_r2;
+    d.core_z0 = g.core_z0;
+    d.core_z1 = g.core_z1;
+    d.reach = g.reach;
+    d.nx = g.nx;
+    d.ny = g.ny;
+    d.nz = g.nz;
+    d.first_cell = first_cell;
+    d.n_triangles = g.n_triangles;
+    first_cell += static_cast<int>(g.cells());
+  }
+  t.mesh_cells = first_cell;
+}
+
+}  // namespace
 
 SceneTables scene_tables(const Scene& scene) {
   validate(scene);
@@ -76,7 +151,23 @@ SceneTables scene_tables(const Scene& scene) {
   bp.plate_sectors = liner.plate_sectors;
   bp.first_lifter_element = liner.first_lifter;
   bp.first_plate_element = liner.first_plate;
+  mesh_tables(scene, liner, r_max, t);
   return t;
+}
+
+void mesh_cells_host(const SceneTables& t, std::vector<int>& starts, std::vector<int>& tris) {
+  starts.assign(1, 0);
+  tris.clear();
+  int first = 0;
+  for (int s = 0; s < MC_MESH_SETS; ++s) {
+    std::vector<int> st, tr;
+    mesh_bin_host(t.mesh_grid_specs[s], t.mesh_set_triangles[s], first, st, tr);
+    const int base = static_cast<int>(tris.size());
+    starts.pop_back();
+    for (int v : st) starts.push_back(base + v);
+    tris.insert(tris.end(), tr.begin(), tr.end());
+    first += static_cast<int>(t.mesh_set_triangles[s].size());
+  }
 }
 
 }  // namespace mc

@@ -4,7 +4,10 @@
 // so both always see the same derived values.
 #pragma once
 
+#include <array>
 #include <vector>
+
+#include "core/wall_mesh.h"
 
 #include "core/scene.h"
 #include "sim/layout.hpp"
@@ -17,7 +20,23 @@ struct SceneTables {
   std::vector<f64::PairParams> pairs;
   std::vector<f64::LifterPolygon> lifters;  // at least one entry
   f64::BookParams books{};                  // spectra and liner (core/liner.h)
+  // Mesh walls (cl/mesh.h): triangles in the device order, each feature's
+  // (smooth patch, wall type), each set's grid (cells not yet filled:
+  // mesh_cells), the pair table ball material × mesh material (at least
+  // one entry each).
+  std::vector<f64::MeshTriangle> mesh_tris;
+  std::vector<f64::int2> mesh_feature;
+  std::array<f64::MeshGrid, MC_MESH_SETS> mesh_grid{};
+  std::vector<f64::PairParams> mesh_pairs;
+  int mesh_cells = 0;  // both sets' cells
+  // Each set's triangles as the host has them, for binning on the host.
+  std::array<std::vector<Triangle>, MC_MESH_SETS> mesh_set_triangles;
+  std::array<MeshGridSpec, MC_MESH_SETS> mesh_grid_specs;
 };
+
+// The mesh grid's cells on the host, as cl/mesh_bin.cl fills them on the
+// device: starts (mesh_cells + 1) and the triangles of each cell.
+void mesh_cells_host(const SceneTables& t, std::vector<int>& starts, std::vector<int>& tris);
 
 SceneTables scene_tables(const Scene& scene);
 

@@ -132,7 +132,7 @@ void MillRenderer::set_liner_colours(const std::vector<glm::vec3>& per_element) 
 void MillRenderer::set_walls(const Walls& w) {
   radius_ = static_cast<float>(w.shell_radius);
   length_ = static_cast<float>(w.length);
-  end_plates_ = !w.periodic;
+  end_plates_ = !w.periodic && w.end_plates;
   const float R = radius_, L = length_;
   auto at = [](float r, float a, float z) { return glm::vec3(r * std::cos(a), r * std::sin(a), z); };
 
@@ -185,6 +185,18 @@ void MillRenderer::set_walls(const Walls& w) {
       const Vec2 a = poly[0], b = poly[k], c = poly[k + 1];
       bars.insert(bars.end(), {{{a.x, a.y, L}, up_z}, {{b.x, b.y, L}, up_z}, {{c.x, c.y, L}, up_z}});
       bars.insert(bars.end(), {{{a.x, a.y, 0}, -up_z}, {{c.x, c.y, 0}, -up_z}, {{b.x, b.y, 0}, -up_z}});
+    }
+  }
+  // Mesh walls that turn with the mill, drawn with the lifters (their
+  // triangles face the charge; culling is off for these).
+  for (const WallMesh& m : w.meshes) {
+    if (!m.turning) continue;
+    for (const Triangle& t : m.triangles) {
+      const glm::vec3 a(t.v[0].x, t.v[0].y, t.v[0].z), b(t.v[1].x, t.v[1].y, t.v[1].z), c(t.v[2].x, t.v[2].y, t.v[2].z);
+      const glm::vec3 n = glm::cross(b - a, c - a);
+      if (glm::length(n) <= 0) continue;
+      const glm::vec3 nrm = glm::normalize(n);
+      bars.insert(bars.end(), {{a, nrm}, {b, nrm}, {c, nrm}});
     }
   }
   lifters_.upload(bars);

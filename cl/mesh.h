@@ -1,0 +1,179 @@
+/* mesh.h — what a ball touches of the mesh walls: triangles read from STL
+ * files or built from the case (cone ends, end lifters), in two sets, one
+ * turning with the mill (mill frame) and one standing still (lab frame).
+ * Stateless, shared by the force kernels and the CPU reference; the forces
+ * themselves go through ball_forces.h's wall_contact like any wall's.
+ *
+ * A ball finds its candidate triangles in one cell of its set's grid
+ * (layout.h MeshGrid, filled by mesh_bin.cl). A triangle counts only from
+ * the side its normal faces (the charge's side). Each candidate's closest
+ * point is on its face, on one of its edges or on one of its vertices
+ * (Ericson, Real-Time Collision Detection, 2005, §5.1.5), and that feature
+ * names the contact. Of the candidates, those that are one contact of a
+ * smooth surface seen from several triangles are dropped by the rule of Hu
+ * et al. (2013, Int. J. Numer. Meth. Eng. 94:787): every face contact is
+ * kept; an edge contact is dropped when a triangle with a face contact has
+ * that edge, or when another triangle already gave the same edge; a vertex
+ * contact is dropped when a face contact's triangle or a kept edge has that
+ * vertex, or another triangle already gave it. So a ball on the shared edge
+ * or vertex of coplanar triangles feels one contact, and a ball in a
+ * concave corner feels each face. Triangles sharing an edge at less than
+ * kSmoothDegrees (src/core/wall_mesh.h) belong to one smooth patch; a
+ * contact that moves from one feature to another of its patch keeps its
+ * record (its tangential spring and its losses so far). */
+#ifndef MC_MESH_H
+#define MC_MESH_H
+
+/* The mesh walls' device tables, as the force kernels see them. */
+typedef struct {
+  MC_GLOBAL const MeshGrid* grid;       /* MC_MESH_SETS */
+  MC_GLOBAL const MeshTriangle* tris;
+  MC_GLOBAL const int2* feature;        /* per feature: smooth patch, wall type (MC_WALL_TYPE_*) */
+  MC_GLOBAL const int* cell_start;      /* per set: its cells' starts, n + 1 */
+  MC_GLOBAL const int* cell_tris;       /* the triangles of the cells, ascending in each */
+  MC_GLOBAL const PairParams* pairs;    /* ball material × mesh material, row tri.pair_row */
+} Meshes;
+
+/* Where on triangle abc the closest point to p lies: MC_MESH_FACE, an edge
+ * (MC_MESH_EDGE0 + 0 ab, 1 bc, 2 ca) or a vertex (MC_MESH_VERTEX0 + 0 a,
+ * 1 b, 2 c); region − 1 indexes MeshTriangle.feat. */
+#define MC_MESH_FACE 0
+#define MC_MESH_EDGE0 1
+#define MC_MESH_VERTEX0 4
+
+MC_FN real3 triangle_closest(real3 p, real3 a, real3 b, real3 c, int* region) {
+  const real3 ab = b - a, ac = c - a, ap = p - a;
+  const real d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= R(0.0) && d2 <= R(0.0)) { *region = MC_MESH_VERTEX0; return a; }
+  const real3 bp = p - b;
+  const real d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= R(0.0) && d4 <= d3) { *region = MC_MESH_VERTEX0 + 1; return b; }
+  const real vc = d1 * d4 - d3 * d2;
+  if (vc <= R(0.0) && d1 >= R(0.0) && d3 <= R(0.0)) {
+    *region = MC_MESH_EDGE0;
+    return a + (d1 / (d1 - d3)) * ab;
+  }
+  const real3 cp = p - c;
+  const real d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= R(0.0) && d5 <= d6) { *region = MC_MESH_VERTEX0 + 2; return c; }
+  const real vb = d5 * d2 - d1 * d6;
+  if (vb <= R(0.0) && d2 >= R(0.0) && d6 <= R(0.0)) {
+    *region = MC_MESH_EDGE0 + 2;
+    return a + (d2 / (d2 - d6)) * ac;
+  }
+  const real va = d3 * d6 - d5 * d4;
+  if (va <= R(0.0) && d4 - d3 >= R(0.0) && d5 - d6 >= R(0.0)) {
+    *region = MC_MESH_EDGE0 + 1;
+    return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+  }
+  const real inv = R(1.0) / (va + vb + vc);
+  *region = MC_MESH_FACE;
+  return a + (vb * inv) * ab + (vc * inv) * ac;
+}
+
+/* A candidate contact of a ball with a triangle of one set. */
+typedef struct {
+  int tri;
+  int region;   /* MC_MESH_FACE, MC_MESH_EDGE0 + k, MC_MESH_VERTEX0 + k */
+  int feature;  /* the triangle for a face, else tri.feat[region − 1] */
+  real dist;    /* centre to the closest point, m */
+  real3 normal; /* from the closest point to the centre, the set's frame */
+} MeshHit;
+
+/* Whether triangle t has feature f among its edges (0) or vertices (3). */
+MC_FN int triangle_has(MC_GLOBAL const MeshTriangle* t, int from, int f) {
+  return t->feat[from] == f || t->feat[from + 1] == f || t->feat[from + 2] == f;
+}
+
+/* The candidates of a ball centred at q (the set's frame), radius r, in its
+ * cell of set s: at most MC_MESH_HITS (more raises *overflow). */
+MC_FN int mesh_candidates(const Meshes* m, int s, real3 q, real r, MeshHit* hits, int* overflow) {
+  MC_GLOBAL const MeshGrid* g = m->grid + s;
+  if (g->n_triangles == 0) return 0;
+  if (q.x * q.x + q.y * q.y < g->core_r2 && q.z > g->core_z0 && q.z < g->core_z1) return 0;
+  const real inv = R(1.0) / g->origin.w;
+  const int cx = (int)floor((q.x - g->origin.x) * inv);
+  const int cy = (int)floor((q.y - g->origin.y) * inv);
+  const int cz = (int)floor((q.z - g->origin.z) * inv);
+  if (cx < 0 || cy < 0 || cz < 0 || cx >= g->nx || cy >= g->ny || cz >= g->nz) return 0;
+  const int cell = g->first_cell + (cz * g->ny + cy) * g->nx + cx;
+  const int b = m->cell_start[cell], e = m->cell_start[cell + 1];
+  int nh = 0;
+  for (int k = b; k < e; ++k) {
+    const int t = m->cell_tris[k];
+    MC_GLOBAL const MeshTriangle* tr = m->tris + t;
+    const real3 a = xyz_of(tr->a);
+    const real3 n = xyz_of(tr->n);
+    const real h = dot(q - a, n); /* height over the triangle's plane */
+    if (!(h > R(0.0) && h < r)) continue;
+    int region;
+    const real3 cp = triangle_closest(q, a, xyz_of(tr->b), xyz_of(tr->c), &region);
+    MeshHit hit;
+    hit.tri = t;
+    hit.region = region;
+    if (region == MC_MESH_FACE) {
+      hit.dist = h;
+      hit.normal = n;
+      hit.feature = t;
+    } else {
+      const real3 d = q - cp;
+      const real d2 = dot(d, d);
+      if (!(d2 < r * r)) continue;
+      hit.dist = sqrt(d2);
+      hit.normal = (R(1.0) / hit.dist) * d;
+      hit.feature = tr->feat[region - 1];
+    }
+    if (nh < MC_MESH_HITS) hits[nh++] = hit;
+    else *overflow = 1;
+  }
+  return nh;
+}
+
+/* Hu et al.'s rule over the candidates: keep[h] says which are contacts. */
+MC_FN void mesh_keep(const Meshes* m, const MeshHit* hits, int nh, int* keep) {
+  for (int h = 0; h < nh; ++h) keep[h] = hits[h].region == MC_MESH_FACE;
+  for (int h = 0; h < nh; ++h) {
+    if (hits[h].region == MC_MESH_FACE || hits[h].region >= MC_MESH_VERTEX0) continue;
+    int k = 1;
+    for (int j = 0; j < nh && k; ++j) {
+      if (hits[j].region == MC_MESH_FACE && triangle_has(m->tris + hits[j].tri, 0, hits[h].feature)) k = 0;
+      if (j < h && keep[j] && hits[j].feature == hits[h].feature) k = 0;
+    }
+    keep[h] = k;
+  }
+  for (int h = 0; h < nh; ++h) {
+    if (hits[h].region < MC_MESH_VERTEX0) continue;
+    const int v = hits[h].feature;
+    int k = 1;
+    for (int j = 0; j < nh && k; ++j) {
+      if (j == h) continue;
+      MC_GLOBAL const MeshTriangle* tj = m->tris + hits[j].tri;
+      if (hits[j].region == MC_MESH_FACE && triangle_has(tj, 3, v)) k = 0;
+      if (hits[j].region >= MC_MESH_EDGE0 && hits[j].region < MC_MESH_VERTEX0 && keep[j]) {
+        const int e = hits[j].region - MC_MESH_EDGE0;
+        if (tj->feat[3 + e] == v || tj->feat[3 + (e + 1) % 3] == v) k = 0;
+      }
+      if (j < h && keep[j] && hits[j].feature == v) k = 0;
+    }
+    keep[h] = k;
+  }
+}
+
+/* Whether a ball centre at squared distance rho2 from the axis and axial
+ * position z is outside the core of some set (it may touch a triangle). */
+MC_FN int mesh_near(const Meshes* m, real rho2, real z) {
+  int near = 0;
+  for (int s = 0; s < MC_MESH_SETS; ++s) {
+    MC_GLOBAL const MeshGrid* g = m->grid + s;
+    near |= g->n_triangles > 0 && !(rho2 < g->core_r2 && z > g->core_z0 && z < g->core_z1);
+  }
+  return near;
+}
+
+/* The wall type (MC_WALL_TYPE_*) of a wall slot's key. */
+MC_FN int wall_type_of(const Meshes* m, int key) {
+  if (key >= MC_WALL_MESH0) return m->feature[key - MC_WALL_MESH0].y;
+  return key == MC_WALL_SHELL ? MC_WALL_TYPE_SHELL : key >= MC_WALL_LIFTER0 ? MC_WALL_TYPE_LIFTER : MC_WALL_TYPE_PLATE;
+}
+
+#endif /* MC_MESH_H */

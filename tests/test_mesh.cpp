@@ -1,0 +1,362 @@
+// Mesh walls (cl/mesh.h, core/wall_mesh.h): a ball on a plate of irregular
+// triangles moves as on the analytic end plate; a ball on a shared edge or
+// vertex of coplanar triangles feels one contact with the plate's force, in
+// a concave corner one per face; the topology and the grid; the lab mill
+// with its lifters as an STL against the parametric lifters.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "checks.h"
+#include "core/drum.h"
+#include "core/lifters.h"
+#include "core/liner.h"
+#include "core/mill_case.h"
+#include "core/wall_mesh.h"
+#include "helpers.h"
+#include "io/case_file.h"
+#include "io/stl.h"
+#include "sim/layout.hpp"
+#include "sim/reference.h"
+#include "sim/tables.h"
+#include "text_file.h"
+
+using namespace mc;
+using namespace mc::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+const Material kSteel{"steel", 7800, 2e11, 0.3};
+
+// A square plate [-h, h]² at z = 0 facing +z: an n × n grid of points, the
+// inner ones moved at random by up to `jitter` of the spacing, each square
+// cut along a random diagonal.
+std::vector<Triangle> irregular_plate(double h, int n, double jitter, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double step = 2 * h / n;
+  std::vector<Vec3> p((n + 1) * (n + 1));
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const bool inner = i > 0 && i < n && j > 0 && j < n;
+      p[j * (n + 1) + i] = {-h + i * step + (inner ? jitter * step * u(rng) : 0.0),
+                            -h + j * step + (inner ? jitter * step * u(rng) : 0.0), 0.0};
+    }
+  std::vector<Triangle> t;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const Vec3 a = p[j * (n + 1) + i], b = p[j * (n + 1) + i + 1], c = p[(j + 1) * (n + 1) + i + 1],
+                 d = p[(j + 1) * (n + 1) + i];
+      if (u(rng) > 0) {
+        t.push_back({{a, b, c}});
+        t.push_back({{a, c, d}});
+      } else {
+        t.push_back({{a, b, d}});
+        t.push_back({{b, c, d}});
+      }
+    }
+  return t;
+}
+
+WallMesh mesh_of(std::vector<Triangle> t, const Scene& s) {
+  WallMesh m;
+  m.name = "plate";
+  m.triangles = std::move(t);
+  m.material = s.wall_material;
+  m.interactions = {s.interaction(0, s.wall_index())};
+  return m;
+}
+
+// One steel ball above a plate at z = 0 under gravity along −z: the
+// analytic end plate (walls.length > 0) or a mesh.
+Scene plate_scene(ContactLaw law, const std::vector<Triangle>* mesh) {
+  Interaction in;
+  in.restitution = 0.5;
+  in.mu_slide = 0.3;
+  in.mu_roll = 0.02;
+  in.kn = 1e5;
+  Scene s = bare_scene(kSteel, kSteel, in, law, Precision::double_);
+  s.numerics.gravity = {0, 0, -9.81};
+  s.numerics.dt = law == ContactLaw::linear ? 5e-5 : 2e-6;
+  if (mesh) s.walls.meshes = {mesh_of(*mesh, s)};
+  else s.walls.length = 50.0;  // the plate at z = 0; the other far away
+  Ball b;
+  b.radius = 0.02;
+  b.position = {0.013, -0.021, 0.06};
+  b.velocity = {0.8, 0.35, -0.9};
+  b.omega = {4.0, -3.0, 2.0};
+  s.balls = {b};
+  return s;
+}
+
+Vec3 force_on(const Scene& s) {
+  auto solver = make_solver(context(), s);
+  return solver->balls().at(0).force;
+}
+
+double wall_contacts(const Scene& s) { return make_solver(context(), s)->contact_stats().wall_contacts_per_ball; }
+
+}  // namespace
+
+TEST_CASE("closest point on a triangle: face, edges and vertices", "[mesh][geometry]") {
+  using namespace mc::f64;
+  const real3 a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
+  int region = -1;
+  real3 q = triangle_closest(real3{0.2, 0.3, 0.5}, a, b, c, &region);
+  CHECK(region == MC_MESH_FACE);
+  CHECK(q.x == Approx(0.2));
+  CHECK(q.y == Approx(0.3));
+  q = triangle_closest(real3{0.5, -0.4, 0.1}, a, b, c, &region);
+  CHECK(region == MC_MESH_EDGE0);  // ab
+  CHECK(q.x == Approx(0.5));
+  CHECK(q.y == Approx(0.0).margin(1e-15));
+  q = triangle_closest(real3{0.8, 0.8, 0}, a, b, c, &region);
+  CHECK(region == MC_MESH_EDGE0 + 1);  // bc
+  CHECK(q.x == Approx(0.5));
+  q = triangle_closest(real3{-0.3, 0.4, 0}, a, b, c, &region);
+  CHECK(region == MC_MESH_EDGE0 + 2);  // ca
+  triangle_closest(real3{-1, -1, 0}, a, b, c, &region);
+  CHECK(region == MC_MESH_VERTEX0);
+  triangle_closest(real3{2, -0.1, 0}, a, b, c, &region);
+  CHECK(region == MC_MESH_VERTEX0 + 1);
+  triangle_closest(real3{-0.1, 2, 0}, a, b, c, &region);
+  CHECK(region == MC_MESH_VERTEX0 + 2);
+}
+
+TEST_CASE("mesh topology: shared edges and vertices, smooth patches", "[mesh]") {
+  Scene s = bare_scene(kSteel, kSteel, Interaction{}, ContactLaw::linear);
+  // Two coplanar triangles (one patch) and a third folded up by 90° along
+  // the far edge x–xy (its own patch); one vertex written 1e-9 m off, as
+  // CAD tools may, is still shared.
+  const Vec3 o{0, 0, 0}, x{1, 0, 0}, y{0, 1, 0}, xy{1, 1, 0}, upx{1, 0, 1}, xy_off{1, 1 + 1e-9, 0};
+  std::vector<Triangle> t = {{{o, x, xy}}, {{o, xy, y}}, {{x, upx, xy_off}}};
+  const MeshTopology topo = mesh_topology({mesh_of(t, s)});
+  CHECK(topo.n_triangles == 3);
+  CHECK(topo.n_vertices == 5);
+  CHECK(topo.n_edges == 3 + 2 + 2);  // the diagonal o–xy and the fold x–xy are shared
+  CHECK(topo.edges[0][2] == topo.edges[1][0]);  // ca of the first = ab of the second
+  CHECK(topo.patch[0] == topo.patch[1]);
+  CHECK(topo.patch[2] != topo.patch[0]);
+  CHECK(topo.n_patches == 2);
+  // Device order: the turning meshes first.
+  WallMesh still = mesh_of(t, s);
+  still.turning = false;
+  const auto order = mesh_device_order({still, mesh_of(t, s)});
+  REQUIRE(order.size() == 6);
+  CHECK(order[0].mesh == 1);
+  CHECK(order[3].mesh == 0);
+}
+
+TEST_CASE("the mesh grid lists every triangle a ball in a cell can touch", "[mesh]") {
+  // Random small triangles; for random points, every triangle within the
+  // reach of the point must be in the point's cell (host binning; the
+  // device's is checked against it through the forces below).
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  std::vector<Triangle> tris;
+  for (int k = 0; k < 300; ++k) {
+    const Vec3 c{u(rng), u(rng), u(rng)};
+    tris.push_back({{c, c + Vec3{0.05 * u(rng), 0.08, 0.01}, c + Vec3{0.07, 0.03 * u(rng), -0.02}}});
+  }
+  const double reach = 0.03;
+  const MeshGridSpec g = mesh_grid_spec(tris, reach);
+  std::vector<int> starts, cells;
+  mesh_bin_host(g, tris, 0, starts, cells);
+  int missing = 0, tested = 0;
+  for (int q = 0; q < 2000; ++q) {
+    const Vec3 p{u(rng), u(rng), u(rng)};
+    const int cx = static_cast<int>(std::floor((p.x - g.origin.x) / g.cell));
+    const int cy = static_cast<int>(std::floor((p.y - g.origin.y) / g.cell));
+    const int cz = static_cast<int>(std::floor((p.z - g.origin.z) / g.cell));
+    if (cx < 0 || cy < 0 || cz < 0 || cx >= g.nx || cy >= g.ny || cz >= g.nz) continue;
+    const int cell = (cz * g.ny + cy) * g.nx + cx;
+    for (int k = 0; k < static_cast<int>(tris.size()); ++k) {
+      if ((closest_on_triangle(tris[k], p) - p).norm() >= reach) continue;
+      ++tested;
+      bool found = false;
+      for (int e = starts[cell]; e < starts[cell + 1]; ++e) found = found || cells[e] == k;
+      missing += !found;
+    }
+  }
+  CHECK(tested > 50);
+  CHECK(missing == 0);
+}
+
+TEST_CASE("a ball on a plate of irregular triangles bounces, slides and rolls as on the analytic end plate",
+          "[mesh][physics]") {
+  const std::vector<Triangle> plate = irregular_plate(0.6, 24, 0.3, 11);
+  for (ContactLaw law : {ContactLaw::linear, ContactLaw::hertz}) {
+    const char* name = law == ContactLaw::linear ? "linear" : "hertz";
+    auto a = make_solver(context(), plate_scene(law, nullptr));
+    auto m = make_solver(context(), plate_scene(law, &plate));
+    const long steps = static_cast<long>(std::lround(0.4 / a->dt()));
+    const long chunk = steps / 200;
+    double worst = 0, vz_a = -1e9, vz_m = -1e9;
+    for (long k = 0; k < steps; k += chunk) {
+      a->advance(chunk);
+      m->advance(chunk);
+      const BallState ba = a->balls()[0], bm = m->balls()[0];
+      worst = std::max(worst, (ba.position - bm.position).norm());
+      vz_a = std::max(vz_a, ba.velocity.z);  // the rebounds' fastest upward speed
+      vz_m = std::max(vz_m, bm.velocity.z);
+    }
+    const BallState end = a->balls()[0];
+    std::printf("irregular plate (%zu triangles), %s: path differs by at most %.3g m over %.2f m; rebound %.6f vs "
+                "%.6f m/s (%.2g); end speed %.4f m/s, spin x r / v %.4f\n",
+                plate.size(), name, worst, end.position.x - 0.013, vz_m, vz_a, rel_err(vz_m, vz_a),
+                std::hypot(end.velocity.x, end.velocity.y),
+                std::hypot(end.omega.x, end.omega.y) * 0.02 / std::hypot(end.velocity.x, end.velocity.y));
+    INFO(name);
+    CHECK(vz_a > 0.1);                         // it bounced
+    CHECK(rel_err(vz_m, vz_a) < 1e-3);         // rebound within 0.1 %
+    CHECK(worst < 1e-6);                       // path within a micrometre
+    CHECK(end.position.x - 0.013 > 0.15);      // it went across many triangles
+  }
+}
+
+TEST_CASE("a ball on a shared edge or vertex feels one contact with the plate's force, in a corner one per face",
+          "[mesh][physics]") {
+  // A fan of six irregular triangles about the origin, in z = 0, facing +z.
+  std::vector<Triangle> fan;
+  const double angles[] = {0, 50, 110, 170, 235, 300, 360};
+  for (int k = 0; k < 6; ++k) {
+    const double a0 = angles[k] * kPi / 180, a1 = angles[k + 1] * kPi / 180;
+    const double r0 = 0.5 + 0.1 * k, r1 = 0.5 + 0.1 * ((k + 1) % 6);
+    fan.push_back({{Vec3{0, 0, 0}, Vec3{r0 * std::cos(a0), r0 * std::sin(a0), 0}, Vec3{r1 * std::cos(a1), r1 * std::sin(a1), 0}}});
+  }
+  const double r = 0.02, delta = 2e-4;
+  auto scene_at = [&](Vec3 p, const std::vector<Triangle>* mesh) {
+    Scene s = plate_scene(ContactLaw::linear, mesh);
+    s.numerics.gravity = {0, 0, 0};
+    s.balls[0].position = p;
+    s.balls[0].velocity = {};
+    s.balls[0].omega = {};
+    return s;
+  };
+  struct Where {
+    const char* what;
+    Vec3 p;
+  } where[] = {{"vertex", {0, 0, r - delta}}, {"edge", {0.3, 0, r - delta}}, {"face", {0.2, 0.1, r - delta}}};
+  for (const Where& w : where) {
+    const Vec3 fm = force_on(scene_at(w.p, &fan)), fa = force_on(scene_at(w.p, nullptr));
+    std::printf("ball on a shared %s: %.0f contact(s), force %.9g N (plate %.9g N, kn delta %.9g N)\n", w.what,
+                wall_contacts(scene_at(w.p, &fan)), fm.z, fa.z, 1e5 * delta);
+    INFO(w.what);
+    CHECK(wall_contacts(scene_at(w.p, &fan)) == 1.0);
+    CHECK(fm.z == Approx(fa.z).epsilon(1e-12));
+    CHECK(fm.z == Approx(1e5 * delta).epsilon(1e-9));
+    CHECK(std::fabs(fm.x) + std::fabs(fm.y) < 1e-9 * fm.z);
+  }
+  // A convex ridge: the ball beyond both faces touches the edge once, along
+  // the line from the edge to its centre.
+  const Vec3 a{-1, 0, 0}, b{1, 0, 0};
+  std::vector<Triangle> roof = {{{a, b, Vec3{1, 1, -1}}}, {{b, a, Vec3{-1, -1, -1}}}};
+  {
+    const Vec3 p{0.1, 0.6 * (r - delta), 0.8 * (r - delta)};
+    Scene s = scene_at(p, &roof);
+    const Vec3 f = force_on(s);
+    CHECK(wall_contacts(s) == 1.0);
+    CHECK(f.norm() == Approx(1e5 * delta).epsilon(1e-9));
+    CHECK(f.y / f.norm() == Approx(0.6).epsilon(1e-9));
+    CHECK(f.z / f.norm() == Approx(0.8).epsilon(1e-9));
+  }
+  // A concave corner: a floor (z = 0) and a wall (x = 0) of two triangles
+  // each; the ball pressed into both feels each face.
+  const double d1 = 1e-4, d2 = 3e-4;
+  std::vector<Triangle> corner = {
+      {{Vec3{0, -1, 0}, Vec3{1, -1, 0}, Vec3{1, 1, 0}}}, {{Vec3{0, -1, 0}, Vec3{1, 1, 0}, Vec3{0, 1, 0}}},
+      {{Vec3{0, -1, 0}, Vec3{0, 1, 1}, Vec3{0, -1, 1}}}, {{Vec3{0, -1, 0}, Vec3{0, 1, 0}, Vec3{0, 1, 1}}}};
+  {
+    Scene s = scene_at({r - d1, 0.1, r - d2}, &corner);
+    const Vec3 f = force_on(s);
+    CHECK(wall_contacts(s) == 2.0);
+    CHECK(f.x == Approx(1e5 * d1).epsilon(1e-9));
+    CHECK(f.z == Approx(1e5 * d2).epsilon(1e-9));
+  }
+}
+
+TEST_CASE("mesh lifters in a turning drum: the kernels equal the CPU reference ball by ball", "[mesh][reference]") {
+  // The drum's 8 bars as a mesh (cut at the shell), the charge settled on
+  // the device, then 200 steps on the device and in the CPU reference,
+  // whose mesh cells are binned on the host.
+  for (ContactLaw law : {ContactLaw::linear, ContactLaw::hertz}) {
+    DrumSpec spec;
+    spec.n_balls = 300;
+    spec.law = law;
+    spec.precision = context().info().fp64 ? Precision::double_ : Precision::single;
+    Scene sc = make_drum(spec);
+    WallMesh m;
+    m.name = "drum lifters";
+    m.triangles = lifter_triangles(bars_on_shell(sc.walls.lifters, sc.walls.shell_radius), sc.walls.length);
+    m.material = sc.wall_material;
+    for (int a = 0; a < sc.wall_index(); ++a) m.interactions.push_back(sc.interaction(a, sc.wall_index()));
+    sc.walls.lifters.clear();
+    sc.walls.meshes = {m};
+    {
+      auto pre = make_solver(context(), sc);
+      pre->advance(static_cast<long>(0.25 / sc.numerics.dt));
+      const auto settled = pre->balls();
+      sc.mill_angle = pre->mill_angle();
+      for (std::size_t i = 0; i < sc.balls.size(); ++i) {
+        sc.balls[i].position = settled[i].position;
+        sc.balls[i].velocity = settled[i].velocity;
+        sc.balls[i].omega = settled[i].omega;
+      }
+    }
+    auto dev = make_solver(context(), sc);
+    ReferenceSolver ref(sc);
+    dev->advance(200);
+    ref.advance(200);
+    const auto a = dev->balls(), b = ref.balls();
+    double dx = 0, vmax = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      dx = std::max(dx, (a[i].position - b[i].position).norm());
+      vmax = std::max(vmax, b[i].velocity.norm());
+    }
+    const double walls = dev->contact_stats().wall_contacts_per_ball;
+    std::printf("mesh lifters, kernel vs reference %s %s: max |dx| %.3g m after 200 steps, %.3f wall contacts a "
+                "ball, vmax %.3g m/s\n",
+                law == ContactLaw::linear ? "linear" : "hertz",
+                spec.precision == Precision::double_ ? "double" : "float", dx, walls, vmax);
+    CHECK(vmax > 0.05);
+    CHECK(walls > 0.05);
+    CHECK(dx < (spec.precision == Precision::double_ ? 1e-10 : 1e-4));
+  }
+}
+
+TEST_CASE("the lab mill with its lifters as an STL draws the parametric lab mill's power, toe and shoulder",
+          "[mesh][mill][slow]") {
+  // assets/cases/lab_stl.toml: lab.toml with its bars from
+  // assets/meshes/lab_lifters.stl, which `millcharge check --write-lifters`
+  // wrote from lab.toml (the bars cut at the shell). Two revolutions after a
+  // 1 s warm-up, as test_mill's lab run.
+  const std::vector<std::string> sets = {"run.duration=4.6", "run.warmup=1.0", "run.output_interval=0.02"};
+  const checks::LabRun p = checks::case_run(context(), io::default_case(), sets);
+  const checks::LabRun m = checks::case_run(context(), io::case_dir() / "lab_stl.toml", sets);
+  REQUIRE(m.scene.walls.lifters.empty());
+  REQUIRE(m.scene.walls.meshes.size() == 1);
+  // The STL is the parametric bars: its triangles, cut at the shell.
+  const Scene walls = build_walls(p.c, p.d);
+  const auto tris = lifter_triangles(bars_on_shell(walls.walls.lifters, walls.walls.shell_radius), p.c.length);
+  REQUIRE(m.scene.walls.meshes[0].triangles.size() == tris.size());
+  std::printf("lab mill, parametric lifters: %.2f W, toe %.1f, shoulder %.1f deg (%ld balls); STL lifters (%zu "
+              "triangles): %.2f W (%+.2f %%), toe %.1f, shoulder %.1f deg (%ld balls)\n",
+              p.s.torque_power_W, p.s.angles.toe_deg, p.s.angles.shoulder_deg, p.d.n_balls, tris.size(),
+              m.s.torque_power_W, 100 * (m.s.torque_power_W / p.s.torque_power_W - 1), m.s.angles.toe_deg,
+              m.s.angles.shoulder_deg, m.d.n_balls);
+  CHECK(m.s.torque_power_W == Approx(p.s.torque_power_W).epsilon(0.03));
+  CHECK(std::fabs(m.s.angles.toe_deg - p.s.angles.toe_deg) < 3.0);
+  CHECK(std::fabs(m.s.angles.shoulder_deg - p.s.angles.shoulder_deg) < 3.0);
+  CHECK(std::abs(m.s.imbalance) < 0.05);
+  // The liner books see the mesh: its triangles take the lifters' impacts.
+  const LinerLayout layout = liner_layout(m.scene);
+  REQUIRE(layout.first_mesh + static_cast<int>(tris.size()) == layout.size());
+  double mesh_impacts = 0;
+  for (int e = layout.first_mesh; e < layout.size(); ++e) mesh_impacts += m.s.books.liner_at(e, MC_LINER_IMPACTS);
+  CHECK(mesh_impacts > 0);
+}
