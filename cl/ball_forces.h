@@ -182,23 +182,42 @@ MC_FN void mesh_walls(const Meshes* m, real3 p, real4 vi, real4 wi, real ri, int
     if (nh == 0) continue;
     int keep[MC_MESH_HITS];
     mesh_keep(m, hits, nh, keep);
+    /* Which old slot each contact continues: first every contact whose
+     * feature had a slot, then the others take a slot of their smooth
+     * patch that no contact continues (a contact that slid onto the next
+     * triangle), so that two contacts of one patch never share a record. */
+    int match[MC_MESH_HITS];
+    int claimed[MC_MAX_WALL_CONTACTS];
+    for (int k = 0; k < MC_MAX_WALL_CONTACTS; ++k) claimed[k] = ws->renewed[k];
+    for (int h = 0; h < nh; ++h) {
+      match[h] = -1;
+      if (!keep[h]) continue;
+      for (int k = 0; k < MC_MAX_WALL_CONTACTS; ++k)
+        if (!claimed[k] && ws->old_key[k] == MC_WALL_MESH0 + hits[h].feature) {
+          claimed[k] = 1;
+          match[h] = ws->old_key[k];
+          break;
+        }
+    }
+    for (int h = 0; h < nh; ++h) {
+      if (!keep[h] || match[h] >= 0) continue;
+      const int patch = m->feature[hits[h].feature].x;
+      for (int k = 0; k < MC_MAX_WALL_CONTACTS; ++k) {
+        const int ok = ws->old_key[k];
+        if (!claimed[k] && ok >= MC_WALL_MESH0 && m->feature[ok - MC_WALL_MESH0].x == patch) {
+          claimed[k] = 1;
+          match[h] = ok;
+          break;
+        }
+      }
+    }
     for (int h = 0; h < nh; ++h) {
       if (!keep[h]) continue;
       MC_GLOBAL const MeshTriangle* tr = m->tris + hits[h].tri;
       WallRef wr;
       wr.key = MC_WALL_MESH0 + hits[h].feature;
       const int2 fi = m->feature[hits[h].feature];
-      wr.match = wr.key;
-      int exact = 0;
-      for (int k = 0; k < MC_MAX_WALL_CONTACTS; ++k) exact |= ws->old_key[k] == wr.key && !ws->renewed[k];
-      if (!exact)
-        for (int k = 0; k < MC_MAX_WALL_CONTACTS; ++k) {
-          const int ok = ws->old_key[k];
-          if (ok >= MC_WALL_MESH0 && !ws->renewed[k] && m->feature[ok - MC_WALL_MESH0].x == fi.x) {
-            wr.match = ok;
-            break;
-          }
-        }
+      wr.match = match[h] >= 0 ? match[h] : wr.key;
       wr.element = tr->element;
       wr.type = fi.y;
       wr.turning = turning;

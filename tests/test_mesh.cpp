@@ -20,6 +20,7 @@
 #include "helpers.h"
 #include "io/case_file.h"
 #include "io/stl.h"
+#include "sim/energy_report.h"
 #include "sim/layout.hpp"
 #include "sim/reference.h"
 #include "sim/tables.h"
@@ -359,4 +360,77 @@ TEST_CASE("the lab mill with its lifters as an STL draws the parametric lab mill
   double mesh_impacts = 0;
   for (int e = layout.first_mesh; e < layout.size(); ++e) mesh_impacts += m.s.books.liner_at(e, MC_LINER_IMPACTS);
   CHECK(mesh_impacts > 0);
+}
+
+TEST_CASE("cone heads and end lifters built from the case face the charge and close the mill", "[mesh][geometry]") {
+  EndsSpec e;
+  e.cone_angle_deg = 20;
+  e.trunnion_diameter = 0.2;
+  e.lifter_rows = 8;
+  e.lifter_height = 0.02;
+  e.lifter_width = 0.03;
+  const double R = 0.45, L = 0.15, depth = cone_depth(e, R);
+  CHECK(depth == Approx((R - 0.1) * std::tan(20 * kPi / 180)));
+  const auto cones = cone_triangles(e, R, L, 96);
+  int wrong = 0;
+  double zmin = 1e9, zmax = -1e9;
+  for (const Triangle& t : cones) {
+    const Vec3 c = (t.v[0] + t.v[1] + t.v[2]) * (1.0 / 3.0), n = triangle_unit_normal(t);
+    // Into the mill: towards the belly's middle along z, towards the axis.
+    const double inward = n.z * (0.5 * L - c.z) - (n.x * c.x + n.y * c.y);
+    wrong += !(inward > 0);
+    for (const Vec3& v : t.v) {
+      zmin = std::min(zmin, v.z);
+      zmax = std::max(zmax, v.z);
+      CHECK(std::hypot(v.x, v.y) <= R * (1 + 1e-12));
+    }
+  }
+  CHECK(wrong == 0);
+  CHECK(zmin == Approx(-depth));
+  CHECK(zmax == Approx(L + depth));
+  // Each cone with its trunnion disc is a closed surface apart from the
+  // ring where it meets the shell: its only open edges lie at radius R.
+  Scene s = bare_scene(kSteel, kSteel, Interaction{}, ContactLaw::linear);
+  const MeshTopology topo = mesh_topology({mesh_of(cones, s)});
+  CHECK(topo.n_patches == 4);  // two cones, two discs
+  // End lifters: closed boxes, each face facing out of its box.
+  e.cone_angle_deg = 0;  // on flat plates
+  const auto bars = end_lifter_triangles(e, R, L);
+  CHECK(bars.size() == 2 * 8 * 12);
+  for (int b = 0; b < 16; ++b) {
+    const std::vector<Triangle> one(bars.begin() + 12 * b, bars.begin() + 12 * (b + 1));
+    const double v = closed_mesh_volume(one);
+    CHECK(v == Approx(e.lifter_height * e.lifter_width * (R * std::sqrt(1 - std::pow(0.015 / R, 2)) - R / 3)).epsilon(1e-6));
+    double v6 = 0;  // signed: positive when the faces point out of the box
+    for (const Triangle& t : one) {
+      const Vec3 a = t.v[0], bb = t.v[1], c = t.v[2];
+      v6 += a.x * (bb.y * c.z - bb.z * c.y) - a.y * (bb.x * c.z - bb.z * c.x) + a.z * (bb.x * c.y - bb.y * c.x);
+    }
+    CHECK(v6 > 0);
+  }
+}
+
+TEST_CASE("a lab mill with cone heads: the cones take collisions and the power books close",
+          "[mesh][mill][slow]") {
+  const checks::LabRun r = checks::case_run(
+      context(), io::default_case(),
+      {"mill.ends=cones", "mill.cone_angle=20", "mill.trunnion_diameter=0.2", "run.duration=2.8", "run.warmup=1.0",
+       "run.output_interval=0.02"});
+  std::printf("lab mill with 20 deg cone heads (%ld balls, %.4g m3 with the cones): torque %.2f W, dissipation "
+              "%.2f W (imbalance %+.2f %%), toe %.1f, shoulder %.1f deg\n",
+              r.d.n_balls, r.d.mill_volume, r.s.torque_power_W, r.s.dissipation_power_W, 100 * r.s.imbalance,
+              r.s.angles.toe_deg, r.s.angles.shoulder_deg);
+  REQUIRE(r.scene.walls.meshes.size() == 1);
+  CHECK_FALSE(r.scene.walls.has_end_plates());
+  CHECK(r.d.mill_volume > 1.5 * kPi * 0.45 * 0.45 * 0.15);  // the cones add their volume
+  CHECK(std::abs(r.s.imbalance) < 0.05);
+  CHECK(r.s.torque_power_W > 800);
+  // The cones (the "end plate" rows of the spectra) take their share of the
+  // collisions.
+  const mc::SpectraReport sp = mc::spectra_report(r.scene, r.s.books, r.s.window_s, r.s.open_loss_start_J,
+                                                  r.s.open_loss_end_J, r.s.dissipated_J);
+  double ends_W = 0;
+  for (const auto& t : sp.types)
+    if (t.pair.find("end plate") != std::string::npos) ends_W += t.power_W;
+  CHECK(ends_W > 0.02 * sp.dissipation_W);
 }

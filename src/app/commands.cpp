@@ -289,6 +289,8 @@ int cmd_check(const CaseOptions& o) {
     std::printf("ends            periodic (mill.ends): no end plates, a ball leaving one end enters at the other; "
                 "shortest slice %.4g m (%.0f largest balls); power, torque, spectra and wear also per metre\n",
                 d.shortest_slice, kSliceDiameters);
+  else if (c.ends.cones())
+    std::printf("ends            cone heads (mill.ends = \"cones\") beyond the belly's z = 0 and %.4g m\n", c.length);
   else
     std::printf("ends            end plates at z = 0 and %.4g m (mill.ends = \"periodic\" would make a slice: at "
                 "least %.4g m)\n",

@@ -320,11 +320,11 @@ std::vector<Triangle> cone_triangles(const EndsSpec& e, double R, double L, int 
                    d = at(r1, t0, z_of(r1));
         // Facing the charge: into the mill (+z at the feed end) and towards the axis.
         if (end == 0) {
-          out.push_back({{a, c, b}});
-          out.push_back({{a, d, c}});
-        } else {
           out.push_back({{a, b, c}});
           out.push_back({{a, c, d}});
+        } else {
+          out.push_back({{a, c, b}});
+          out.push_back({{a, d, c}});
         }
       }
       // The trunnion's disc, closing the opening.

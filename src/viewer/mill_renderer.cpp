@@ -192,6 +192,9 @@ void MillRenderer::set_walls(const Walls& w) {
   for (const WallMesh& m : w.meshes) {
     if (!m.turning) continue;
     for (const Triangle& t : m.triangles) {
+      // The front end (z past the middle, towards the camera) is left out,
+      // as the front end plate is.
+      if (m.part == MeshPart::ends && t.v[0].z + t.v[1].z + t.v[2].z > 1.5 * w.length) continue;
       const glm::vec3 a(t.v[0].x, t.v[0].y, t.v[0].z), b(t.v[1].x, t.v[1].y, t.v[1].z), c(t.v[2].x, t.v[2].y, t.v[2].z);
       const glm::vec3 n = glm::cross(b - a, c - a);
       if (glm::length(n) <= 0) continue;
