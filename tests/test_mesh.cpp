@@ -434,3 +434,40 @@ TEST_CASE("a lab mill with cone heads: the cones take collisions and the power b
     if (t.pair.find("end plate") != std::string::npos) ends_W += t.power_W;
   CHECK(ends_W > 0.02 * sp.dissipation_W);
 }
+
+TEST_CASE("a mesh with more triangles than the device can hold is refused with the count, status 2, no run folder",
+          "[mesh][cli]") {
+  // 2 × 180² = 64,800 triangles (a 0.5 m square just off the feed end of the lab
+  // mill) need some 6 MiB; the device is given 4 MiB, which the balls fit.
+  const fs::path work = fs::temp_directory_path() / "millcharge_mesh_memory";
+  fs::remove_all(work);
+  fs::create_directories(work);
+  std::vector<Triangle> tris;
+  const int n = 180;
+  const double h = 0.25, step = 2 * h / n;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const Vec3 a{-h + i * step, -h + j * step, 0.002}, b = a + Vec3{step, 0, 0}, c = a + Vec3{step, step, 0},
+                 d = a + Vec3{0, step, 0};
+      tris.push_back({{a, b, c}});
+      tris.push_back({{a, c, d}});
+    }
+  std::ofstream(work / "big.stl", std::ios::binary) << io::stl_binary(tris);
+  std::string text = read_text(io::default_case());
+  text += "\n[[walls.mesh]]\nfile = \"big.stl\"\npart = \"ends\"\n";
+  std::ofstream(work / "big.toml") << text;
+  const fs::path out = work / "run", err = work / "err.txt";
+  const std::string cmd = "MILLCHARGE_DEVICE_MEMORY=4M " + std::string(MC_BINARY) + " run '" +
+                          (work / "big.toml").string() + "' --quiet --out '" + out.string() + "' > /dev/null 2> '" +
+                          err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  const std::string message = read_text(err);
+  INFO(message);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 2);
+  CHECK_THAT(message, Catch::StartsWith("millcharge: walls.mesh: 64800 triangles need "));
+  CHECK_THAT(message, Catch::Contains("use coarser meshes (fewer triangles)"));
+  CHECK(std::count(message.begin(), message.end(), '\n') == 1);
+  CHECK_FALSE(fs::exists(out));
+  fs::remove_all(work);
+}
