@@ -103,15 +103,17 @@ TEST_CASE("a drift is caught as correlation, and few batches are not trusted", "
   CHECK(r.batch_length >= 2);  // merged: fewer batches than a run may stop on
   CHECK(r.batches < kMinBatches);
   CHECK_FALSE(converged(r, 0.5));
-  // Fewer than five revolutions never stop a run, however small the error.
-  const BatchMeans four = batch_means({100.0, 100.1, 99.9, 100.0});
-  CHECK(four.sem < 0.001 * 100);
-  CHECK_FALSE(converged(four, 0.01));
-  // Five independent ones with a small error do.
-  const BatchMeans five = batch_means({100.0, 100.2, 99.9, 100.1, 99.8});
-  CHECK_FALSE(five.correlated);
-  CHECK(converged(five, 0.01));
-  CHECK_FALSE(converged(five, 0.0005));
+  // Fewer than eight batches never stop a run, however small the error.
+  REQUIRE(kMinBatches == 8);
+  const BatchMeans seven = batch_means({100.0, 100.1, 99.9, 100.0, 100.2, 99.8, 100.1});
+  CHECK(seven.sem < 0.001 * 100);
+  CHECK_FALSE(seven.correlated);
+  CHECK_FALSE(converged(seven, 0.01));
+  // Eight independent ones with a small error do.
+  const BatchMeans eight = batch_means({100.0, 100.2, 99.9, 100.1, 99.8, 100.1, 99.9, 100.2});
+  CHECK_FALSE(eight.correlated);
+  CHECK(converged(eight, 0.01));
+  CHECK_FALSE(converged(eight, 0.0005));
   // NaNs (revolutions without a toe) are left out.
   const BatchMeans gaps = batch_means({100.0, std::nan(""), 100.2, 99.9});
   CHECK(gaps.values == 3);
@@ -232,9 +234,14 @@ TEST_CASE("duration auto stops on a whole revolution once converged, with the st
   CHECK(conv["duration"] == "auto");
   CHECK(conv["converged"] == true);
   CHECK(conv["stopped_at_cap"] == false);
+  // Eighths of a revolution as batches: at least one revolution, and
+  // never fewer than kMinBatches batches.
   const int revs = conv["revolutions"].get<int>();
-  CHECK(revs >= kMinBatches);
+  CHECK(conv["batches_per_revolution"] == kBatchesPerRevolution);
+  CHECK(revs >= 1);
   CHECK(revs < 15);
+  CHECK(conv["batches"].get<int>() >= kMinBatches);
+  CHECK(conv["batches"].get<int>() * conv["revolutions_per_batch"].get<double>() == Approx(revs));
   check_whole_revolutions(j, 1.0, d.revolution_s, d.dt);
   const double p = j["power_W"]["torque"].get<double>(), sem = j["power_W"]["torque_sem"].get<double>();
   CHECK(sem > 0);
@@ -252,7 +259,8 @@ TEST_CASE("duration auto stops on a whole revolution once converged, with the st
   CHECK(j["liner"]["wear_kg_per_h_sem"].is_number());
   // The console gives the means with their errors and says why it stopped.
   CHECK_THAT(console, Catch::Contains("\u00b1"));
-  CHECK_THAT(console, Catch::Contains("converged after " + std::to_string(revs) + " revolutions"));
+  CHECK_THAT(console, Catch::Contains("converged after " + std::to_string(revs) + " revolution"));
+  CHECK_THAT(console, Catch::Contains("batch means of "));
   // The last row of timeseries.csv is the end of the run.
   std::ifstream ts(dir / "timeseries.csv");
   std::string line, last;
@@ -305,7 +313,7 @@ TEST_CASE("an auto run killed while turning resumes to the same stop, bit for bi
   while (!mid && !fs::exists(b / "summary.json") && std::chrono::steady_clock::now() < until) {
     try {
       const io::Checkpoint cp = io::read_checkpoint(b / io::kCheckpointFile);
-      mid = cp.run.phase == 2 && !cp.run.revolutions.empty();
+      mid = cp.run.phase == 2 && !cp.run.batches.empty();
     } catch (const std::exception&) {
     }
     if (!mid) std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -322,9 +330,9 @@ TEST_CASE("an auto run killed while turning resumes to the same stop, bit for bi
   const io::Checkpoint ca = io::read_checkpoint(a / io::kCheckpointFile), cb = io::read_checkpoint(b / io::kCheckpointFile);
   CHECK(ca.solver.steps == cb.solver.steps);
   CHECK(ca.run.stop_step == cb.run.stop_step);
-  REQUIRE(ca.run.revolutions.size() == cb.run.revolutions.size());
-  for (std::size_t k = 0; k < ca.run.revolutions.size(); ++k)
-    CHECK(ca.run.revolutions[k].torque_power_W == cb.run.revolutions[k].torque_power_W);
+  REQUIRE(ca.run.batches.size() == cb.run.batches.size());
+  for (std::size_t k = 0; k < ca.run.batches.size(); ++k)
+    CHECK(ca.run.batches[k].torque_power_W == cb.run.batches[k].torque_power_W);
   CHECK(slurp(a / "timeseries.csv") == slurp(b / "timeseries.csv"));
   CHECK(summary(a)["power_W"]["torque_sem"] == summary(b)["power_W"]["torque_sem"]);
   fs::remove_all(a);

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <numeric>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -234,26 +235,37 @@ struct Errors {
   BatchMeans collisions, collision_power, impacts, impact, shear, wear;
 };
 
-Errors errors_of(const std::vector<RevolutionMeans>& revs) {
-  auto of = [&](double RevolutionMeans::*field) {
+// A batch of `length` base batches, per_rev of them to a revolution, in
+// words: "1/8 revolution", "1/4 revolution", "1 revolution", "2 revolutions".
+std::string batch_words(int length, int per_rev) {
+  if (length % per_rev == 0) {
+    const int r = length / per_rev;
+    return std::to_string(r) + (r == 1 ? " revolution" : " revolutions");
+  }
+  const int g = std::gcd(length, per_rev);
+  return std::to_string(length / g) + "/" + std::to_string(per_rev / g) + " revolution";
+}
+
+Errors errors_of(const std::vector<WindowBatch>& revs) {
+  auto of = [&](double WindowBatch::*field) {
     std::vector<double> v;
-    for (const RevolutionMeans& m : revs) v.push_back(m.*field);
+    for (const WindowBatch& m : revs) v.push_back(m.*field);
     return batch_means(v);
   };
   Errors e;
-  e.power = of(&RevolutionMeans::torque_power_W);
-  e.dissipation = of(&RevolutionMeans::dissipation_power_W);
-  e.torque = of(&RevolutionMeans::torque_Nm);
-  e.arm = of(&RevolutionMeans::torque_arm_power_W);
-  e.toe = of(&RevolutionMeans::toe_deg);
-  e.shoulder = of(&RevolutionMeans::shoulder_deg);
-  e.com = of(&RevolutionMeans::com_angle_deg);
-  e.collisions = of(&RevolutionMeans::collisions_per_s);
-  e.collision_power = of(&RevolutionMeans::collision_power_W);
-  e.impacts = of(&RevolutionMeans::liner_impacts_per_s);
-  e.impact = of(&RevolutionMeans::liner_impact_W);
-  e.shear = of(&RevolutionMeans::liner_shear_W);
-  e.wear = of(&RevolutionMeans::wear_kg_per_h);
+  e.power = of(&WindowBatch::torque_power_W);
+  e.dissipation = of(&WindowBatch::dissipation_power_W);
+  e.torque = of(&WindowBatch::torque_Nm);
+  e.arm = of(&WindowBatch::torque_arm_power_W);
+  e.toe = of(&WindowBatch::toe_deg);
+  e.shoulder = of(&WindowBatch::shoulder_deg);
+  e.com = of(&WindowBatch::com_angle_deg);
+  e.collisions = of(&WindowBatch::collisions_per_s);
+  e.collision_power = of(&WindowBatch::collision_power_W);
+  e.impacts = of(&WindowBatch::liner_impacts_per_s);
+  e.impact = of(&WindowBatch::liner_impact_W);
+  e.shear = of(&WindowBatch::liner_shear_W);
+  e.wear = of(&WindowBatch::wear_kg_per_h);
   return e;
 }
 
@@ -588,7 +600,9 @@ int cmd_run(const RunOptions& o) {
                   {"to_s", s.window_to_s},
                   {"revolutions", s.window_revolutions},
                   {"whole_revolutions", s.whole_revolutions}};
-  const Errors err = errors_of(s.revolutions_means);
+  const Errors err = errors_of(s.window_batches);
+  const int per_rev = std::max(1, s.batches_per_revolution);
+  const int window_revs = static_cast<int>(s.window_batches.size()) / per_rev;
   const double rel_err = err.power.sem / std::fabs(err.power.mean);
   j["power_W"] = {{"torque", s.torque_power_W},
                   {"dissipation", s.dissipation_power_W},
@@ -620,9 +634,10 @@ int cmd_run(const RunOptions& o) {
                       {"max_duration_s", c.duration_auto ? nlohmann::json(d.turn_limit_s) : nlohmann::json()},
                       {"converged", c.duration_auto ? nlohmann::json(s.converged) : nlohmann::json()},
                       {"stopped_at_cap", s.capped},
-                      {"revolutions", err.power.values},
+                      {"revolutions", window_revs},
                       {"batches", err.power.batches},
-                      {"revolutions_per_batch", err.power.batch_length},
+                      {"batches_per_revolution", per_rev},
+                      {"revolutions_per_batch", static_cast<double>(err.power.batch_length) / per_rev},
                       {"lag1_autocorrelation", number_or_null(err.power.lag1)},
                       {"batches_correlated", err.power.correlated},
                       {"power_relative_sem", number_or_null(rel_err)}};
@@ -709,23 +724,24 @@ int cmd_run(const RunOptions& o) {
               plus_minus(s.torque_power_W / c.length, err.power.sem / c.length, " W/m").c_str(),
               plus_minus(s.dissipation_power_W / c.length, err.dissipation.sem / c.length, " W/m").c_str(),
               s.torque_Nm / c.length, c.length, c.periodic ? " of periodic slice" : " between the end plates");
+  const std::string batch = batch_words(err.power.batch_length, per_rev);
   if (err.power.batches >= 2 && std::isfinite(err.power.lag1))
-    std::printf("                \u00b1 one standard error, from %d batch means of %d revolution%s (lag-1 "
+    std::printf("                \u00b1 one standard error, from %d batch means of %s (lag-1 "
                 "autocorrelation %.2f%s)\n",
-                err.power.batches, err.power.batch_length, err.power.batch_length == 1 ? "" : "s", err.power.lag1,
+                err.power.batches, batch.c_str(), err.power.lag1,
                 err.power.correlated ? ", still correlated: the errors are too small" : "");
   else if (err.power.batches >= 2)
-    std::printf("                \u00b1 one standard error, from %d batch means of %d revolution%s (too few to "
+    std::printf("                \u00b1 one standard error, from %d batch means of %s (too few to "
                 "test their correlation: a rough error)\n",
-                err.power.batches, err.power.batch_length, err.power.batch_length == 1 ? "" : "s");
+                err.power.batches, batch.c_str());
   if (s.duration_auto && s.converged)
-    std::printf("convergence     converged after %d revolutions: the power's standard error is %.2f %% of its mean "
+    std::printf("convergence     converged after %d revolution%s: the power's standard error is %.2f %% of its mean "
                 "(run.tolerance %.3g %%)\n",
-                err.power.values, 100 * rel_err, 100 * c.tolerance);
+                window_revs, window_revs == 1 ? "" : "s", 100 * rel_err, 100 * c.tolerance);
   else if (s.duration_auto)
     std::printf("convergence     NOT converged: stopped at the cap (run.max_duration %.4g s) after %d revolutions; "
                 "the power's standard error is %.2f %% of its mean, run.tolerance %.3g %%\n",
-                d.turn_limit_s, err.power.values, 100 * rel_err, 100 * c.tolerance);
+                d.turn_limit_s, window_revs, 100 * rel_err, 100 * c.tolerance);
   if (s.angles.found)
     std::printf("charge angles   toe %s, shoulder %s, centre of mass %s\n",
                 plus_minus(s.angles.toe_deg, err.toe.sem, " deg").c_str(),

@@ -123,6 +123,7 @@ void run_fields(R& r, F&& f) {
   f("wall_s", r.wall_s);
   f("stop_step", r.stop_step);
   f("settle_wall_s", r.settle_wall_s);
+  f("batches_per_revolution", r.batches_per_revolution);
 }
 
 // Doubles as raw bytes (every bit kept).
@@ -165,16 +166,16 @@ void write_checkpoint(const std::filesystem::path& path, const Checkpoint& cp) {
 
   // The window's revolutions, the open one's sums and contact profile.
   std::vector<double> revs;
-  for (const RevolutionMeans& m : r.revolutions)
-    for (auto field : kRevolutionFields) revs.push_back(m.*field);
+  for (const WindowBatch& m : r.batches)
+    for (auto field : kWindowBatchFields) revs.push_back(m.*field);
   const std::string revs_bytes = doubles_bytes(revs);
   put_record(payload, "run.revolutions", revs_bytes.data(), revs_bytes.size());
   std::vector<double> tally;
-  for (auto field : kTallyFields) tally.push_back(r.revolution.*field);
+  for (auto field : kTallyFields) tally.push_back(r.batch.*field);
   const std::string tally_bytes = doubles_bytes(tally);
   put_record(payload, "run.revolution", tally_bytes.data(), tally_bytes.size());
-  std::vector<std::int64_t> rprof(r.revolution_profile.begin(), r.revolution_profile.end());
-  put_record(payload, "run.revolution_profile", reinterpret_cast<const char*>(rprof.data()),
+  std::vector<std::int64_t> rprof(r.batch_profile.begin(), r.batch_profile.end());
+  put_record(payload, "run.batch_profile", reinterpret_cast<const char*>(rprof.data()),
              rprof.size() * sizeof(std::int64_t));
 
   const SolverState& s = cp.solver;
@@ -257,35 +258,38 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
   run_fields(r, [&](const char* k, auto& v) {
     const std::string key(k);
     if ((key == "open_loss_start" || key == "stop_step" || key == "settle_wall_s") && !rs.has(k)) return;
+    if (key == "batches_per_revolution" && !rs.has(k)) return;
     rs.get(k, v);
   });
+  // Older files kept one batch per whole revolution.
+  if (!rs.has("batches_per_revolution")) r.batches_per_revolution = 1;
   const std::string& prof = record("run.window_profile");
   std::vector<std::int64_t> counts(prof.size() / sizeof(std::int64_t));
   std::memcpy(counts.data(), prof.data(), counts.size() * sizeof(std::int64_t));
   r.window_profile.assign(counts.begin(), counts.end());
   // Revolutions: absent from files written before the standard errors (the
   // run then goes on with the revolutions still to come).
-  constexpr std::size_t kRevFields = std::size(kRevolutionFields), kTally = std::size(kTallyFields);
+  constexpr std::size_t kRevFields = std::size(kWindowBatchFields), kTally = std::size(kTallyFields);
   if (records.count("run.revolutions")) {
     const std::vector<double> v = bytes_doubles(records["run.revolutions"]);
     if (v.size() % kRevFields != 0) throw CheckpointError(where + ": run.revolutions has a partial revolution");
     for (std::size_t i = 0; i < v.size(); i += kRevFields) {
-      RevolutionMeans m;
-      for (std::size_t f = 0; f < kRevFields; ++f) m.*kRevolutionFields[f] = v[i + f];
-      r.revolutions.push_back(m);
+      WindowBatch m;
+      for (std::size_t f = 0; f < kRevFields; ++f) m.*kWindowBatchFields[f] = v[i + f];
+      r.batches.push_back(m);
     }
   }
   if (records.count("run.revolution")) {
     const std::vector<double> v = bytes_doubles(records["run.revolution"]);
     if (v.size() != kTally) throw CheckpointError(where + ": run.revolution has " + std::to_string(v.size()) +
                                                   " numbers, not " + std::to_string(kTally));
-    for (std::size_t f = 0; f < kTally; ++f) r.revolution.*kTallyFields[f] = v[f];
+    for (std::size_t f = 0; f < kTally; ++f) r.batch.*kTallyFields[f] = v[f];
   }
-  if (records.count("run.revolution_profile")) {
-    const std::string& b = records["run.revolution_profile"];
+  if (records.count("run.batch_profile")) {
+    const std::string& b = records["run.batch_profile"];
     std::vector<std::int64_t> rc(b.size() / sizeof(std::int64_t));
     std::memcpy(rc.data(), b.data(), rc.size() * sizeof(std::int64_t));
-    r.revolution_profile.assign(rc.begin(), rc.end());
+    r.batch_profile.assign(rc.begin(), rc.end());
   }
 
   const ScalarReader ss(record("solver"), where + ": solver");

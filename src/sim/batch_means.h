@@ -1,6 +1,7 @@
 // The standard error of a run's mean from batch means: the values of the
-// averaging window in equal batches (here whole revolutions of the mill),
-// each batch's mean, and the spread of those means. Batches only give an
+// averaging window in equal batches (here eighths of a revolution of the
+// mill, the window itself whole revolutions), each batch's mean, and the
+// spread of those means. Batches only give an
 // honest error when their means are uncorrelated; where the lag-1
 // autocorrelation of the means is significant, neighbouring batches are
 // merged (the batch doubled) and the test repeated (Flyvbjerg and Petersen,
@@ -13,12 +14,20 @@
 
 namespace mc {
 
-// Fewest batches an automatic run stops on: five batch means give the
-// standard error to within about ±35 % (one standard deviation).
-inline constexpr int kMinBatches = 5;
+// Base batches a revolution is cut into. The power of a turning charge
+// forgets itself within a few lifter passes (mill D: the autocorrelation of
+// its 0.05 s means is gone by 0.15 s, 1/30 of a revolution), so an eighth
+// of a revolution is already a long batch; where it is not, the means come
+// out correlated and are merged.
+inline constexpr int kBatchesPerRevolution = 8;
+
+// Fewest batches an automatic run stops on: eight batch means give the
+// standard error to within about ±27 % (one standard deviation). With
+// eighths that is one revolution; merged quarters take two.
+inline constexpr int kMinBatches = 8;
 
 struct BatchMeans {
-  int values = 0;        // base batches given (revolutions)
+  int values = 0;        // base batches given
   int batches = 0;       // batches the error was taken from
   int batch_length = 1;  // base batches per batch after merging
   double mean = std::numeric_limits<double>::quiet_NaN();  // of all the values
@@ -38,7 +47,7 @@ struct BatchMeans {
 double lag1_limit(int batches);
 
 // `values`: one mean per base batch of equal length, in time order (NaNs,
-// such as a revolution without a toe, are left out). When the count is not
+// such as a batch without a toe, are left out). When the count is not
 // a multiple of the batch length, the earliest values, those nearest the
 // warm-up, are the ones left out of the error (not out of the mean).
 BatchMeans batch_means(const std::vector<double>& values);

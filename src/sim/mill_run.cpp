@@ -57,12 +57,13 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   Rate rate;
   double last_report = -1e9;
   if (st.window_profile.empty()) st.window_profile.assign(kProfileBins, 0);
-  if (st.revolution_profile.empty()) st.revolution_profile.assign(kProfileBins, 0);
+  if (st.batch_profile.empty()) st.batch_profile.assign(kProfileBins, 0);
 
   // The turning: a fixed duration averaged over the largest whole number of
   // revolutions that end with it, or (auto) revolutions from the end of the
   // warm-up until the power's mean converges, at most as many as the cap
-  // holds. Revolution k of the window ends at step window_start + k·rev_steps.
+  // holds. Revolution k of the window ends at step window_start + k·rev_steps;
+  // each is cut into per_rev batches, the base batches of the errors.
   const double rev_steps = d.revolution_s / dt;
   long turn_steps, warm_steps, window_start, revs;
   if (c.duration_auto) {
@@ -85,6 +86,9 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     }
   }
   if (st.stop_step >= 0) turn_steps = st.stop_step;  // resumed after an auto run stopped
+  const int per_rev = std::max(1, st.batches_per_revolution);
+  const long n_batches = revs * per_rev;
+  sum.batches_per_revolution = per_rev;
 
   auto report = [&](const char* phase, double sim, double revs, double done, bool force) {
     const double wall = seconds_since(wall0);
@@ -101,9 +105,9 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     p.done = done;
     const long left = std::max(0L, static_cast<long>((1 - done) * turn_steps));
     p.eta_s = rate.per_s() > 0 ? left / rate.per_s() : 0;
-    if (c.duration_auto && st.revolutions.size() >= 2) {
+    if (c.duration_auto && st.batches.size() >= 2) {
       std::vector<double> power;
-      for (const RevolutionMeans& m : st.revolutions) power.push_back(m.torque_power_W);
+      for (const WindowBatch& m : st.batches) power.push_back(m.torque_power_W);
       const BatchMeans b = batch_means(power);
       if (b.mean != 0) p.relative_error = b.sem / std::fabs(b.mean);
     }
@@ -206,11 +210,14 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     while (b <= s) b += out_steps;
     return std::min(b, turn_steps);
   };
-  // The end of the revolution being turned (none before the window, or when
-  // the window holds no whole revolution).
-  auto revolution_end = [&]() {
-    const long k = static_cast<long>(st.revolutions.size()) + 1;
-    return k <= revs ? window_start + std::lround(k * rev_steps) : LONG_MAX;
+  // The end of the batch being turned (none before the window, or when the
+  // window holds no whole revolution). A batch that closes a revolution ends
+  // where that revolution does.
+  auto batch_end = [&]() {
+    const long k = static_cast<long>(st.batches.size()) + 1;
+    if (k > n_batches) return LONG_MAX;
+    return window_start + (k % per_rev == 0 ? std::lround((k / per_rev) * rev_steps)
+                                            : std::lround(k * rev_steps / per_rev));
   };
 
   if (st.phase == 1) {
@@ -231,8 +238,8 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   const double time0 = st.turn_start_s;
 
   long& s = st.turn_step;
-  RevolutionTally& rev = st.revolution;
-  // The revolution's share of the row so far, from the row's running sums.
+  BatchTally& rev = st.batch;
+  // The batch's share of the row so far, from the row's running sums.
   auto add_row_share = [&](double span, double work, double diss, double torque_time) {
     rev.span += span - rev.row_span;
     rev.work += work - rev.row_work;
@@ -275,10 +282,10 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
       st.comy += o.com_y_m;
       st.neigh += o.neighbours_per_ball;
       ++st.rows_in_window;
-      if (revs >= 1) {  // the row ends in the open revolution
+      if (revs >= 1) {  // the row ends in the open batch
         add_row_share(o.interval_s, o.wall_work_J, o.dissipated_J, o.wall_torque_Nm * o.interval_s);
         rev.row_span = rev.row_work = rev.row_diss = rev.row_torque_time = 0;
-        for (int k = 0; k < kProfileBins; ++k) st.revolution_profile[k] += prof[k];
+        for (int k = 0; k < kProfileBins; ++k) st.batch_profile[k] += prof[k];
         rev.arm_time += r.torque_arm_power_W * o.interval_s;
         rev.rows_span += o.interval_s;
         rev.comx += o.com_x_m;
@@ -290,21 +297,22 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     ++st.rows;
     if (hooks.on_row) hooks.on_row(r);
   };
-  // A revolution ends: its means, and (auto) whether the run stops here.
-  auto end_revolution = [&]() {
+  // A batch ends: its means, and (auto, at a revolution's end) whether the
+  // run stops here.
+  auto end_batch = [&]() {
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    RevolutionMeans m;
+    WindowBatch m;
     const double span = rev.span > 0 ? rev.span : 1.0;
     m.span_s = rev.span;
     m.torque_power_W = rev.work / span;
     m.dissipation_power_W = rev.diss / span;
     m.torque_Nm = rev.torque_time / span;
     m.torque_arm_power_W = rev.rows_span > 0 ? rev.arm_time / rev.rows_span : nan;
-    const ChargeAngles a = toe_and_shoulder(st.revolution_profile);
+    const ChargeAngles a = toe_and_shoulder(st.batch_profile);
     m.toe_deg = a.found ? a.toe_deg : nan;
     m.shoulder_deg = a.found ? a.shoulder_deg : nan;
     m.com_angle_deg = rev.rows > 0 ? angle_deg(rev.comx / rev.rows, rev.comy / rev.rows) : nan;
-    // The books' totals since the window began; this revolution's part.
+    // The books' totals since the window began; this batch's part.
     const BookSums books = solver.read_books();
     const CollisionRates all = spectra_report(scene, books, 1.0, 0, 0, 0).all;  // per 1 s: totals
     double impacts = 0, impact_J = 0, shear_J = 0, wear_m3 = 0;
@@ -320,19 +328,19 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     m.liner_impact_W = (impact_J - rev.impact_J) / span;
     m.liner_shear_W = (shear_J - rev.shear_J) / span;
     m.wear_kg_per_h = (wear_m3 - rev.wear_m3) / span * scene.wall_material.density * 3600.0;
-    st.revolutions.push_back(m);
-    // The next revolution begins with the row's sums at this cut and the
+    st.batches.push_back(m);
+    // The next batch begins with the row's sums at this cut and the
     // books' totals now.
-    RevolutionTally next;
+    BatchTally next;
     next.row_span = rev.row_span, next.row_work = rev.row_work, next.row_diss = rev.row_diss;
     next.row_torque_time = rev.row_torque_time;
     next.collisions = all.collisions_per_s, next.collision_J = all.power_W;
     next.impacts = impacts, next.impact_J = impact_J, next.shear_J = shear_J, next.wear_m3 = wear_m3;
     rev = next;
-    std::fill(st.revolution_profile.begin(), st.revolution_profile.end(), 0L);
-    if (c.duration_auto) {
+    std::fill(st.batch_profile.begin(), st.batch_profile.end(), 0L);
+    if (c.duration_auto && st.batches.size() % per_rev == 0) {
       std::vector<double> power;
-      for (const RevolutionMeans& x : st.revolutions) power.push_back(x.torque_power_W);
+      for (const WindowBatch& x : st.batches) power.push_back(x.torque_power_W);
       if (converged(batch_means(power), c.tolerance)) {
         st.stop_step = s;
         turn_steps = s;
@@ -342,14 +350,14 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
 
   // A checkpoint written before runs kept their revolutions: those already
   // turned count as unknown.
-  while (st.phase == 2 && revolution_end() != LONG_MAX && revolution_end() <= s) {
-    RevolutionMeans unknown;
-    for (auto field : kRevolutionFields) unknown.*field = std::numeric_limits<double>::quiet_NaN();
-    st.revolutions.push_back(unknown);
+  while (st.phase == 2 && batch_end() != LONG_MAX && batch_end() <= s) {
+    WindowBatch unknown;
+    for (auto field : kWindowBatchFields) unknown.*field = std::numeric_limits<double>::quiet_NaN();
+    st.batches.push_back(unknown);
   }
   while (st.phase == 2 && s < turn_steps) {
     const long row_end = next_boundary(s);
-    const long rev_end = revolution_end();
+    const long rev_end = batch_end();
     long next = std::min(row_end, rev_end);
     const long next_profile = (s / profile_every + 1) * profile_every;
     next = std::min(next, next_profile);
@@ -363,7 +371,7 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
       const Observables o = solver.observe(false);
       add_row_share(o.interval_s, o.wall_work_J, o.dissipated_J, o.wall_torque_Nm * o.interval_s);
     }
-    if (s == rev_end) end_revolution();
+    if (s == rev_end) end_batch();
     if (s != row_end && s == turn_steps) end_row();  // stopped inside a row: a short last row
     if (hooks.on_snapshot && snap_steps > 0 && (s % snap_steps == 0 || s == turn_steps)) {
       hooks.on_snapshot(solver.time_s() - time0);
@@ -400,7 +408,7 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   sum.window_s = span;
   sum.mill_angle_end = solver.mill_angle();
   sum.angles = toe_and_shoulder(st.window_profile);
-  sum.revolutions_means = st.revolutions;
+  sum.window_batches = st.batches;
   sum.duration_auto = c.duration_auto;
   sum.converged = c.duration_auto && st.stop_step >= 0;
   sum.capped = c.duration_auto && st.stop_step < 0;

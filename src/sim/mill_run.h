@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/mill_case.h"
+#include "sim/batch_means.h"
 #include "sim/charge_profile.h"
 #include "sim/solver.h"
 
@@ -43,10 +44,10 @@ struct RunProgress {
   double relative_error = -1; // an auto run: the power's standard error over its mean so far; < 0: not yet
 };
 
-// Means over one whole revolution of the averaging window: a batch of the
-// standard errors (sim/batch_means.h). NaN where a revolution has no value
-// (no toe found in it).
-struct RevolutionMeans {
+// Means over one batch of the averaging window, 1/kBatchesPerRevolution of a
+// revolution: the base batches of the standard errors (sim/batch_means.h).
+// NaN where a batch has no value (no toe found in it).
+struct WindowBatch {
   double span_s = 0;
   double torque_power_W = 0, dissipation_power_W = 0, torque_Nm = 0, torque_arm_power_W = 0;
   double toe_deg = 0, shoulder_deg = 0, com_angle_deg = 0;
@@ -55,30 +56,30 @@ struct RevolutionMeans {
   double liner_impacts_per_s = 0, liner_impact_W = 0, liner_shear_W = 0, wear_kg_per_h = 0;
 };
 // Its fields in one list, for the checkpoint and for the summary.
-inline constexpr double RevolutionMeans::* kRevolutionFields[] = {
-    &RevolutionMeans::span_s,           &RevolutionMeans::torque_power_W,     &RevolutionMeans::dissipation_power_W,
-    &RevolutionMeans::torque_Nm,        &RevolutionMeans::torque_arm_power_W, &RevolutionMeans::toe_deg,
-    &RevolutionMeans::shoulder_deg,     &RevolutionMeans::com_angle_deg,      &RevolutionMeans::collisions_per_s,
-    &RevolutionMeans::collision_power_W, &RevolutionMeans::liner_impacts_per_s, &RevolutionMeans::liner_impact_W,
-    &RevolutionMeans::liner_shear_W,    &RevolutionMeans::wear_kg_per_h};
+inline constexpr double WindowBatch::* kWindowBatchFields[] = {
+    &WindowBatch::span_s,           &WindowBatch::torque_power_W,     &WindowBatch::dissipation_power_W,
+    &WindowBatch::torque_Nm,        &WindowBatch::torque_arm_power_W, &WindowBatch::toe_deg,
+    &WindowBatch::shoulder_deg,     &WindowBatch::com_angle_deg,      &WindowBatch::collisions_per_s,
+    &WindowBatch::collision_power_W, &WindowBatch::liner_impacts_per_s, &WindowBatch::liner_impact_W,
+    &WindowBatch::liner_shear_W,    &WindowBatch::wear_kg_per_h};
 
-// What the revolution being turned has summed so far, and where the row and
-// the books stood at its last cut: a revolution ends inside a row, so its
-// share of that row is the row's sums then minus the sums at the cut.
-struct RevolutionTally {
+// What the batch being turned has summed so far, and where the row and the
+// books stood at its last cut: a batch ends inside a row, so its share of
+// that row is the row's sums then minus the sums at the cut.
+struct BatchTally {
   double span = 0, work = 0, diss = 0, torque_time = 0;  // exact, from the solver's sums
   double arm_time = 0, rows_span = 0, comx = 0, comy = 0, rows = 0;  // rows that end in it
   double row_span = 0, row_work = 0, row_diss = 0, row_torque_time = 0;  // the row's sums at the cut
   // the books' totals since the window began, at the last revolution's end
   double collisions = 0, collision_J = 0, impacts = 0, impact_J = 0, shear_J = 0, wear_m3 = 0;
 };
-inline constexpr double RevolutionTally::* kTallyFields[] = {
-    &RevolutionTally::span,       &RevolutionTally::work,     &RevolutionTally::diss,
-    &RevolutionTally::torque_time, &RevolutionTally::arm_time, &RevolutionTally::rows_span, &RevolutionTally::comx,
-    &RevolutionTally::comy,       &RevolutionTally::rows,     &RevolutionTally::row_span,
-    &RevolutionTally::row_work,   &RevolutionTally::row_diss, &RevolutionTally::row_torque_time,
-    &RevolutionTally::collisions, &RevolutionTally::collision_J, &RevolutionTally::impacts,
-    &RevolutionTally::impact_J,   &RevolutionTally::shear_J,  &RevolutionTally::wear_m3};
+inline constexpr double BatchTally::* kTallyFields[] = {
+    &BatchTally::span,       &BatchTally::work,     &BatchTally::diss,
+    &BatchTally::torque_time, &BatchTally::arm_time, &BatchTally::rows_span, &BatchTally::comx,
+    &BatchTally::comy,       &BatchTally::rows,     &BatchTally::row_span,
+    &BatchTally::row_work,   &BatchTally::row_diss, &BatchTally::row_torque_time,
+    &BatchTally::collisions, &BatchTally::collision_J, &BatchTally::impacts,
+    &BatchTally::impact_J,   &BatchTally::shear_J,  &BatchTally::wear_m3};
 
 struct RunSummary {
   double settle_s = 0;              // simulated settling time
@@ -114,9 +115,10 @@ struct RunSummary {
   double wall_s = 0;                // wall time of settling and turning
   double updates_per_s = 0;         // balls × steps / wall_s
   bool interrupted = false;         // stopped on request, checkpoint written
-  // The window's whole revolutions (the batches of the standard errors),
-  // and how the turning ended.
-  std::vector<RevolutionMeans> revolutions_means;
+  // The window's batches (the base batches of the standard errors; whole
+  // revolutions of them), and how the turning ended.
+  std::vector<WindowBatch> window_batches;
+  int batches_per_revolution = kBatchesPerRevolution;
   bool duration_auto = false;
   bool converged = false;           // auto: the power's standard error reached the tolerance
   bool capped = false;              // auto: stopped at the cap without converging
@@ -138,9 +140,12 @@ struct RunState {
   double e_window_start = 0, e_end = 0, work = 0, diss = 0, torque_time = 0, arm_time = 0, span = 0,
          comx = 0, comy = 0, neigh = 0;
   long rows_in_window = 0;
-  std::vector<RevolutionMeans> revolutions;  // closed revolutions of the window
-  RevolutionTally revolution;                // the open one
-  std::vector<long> revolution_profile;      // its rows' contact profile
+  std::vector<WindowBatch> batches;     // closed batches of the window
+  BatchTally batch;                     // the open one
+  std::vector<long> batch_profile;      // its rows' contact profile
+  // Batches a revolution is cut into (kBatchesPerRevolution; 1 in
+  // checkpoints written when the batches were whole revolutions).
+  int batches_per_revolution = kBatchesPerRevolution;
   long stop_step = -1;                       // auto: the turning step it stopped at (converged)
   long rows = 0;                 // rows handed to on_row
   long snapshots = 0;            // snapshots handed to on_snapshot
