@@ -256,7 +256,12 @@ std::string pair_type_name(const Scene& scene, int type) {
   const int balls = nm * (nm + 1) / 2;
   if (type >= balls) {
     const int m = (type - balls) / 3, w = (type - balls) % 3;
-    static const char* walls[] = {"shell", "lifter", "end plate"};  // mesh walls book as their part
+    // Mesh walls book as their part; ends that are meshes (cone heads, end
+    // lifters) are more than a plate.
+    bool end_meshes = false;
+    for (const WallMesh& mesh : scene.walls.meshes) end_meshes = end_meshes || mesh.part == MeshPart::ends;
+    const char* ends = scene.walls.has_end_plates() && !end_meshes ? "end plate" : "ends";
+    const char* walls[] = {"shell", "lifter", ends};
     return scene.materials.at(m).name + "-" + walls[w];
   }
   for (int a = 0; a < nm; ++a)

@@ -336,6 +336,18 @@ MillDerived derive(const MillCase& c) {
 std::vector<WallMesh> place_meshes(const MillCase& c) {
   std::vector<WallMesh> out;
   const int nm = static_cast<int>(c.materials.size());
+  // Each ball material against wall material `mat`: the case's contact, or
+  // its [[pairs]] entry for the two.
+  auto interactions_with = [&](const std::string& mat) {
+    std::vector<Interaction> v;
+    for (int a = 0; a < nm; ++a) {
+      Interaction in = c.contact;
+      for (const PairOverride& p : c.pairs)
+        if ((p.a == c.materials[a].name && p.b == mat) || (p.b == c.materials[a].name && p.a == mat)) in = p.interaction;
+      v.push_back(in);
+    }
+    return v;
+  };
   for (std::size_t k = 0; k < c.meshes.size(); ++k) {
     const MeshSpec& spec = c.meshes[k];
     const std::string key = "walls.mesh[" + std::to_string(k) + "]";
@@ -347,12 +359,7 @@ std::vector<WallMesh> place_meshes(const MillCase& c) {
     const int mi = material_index(c, mat);
     if (mi < 0) fail(key + ".material", "unknown material \"" + mat + "\"");
     m.material = c.materials[mi];
-    for (int a = 0; a < nm; ++a) {
-      Interaction in = c.contact;
-      for (const PairOverride& p : c.pairs)
-        if ((p.a == c.materials[a].name && p.b == mat) || (p.b == c.materials[a].name && p.a == mat)) in = p.interaction;
-      m.interactions.push_back(in);
-    }
+    m.interactions = interactions_with(mat);
     const double th = spec.angle_deg * kPi / 180.0, ct = std::cos(th), st = std::sin(th);
     const double z_tol = 1e-6 * std::max(1.0, c.length);
     std::vector<Triangle> placed;
@@ -385,13 +392,7 @@ std::vector<WallMesh> place_meshes(const MillCase& c) {
     m.name = name;
     m.part = MeshPart::ends;
     m.material = c.materials[li];
-    for (int a = 0; a < nm; ++a) {
-      Interaction in = c.contact;
-      for (const PairOverride& p : c.pairs)
-        if ((p.a == c.materials[a].name && p.b == c.liner) || (p.b == c.materials[a].name && p.a == c.liner))
-          in = p.interaction;
-      m.interactions.push_back(in);
-    }
+    m.interactions = interactions_with(c.liner);
     m.triangles = std::move(t);
     m.volume = 0;
     out.push_back(std::move(m));

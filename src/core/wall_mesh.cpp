@@ -9,6 +9,8 @@
 #include <string>
 #include <tuple>
 
+#include "sim/layout.hpp"
+
 namespace mc {
 namespace {
 
@@ -152,25 +154,13 @@ MeshTopology mesh_topology(const std::vector<WallMesh>& meshes) {
   return topo;
 }
 
+// The kernels' own closest point (cl/mesh.h, Ericson §5.1.5), in double.
 Vec3 closest_on_triangle(const Triangle& t, const Vec3& p) {
-  const Vec3 a = t.v[0], b = t.v[1], c = t.v[2];
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Vec3 bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
-  const Vec3 cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const double inv = 1.0 / (va + vb + vc);
-  return a + ab * (vb * inv) + ac * (vc * inv);
+  using f64::real3;
+  auto r3 = [](const Vec3& v) { return real3{v.x, v.y, v.z}; };
+  int region = 0;
+  const real3 q = f64::triangle_closest(r3(p), r3(t.v[0]), r3(t.v[1]), r3(t.v[2]), &region);
+  return {q.x, q.y, q.z};
 }
 
 bool triangle_near_cell(const Triangle& t, const Vec3& centre, double limit) {

@@ -35,10 +35,10 @@ namespace mc {
 static_assert(sizeof(f32::real4) == 16 && alignof(f32::real4) == 16);
 static_assert(sizeof(f64::real4) == 32 && alignof(f64::real4) == 32);
 static_assert(sizeof(f32::PairParams) == 8 * 4 && sizeof(f64::PairParams) == 8 * 8);
-// Nine reals and seven ints after the two 4-vectors; in double the struct
+// Eleven reals and nine ints after the two 4-vectors; in double the struct
 // ends padded to its 32-byte alignment (OpenCL C pads it the same way).
-static_assert(sizeof(f32::SimParams) == 2 * 16 + 9 * 4 + 7 * 4);
-static_assert(sizeof(f64::SimParams) == 2 * 32 + 9 * 8 + 7 * 4 + 28);
+static_assert(sizeof(f32::SimParams) == 2 * 16 + 11 * 4 + 9 * 4);
+static_assert(sizeof(f64::SimParams) == 2 * 32 + 11 * 8 + 9 * 4 + 4);
 static_assert(sizeof(f32::MeshTriangle) == 4 * 16 + 8 * 4 && sizeof(f64::MeshTriangle) == 4 * 32 + 8 * 4);
 static_assert(sizeof(f32::MeshGrid) == 16 + 4 * 4 + 8 * 4 && sizeof(f64::MeshGrid) == 32 + 4 * 8 + 8 * 4);
 static_assert(sizeof(f32::BookParams) == 4 * 4 + 8 * 4 && sizeof(f64::BookParams) == 4 * 8 + 8 * 4);

@@ -376,16 +376,23 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
   observe(true);  // start the first interval here
 }
 
+// A table of pair parameters in the solver's precision, on the device.
+template <class Buf>
+void upload_pairs(const std::vector<f64::PairParams>& from, Buf& to) {
+  using Real = decltype(to.host[0].kn);
+  to.resize(from.size());
+  for (std::size_t k = 0; k < from.size(); ++k) {
+    const f64::PairParams& c = from[k];
+    to.host[k] = {Real(c.kn),      Real(c.kt_over_kn), Real(c.e_star),  Real(c.g_star),
+                  Real(c.damping), Real(c.mu_slide),   Real(c.mu_roll), Real(c.restitution)};
+  }
+  to.write_to_device();
+}
+
 template <class Real>
 void SolverImpl<Real>::setup_params(const Scene& scene) {
   const SceneTables t = scene_tables(scene);
-  pairs_.resize(t.pairs.size());
-  for (std::size_t k = 0; k < t.pairs.size(); ++k) {
-    const f64::PairParams& c = t.pairs[k];
-    pairs_.host[k] = {Real(c.kn),      Real(c.kt_over_kn), Real(c.e_star),  Real(c.g_star),
-                      Real(c.damping), Real(c.mu_slide),   Real(c.mu_roll), Real(c.restitution)};
-  }
-  pairs_.write_to_device();
+  upload_pairs(t.pairs, pairs_);
   lifters_.resize(t.lifters.size());
   for (std::size_t k = 0; k < t.lifters.size(); ++k) {
     lifters_.host[k].n_vertices = t.lifters[k].n_vertices;
@@ -435,6 +442,8 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   sp.lifter_first_angle = Real(tp.lifter_first_angle);
   sp.lifter_spacing = Real(tp.lifter_spacing);
   sp.period = Real(tp.period);
+  sp.escape_z0 = Real(tp.escape_z0);
+  sp.escape_z1 = Real(tp.escape_z1);
   sp.n_balls = tp.n_balls;
   sp.n_materials = tp.n_materials;
   sp.n_lifters = tp.n_lifters;
@@ -626,13 +635,7 @@ void SolverImpl<Real>::setup_meshes(const SceneTables& t) {
   mesh_feature_.resize(t.mesh_feature.size());
   for (std::size_t k = 0; k < t.mesh_feature.size(); ++k) mesh_feature_.host[k] = {t.mesh_feature[k].x, t.mesh_feature[k].y};
   mesh_feature_.write_to_device();
-  mesh_pairs_.resize(t.mesh_pairs.size());
-  for (std::size_t k = 0; k < t.mesh_pairs.size(); ++k) {
-    const f64::PairParams& c = t.mesh_pairs[k];
-    mesh_pairs_.host[k] = {Real(c.kn),      Real(c.kt_over_kn), Real(c.e_star),  Real(c.g_star),
-                           Real(c.damping), Real(c.mu_slide),   Real(c.mu_roll), Real(c.restitution)};
-  }
-  mesh_pairs_.write_to_device();
+  upload_pairs(t.mesh_pairs, mesh_pairs_);
 
   const int n_cells = t.mesh_cells;
   mesh_cell_start_.resize(static_cast<std::size_t>(n_cells) + 1);
@@ -808,7 +811,11 @@ void SolverImpl<Real>::wait_status() {
     const auto& sp = params_.host[0];
     for (int i = 0; i < n_; ++i) {
       const auto& p = pos_.host[i];
-      if (std::hypot(p.x, p.y) > sp.shell_radius + p.w || p.z < -p.w || (sp.length > 0 && p.z > sp.length + p.w)) {
+      const bool out_shell = sp.shell_radius > 0 && std::hypot(p.x, p.y) > sp.shell_radius + p.w;
+      const bool out_plates = sp.length > 0 && (p.z < -p.w || p.z > sp.length + p.w);
+      const bool out_ends =
+          sp.escape_z1 > sp.escape_z0 && (p.z < sp.escape_z0 - p.w || p.z > sp.escape_z1 + p.w);
+      if (out_shell || out_plates || out_ends) {
         m << ": ball " << info_.host[i].x << " is at (" << p.x << ", " << p.y << ", " << p.z << ") m";
         break;
       }
@@ -937,7 +944,7 @@ void SolverImpl<Real>::reset_books() {
 
 template <class Real>
 void SolverImpl<Real>::sample_contact_profile() {
-  k_profile_.args(params_, pos_, wall_key_, kProfileBins, profile_).launch(n_);
+  k_profile_.args(params_, pos_, wall_key_, mesh_feature_, kProfileBins, profile_).launch(n_);
   lap(&StageTimes::reductions_s);
 }
 

@@ -17,8 +17,11 @@ void mesh_tables(const Scene& scene, const LinerLayout& liner, double r_max, Sce
   // The pair table: a row of n_materials entries per mesh (its material and
   // its interactions with the ball materials).
   std::vector<int> row(meshes.size(), 0);
+  Scene s;  // the materials alone, each mesh's as the wall's in turn
+  s.materials = scene.materials;
+  s.interactions = scene.interactions;
+  s.numerics = scene.numerics;
   for (std::size_t m = 0; m < meshes.size(); ++m) {
-    Scene s = scene;
     s.wall_material = meshes[m].material;
     for (int a = 0; a < nm; ++a) s.set_interaction(a, nm, meshes[m].interactions.at(a));
     row[m] = static_cast<int>(t.mesh_pairs.size());
@@ -122,6 +125,16 @@ SceneTables scene_tables(const Scene& scene) {
   sp.shell_radius = w.shell_radius;
   sp.length = w.has_end_plates() ? w.length : 0.0;
   sp.period = w.periodic ? w.length : 0.0;
+  // A mill closed by mesh ends (cone heads) has no plates to bound it: its
+  // meshes' axial extent does.
+  if (!w.periodic && !w.has_end_plates() && !w.meshes.empty()) {
+    double z0 = 1e300, z1 = -1e300;
+    for (const WallMesh& m : w.meshes)
+      for (const Triangle& tri : m.triangles)
+        for (const Vec3& v : tri.v) z0 = std::min(z0, v.z), z1 = std::max(z1, v.z);
+    sp.escape_z0 = z0;
+    sp.escape_z1 = z1;
+  }
   // A ball centre farther than this from the axis may touch a lifter.
   sp.lifter_reach = std::max(0.0, reach - 1.01 * r_max);
   sp.lifter_first_angle = w.lifter_first_angle;

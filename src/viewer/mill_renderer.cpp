@@ -79,17 +79,17 @@ void MillRenderer::ColourMesh::draw() const {
 }
 
 MillRenderer::MillRenderer() : shader_("mill.vert", "mill.frag") {
-  for (Mesh* m : {&shell_, &plate_, &rims_, &lifters_, &marks_}) m->create();
-  for (ColourMesh* m : {&liner_shell_, &liner_parts_}) m->create();
+  for (Mesh* m : {&shell_, &plate_, &rims_, &lifters_, &marks_, &still_}) m->create();
+  for (ColourMesh* m : {&liner_shell_, &liner_parts_, &liner_still_}) m->create();
 }
 
 MillRenderer::~MillRenderer() {
-  for (Mesh* m : {&shell_, &plate_, &rims_, &lifters_, &marks_}) m->destroy();
-  for (ColourMesh* m : {&liner_shell_, &liner_parts_}) m->destroy();
+  for (Mesh* m : {&shell_, &plate_, &rims_, &lifters_, &marks_, &still_}) m->destroy();
+  for (ColourMesh* m : {&liner_shell_, &liner_parts_, &liner_still_}) m->destroy();
 }
 
 void MillRenderer::set_liner(const LinerLayout& layout) {
-  for (ColourMesh* m : {&liner_shell_, &liner_parts_}) {
+  for (ColourMesh* m : {&liner_shell_, &liner_parts_, &liner_still_}) {
     m->vertices.clear();
     m->element.clear();
   }
@@ -97,7 +97,10 @@ void MillRenderer::set_liner(const LinerLayout& layout) {
   for (int e = 0; e < layout.size(); ++e) {
     const LinerElement& el = layout.elements[e];
     if (el.part == LinerPart::plate && el.row != 0) continue;  // the front plate is left out
-    ColourMesh& m = el.part == LinerPart::shell ? liner_shell_ : liner_parts_;
+    if (el.part == LinerPart::mesh && static_cast<std::size_t>(el.row) < mesh_hidden_.size() &&
+        static_cast<std::size_t>(el.bin) < mesh_hidden_[el.row].size() && mesh_hidden_[el.row][el.bin])
+      continue;  // as set_walls leaves it out
+    ColourMesh& m = el.part == LinerPart::shell ? liner_shell_ : el.still ? liner_still_ : liner_parts_;
     const auto& o = el.outline;
     for (std::size_t k = 1; k + 1 < o.size(); ++k) {
       glm::vec3 a(o[0].x, o[0].y, o[0].z), b(o[k].x, o[k].y, o[k].z), c(o[k + 1].x, o[k + 1].y, o[k + 1].z);
@@ -117,10 +120,11 @@ void MillRenderer::set_liner(const LinerLayout& layout) {
   }
   liner_shell_.upload();
   liner_parts_.upload();
+  liner_still_.upload();
 }
 
 void MillRenderer::set_liner_colours(const std::vector<glm::vec3>& per_element) {
-  for (ColourMesh* m : {&liner_shell_, &liner_parts_}) {
+  for (ColourMesh* m : {&liner_shell_, &liner_parts_, &liner_still_}) {
     for (std::size_t v = 0; v < m->vertices.size(); ++v) {
       const int e = m->element[v];
       if (e >= 0 && static_cast<std::size_t>(e) < per_element.size()) m->vertices[v].colour = per_element[e];
@@ -187,22 +191,32 @@ void MillRenderer::set_walls(const Walls& w) {
       bars.insert(bars.end(), {{{a.x, a.y, 0}, -up_z}, {{c.x, c.y, 0}, -up_z}, {{b.x, b.y, 0}, -up_z}});
     }
   }
-  // Mesh walls that turn with the mill, drawn with the lifters (their
-  // triangles face the charge; culling is off for these).
-  for (const WallMesh& m : w.meshes) {
-    if (!m.turning) continue;
-    for (const Triangle& t : m.triangles) {
+  // Mesh walls, drawn as the lifters are (their triangles face the charge;
+  // culling is off for these): those that turn with the mill with the
+  // lifters, those that stand still in the lab frame.
+  std::vector<Vertex> still;
+  mesh_hidden_.assign(w.meshes.size(), {});
+  for (std::size_t k = 0; k < w.meshes.size(); ++k) {
+    const WallMesh& m = w.meshes[k];
+    std::vector<Vertex>& into = m.turning ? bars : still;
+    mesh_hidden_[k].assign(m.triangles.size(), false);
+    for (std::size_t i = 0; i < m.triangles.size(); ++i) {
+      const Triangle& t = m.triangles[i];
       // The front end (z past the middle, towards the camera) is left out,
       // as the front end plate is.
-      if (m.part == MeshPart::ends && t.v[0].z + t.v[1].z + t.v[2].z > 1.5 * w.length) continue;
+      if (m.part == MeshPart::ends && t.v[0].z + t.v[1].z + t.v[2].z > 1.5 * w.length) {
+        mesh_hidden_[k][i] = true;
+        continue;
+      }
       const glm::vec3 a(t.v[0].x, t.v[0].y, t.v[0].z), b(t.v[1].x, t.v[1].y, t.v[1].z), c(t.v[2].x, t.v[2].y, t.v[2].z);
       const glm::vec3 n = glm::cross(b - a, c - a);
       if (glm::length(n) <= 0) continue;
       const glm::vec3 nrm = glm::normalize(n);
-      bars.insert(bars.end(), {{a, nrm}, {b, nrm}, {c, nrm}});
+      into.insert(into.end(), {{a, nrm}, {b, nrm}, {c, nrm}});
     }
   }
   lifters_.upload(bars);
+  still_.upload(still);
 }
 
 // The lit shader with the mill's parts turned to the mill angle.
@@ -235,6 +249,11 @@ void MillRenderer::draw(const glm::mat4& view, const glm::mat4& projection, bool
   glDisable(GL_CULL_FACE);
   shader_.set("base_colour", glm::vec4(0.62f, 0.63f, 0.65f, 1.0f));
   lifters_.draw();
+  if (still_.count > 0) {  // in the lab frame, then back to the mill's
+    use_turning(view, projection, orthographic, 0.0);
+    still_.draw();
+    use_turning(view, projection, orthographic, mill_angle);
+  }
   if (liner_coloured) {
     // Over the plain parts, pulled forward in depth.
     shader_.set("vertex_colour", 1);
@@ -248,6 +267,12 @@ void MillRenderer::draw(const glm::mat4& view, const glm::mat4& projection, bool
       glDisable(GL_CULL_FACE);
     }
     liner_parts_.draw();
+    if (!liner_still_.vertices.empty()) {
+      use_turning(view, projection, orthographic, 0.0);
+      shader_.set("vertex_colour", 1);
+      shader_.set("base_colour", glm::vec4(1, 1, 1, 1));
+      liner_still_.draw();
+    }
     glDisable(GL_POLYGON_OFFSET_FILL);
     shader_.set("vertex_colour", 0);
   }

@@ -74,7 +74,12 @@ class MillRenderer {
   };
   ShaderProgram shader_;
   Mesh shell_, plate_, rims_, lifters_, marks_;
+  Mesh still_;  // mesh walls that stand still: drawn in the lab frame
   ColourMesh liner_shell_, liner_parts_;  // culled like the shell; the rest
+  ColourMesh liner_still_;                // still meshes' elements, lab frame
+  // Per mesh wall (Walls::meshes), its triangles left out of the picture
+  // (the front end's, as the front end plate is).
+  std::vector<std::vector<bool>> mesh_hidden_;
   float radius_ = 0, length_ = 0;
   bool end_plates_ = true;  // false for a periodic slice
 };
