@@ -433,7 +433,7 @@ TEST_CASE("cone heads and end lifters built from the case face the charge and cl
   }
 }
 
-TEST_CASE("a ball that goes out through a cone head stops the run; one inside the cone does not", "[mesh][failure]") {
+TEST_CASE("a ball that goes out through a cone head stops the run, one inside the cone does not", "[mesh][failure]") {
   const MillCase c =
       io::read_case(io::default_case(), {"mill.ends=cones", "mill.cone_angle=20", "mill.trunnion_diameter=0.2"});
   const MillDerived d = derive(c);
