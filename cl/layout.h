@@ -147,9 +147,10 @@ typedef struct {
   real period;       /* > 0: a periodic slice, z taken modulo period over
                         [0, period), no end plates (length is 0); the grid's
                         z cells tile the period (periodic.h) */
-  real escape_z0, escape_z1; /* escape_z1 > escape_z0: a mill closed by mesh
-                        ends (cone heads) reaches from z0 to z1, and a ball
-                        wholly outside that has gone through an end; else 0 */
+  real escape_z0, escape_z1; /* escape_z1 > escape_z0: the mill reaches from
+                        z0 to z1 along the axis (its end plates, or its mesh
+                        ends such as cone heads), and a ball wholly outside
+                        has gone through an end; 0 for a slice */
   int grid_nx, grid_ny, grid_nz;
   int n_balls;
   int n_materials;   /* ball materials; the wall material has index n_materials */

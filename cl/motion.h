@@ -36,13 +36,12 @@ MC_FN int integrate_ball(int i, MC_GLOBAL const SimParams* sp,
    * skin after one more step: the flag goes up two steps' travel early. */
   const real reach = R(0.5) * sp->skin - R(2.0) * dt * sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
   if (reach <= R(0.0) || dx * dx + dy * dy + dz * dz > reach * reach) flags |= MC_FLAG_REBUILD;
-  /* A ball wholly outside the shell, past an end plate or past the mesh
-   * ends has gone through a wall: the contact was too soft or too short for
-   * this dt. */
+  /* A ball wholly outside the shell or past the mill's ends (its plates or
+   * its mesh ends) has gone through a wall: the contact was too soft or too
+   * short for this dt. */
   const real rho2 = p.x * p.x + p.y * p.y;
   const real out_r = sp->shell_radius + p.w;
   if ((sp->shell_radius > R(0.0) && rho2 > out_r * out_r) ||
-      (sp->length > R(0.0) && (p.z < -p.w || p.z > sp->length + p.w)) ||
       (sp->escape_z1 > sp->escape_z0 && (p.z < sp->escape_z0 - p.w || p.z > sp->escape_z1 + p.w)))
     flags |= MC_FLAG_ESCAPED;
   /* Comparisons with NaN are false, so this also catches NaN. */

@@ -30,6 +30,19 @@ inline compute::Context& context() {
 
 inline constexpr double kPi = 3.14159265358979323846;
 
+// Where a solver has taken a scene's balls (positions, velocities, spins)
+// and its mill (the angle), written back into the scene: to start another
+// solver from that state.
+inline void take_motion(Solver& from, Scene& into) {
+  const std::vector<BallState> now = from.balls();
+  into.mill_angle = from.mill_angle();
+  for (std::size_t i = 0; i < into.balls.size(); ++i) {
+    into.balls[i].position = now[i].position;
+    into.balls[i].velocity = now[i].velocity;
+    into.balls[i].omega = now[i].omega;
+  }
+}
+
 inline double sphere_mass(double density, double r) { return density * 4.0 / 3.0 * kPi * r * r * r; }
 
 // One ball material and a wall material, all pairs alike, no gravity.

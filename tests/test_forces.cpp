@@ -61,13 +61,7 @@ Scene settled_drum(const DrumSpec& spec) {
   compute::Context& settling = settling_context(settle.numerics.precision);
   auto pre = make_solver(settling, settle);
   pre->advance(static_cast<long>(0.25 / sc.numerics.dt));
-  const auto settled = pre->balls();
-  sc.mill_angle = pre->mill_angle();
-  for (std::size_t i = 0; i < sc.balls.size(); ++i) {
-    sc.balls[i].position = settled[i].position;
-    sc.balls[i].velocity = settled[i].velocity;
-    sc.balls[i].omega = settled[i].omega;
-  }
+  take_motion(*pre, sc);
   return sc;
 }
 

@@ -324,13 +324,7 @@ TEST_CASE("mesh lifters in a turning drum: the kernels equal the CPU reference b
     {
       auto pre = make_solver(context(), sc);
       pre->advance(static_cast<long>(0.25 / sc.numerics.dt));
-      const auto settled = pre->balls();
-      sc.mill_angle = pre->mill_angle();
-      for (std::size_t i = 0; i < sc.balls.size(); ++i) {
-        sc.balls[i].position = settled[i].position;
-        sc.balls[i].velocity = settled[i].velocity;
-        sc.balls[i].omega = settled[i].omega;
-      }
+      take_motion(*pre, sc);
     }
     auto dev = make_solver(context(), sc);
     ReferenceSolver ref(sc);

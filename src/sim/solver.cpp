@@ -477,13 +477,10 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
     lo.z = std::min(lo.z, 0.0);
     hi.z = std::max(hi.z, w.length);
   }
-  if (tp.period <= 0)  // the grid spans the meshes too (cone ends reach past the belly)
-    for (const WallMesh& m : w.meshes)
-      for (const Triangle& tri : m.triangles)
-        for (const Vec3& v : tri.v) {
-          lo.z = std::min(lo.z, v.z);
-          hi.z = std::max(hi.z, v.z);
-        }
+  if (tp.period <= 0 && t.mesh_z1 >= t.mesh_z0) {  // the grid spans the meshes too (cone ends reach past the belly)
+    lo.z = std::min(lo.z, t.mesh_z0);
+    hi.z = std::max(hi.z, t.mesh_z1);
+  }
   const double period = tp.period;
   auto z_cells = [&](double c) { return static_cast<long>(std::floor(period / c)); };
   double cell = 2.0 * r_max + skin;
@@ -812,10 +809,9 @@ void SolverImpl<Real>::wait_status() {
     for (int i = 0; i < n_; ++i) {
       const auto& p = pos_.host[i];
       const bool out_shell = sp.shell_radius > 0 && std::hypot(p.x, p.y) > sp.shell_radius + p.w;
-      const bool out_plates = sp.length > 0 && (p.z < -p.w || p.z > sp.length + p.w);
       const bool out_ends =
           sp.escape_z1 > sp.escape_z0 && (p.z < sp.escape_z0 - p.w || p.z > sp.escape_z1 + p.w);
-      if (out_shell || out_plates || out_ends) {
+      if (out_shell || out_ends) {
         m << ": ball " << info_.host[i].x << " is at (" << p.x << ", " << p.y << ", " << p.z << ") m";
         break;
       }

@@ -48,6 +48,7 @@ void mesh_tables(const Scene& scene, const LinerLayout& liner, double r_max, Sce
     d.element = liner.first_mesh + k;
     t.mesh_tris.push_back(d);
     t.mesh_set_triangles[m.turning ? 0 : 1].push_back(tri);
+    for (const Vec3& v : tri.v) t.mesh_z0 = std::min(t.mesh_z0, v.z), t.mesh_z1 = std::max(t.mesh_z1, v.z);
   }
   if (t.mesh_tris.empty()) t.mesh_tris.push_back(f64::MeshTriangle{});
   // Each feature's patch and wall type (that of the mesh of a triangle
@@ -125,16 +126,6 @@ SceneTables scene_tables(const Scene& scene) {
   sp.shell_radius = w.shell_radius;
   sp.length = w.has_end_plates() ? w.length : 0.0;
   sp.period = w.periodic ? w.length : 0.0;
-  // A mill closed by mesh ends (cone heads) has no plates to bound it: its
-  // meshes' axial extent does.
-  if (!w.periodic && !w.has_end_plates() && !w.meshes.empty()) {
-    double z0 = 1e300, z1 = -1e300;
-    for (const WallMesh& m : w.meshes)
-      for (const Triangle& tri : m.triangles)
-        for (const Vec3& v : tri.v) z0 = std::min(z0, v.z), z1 = std::max(z1, v.z);
-    sp.escape_z0 = z0;
-    sp.escape_z1 = z1;
-  }
   // A ball centre farther than this from the axis may touch a lifter.
   sp.lifter_reach = std::max(0.0, reach - 1.01 * r_max);
   sp.lifter_first_angle = w.lifter_first_angle;
@@ -165,6 +156,16 @@ SceneTables scene_tables(const Scene& scene) {
   bp.first_lifter_element = liner.first_lifter;
   bp.first_plate_element = liner.first_plate;
   mesh_tables(scene, liner, r_max, t);
+  // A ball wholly past the mill's ends has gone through one: the end plates
+  // bound the mill, or, closed by mesh ends (cone heads), the meshes' axial
+  // extent. A slice has no ends.
+  if (w.has_end_plates()) {
+    sp.escape_z0 = 0.0;
+    sp.escape_z1 = w.length;
+  } else if (!w.periodic && t.mesh_z1 >= t.mesh_z0) {
+    sp.escape_z0 = t.mesh_z0;
+    sp.escape_z1 = t.mesh_z1;
+  }
   return t;
 }
 

@@ -32,6 +32,8 @@ struct SceneTables {
   // Each set's triangles as the host has them, for binning on the host.
   std::array<std::vector<Triangle>, MC_MESH_SETS> mesh_set_triangles;
   std::array<MeshGridSpec, MC_MESH_SETS> mesh_grid_specs;
+  // The axial extent of every mesh triangle (mesh_z1 < mesh_z0: no meshes).
+  double mesh_z0 = 1e300, mesh_z1 = -1e300;
 };
 
 // The mesh grid's cells on the host, as cl/mesh_bin.cl fills them on the
