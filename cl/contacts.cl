@@ -29,7 +29,7 @@
 
 /* Whether a and b are within r_a + r_b + skin (the minimum image along a
  * periodic axis). */
-inline int is_neighbour(__global const SimParams* sp, real4 a, real4 b) {
+MC_FN int is_neighbour(__global const SimParams* sp, real4 a, real4 b) {
   real3 d = xyz_of(a) - xyz_of(b);
   d.z = image_dz(sp, d.z);
   const real cut = a.w + b.w + sp->skin;
@@ -64,7 +64,7 @@ __kernel void contacts_count(__global const SimParams* sp,
 
 /* Whether the pair (old indices a < b) was carried; if so its record goes
  * to *rec. */
-inline int find_carried(int a, int b, __global const int* carry_start,
+MC_FN int find_carried(int a, int b, __global const int* carry_start,
                         __global const int* carry_count,
                         __global const int* carry_index,
                         __global const int* carry_rec, int* rec) {

@@ -122,11 +122,15 @@ MC_FN void fg_pair_law(int q, int total, int group_first, __global const SimPara
                        __local const int* pair_ball,
                        __local real* own, Books* books, int law) {
   const int qc = min(q, max(total - 1, 0));
-  const int k = pair_entry[qc];
-  const int link = neigh_index[k];
-  const int a = group_first + pair_ball[qc];
-  const int touched = MC_LINK_TOUCHING(link);
-  const int b = min(MC_LINK_PARTNER(link), sp->n_balls - 1);
+  /* With no pair queued nothing is read that no kernel wrote: the queue's
+   * local slots, the list and the records may all be unwritten (a GPU does
+   * not zero its memory); the lane runs ball group_first against ball 0. */
+  const int any = total > 0;
+  const int k = any ? pair_entry[qc] : 0;
+  const int link = any ? neigh_index[k] : 0;
+  const int a = group_first + (any ? pair_ball[qc] : 0);
+  const int touched = any && MC_LINK_TOUCHING(link);
+  const int b = clamp(MC_LINK_PARTNER(link), 0, sp->n_balls - 1);
   const real z_b = image_z(sp, FG_AT(pos, b, 2), FG_AT(pos, a, 2)); /* nearest image, periodic.h */
   const ContactGeom g = pair_geometry(
       v3_make(FG_AT(pos, a, 0), FG_AT(pos, a, 1), FG_AT(pos, a, 2)), FG_AT(pos, a, 3),

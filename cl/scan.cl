@@ -3,8 +3,10 @@
  * sums; the block offsets are added back. Used for cell starts (binning) and
  * neighbour-list offsets (contacts). MC_SCAN_WG is a power of two. */
 
+#include "mc_shim.h"
+
 /* Exclusive scan of `value` over the work-group (Hillis–Steele). */
-inline int workgroup_exclusive_scan(__local int* tmp, int value) {
+MC_FN int workgroup_exclusive_scan(__local int* tmp, int value) {
   const int lid = get_local_id(0);
   tmp[lid] = value;
   barrier(CLK_LOCAL_MEM_FENCE);

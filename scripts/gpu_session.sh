@@ -1,103 +1,149 @@
 #!/bin/bash
-# Runs the tests and the benchmark on a GPU machine that lacks this
-# project's packages, from a copy of the repository that holds gpu-kit/
-# (made here by scripts/gpu_kit.sh; with the device tool, name gpu-kit in
-# `carry`):
+# One GPU session in one command that ends by itself within its budget
+# (default 480 s, the eight minutes of a lent machine), run from a copy of
+# the repository that holds gpu-kit/ (made here by scripts/gpu_kit.sh; with
+# the device tool, name gpu-kit in `carry`):
 #
-#   bash scripts/gpu_session.sh [--tests] [--validate] [--bench ROWS] [--steps N] [--device SPEC]
+#   bash scripts/gpu_session.sh [--budget S] [--device SPEC] [--dry-run]
 #
-# --tests runs millcharge_tests (all but the viewer's) on the GPU;
-# --validate runs the validation checks there (millcharge_validate, as
-# scripts/validate.sh does; validation.jsonl, and validation.md when
-# python3 is there); --bench
-# runs scripts/bench.sh for ROWS (its row names, e.g.
-# lab,tile-10k,tile-100k,tile-1M,100k,D) and the law probe. With neither,
-# it only lists the devices. It finds NVIDIA's OpenCL library
-# (libnvidia-opencl.so.1; MC_OPENCL_LIB names another driver's), points an
-# ICD file of its own at it, and puts gpu-kit/lib on the library path, so
-# nothing is installed. The build's compiled-in root (gpu-kit/build-root)
-# is linked to this copy when it does not exist here. Logs go to $OUT
-# when it is set (the device tool's folder), else to runs/gpu-DATE:
-# devices.txt, tests.log, validation.jsonl, validation.md, bench.md and
-# bench.jsonl.
+# Steps, in this order, each under its own time limit, each writing its
+# figures under $OUT (else runs/gpu-DATE) as soon as it ends, so a session
+# cut short still returns what it measured:
+#   devices     clinfo, `millcharge devices`, nvidia-smi      -> devices.txt
+#   kernels     the kernels built once, the driver's build log kept
+#               (-cl-nv-verbose on NVIDIA: registers, spills)  -> kernels.log
+#   tests       kernel against CPU reference, books, poison    -> tests.log
+#   validation  the analytic validation checks                 -> validation.jsonl
+#   bench       rows lab, tile-10k, tile-1M (its stage split in its JSON),
+#               mill D, few steps each; a row whose budget is gone is
+#               skipped, and the ledger says so                -> bench.jsonl
+#   law probe   the contact law's cost per pair                -> law_probe.txt
+# session.log is the ledger: each step's budget, the seconds it took, its
+# exit status, or why it was skipped. Seven files in all.
+# --dry-run runs the same plan with this checkout's build/ on PoCL's CPU
+# device (no kit, no driver search), to see the plan, the budgets and the
+# files on a machine without a GPU.
 set -uo pipefail
 root=$(pwd)
 kit=$root/gpu-kit
-tests=0; validate=0; rows=""; steps=""; device=gpu
+budget=480; device=gpu; dry=0
 while [ $# -gt 0 ]; do
   case "$1" in
-    --tests) tests=1; shift ;;
-    --validate) validate=1; shift ;;
-    --bench) rows="${2:?--bench needs rows, e.g. lab,100k,D}"; shift 2 ;;
-    --steps) steps="${2:?--steps needs a number}"; shift 2 ;;
+    --budget) budget="${2:?--budget needs seconds}"; shift 2 ;;
     --device) device="${2:?--device needs a spec}"; shift 2 ;;
-    *) echo "gpu_session.sh: unknown argument '$1'" >&2; exit 2 ;;
+    --dry-run) dry=1; device=cpu; shift ;;
+    *) echo "gpu_session.sh: unknown argument '$1' (use --budget, --device, --dry-run)" >&2; exit 2 ;;
   esac
 done
-[ -x "$kit/bin/millcharge" ] || { echo "gpu_session.sh: no $kit/bin/millcharge: run scripts/gpu_kit.sh on the build machine and carry gpu-kit" >&2; exit 1; }
 out=${OUT:-$root/runs/gpu-$(date +%Y%m%d-%H%M%S)}
 mkdir -p "$out"
+ledger=$out/session.log
+start=$(date +%s)
+left() { echo $((budget - ($(date +%s) - start))); }
+exec 3>&2  # the terminal, whatever a step's stderr is sent to
+log() { echo "$*" >> "$ledger"; echo "$*" >&3; }
 
-# The OpenCL driver: an ICD file of our own naming it.
-lib=${MC_OPENCL_LIB:-}
-[ -n "$lib" ] || lib=$(ldconfig -p 2> /dev/null | awk '/libnvidia-opencl\.so\.1 /{print $NF; exit}')
-[ -n "$lib" ] || lib=$(find / \( -path /proc -o -path /sys -o -path "$root" \) -prune -o -name 'libnvidia-opencl.so.1' -print 2> /dev/null | head -1)
-[ -n "$lib" ] || { echo "gpu_session.sh: no libnvidia-opencl.so.1 on this machine (set MC_OPENCL_LIB to the driver's OpenCL library)" >&2; exit 1; }
-icd=$(mktemp -d)
-echo "$lib" > "$icd/gpu.icd"
-export OCL_ICD_VENDORS=$icd
-export LD_LIBRARY_PATH=$kit/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-
-# The programs where the build's paths expect them.
-build_root=$(cat "$kit/build-root")
-if [ "$build_root" != "$root" ]; then
-  if [ ! -e "$build_root" ]; then
-    mkdir -p "$(dirname "$build_root")" && ln -s "$root" "$build_root"
-  elif [ "$(cd "$build_root" && pwd -P)" != "$(pwd -P)" ]; then
-    echo "gpu_session.sh: $build_root exists and is not this copy: the kernels and assets it holds will be used" >&2
+# step NAME SECONDS COMMAND...: runs COMMAND under the smaller of SECONDS
+# and what is left of the budget (less 10 s for the ledger), or skips it.
+step() {
+  local name=$1 want=$2; shift 2
+  local have=$(($(left) - 10))
+  local limit=$((want < have ? want : have))
+  if [ "$limit" -lt 15 ]; then
+    log "step $name: skipped, $have s of the budget left (wanted $want s)"
+    return 0
   fi
-fi
-mkdir -p build/tests
-cp "$kit/bin/millcharge" build/millcharge
-cp "$kit/bin/millcharge_law_probe" build/millcharge_law_probe
-cp "$kit/bin/millcharge_validate" build/millcharge_validate
-cp "$kit/bin/millcharge_tests" build/tests/millcharge_tests
+  local t0=$(date +%s) rc=0
+  timeout --kill-after=5 "$limit" "$@" || rc=$?
+  local used=$(($(date +%s) - t0))
+  case $rc in
+    0) log "step $name: done in $used s (limit $limit s)" ;;
+    124 | 137) log "step $name: stopped at its limit of $limit s; what it wrote is kept" ;;
+    *) log "step $name: exit $rc after $used s (limit $limit s)" ;;
+  esac
+  return 0
+}
 
-{
-  echo "OpenCL library: $lib; kit built at $(cat "$kit/commit" 2> /dev/null || echo '?')"
-  "$kit/bin/clinfo" -l
-  build/millcharge devices
-  command -v nvidia-smi > /dev/null && nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm --format=csv
-} 2>&1 | tee "$out/devices.txt"
-status=0
-if [ "$tests" = 1 ]; then
-  echo "gpu_session.sh: tests on --device $device" >&2
-  MILLCHARGE_DEVICE=$device build/tests/millcharge_tests --durations yes > "$out/tests.log" 2>&1 || status=1
-  tail -4 "$out/tests.log"
-fi
-if [ "$validate" = 1 ]; then
-  echo "gpu_session.sh: validation checks on --device $device" >&2
-  vstatus=0
-  build/millcharge_validate --device "$device" > "$out/validation.jsonl" 2> "$out/validation.err" || vstatus=$?
-  # 3: every check ran and a row fails, which the report shows.
-  [ "$vstatus" = 0 ] || [ "$vstatus" = 3 ] || status=1
-  if command -v python3 > /dev/null && [ "$vstatus" != 1 ]; then
-    python3 scripts/validation_report.py --rows "$out/validation.jsonl" \
-      --command "bash scripts/gpu_session.sh --validate --device $device" \
-      --machine "$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(nproc) CPUs" \
-      --date "$(date -u +%Y-%m-%d)" --commit "$(cat "$kit/commit" 2> /dev/null || echo '?')" \
-      --liggghts-note "not run on the GPU machine" > "$out/validation.md" || status=1
+if [ "$dry" = 1 ]; then
+  bin=$root/build
+  [ -x "$bin/millcharge" ] && [ -x "$bin/tests/millcharge_tests" ] || bash scripts/build.sh >&2
+  tests_bin=$bin/tests/millcharge_tests
+  clinfo_bin=$(command -v clinfo || echo true)
+  log "gpu_session.sh: dry run on --device $device with build/, budget $budget s"
+else
+  [ -x "$kit/bin/millcharge" ] || { echo "gpu_session.sh: no $kit/bin/millcharge: run scripts/gpu_kit.sh on the build machine and carry gpu-kit" >&2; exit 1; }
+  # The OpenCL driver, where a container's driver mount puts it first: the
+  # library path, /usr/local/nvidia, then the loader's cache, then a search
+  # of a few folders that gives up after 20 s.
+  lib=${MC_OPENCL_LIB:-}
+  if [ -z "$lib" ]; then
+    IFS=: read -r -a dirs <<< "${LD_LIBRARY_PATH:-}"
+    for d in "${dirs[@]}" /usr/local/nvidia/lib64 /usr/local/nvidia/lib /usr/lib/x86_64-linux-gnu /usr/lib64; do
+      [ -n "$d" ] && [ -e "$d/libnvidia-opencl.so.1" ] && { lib=$d/libnvidia-opencl.so.1; break; }
+    done
   fi
-  tail -2 "$out/validation.err"
+  [ -n "$lib" ] || lib=$(ldconfig -p 2> /dev/null | awk '/libnvidia-opencl\.so\.1 /{print $NF; exit}')
+  [ -n "$lib" ] || lib=$(timeout 20 find /usr /opt /lib -name 'libnvidia-opencl.so.1' -print 2> /dev/null | head -1)
+  [ -n "$lib" ] || { echo "gpu_session.sh: no libnvidia-opencl.so.1 on this machine (set MC_OPENCL_LIB to the driver's OpenCL library)" | tee -a "$ledger" >&2; exit 1; }
+  icd=$(mktemp -d)
+  echo "$lib" > "$icd/gpu.icd"
+  export OCL_ICD_VENDORS=$icd
+  export LD_LIBRARY_PATH=$kit/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+  # The programs where the build's paths expect them.
+  build_root=$(cat "$kit/build-root")
+  if [ "$build_root" != "$root" ]; then
+    if [ ! -e "$build_root" ]; then
+      mkdir -p "$(dirname "$build_root")" && ln -s "$root" "$build_root"
+    elif [ "$(cd "$build_root" && pwd -P)" != "$(pwd -P)" ]; then
+      echo "gpu_session.sh: $build_root exists and is not this copy: the kernels and assets it holds will be used" >&2
+    fi
+  fi
+  bin=$kit/bin
+  tests_bin=$kit/bin/millcharge_tests
+  clinfo_bin=$kit/bin/clinfo
+  log "gpu_session.sh: OpenCL library $lib; kit built at $(cat "$kit/commit" 2> /dev/null || echo '?'); budget $budget s"
 fi
-if [ -n "$rows" ]; then
-  args=(--device "$device" --only "$rows")
-  [ -n "$steps" ] && args+=(--steps "$steps")
-  bash scripts/bench.sh "${args[@]}" > "$out/bench.md" 2> "$out/bench.err" || status=1
-  cat "$out/bench.md"
-  build/millcharge_law_probe --device "$device" 2>&1 | tee "$out/law_probe.txt" || status=1
-  dir=$(sed -n 's/^bench.sh: JSON lines in //p' "$out/bench.err" | tail -1)
-  [ -n "$dir" ] && cat "$dir"/*.json > "$out/bench.jsonl"
-  tail -3 "$out/bench.err" >&2
+mc=$bin/millcharge
+
+export clinfo_bin mc
+step devices 30 bash -c '"$clinfo_bin" -l; "$mc" devices; command -v nvidia-smi > /dev/null &&
+  nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm --format=csv; true' > "$out/devices.txt" 2>&1
+platform=$("$mc" devices 2> /dev/null | grep -i -m1 nvidia || true)
+
+# The kernels, built once with the driver's log kept. NVIDIA's compiler
+# prints registers and spills per kernel under -cl-nv-verbose.
+export MILLCHARGE_BUILD_LOG=$out/kernels.log
+[ -n "$platform" ] && export MILLCHARGE_CL_OPTIONS="${MILLCHARGE_CL_OPTIONS:+$MILLCHARGE_CL_OPTIONS }-cl-nv-verbose"
+step kernels 60 "$mc" bench assets/cases/lab.toml --device "$device" --steps 20 --warmup 0 --books on --quiet \
+  > /dev/null 2>> "$out/kernels.log"
+unset MILLCHARGE_BUILD_LOG
+
+# Kernel against reference (forces, contacts, motion), the books, the
+# poison test; a test process stops at the first fault a GPU makes sticky.
+step tests 150 env MILLCHARGE_DEVICE="$device" "$tests_bin" "[forces],[contacts],[motion],[books],[poison]" \
+  --durations yes > "$out/tests.log" 2>&1
+
+vlog=$(mktemp)
+step validation 60 "$bin/millcharge_validate" --device "$device" > "$out/validation.jsonl" 2> "$vlog"
+tail -2 "$vlog" >> "$ledger"
+
+# Bench rows from small to large, each JSON line appended as it ends.
+bench_row() {  # NAME SECONDS ARGS...
+  local name=$1 want=$2; shift 2
+  step "bench $name" "$want" bash -c '"$@" >> "'"$out"'/bench.jsonl"' _ "$mc" bench "$@" --device "$device" --quiet
+}
+settled=$(mktemp -d)/settled-10k  # not under $OUT: only the six files go back
+step "settle 10k" 60 "$mc" run assets/cases/bench_100k.toml --set mill.length=0.305 --set run.duration=0.05 \
+  --set run.warmup=0 --set run.snapshot_interval=0 --device "$device" --out "$settled" --quiet > /dev/null 2>&1
+bench_row lab 40 assets/cases/lab.toml --steps 2000 --warmup 0.05
+if [ -f "$settled/checkpoint.bin" ]; then
+  bench_row tile-10k 40 --from "$settled" --tile 1 --steps 2000
+  bench_row tile-1M 90 --from "$settled" --tile 100 --steps 200
+else
+  log "bench tile-10k, tile-1M: skipped, the settled 10k charge was not made"
 fi
-exit $status
+bench_row D 120 assets/cases/mill_d.toml --steps 100 --warmup 0.05
+step "law probe" 30 "$bin/millcharge_law_probe" --device "$device" > "$out/law_probe.txt" 2>&1
+rm -rf "$(dirname "$settled")" "$vlog"
+log "gpu_session.sh: $(($(date +%s) - start)) s of $budget s; files: $(cd "$out" && ls | tr '\n' ' ')"
+exit 0

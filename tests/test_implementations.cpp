@@ -19,6 +19,7 @@
 
 #include "app/commands.h"
 #include "compute/context.h"
+#include "viewer/gl_sharing.h"
 
 namespace fs = std::filesystem;
 
@@ -115,4 +116,19 @@ TEST_CASE("millcharge devices lists the second implementation beside PoCL", "[.]
   CHECK_THAT(details, Catch::Contains(tested.c_version));
   CHECK_THAT(details, Catch::Contains(tested.fp64 ? "fp64 yes" : "fp64 no"));
   CHECK(tested.c_version.rfind("OpenCL C 1.", 0) == 0);  // the kernels are OpenCL C 1.2
+}
+
+TEST_CASE("CL-GL interop is tried only with the GL driver of the OpenCL platform's vendor", "[device]") {
+  using mc::viewer::same_gl_cl_vendor;
+  // Xvfb's software GL on a machine with an NVIDIA GPU: NVIDIA's OpenCL
+  // cannot take Mesa's GLX context.
+  CHECK_FALSE(same_gl_cl_vendor("Mesa", "llvmpipe (LLVM 15.0.6, 256 bits)", "NVIDIA CUDA"));
+  CHECK_FALSE(same_gl_cl_vendor("Mesa", "llvmpipe (LLVM 15.0.6, 256 bits)", "Portable Computing Language"));
+  CHECK(same_gl_cl_vendor("Mesa", "llvmpipe (LLVM 15.0.6, 256 bits)", "rusticl"));
+  CHECK(same_gl_cl_vendor("NVIDIA Corporation", "NVIDIA H100 80GB HBM3/PCIe/SSE2", "NVIDIA CUDA"));
+  CHECK_FALSE(same_gl_cl_vendor("NVIDIA Corporation", "NVIDIA H100 80GB HBM3/PCIe/SSE2", "rusticl"));
+  CHECK(same_gl_cl_vendor("AMD", "AMD Radeon RX 7900 XTX", "AMD Accelerated Parallel Processing"));
+  // Mesa's Intel GL driver is Mesa's: it shares with rusticl.
+  CHECK(same_gl_cl_vendor("Intel", "Mesa Intel(R) UHD Graphics 630", "rusticl"));
+  CHECK_FALSE(same_gl_cl_vendor("", "", "NVIDIA CUDA"));
 }

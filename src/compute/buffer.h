@@ -42,6 +42,9 @@ class Buffer {
     host.assign(n, T{});
     try {
       device_ = cl::Buffer(ctx_->context(), CL_MEM_READ_WRITE, b);
+      // Never what the device last held there (Context::new_buffer_fill).
+      const cl_uchar fill = ctx_->new_buffer_fill();
+      ctx_->queue().enqueueFillBuffer(device_, fill, 0, b);
     } catch (const cl::Error& e) {
       throw ctx_->error("allocating buffer '" + label_ + "' of " + bytes_text(b), e.err());
     }

@@ -207,7 +207,15 @@ void Context::choose(const std::string& spec_in) {
   if (const std::size_t limit = memory_override(); limit > 0) memory_bytes_ = std::min(memory_bytes_, limit);
 }
 
+namespace {
+unsigned char fill_from_environment() {
+  const char* p = std::getenv("MILLCHARGE_POISON");
+  return p && std::string(p) == "1" ? 0xFF : 0x00;
+}
+}  // namespace
+
 Context::Context(const std::string& spec_in) : ledger_(std::make_shared<Ledger>()) {
+  new_buffer_fill_ = fill_from_environment();
   choose(spec_in);
   try {
     context_ = cl::Context(device_);
@@ -220,6 +228,7 @@ Context::Context(const std::string& spec_in) : ledger_(std::make_shared<Ledger>(
 
 Context::Context(const std::string& spec_in, const std::vector<cl_context_properties>& gl_properties)
     : ledger_(std::make_shared<Ledger>()) {
+  new_buffer_fill_ = fill_from_environment();
   choose(spec_in);
   if (!info_.gl_sharing) throw Error(info_.label() + " has no cl_khr_gl_sharing");
   try {

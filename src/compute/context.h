@@ -84,6 +84,15 @@ class Context {
   // CL_DEVICE_MAX_MEM_ALLOC_SIZE (capped at memory_bytes()).
   std::size_t max_alloc_bytes() const;
 
+  // The byte every new device buffer is filled with before any kernel
+  // runs: 0, or 0xFF (a NaN in every real, -1 in every int) with
+  // MILLCHARGE_POISON=1 in the environment or after set_new_buffer_fill.
+  // A device does not clear the memory it hands out, so a kernel that reads
+  // what no kernel wrote sees the last program's data on a GPU; under the
+  // poison such a read changes a result (tests/test_poison.cpp).
+  unsigned char new_buffer_fill() const { return new_buffer_fill_; }
+  void set_new_buffer_fill(unsigned char byte) { new_buffer_fill_ = byte; }
+
   // The error for an OpenCL call that failed while doing `what` (e.g.
   // "writing buffer 'positions'"): the out-of-memory codes
   // (CL_MEM_OBJECT_ALLOCATION_FAILURE, CL_OUT_OF_RESOURCES,
@@ -96,6 +105,7 @@ class Context {
   std::shared_ptr<Ledger> ledger_;
   std::size_t memory_bytes_ = 0;
   bool shares_gl_ = false;
+  unsigned char new_buffer_fill_ = 0;
   DeviceInfo info_;
   cl::Device device_;
   cl::Context context_;

@@ -4,7 +4,11 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
+#include <filesystem>
+#include <vector>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -128,6 +132,47 @@ std::string build_failure_message(const std::string& device, const std::string& 
   return m.str();
 }
 
+// MILLCHARGE_BUILD_LOG=FILE: a good build's log (NVIDIA's register and
+// spill counts under -cl-nv-verbose, PoCL's vectoriser notes) appended to
+// FILE with the device and the options, since a good build shows none.
+void Program::keep_build_log(Context& ctx, const std::string& opts) {
+  const char* path = std::getenv("MILLCHARGE_BUILD_LOG");
+  if (!path || !*path) return;
+  std::string log;
+  try {
+    log = program_.getBuildInfo<CL_PROGRAM_BUILD_LOG>(ctx.device());
+  } catch (const cl::Error&) {
+    log = "(the driver gave no build log)";
+  }
+  if (std::FILE* f = std::fopen(path, "a")) {
+    std::fprintf(f, "== %s (%s)\n== options: %s\n%s\n", ctx.info().label().c_str(), double_ ? "double" : "float",
+                 opts.c_str(), log.c_str());
+    std::fclose(f);
+  }
+}
+
+// A hash (FNV-1a) of every file in the kernel folder, names and contents.
+// A driver's compiler cache may key on the source string alone, which names
+// the headers but does not hold them: an edited header would then reuse the
+// old binary. The hash goes into the options, and so into the key.
+static std::string kernel_folder_hash(const std::string& dir) {
+  std::vector<std::filesystem::path> paths;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.is_regular_file()) paths.push_back(e.path());
+  std::sort(paths.begin(), paths.end());
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const std::string& bytes) {
+    for (unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
+  };
+  for (const auto& p : paths) {
+    mix(p.filename().string());
+    mix(read_file(p.string()));
+  }
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
 Program::Program(Context& ctx, const std::vector<std::string>& files,
                  BuildOptions options, bool double_precision)
     : ctx_(ctx), double_(double_precision) {
@@ -140,7 +185,7 @@ Program::Program(Context& ctx, const std::vector<std::string>& files,
   for (const std::string& f : files)
     source += "#line 1 \"" + f + "\"\n" + read_file(dir + "/" + f) + "\n";
   if (double_) options.define("MC_DOUBLE");
-  std::string opts = options.str(dir);
+  std::string opts = options.str(dir) + " -DMC_SOURCE_HASH=0x" + kernel_folder_hash(dir);
   // Extra compiler options for tuning and for drivers that need them, e.g.
   // MILLCHARGE_CL_OPTIONS="-cl-mad-enable".
   if (const char* extra = std::getenv("MILLCHARGE_CL_OPTIONS")) opts += std::string(" ") + extra;
@@ -155,6 +200,7 @@ Program::Program(Context& ctx, const std::vector<std::string>& files,
     // A good build: whatever the driver printed goes out as before.
     const std::string printed = driver_output.release();
     if (!printed.empty()) std::fputs(printed.c_str(), stderr);
+    keep_build_log(ctx, opts);
   } catch (const cl::Error& e) {
     const std::string printed = driver_output.release();  // the build log has it too
     std::string log;

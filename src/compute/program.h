@@ -45,6 +45,7 @@ class Program {
   bool double_precision() const { return double_; }
 
  private:
+  void keep_build_log(Context& ctx, const std::string& opts);
   Context& ctx_;
   cl::Program program_;
   bool double_;

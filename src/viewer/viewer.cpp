@@ -153,8 +153,16 @@ void App::make_context() {
   compute::DeviceInfo dev = compute::choose_device(opt_.device.empty() && std::getenv("MILLCHARGE_DEVICE")
                                                        ? std::getenv("MILLCHARGE_DEVICE")
                                                        : opt_.device);
-  if (!dev.gl_sharing) {
+  const char* gl_vendor = reinterpret_cast<const char*>(glGetString(GL_VENDOR));
+  const char* gl_renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  const char* interop = std::getenv("MILLCHARGE_INTEROP");
+  if (interop && std::string(interop) == "0") {
+    why_not_shared_ = "MILLCHARGE_INTEROP=0";
+  } else if (!dev.gl_sharing) {
     why_not_shared_ = dev.name + " has no cl_khr_gl_sharing";
+  } else if (!same_gl_cl_vendor(gl_vendor ? gl_vendor : "", gl_renderer ? gl_renderer : "", dev.platform_name)) {
+    why_not_shared_ = std::string("the GL driver (") + (gl_vendor ? gl_vendor : "?") + ", " +
+                      (gl_renderer ? gl_renderer : "?") + ") is not the OpenCL platform's (" + dev.platform_name + ")";
   } else {
     const auto props = gl_sharing_properties(window_->get());
     if (props.empty()) {
@@ -167,7 +175,11 @@ void App::make_context() {
       }
     }
   }
-  if (!ctx_) ctx_ = std::make_unique<compute::Context>(opt_.device);
+  if (!ctx_) {
+    // Once, here: the panel shows it too.
+    if (dev.gl_sharing) std::cerr << "millcharge view: no CL-GL interop (" << why_not_shared_ << "); copying through the host\n";
+    ctx_ = std::make_unique<compute::Context>(opt_.device);
+  }
 }
 
 double App::sim_time() const { return time_offset_ + (solver_ ? solver_->time_s() : 0.0); }
