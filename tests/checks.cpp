@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <random>
 #include <stdexcept>
 
@@ -332,12 +333,19 @@ PowerBalance drum_power_balance(compute::Context& ctx, ContactLaw law) {
   DrumSpec spec;  // 0.3 m drum, 8 lifters, 75 % of critical
   spec.n_balls = 300;
   spec.law = law;
+  return drum_power_balance(ctx, spec, 1.5, 3);  // warm-up: charge lifted and cycling
+}
+
+PowerBalance drum_power_balance(compute::Context& ctx, const DrumSpec& spec, double warmup_s, int revolutions,
+                                const char* forces) {
   const Scene sc = make_drum(spec);
+  if (forces) ::setenv("MILLCHARGE_FORCES", forces, 1);
   auto s = make_solver(ctx, sc);
+  if (forces) ::unsetenv("MILLCHARGE_FORCES");
   const double rev_s = 2 * kPi / sc.mill_omega;
-  s->advance(static_cast<long>(1.5 / sc.numerics.dt));  // warm-up: charge lifted and cycling
+  s->advance(static_cast<long>(warmup_s / sc.numerics.dt));
   const double e_start = s->observe(true).total_energy();
-  s->advance(static_cast<long>(3 * rev_s / sc.numerics.dt));  // three whole revolutions
+  s->advance(static_cast<long>(revolutions * rev_s / sc.numerics.dt));
   const Observables o = s->observe(true);
   PowerBalance out;
   out.window_s = o.interval_s;

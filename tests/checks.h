@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "compute/context.h"
+#include "core/drum.h"
 #include "core/mill_case.h"
 #include "core/scene.h"
 #include "sim/mill_run.h"
@@ -111,6 +112,10 @@ struct PowerBalance {
   double imbalance() const { return (torque_power_W - dissipation_power_W - energy_change_W) / torque_power_W; }
 };
 PowerBalance drum_power_balance(compute::Context& ctx, ContactLaw law);
+// The same books of any drum: turned warmup_s, then whole revolutions
+// measured. `forces` names the force kernel (MILLCHARGE_FORCES), or null.
+PowerBalance drum_power_balance(compute::Context& ctx, const DrumSpec& spec, double warmup_s, int revolutions,
+                                const char* forces = nullptr);
 
 // The lab mill (assets/cases/lab.toml) with overrides, e.g.
 // {"mill.speed_fraction=0.5", "mill.length=0.1"}, run as `millcharge run`
