@@ -30,6 +30,9 @@
 #define MC_FLAG_ESCAPED 8       /* a ball wholly outside the shell or the end plates */
 #define MC_FLAG_RECORDS_FULL 16 /* a contact found the record pool full */
 #define MC_FLAG_PACK_RECORDS 32 /* the record pool is past its mark: pack it */
+#define MC_FLAG_FAST 64         /* a ball crosses half the skin within twice
+                                   status_every steps: the host must read the
+                                   status word every step */
 
 /* A neighbour-list entry (a link) holds the partner's index j while the
  * pair is apart, and ~j (negative) while it touched at the last force
@@ -156,7 +159,10 @@ typedef struct {
   int n_materials;   /* ball materials; the wall material has index n_materials */
   int n_lifters;
   int law;           /* MC_LAW_LINEAR or MC_LAW_HERTZ */
-  int pad0, pad1;
+  int status_every;  /* steps between the host's reads of the status word
+                        (>= 1): the rebuild flag goes up that many steps'
+                        travel earlier */
+  int pad1;
 } SimParams;
 
 /* How the energy is booked: the spectra's pair types and the liner's

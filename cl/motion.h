@@ -31,11 +31,17 @@ MC_FN int integrate_ball(int i, MC_GLOBAL const SimParams* sp,
   int flags = 0;
   const real4 b = pos_at_build[i];
   const real dx = p.x - b.x, dy = p.y - b.y, dz = image_dz(sp, p.z - b.z); /* wrapped or not */
-  /* The host acts on this flag one step later (it reads the status word
-   * without stalling the queue), so the ball must still be inside half the
-   * skin after one more step: the flag goes up two steps' travel early. */
-  const real reach = R(0.5) * sp->skin - R(2.0) * dt * sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+  /* The host reads the status word every status_every steps, without
+   * stalling the queue, and acts on it one step after the read: a flag
+   * raised now may wait status_every steps. The flag goes up twice that
+   * many steps' travel early (two when the host reads every step): a
+   * collision in the steps it waits may speed the ball up. */
+  const real reach =
+      R(0.5) * sp->skin - (real)(2 * sp->status_every) * dt * sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
   if (reach <= R(0.0) || dx * dx + dy * dy + dz * dz > reach * reach) flags |= MC_FLAG_REBUILD;
+  /* Too fast for reads every status_every steps: a rebuild may come only
+   * that often, and this ball would leave the skin in between. */
+  if (sp->status_every > 1 && reach <= R(0.0)) flags |= MC_FLAG_FAST;
   /* A ball wholly outside the shell or past the mill's ends (its plates or
    * its mesh ends) has gone through a wall: the contact was too soft or too
    * short for this dt. */

@@ -1,6 +1,8 @@
 // Neighbour lists (binning + contacts kernels) against brute force.
 #include <catch2/catch.hpp>
 
+#include <cstdlib>
+
 #include <algorithm>
 #include <random>
 #include <set>
@@ -108,20 +110,53 @@ TEST_CASE("neighbour search equals brute force on random packings", "[contacts]"
 
 TEST_CASE("neighbour lists stay complete while the charge moves", "[contacts]") {
   // A settling, colliding bed rebuilds its lists many times; at every check
-  // each touching pair must be listed.
-  Scene sc = random_packing(0.004, 0.012, 5, 0.08, 7);
-  sc.numerics.gravity = {0, -9.81, 0};
-  sc.walls.shell_radius = 0.0;
-  for (auto& b : sc.balls) b.velocity = {0.5 * std::sin(b.id), 0.5 * std::cos(b.id), 0.3 * std::sin(3.0 * b.id)};
-  sc.numerics.dt = 2e-6;
-  auto s = make_solver(context(), sc);
-  for (int round = 0; round < 5; ++round) {
-    s->advance(2000);
-    const std::set<std::pair<int, int>> listed = test::unordered(s->neighbour_pairs());
-    const auto touching = brute_force(s->balls(), 0.0, 0.0);
-    int missing = 0;
-    for (const auto& p : touching) missing += listed.count(p) == 0;
+  // (600 of them, between status reads too) each touching pair must be
+  // listed: with the status word read every step (a CPU device) and every 8
+  // steps (MILLCHARGE_STATUS_EVERY; a GPU reads every kGpuStatusEvery), when
+  // a rebuild flag may wait 8 steps. With a thin skin (10 um, half of it a
+  // few steps of a 0.5 m/s ball's travel) 8 steps are too many: the solver
+  // reads every step from the start, or from the step a ball gets that fast
+  // (MC_FLAG_FAST).
+  struct Case {
+    double skin;    // m; 0: the default (20 % of the smallest radius)
+    double speed;   // of the balls' start velocities
+    const char* every;
+    int every_after;
+  };
+  for (const Case& c : {Case{0.0, 1.0, "8", 8}, Case{1e-5, 1.0, "8", 1}, Case{1e-5, 0.2, "8", 1},
+                        Case{1e-5, 1.0, "1", 1}}) {
+    Scene sc = random_packing(0.004, 0.012, 5, 0.08, 7);
+    sc.numerics.gravity = {0, -9.81, 0};
+    sc.walls.shell_radius = 0.0;
+    for (auto& b : sc.balls)
+      b.velocity = {0.5 * c.speed * std::sin(b.id), 0.5 * c.speed * std::cos(b.id), 0.3 * c.speed * std::sin(3.0 * b.id)};
+    sc.numerics.dt = 2e-6;
+    sc.numerics.skin = c.skin;
+    ::setenv("MILLCHARGE_STATUS_EVERY", c.every, 1);
+    auto s = make_solver(context(), sc);
+    ::unsetenv("MILLCHARGE_STATUS_EVERY");
+    INFO("skin " << c.skin << " m, speed x" << c.speed << ", status read every " << c.every << " steps");
+    long missing = 0, pairs = 0;
+    for (int round = 0; round < 600; ++round) {
+      s->advance(round % 2 ? 5 : 6);
+      const std::set<std::pair<int, int>> listed = test::unordered(s->neighbour_pairs());
+      const auto touching = brute_force(s->balls(), 0.0, 0.0);
+      pairs += static_cast<long>(touching.size());
+      for (const auto& p : touching) missing += listed.count(p) == 0;
+    }
+    CHECK(pairs > 100);  // the balls met
     CHECK(missing == 0);
+    CHECK(s->rebuilds() > 2);
+    CHECK(s->status_every() == c.every_after);
   }
-  CHECK(s->rebuilds() > 2);
+}
+
+TEST_CASE("a bad MILLCHARGE_STATUS_EVERY is refused with its name", "[contacts]") {
+  Scene sc = random_packing(0.004, 0.012, 2, 0.04, 7);
+  for (const char* bad : {"0", "65", "four", "8x"}) {
+    ::setenv("MILLCHARGE_STATUS_EVERY", bad, 1);
+    INFO(bad);
+    CHECK_THROWS_WITH(make_solver(context(), sc), Catch::Contains("MILLCHARGE_STATUS_EVERY"));
+  }
+  ::unsetenv("MILLCHARGE_STATUS_EVERY");
 }

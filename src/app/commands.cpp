@@ -976,6 +976,7 @@ int cmd_bench(const BenchOptions& o) {
   j["precision"] = c.precision == Precision::double_ ? "double" : "float";
   j["law"] = c.law == ContactLaw::hertz ? "hertz" : "linear";
   j["forces_kernel"] = solver->forces_kernel();
+  j["status_every"] = solver->status_every();
   j["dt_s"] = d.dt;
   j["device_bytes"] = bytes;
   j["bytes_per_ball"] = static_cast<double>(bytes) / n;

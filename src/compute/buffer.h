@@ -83,4 +83,39 @@ class Buffer {
   std::shared_ptr<void> reservation_;  // gives the bytes back to the Context
 };
 
+// One int in pinned host memory (CL_MEM_ALLOC_HOST_PTR, mapped once): the
+// target of a read that must not wait. A read into pageable memory may
+// block the host until it is done (NVIDIA's driver stages it through a
+// pinned copy), which keeps the queue from running ahead.
+class PinnedInt {
+ public:
+  PinnedInt() = default;
+  explicit PinnedInt(Context& ctx) : ctx_(&ctx) {
+    try {
+      buffer_ = cl::Buffer(ctx.context(), CL_MEM_READ_WRITE | CL_MEM_ALLOC_HOST_PTR, sizeof(int));
+      ptr_ = static_cast<int*>(
+          ctx.queue().enqueueMapBuffer(buffer_, CL_TRUE, CL_MAP_READ | CL_MAP_WRITE, 0, sizeof(int)));
+    } catch (const cl::Error& e) {
+      throw ctx.error("mapping a pinned status word", e.err());
+    }
+    *ptr_ = 0;
+  }
+  PinnedInt(const PinnedInt&) = delete;
+  PinnedInt& operator=(const PinnedInt&) = delete;
+  ~PinnedInt() {
+    if (ptr_ == nullptr) return;
+    try {
+      ctx_->queue().enqueueUnmapMemObject(buffer_, ptr_);
+      ctx_->queue().finish();
+    } catch (const cl::Error&) {
+    }
+  }
+  int* get() const { return ptr_; }
+
+ private:
+  Context* ctx_ = nullptr;
+  cl::Buffer buffer_;
+  int* ptr_ = nullptr;
+};
+
 }  // namespace mc::compute

@@ -98,6 +98,7 @@ class SolverImpl final : public Solver {
   double dt() const override { return dt_; }
   std::size_t device_bytes() const override;
   const char* forces_kernel() const override { return grouped_forces_ ? "grouped" : "ball"; }
+  int status_every() const override { return status_every_; }
   const compute::DeviceInfo& device() const override { return ctx_.info(); }
 
  private:
@@ -112,6 +113,8 @@ class SolverImpl final : public Solver {
   void motion();
   void read_status();
   void wait_status();
+  void check_status_now();
+  void read_every_step();
   void lap(double StageTimes::*stage);
   // Entries the lists are given room for when they hold `entries`: a
   // sixteenth to spare.
@@ -192,10 +195,13 @@ class SolverImpl final : public Solver {
   Buffer<int> counts_;
   double total_mass_ = 0;
 
-  // The status word of step s is read without waiting and acted on at step
-  // s + 1, so the host never stalls the queue inside a step (the motion
-  // kernel flags a rebuild one step early to allow for this).
-  int status_host_ = 0;
+  // The status word is read every status_every_ steps (on steps whose count
+  // is a multiple of it, so a resumed run reads where the unbroken one did),
+  // without waiting, and acted on at the next step; between reads the host
+  // does not wait for the queue (the motion kernel flags a rebuild
+  // status_every_ + 1 steps early to allow for this).
+  int status_every_ = 1;
+  compute::PinnedInt status_host_;
   cl::Event status_event_;
   bool status_in_flight_ = false;
   int pending_flags_ = 0;  // read, not yet acted on
@@ -275,6 +281,7 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       partial_(ctx, (static_cast<std::size_t>(n_) / kReduceWG + 1) * kObservables, "reduction partials"),
       profile_(ctx, kProfileBins, "contact profile"),
       counts_(ctx, 3, "contact counts"),
+      status_host_(ctx),
       scan_(program_, ctx, std::max<std::size_t>(n_, 1)),
       k_bin_clear_(program_, "bin_clear"),
       k_bin_count_(program_, "bin_count"),
@@ -310,6 +317,14 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
     if (v != "ball" && v != "grouped")
       throw std::invalid_argument("MILLCHARGE_FORCES=" + v + ": expected ball (the default) or grouped");
     grouped_forces_ = v == "grouped";
+  }
+  status_every_ = ctx.info().type == "gpu" ? kGpuStatusEvery : 1;
+  if (const char* e = std::getenv("MILLCHARGE_STATUS_EVERY"); e && *e) {
+    char* end = nullptr;
+    const long k = std::strtol(e, &end, 10);
+    if (*end != '\0' || k < 1 || k > 64)
+      throw std::invalid_argument(std::string("MILLCHARGE_STATUS_EVERY=") + e + ": expected a whole number from 1 to 64");
+    status_every_ = static_cast<int>(k);
   }
   if (n_ == 0) throw std::invalid_argument("scene: no balls");
 
@@ -448,6 +463,13 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   sp.n_materials = tp.n_materials;
   sp.n_lifters = tp.n_lifters;
   sp.law = tp.law;
+  // Reads every status_every_ steps need balls that take twice as many
+  // steps to cross half the skin; a scene that starts faster reads every
+  // step (and the motion kernel's MC_FLAG_FAST says so later).
+  double v_max = 0;
+  for (const Ball& b : scene.balls) v_max = std::max(v_max, b.velocity.norm());
+  if (status_every_ > 1 && 2.0 * status_every_ * tp.dt * v_max >= 0.5 * tp.skin) status_every_ = 1;
+  sp.status_every = status_every_;
   if (scene.numerics.law != law_)
     throw std::invalid_argument("the contact law cannot change in a running solver (its kernels are built for one)");
 
@@ -776,7 +798,7 @@ void SolverImpl<Real>::set_stage_timing(bool on) {
 template <class Real>
 void SolverImpl<Real>::read_status() {
   try {
-    ctx_.queue().enqueueReadBuffer(status_.device(), CL_FALSE, 0, sizeof(int), &status_host_, nullptr,
+    ctx_.queue().enqueueReadBuffer(status_.device(), CL_FALSE, 0, sizeof(int), status_host_.get(), nullptr,
                                    &status_event_);
   } catch (const cl::Error& e) {
     throw compute::Error("reading the status word failed: " + compute::error_name(e.err()));
@@ -791,8 +813,9 @@ void SolverImpl<Real>::wait_status() {
   if (!status_in_flight_) return;
   status_event_.wait();
   status_in_flight_ = false;
-  pending_flags_ |= status_host_;
+  pending_flags_ |= *status_host_.get();
   const int flags = pending_flags_;
+  if ((flags & MC_FLAG_FAST) && status_every_ > 1) read_every_step();
   if (flags & MC_FLAG_NOT_FINITE) {
     std::ostringstream m;
     m << "blow-up at t = " << time_ << " s (step " << steps_
@@ -841,13 +864,36 @@ void SolverImpl<Real>::advance(long steps) {
       k_clear_flag_.args(status_, MC_FLAG_PACK_RECORDS | MC_FLAG_RECORDS_FULL).launch(1);
     }
     pending_flags_ = 0;
-    read_status();
+    if (steps_ % status_every_ == 0) read_status();
     ++steps_;
     time_ += dt_;
     mill_angle_ = std::fmod(mill_angle_ + mill_omega_ * dt_, 2.0 * M_PI);
     forces();
   }
-  wait_status();  // report a blow-up from the last step now, not later
+  wait_status();  // report a blow-up from the last read now, not later
+  if (status_every_ > 1) check_status_now();
+}
+
+// A ball too fast for reads every status_every_ steps: from now on the
+// status word is read every step, as on a CPU device, for the rest of the
+// solver's life (and of a run resumed from its checkpoints).
+template <class Real>
+void SolverImpl<Real>::read_every_step() {
+  status_every_ = 1;
+  params_.host[0].status_every = 1;
+  params_.write_to_device();
+}
+
+// A blow-up, an escape or a wall overflow since the last read, reported at
+// the end of advance() as with a read every step. The flags stay on the
+// device for the next read, and the rebuild decision is left to it: the
+// same steps rebuild however a run's steps are split into advance() calls.
+template <class Real>
+void SolverImpl<Real>::check_status_now() {
+  const int keep = pending_flags_;
+  read_status();
+  wait_status();
+  pending_flags_ = keep;
 }
 
 template <class Real>
@@ -1048,6 +1094,9 @@ SolverState SolverImpl<Real>::save_state() {
   put_array(st, "impact_profile", impact_profile_, impact_profile_.size());
   put_array(st, "status", status_, 1);
   put_array(st, "profile", profile_, kProfileBins);
+  Buffer<int> every(ctx_, 1, "status reads");
+  every.host = {status_every_};
+  put_array(st, "status_every", every, 1, false);
   return st;
 }
 
@@ -1096,6 +1145,17 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
   index_incoming();
   get_array(st, "status", status_, false);
   get_array(st, "profile", profile_, false);
+  if (has_array(st, "status_every")) {  // a state saved before has none: reads as this solver's
+    Buffer<int> every(ctx_, 1, "status reads");
+    get_array(st, "status_every", every, false);
+    if (every.host[0] < 1 || every.host[0] > 64)
+      throw std::invalid_argument("state array status_every: " + std::to_string(every.host[0]) + " is not 1 to 64");
+    if (every.host[0] != status_every_) {
+      status_every_ = every.host[0];
+      params_.host[0].status_every = status_every_;
+      params_.write_to_device();
+    }
+  }
   time_ = st.time_s;
   steps_ = st.steps;
   rebuilds_ = st.rebuilds;

@@ -169,7 +169,15 @@ class Solver {
   // pair per work-item; MILLCHARGE_FORCES=grouped). Both give the same
   // forces bit for bit.
   virtual const char* forces_kernel() const = 0;
+  // Steps between the host's reads of the status word (rebuild, record-pool
+  // and blow-up flags): 1 on a CPU device, kGpuStatusEvery on a GPU, or
+  // MILLCHARGE_STATUS_EVERY (1-64). Each read waits for the queue to reach
+  // it; between reads the host enqueues steps without waiting. The lists
+  // stay exact: the motion kernel flags a rebuild that many steps early.
+  virtual int status_every() const = 0;
 };
+
+inline constexpr int kGpuStatusEvery = 4;
 
 // Builds the kernels for the scene's precision and law, uploads the scene and
 // evaluates the first forces. Throws std::invalid_argument for a bad scene or

@@ -141,6 +141,7 @@ SceneTables scene_tables(const Scene& scene) {
   sp.period = w.periodic ? w.length : 0.0;
   // A ball centre farther than this from the axis may touch a lifter.
   sp.lifter_reach = std::max(0.0, reach - 1.01 * r_max);
+  sp.status_every = 1;  // the solver sets its own (Solver::status_every)
   sp.lifter_first_angle = w.lifter_first_angle;
   sp.lifter_spacing = nl > 0 ? 2.0 * M_PI / nl : 1.0;
   sp.n_balls = static_cast<int>(scene.balls.size());
