@@ -14,8 +14,9 @@
 #               (-cl-nv-verbose on NVIDIA: registers, spills)  -> kernels.log
 #   tests       kernel against CPU reference, books, poison    -> tests.log
 #   validation  the analytic validation checks                 -> validation.jsonl
-#   bench       rows lab, tile-10k, tile-1M (its stage split in its JSON),
-#               mill D, few steps each; a row whose budget is gone is
+#   bench       rows lab (and lab with the status word read every step),
+#               tile-10k, tile-1M (its stage split in its JSON), mill D,
+#               few steps each; a row whose budget is gone is
 #               skipped, and the ledger says so                -> bench.jsonl
 #   law probe   the contact law's cost per pair                -> law_probe.txt
 # session.log is the ledger: each step's budget, the seconds it took, its
@@ -128,14 +129,18 @@ step validation 60 "$bin/millcharge_validate" --device "$device" > "$out/validat
 tail -2 "$vlog" >> "$ledger"
 
 # Bench rows from small to large, each JSON line appended as it ends.
-bench_row() {  # NAME SECONDS ARGS...
+bench_row() {  # NAME SECONDS ARGS... (ROW_ENV: VAR=VALUE for this row)
   local name=$1 want=$2; shift 2
-  step "bench $name" "$want" bash -c '"$@" >> "'"$out"'/bench.jsonl"' _ "$mc" bench "$@" --device "$device" --quiet
+  step "bench $name" "$want" env ${ROW_ENV:-} bash -c '"$@" >> "'"$out"'/bench.jsonl"' _ "$mc" bench "$@" \
+    --device "$device" --quiet
 }
 settled=$(mktemp -d)/settled-10k  # not under $OUT: only the six files go back
 step "settle 10k" 60 "$mc" run assets/cases/bench_100k.toml --set mill.length=0.305 --set run.duration=0.05 \
   --set run.warmup=0 --set run.snapshot_interval=0 --device "$device" --out "$settled" --quiet > /dev/null 2>&1
 bench_row lab 40 assets/cases/lab.toml --steps 2000 --warmup 0.05
+# The same with the status word read every step (a GPU reads it every 4).
+ROW_ENV=MILLCHARGE_STATUS_EVERY=1 bench_row "lab, status read every step" 40 assets/cases/lab.toml --steps 2000 \
+  --warmup 0.05
 if [ -f "$settled/checkpoint.bin" ]; then
   bench_row tile-10k 40 --from "$settled" --tile 1 --steps 2000
   bench_row tile-1M 90 --from "$settled" --tile 100 --steps 200
@@ -145,5 +150,6 @@ fi
 bench_row D 120 assets/cases/mill_d.toml --steps 100 --warmup 0.05
 step "law probe" 30 "$bin/millcharge_law_probe" --device "$device" > "$out/law_probe.txt" 2>&1
 rm -rf "$(dirname "$settled")" "$vlog"
+find "$out" -maxdepth 1 -type f -empty -delete  # what skipped steps left
 log "gpu_session.sh: $(($(date +%s) - start)) s of $budget s; files: $(cd "$out" && ls | tr '\n' ' ')"
 exit 0
