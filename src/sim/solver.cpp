@@ -199,7 +199,7 @@ class SolverImpl final : public Solver {
   // is a multiple of it, so a resumed run reads where the unbroken one did),
   // without waiting, and acted on at the next step; between reads the host
   // does not wait for the queue (the motion kernel flags a rebuild
-  // status_every_ + 1 steps early to allow for this).
+  // 2 × status_every_ steps early to allow for this).
   int status_every_ = 1;
   compute::PinnedInt status_host_;
   cl::Event status_event_;
@@ -815,7 +815,6 @@ void SolverImpl<Real>::wait_status() {
   status_in_flight_ = false;
   pending_flags_ |= *status_host_.get();
   const int flags = pending_flags_;
-  if ((flags & MC_FLAG_FAST) && status_every_ > 1) read_every_step();
   if (flags & MC_FLAG_NOT_FINITE) {
     std::ostringstream m;
     m << "blow-up at t = " << time_ << " s (step " << steps_
@@ -856,6 +855,10 @@ void SolverImpl<Real>::advance(long steps) {
     // rebuild they ask for comes now, before this step's forces.
     wait_status();
     lap(&StageTimes::motion_s);
+    // Acted on with the other flags of a scheduled read (not the check at the
+    // end of advance), so the same step drops to reads every step however a
+    // run's steps are split into advance() calls.
+    if ((pending_flags_ & MC_FLAG_FAST) && status_every_ > 1) read_every_step();
     if (pending_flags_ & MC_FLAG_REBUILD) {
       rebuild();  // packs the records too
       k_clear_flag_.args(status_, MC_FLAG_REBUILD | MC_FLAG_PACK_RECORDS | MC_FLAG_RECORDS_FULL).launch(1);
