@@ -118,6 +118,11 @@ MC_FN void record_close(Books* b, int rec, int type) {
   add_u64(cell + 2 * MC_SPECTRA_ROLLING, fixed_of(lost.z, inv_unit));
   add_u64(cell + 2 * MC_SPECTRA_SPEED, fixed_of(head.w, R(MC_SPECTRA_SCALE)));
   add_u64(cell + 2 * MC_SPECTRA_STEPS, (long)lost.w);
+  /* The normal energy spectrum: the same collision by its normal loss. */
+  const int bin_n = spectra_bin(lost.x);
+  MC_GLOBAL uint* cell_n = spectra_cell(b, type, bin_n);
+  add_u64(cell_n + 2 * MC_SPECTRA_BY_NORMAL, 1);
+  add_u64(cell_n + 2 * MC_SPECTRA_BY_NORMAL_ENERGY, fixed_of(lost.x, R(MC_SPECTRA_SCALE) / spectra_edge(bin_n)));
 #endif
 }
 

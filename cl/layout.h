@@ -62,18 +62,23 @@
  * integers (two uints, low word first, so that sums are exact and do not
  * depend on the order of the atomic adds): collisions, normal, tangential
  * and rolling losses (J, in units of the bin's lower edge · 2^-24), impact
- * speeds (units of 2^-24 m/s) and steps in contact. */
+ * speeds (units of 2^-24 m/s) and steps in contact. The last two fields
+ * bin the same collisions a second time, by their normal loss alone (the
+ * normal energy spectrum that breakage models take): the collisions whose
+ * normal loss falls in the bin, and those losses (units as above). */
 #define MC_SPECTRA_DECADES 12
 #define MC_SPECTRA_PER_DECADE 10
 #define MC_SPECTRA_LOG_MIN (-9)
 #define MC_SPECTRA_BINS (MC_SPECTRA_DECADES * MC_SPECTRA_PER_DECADE + 2)
-#define MC_SPECTRA_FIELDS 6
+#define MC_SPECTRA_FIELDS 8
 #define MC_SPECTRA_COUNT 0
 #define MC_SPECTRA_NORMAL 1
 #define MC_SPECTRA_TANGENTIAL 2
 #define MC_SPECTRA_ROLLING 3
 #define MC_SPECTRA_SPEED 4
 #define MC_SPECTRA_STEPS 5
+#define MC_SPECTRA_BY_NORMAL 6
+#define MC_SPECTRA_BY_NORMAL_ENERGY 7
 #define MC_SPECTRA_SCALE 16777216.0 /* 2^24 */
 /* Wall pair types after the ball–ball ones: per ball material. */
 #define MC_WALL_TYPE_SHELL 0

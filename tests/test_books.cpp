@@ -52,6 +52,16 @@ OneCollision the_collision(const BookSums& b) {
 
 int expected_bin(double e) { return f64::spectra_bin(e); }
 
+// The one closed collision in the normal energy spectrum: its bin there
+// and its normal loss.
+std::pair<int, double> the_normal_collision(const BookSums& b) {
+  std::pair<int, double> c{-1, 0.0};
+  for (int t = 0; t < b.n_types; ++t)
+    for (int k = 0; k < MC_SPECTRA_BINS; ++k)
+      if (b.at(t, k, MC_SPECTRA_BY_NORMAL) > 0) c = {k, b.at(t, k, MC_SPECTRA_BY_NORMAL_ENERGY)};
+  return c;
+}
+
 // Steps until ball 0 has left every contact (after touching one).
 void run_until_apart(Solver& s, long max_steps) {
   bool touched = false;
@@ -170,13 +180,22 @@ TEST_CASE("Chung & Ooi test 4: the tangential loss of an oblique impact in the s
     const double m = sphere_mass(mat.density, r);
     const double da = mu * (1 + e) * vn;
     const double expected = 0.5 * m * (2 * vt * da - 3.5 * da * da);
-    const OneCollision c = the_collision(s->read_books());
+    const BookSums books = s->read_books();
+    const OneCollision c = the_collision(books);
     const BallState b = s->balls()[0];
     const double lost_t = 0.5 * m * (vt * vt - b.velocity.x * b.velocity.x) - 0.5 * 0.4 * m * r * r * b.omega.y * b.omega.y;
     INFO("theta " << theta_deg << " tangential loss " << c.tangential << " expected " << expected << " balls lost "
                   << lost_t);
     CHECK(c.tangential == Approx(expected).epsilon(0.02));
     CHECK(c.tangential == Approx(lost_t).epsilon(0.005));
+    // The normal energy spectrum holds it once more, in its normal loss's
+    // bin (below the whole loss's: a tenth of it at 85 degrees).
+    const auto [normal_bin, normal_J] = the_normal_collision(books);
+    CHECK(normal_bin == expected_bin(c.normal));
+    CHECK(normal_bin < c.bin);
+    // (The first spectrum rounds it to its whole loss's bin: 2^-24 of a
+    // bin a decade above, a few parts in a million of it here.)
+    CHECK(normal_J == Approx(c.normal).epsilon(2e-5));
     worst = std::max(worst, rel_err(c.tangential, expected));
   }
   std::printf("C&O 4 tangential loss, theta 45..85 deg: worst error %.3f %%\n", 100 * worst);
@@ -252,6 +271,16 @@ TEST_CASE("a turning drum: the spectra's closed collisions and open contacts boo
     INFO((law == ContactLaw::hertz ? "hertz" : "linear"));
     CHECK(collisions(b) > 100);
     CHECK(books_J == Approx(o1.dissipated_J).epsilon(0.01));
+    // The normal energy spectrum bins the same collisions and normal losses.
+    double by_normal = 0, by_normal_J = 0, normal_J = 0;
+    for (int t = 0; t < b.n_types; ++t)
+      for (int k = 0; k < MC_SPECTRA_BINS; ++k) {
+        by_normal += b.at(t, k, MC_SPECTRA_BY_NORMAL);
+        by_normal_J += b.at(t, k, MC_SPECTRA_BY_NORMAL_ENERGY);
+        normal_J += b.at(t, k, MC_SPECTRA_NORMAL);
+      }
+    CHECK(by_normal == collisions(b));
+    CHECK(by_normal_J == Approx(normal_J).epsilon(1e-6));
     CHECK(s->records_refused() == 0);
   }
 }

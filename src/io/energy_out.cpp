@@ -46,12 +46,14 @@ const char* face_name(int f) {
 void write_spectra_csv(const std::filesystem::path& path, const SpectraReport& r) {
   std::string t =
       "pair,bin,energy_from_J,energy_to_J,collisions_per_s,power_W,normal_W,tangential_W,rolling_W,"
-      "mean_impact_speed_m_s,mean_contact_s\n";
+      "mean_impact_speed_m_s,mean_contact_s,normal_spectrum_collisions_per_s,normal_spectrum_W\n";
   char line[512];
   for (const SpectraBin& b : r.bins) {
-    std::snprintf(line, sizeof line, "%s,%d,%.6g,%.6g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g\n", b.rates.pair.c_str(),
-                  b.bin, b.energy_from_J, b.energy_to_J, b.rates.collisions_per_s, b.rates.power_W, b.rates.normal_W,
-                  b.rates.tangential_W, b.rates.rolling_W, b.rates.mean_impact_speed_m_s, b.rates.mean_contact_s);
+    std::snprintf(line, sizeof line, "%s,%d,%.6g,%.6g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.9g,%.9g\n",
+                  b.rates.pair.c_str(), b.bin, b.energy_from_J, b.energy_to_J, b.rates.collisions_per_s,
+                  b.rates.power_W, b.rates.normal_W, b.rates.tangential_W, b.rates.rolling_W,
+                  b.rates.mean_impact_speed_m_s, b.rates.mean_contact_s, b.rates.by_normal_collisions_per_s,
+                  b.rates.by_normal_W);
     t += line;
   }
   write_file_atomic(path, t);

@@ -14,7 +14,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Collision sums of one spectra cell (or a sum of cells) into rates.
 struct CellSums {
-  double count = 0, normal = 0, tangential = 0, rolling = 0, speed = 0, steps = 0;
+  double count = 0, normal = 0, tangential = 0, rolling = 0, speed = 0, steps = 0, by_normal = 0, by_normal_e = 0;
   void add(const BookSums& b, int row, int bin) {
     count += b.at(row, bin, MC_SPECTRA_COUNT);
     normal += b.at(row, bin, MC_SPECTRA_NORMAL);
@@ -22,10 +22,12 @@ struct CellSums {
     rolling += b.at(row, bin, MC_SPECTRA_ROLLING);
     speed += b.at(row, bin, MC_SPECTRA_SPEED);
     steps += b.at(row, bin, MC_SPECTRA_STEPS);
+    by_normal += b.at(row, bin, MC_SPECTRA_BY_NORMAL);
+    by_normal_e += b.at(row, bin, MC_SPECTRA_BY_NORMAL_ENERGY);
   }
   void add(const CellSums& o) {
     count += o.count, normal += o.normal, tangential += o.tangential, rolling += o.rolling, speed += o.speed,
-        steps += o.steps;
+        steps += o.steps, by_normal += o.by_normal, by_normal_e += o.by_normal_e;
   }
   CollisionRates rates(double window_s, double dt) const {
     CollisionRates r;
@@ -38,6 +40,8 @@ struct CellSums {
     r.mean_energy_J = count > 0 ? (normal + tangential + rolling) / count : 0;
     r.mean_impact_speed_m_s = count > 0 ? speed / count : 0;
     r.mean_contact_s = count > 0 ? steps * dt / count : 0;
+    r.by_normal_collisions_per_s = by_normal / w;
+    r.by_normal_W = by_normal_e / w;
     return r;
   }
 };

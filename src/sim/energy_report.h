@@ -24,6 +24,10 @@ struct CollisionRates {
   double mean_energy_J = 0;     // lost per collision
   double mean_impact_speed_m_s = 0;
   double mean_contact_s = 0;    // duration of a collision
+  // The normal energy spectrum: in a bin, the collisions whose normal loss
+  // (not the whole) falls in it, and those normal losses; over a pair type
+  // or all bins they are the collisions and normal_W again.
+  double by_normal_collisions_per_s = 0, by_normal_W = 0;
 };
 
 struct SpectraBin {

@@ -962,7 +962,7 @@ BookSums SolverImpl<Real>::read_books() {
       for (int f = 0; f < MC_SPECTRA_FIELDS; ++f) {
         const std::size_t q = (static_cast<std::size_t>(r) * MC_SPECTRA_BINS + b) * MC_SPECTRA_FIELDS + f;
         const double v = static_cast<double>(u64_at(spectra_.host, q));
-        out.spectra[q] = f == MC_SPECTRA_COUNT || f == MC_SPECTRA_STEPS ? v
+        out.spectra[q] = f == MC_SPECTRA_COUNT || f == MC_SPECTRA_STEPS || f == MC_SPECTRA_BY_NORMAL ? v
                          : f == MC_SPECTRA_SPEED                        ? v / MC_SPECTRA_SCALE
                                                                         : v * e_unit;
       }
