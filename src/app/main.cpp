@@ -9,11 +9,14 @@
 //   millcharge bench [CASE] [--steps N] [--warmup N] [--device SPEC]
 //                    [--precision float|double] [--set KEY=VALUE]... [--quiet]
 //   millcharge devices
+//   millcharge grind RUN_DIR --ore ORE.toml [--time MIN,...] [--feed-rate T/H] [--target-p80 UM]
+//                    [--tanks N] [--out DIR] [--quiet]
 //   millcharge sweep check FILE | run FILE --local [N]|--slurm|--print | collect DIR
 // Exit status: 0 done; 2 bad input (a message names the key; nothing written);
 // 1 any other failure (device, blow-up, disk).
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -22,6 +25,7 @@
 #include <string>
 
 #include "app/commands.h"
+#include "app/grind.h"
 #include "app/sweep.h"
 #include "compute/context.h"
 
@@ -133,6 +137,25 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"both", "on", "off"}));
   bench->add_flag("--quiet", bo.quiet, "no progress lines");
 
+  mc::app::GrindOptions go;
+  std::string grind_times;
+  auto* grind = app.add_subcommand(
+      "grind", "the product size a finished run's mill makes of an ore: batch times or a continuous feed rate");
+  grind->add_option("run", go.run_dir, "a finished run's folder (summary.json, case.toml, spectra.csv)")->required();
+  grind->add_option("--ore", go.ore, "the ore's breakage parameters and feed (TOML; docs/grinding.md)")
+      ->required()
+      ->type_name("FILE");
+  grind->add_option("--time", grind_times, "batch grinding times in minutes, comma-separated (default 1,2,4,8,16)")
+      ->type_name("MIN,...");
+  grind->add_option("--feed-rate", go.feed_rate_t_h, "a continuous mill fed at this rate (t/h)")
+      ->check(CLI::PositiveNumber);
+  grind->add_option("--target-p80", go.target_p80_um, "the continuous feed rate whose product has this P80 (um)")
+      ->check(CLI::PositiveNumber);
+  grind->add_option("--tanks", go.tanks, "tanks in series for the continuous mill (default: the ore file's, or 1)")
+      ->check(CLI::Range(1, 1000));
+  grind->add_option("--out", go.out, "folder for the results (default RUN/grind)");
+  grind->add_flag("--quiet", go.quiet, "no summary lines");
+
   mc::app::SweepCli sweep;
   mc::app::add_sweep_commands(app, sweep);
 
@@ -147,6 +170,21 @@ int main(int argc, char** argv) {
     if (*check) return mc::app::cmd_check(co);
     if (*run) return mc::app::cmd_run(ro);
     if (*bench) return mc::app::cmd_bench(bo);
+    if (*grind) {
+      std::size_t start = 0;
+      while (start < grind_times.size()) {
+        const std::size_t end = std::min(grind_times.find(',', start), grind_times.size());
+        const std::string item = grind_times.substr(start, end - start);
+        char* stop = nullptr;
+        const double t = std::strtod(item.c_str(), &stop);
+        if (item.empty() || *stop != '\0' || !(t > 0) || !std::isfinite(t))
+          throw std::invalid_argument("--time " + grind_times + ": expected minutes > 0, comma-separated, got \"" +
+                                      item + "\"");
+        go.times_min.push_back(t);
+        start = end + 1;
+      }
+      return mc::app::cmd_grind(go);
+    }
     if (*view) {
       if (steps_per_frame == "auto") vo.steps_per_frame = -1;
       else if (!steps_per_frame.empty()) {

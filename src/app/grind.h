@@ -1,0 +1,24 @@
+// `millcharge grind RUN_DIR --ore ORE.toml`: the product size a mill makes,
+// from a finished run's power and normal energy spectrum and an ore's
+// breakage parameters (docs/grinding.md).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace mc::app {
+
+struct GrindOptions {
+  std::string run_dir;
+  std::string ore;                 // --ore FILE
+  std::vector<double> times_min;   // --time, batch grinding times (min)
+  double feed_rate_t_h = 0;        // --feed-rate, a continuous mill (t/h)
+  double target_p80_um = 0;        // --target-p80: the feed rate that gives it
+  int tanks = 0;                   // --tanks, 0: the ore file's (default 1)
+  std::string out;                 // --out, default RUN_DIR/grind
+  bool quiet = false;
+};
+
+int cmd_grind(const GrindOptions& o);
+
+}  // namespace mc::app

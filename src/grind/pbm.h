@@ -1,0 +1,110 @@
+// The population balance of grinding (docs/grinding.md): size classes on a
+// geometric series, the appearance function of broken material, specific
+// breakage rates from three models (Austin's, Herbst & Fuerstenau's energy
+// specific rates, and a mechanistic one from the run's normal energy
+// spectrum), and the mill's product: batch grinding over time, or a
+// continuous mill of tanks in series at a feed rate.
+//
+// Classes: class i holds the sizes from top[i+1] up to top[i] (metres,
+// top[0] the largest); the last class holds everything below its top (the
+// sink). Masses are fractions of the charge of ore, summing to 1.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace mc::grind {
+
+struct SizeSeries {
+  std::vector<double> top_m;  // descending; top_m.size() classes, the last the sink
+  int size() const { return static_cast<int>(top_m.size()); }
+  // Geometric mean size of class i (the sink: its top over the ratio's root).
+  double mid_m(int i) const;
+};
+
+// n classes from top down by a constant ratio (sqrt(2) or 2^(1/4)).
+SizeSeries geometric_series(double top_m, double ratio, int n);
+
+// Austin's cumulative breakage function: the fraction of broken material
+// of a class finer than x, for u = x / (the class's lower size):
+// B(u) = phi u^gamma + (1 - phi) u^beta, capped at 1.
+struct AustinBreakage {
+  double phi = 0.5, gamma = 1.0, beta = 4.0;
+  double cumulative(double u) const;
+};
+
+// b[i][j] (i > j): the fraction of what breaks out of class j that lands in
+// class i; each column sums to 1 (the sink takes the rest).
+std::vector<std::vector<double>> breakage_matrix(const SizeSeries& s, const AustinBreakage& b);
+
+// Batch grinding, dm_i/dt = -S_i m_i + sum_{j<i} b_ij S_j m_j, from m0 over
+// time t (S per unit of t): fourth-order Runge-Kutta with steps of at most
+// 0.01 / max S. The sink does not break (its S is ignored).
+std::vector<double> batch_grind(const std::vector<double>& m0, const std::vector<double>& S,
+                                const std::vector<std::vector<double>>& b, double t);
+
+// The same equations' closed form (Reid 1965): valid where the S_i differ.
+std::vector<double> reid_batch(const std::vector<double>& m0, const std::vector<double>& S,
+                               const std::vector<std::vector<double>>& b, double t);
+
+// A continuous mill of `tanks` perfectly mixed tanks in series, each of
+// mean residence time tau / tanks: the steady product of a feed (each tank:
+// (I + tau_k (S - b S)) m_out = m_in, solved down the classes).
+std::vector<double> continuous_grind(const std::vector<double>& feed, const std::vector<double>& S,
+                                     const std::vector<std::vector<double>>& b, double tau, int tanks);
+
+// Cumulative passing at each class's top (passing[i]: finer than top[i]).
+std::vector<double> passing(const std::vector<double>& m);
+
+// The size that p of the mass passes (0 < p < 1), log-linear between the
+// class tops; NaN if the finest top already passes less than p.
+double passing_size(const SizeSeries& s, const std::vector<double>& m, double p);
+
+// Class masses of a feed given as cumulative passing at sieve sizes
+// (descending sizes, passing in 0..1, the first sieve passing 1): passing
+// interpolated log-linearly at the class tops.
+std::vector<double> feed_masses(const SizeSeries& s, const std::vector<double>& sieve_m,
+                                const std::vector<double>& passing);
+
+// ---------------------------------------------------------------- rates
+
+// Austin: S_i = a (x_i / 1 mm)^alpha / (1 + (x_i / mu)^lambda), per minute,
+// x_i the class's top.
+struct AustinRates {
+  double a_per_min = 0, alpha = 1, mu_m = 0, lambda = 2;
+};
+std::vector<double> austin_rates(const SizeSeries& s, const AustinRates& r);
+
+// Herbst & Fuerstenau: S_i^E = S1E exp(z1 ln(x_i/x1) + z2 ln²(x_i/x1)),
+// t/kWh, with x_i the class's geometric mean; S_i = S_i^E P / H.
+struct EnergyRates {
+  double s1e_t_per_kWh = 0, x1_m = 0, zeta1 = 0, zeta2 = 0;
+};
+std::vector<double> energy_specific_rates(const SizeSeries& s, const EnergyRates& r);  // t/kWh
+
+// Tavares' breakage probability: an upper-truncated lognormal of the
+// mass-specific energy with median E50(d) = Einf (1 + (d0/d)^phi), spread
+// sigma and truncation Emax = emax_ratio · E50.
+struct Fracture {
+  double e_inf_J_kg = 0, d0_m = 0, phi = 1, sigma = 0.8, emax_ratio = 10;
+  double e50(double d_m) const;
+  double broken(double e_J_kg, double d_m) const;  // fraction broken, 0..1
+};
+
+// One class of the normal energy spectrum: collisions per second whose
+// normal loss is about energy_J, and how many ball radii (R_eff) they have.
+struct SpectrumBin {
+  double collisions_per_s = 0, energy_J = 0, r_eff_m = 0;
+};
+
+// The mass a collision catches of particles of size d between surfaces of
+// effective radius R_eff: a monolayer where the gap is under d,
+// m = packing · (pi²/3) · rho · d² · R_eff (docs/grinding.md).
+double captured_mass(double d_m, double r_eff_m, double ore_density, double packing);
+
+// S_i (per second) = efficiency / H · sum_k N_k · m_cap,i · P_i(E_k / m_cap,i).
+std::vector<double> spectrum_rates(const SizeSeries& s, const std::vector<SpectrumBin>& spectrum,
+                                   const Fracture& f, double ore_density, double packing, double efficiency,
+                                   double holdup_kg);
+
+}  // namespace mc::grind

@@ -1,0 +1,255 @@
+// The population balance (src/grind/pbm.h): the batch solver against
+// Reid's closed form, mass balances, the continuous mill's limits, the
+// appearance function, the breakage probability and the size read-outs.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+
+#include "grind/pbm.h"
+
+using namespace mc::grind;
+
+namespace {
+
+struct Mill {
+  SizeSeries s = geometric_series(3.35e-3, std::sqrt(2.0), 20);
+  std::vector<std::vector<double>> b = breakage_matrix(s, AustinBreakage{0.55, 1.2, 4.0});
+  // Austin's rates with a maximum near 2 mm, per minute.
+  std::vector<double> S = austin_rates(s, AustinRates{0.9, 1.1, 2.5e-3, 2.5});
+  std::vector<double> feed = [] {
+    std::vector<double> m(20, 0.0);
+    m[0] = 0.6, m[1] = 0.3, m[2] = 0.1;
+    return m;
+  }();
+};
+
+double sum(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("the appearance function's columns sum to one and Austin's B is met at the class tops", "[grind]") {
+  Mill m;
+  for (int j = 0; j + 1 < m.s.size(); ++j) {
+    double c = 0;
+    for (int i = j + 1; i < m.s.size(); ++i) c += m.b[i][j];
+    CHECK(c == Approx(1.0).margin(1e-12));
+    CHECK(m.b[j][j] == 0.0);
+  }
+  // Cumulative from the sink up to class 3's top, for breakage of class 0:
+  // B(x_3 / x_1) = 0.55 (2^-1)^1.2 + 0.45 (2^-1)^4.
+  double below = 0;
+  for (int i = 3; i < m.s.size(); ++i) below += m.b[i][0];
+  const double u = m.s.top_m[3] / m.s.top_m[1];
+  CHECK(below == Approx(0.55 * std::pow(u, 1.2) + 0.45 * std::pow(u, 4.0)).epsilon(1e-12));
+}
+
+TEST_CASE("batch grinding: the solver against Reid's closed form, and mass kept", "[grind]") {
+  Mill m;
+  double worst = 0, worst_mass = 0;
+  for (double t : {0.5, 2.0, 8.0, 30.0}) {  // minutes
+    const std::vector<double> rk = batch_grind(m.feed, m.S, m.b, t);
+    const std::vector<double> reid = reid_batch(m.feed, m.S, m.b, t);
+    for (std::size_t i = 0; i < rk.size(); ++i) {
+      INFO("t " << t << " class " << i << " solver " << rk[i] << " Reid " << reid[i]);
+      const double err = std::fabs(rk[i] - reid[i]) / std::max(reid[i], 1e-6);
+      CHECK(err <= 1e-8);
+      worst = std::max(worst, err);
+    }
+    worst_mass = std::max({worst_mass, std::fabs(sum(rk) - 1), std::fabs(sum(reid) - 1)});
+    CHECK(sum(rk) == Approx(1.0).margin(1e-12));
+    CHECK(sum(reid) == Approx(1.0).margin(1e-12));
+  }
+  // The top class decays at its own rate alone.
+  CHECK(batch_grind(m.feed, m.S, m.b, 2.0)[0] == Approx(0.6 * std::exp(-2.0 * m.S[0])).epsilon(1e-9));
+  std::printf("batch grind vs Reid: worst relative error %.2e, worst mass error %.2e\n", worst, worst_mass);
+}
+
+TEST_CASE("a continuous mill: one tank's closed form, plug flow in the limit of many tanks", "[grind]") {
+  Mill m;
+  const double tau = 3.0;
+  const std::vector<double> one = continuous_grind(m.feed, m.S, m.b, tau, 1);
+  CHECK(one[0] == Approx(0.6 / (1 + tau * m.S[0])).epsilon(1e-12));
+  CHECK(sum(one) == Approx(1.0).margin(1e-12));
+  const std::vector<double> many = continuous_grind(m.feed, m.S, m.b, tau, 4000);
+  const std::vector<double> plug = reid_batch(m.feed, m.S, m.b, tau);
+  for (std::size_t i = 0; i < plug.size(); ++i) CHECK(many[i] == Approx(plug[i]).margin(2e-4));
+  // Mixing grinds less of the top class than plug flow at the same tau.
+  CHECK(one[0] > plug[0]);
+}
+
+TEST_CASE("sizes passing: P80 of a known distribution, feed interpolated at the class tops", "[grind]") {
+  const SizeSeries s = geometric_series(4e-3, 2.0, 6);  // 4, 2, 1, 0.5, 0.25, 0.125 mm
+  // Rosin-free check: passing 1, 0.8, 0.5, 0.3, 0.2, 0.1 at the tops.
+  const std::vector<double> m{0.2, 0.3, 0.2, 0.1, 0.1, 0.1};
+  CHECK(passing_size(s, m, 0.8) == Approx(2e-3).epsilon(1e-12));
+  CHECK(passing_size(s, m, 0.65) == Approx(std::sqrt(2e-3 * 1e-3)).epsilon(1e-12));
+  CHECK(std::isnan(passing_size(s, m, 0.05)));
+  const std::vector<double> f = feed_masses(s, {4e-3, 1e-3, 0.25e-3}, {1.0, 0.5, 0.2});
+  CHECK(f[0] == Approx(0.25).epsilon(1e-12));  // passing 0.75 at 2 mm: log-linear
+  CHECK(sum(f) == Approx(1.0).margin(1e-12));
+}
+
+TEST_CASE("the breakage probability: half at E50, Tavares' size effect, certain at Emax", "[grind]") {
+  const Fracture f{120.0, 5e-3, 1.2, 0.8, 8.0};  // J/kg, m
+  for (double d : {0.5e-3, 2e-3, 8e-3}) {
+    CHECK(f.broken(f.e50(d), d) == Approx(0.5).margin(1e-12));
+    CHECK(f.broken(0.5 * f.e50(d), d) < 0.5);
+    CHECK(f.broken(8.0 * f.e50(d), d) == 1.0);
+  }
+  CHECK(f.e50(5e-3) == Approx(240.0));
+  CHECK(f.e50(0.5e-3) > f.e50(8e-3));  // fine particles are stronger
+  // The mechanistic rate grows with the energy of the collisions.
+  const SizeSeries s = geometric_series(3.35e-3, std::sqrt(2.0), 12);
+  const std::vector<SpectrumBin> weak{{1e4, 1e-3, 0.01}}, strong{{1e4, 1e-2, 0.01}};
+  const auto Sw = spectrum_rates(s, weak, f, 2700, 0.6, 1.0, 1.0);
+  const auto Ss = spectrum_rates(s, strong, f, 2700, 0.6, 1.0, 1.0);
+  for (int i = 0; i + 1 < s.size(); ++i) CHECK(Ss[i] >= Sw[i]);
+  CHECK(Ss[0] > 0);
+  CHECK(Ss.back() == 0.0);
+  // Captured mass: the monolayer's closed form.
+  CHECK(captured_mass(1e-3, 0.01, 2700, 0.6) == Approx(0.6 * 9.8696044 / 3 * 2700 * 1e-6 * 0.01).epsilon(1e-6));
+}
+
+// ------------------------------------------------------------ the command
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "app/commands.h"
+#include "app/grind.h"
+#include "io/case_file.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string text_of(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// A short run of a slice of the lab mill, made once.
+const fs::path& short_run() {
+  static const fs::path out = [] {
+    const fs::path dir = fs::temp_directory_path() / ("millcharge_test_grind_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    mc::app::RunOptions o;
+    o.c.overrides = {"mill.length=0.06", "run.settle=0.05", "run.warmup=0.1", "run.output_interval=0.01",
+                     "run.snapshot_interval=0.2"};
+    o.c.duration = 0.3;
+    o.out = dir.string();
+    o.quiet = true;
+    REQUIRE(mc::app::cmd_run(o) == 0);
+    return dir;
+  }();
+  return out;
+}
+
+fs::path ore_file(const std::string& name) { return fs::path(MC_ASSET_DIR) / "ores" / name; }
+
+// The example ore with one line replaced (or a line added).
+fs::path edited_ore(const std::string& from, const std::string& to) {
+  std::string t = text_of(ore_file("example_energy.toml"));
+  const std::size_t at = t.find(from);
+  REQUIRE(at != std::string::npos);
+  t.replace(at, from.size(), to);
+  const fs::path p = fs::temp_directory_path() / ("millcharge_test_ore_" + std::to_string(::getpid()) + ".toml");
+  std::ofstream(p) << t;
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("grind: a run's product size in batch and continuous, both rate models", "[grind][outputs]") {
+  const fs::path run = short_run();
+  const nlohmann::json summary = nlohmann::json::parse(text_of(run / "summary.json"));
+  const double power_W = summary["power_W"]["torque"].get<double>();
+  for (const char* ore : {"example_energy.toml", "example_spectrum.toml"}) {
+    INFO(ore);
+    mc::app::GrindOptions o;
+    o.run_dir = run.string();
+    o.ore = ore_file(ore).string();
+    o.times_min = {1, 4, 16};
+    o.feed_rate_t_h = 0.02;
+    o.target_p80_um = 200;
+    o.out = (run / (std::string("grind-") + ore)).string();
+    o.quiet = true;
+    REQUIRE(mc::app::cmd_grind(o) == 0);
+    const nlohmann::json j = nlohmann::json::parse(text_of(fs::path(o.out) / "grind.json"));
+    const double H = j["holdup_kg"].get<double>();
+    CHECK(H > 0);
+    const auto& p = j["products"];
+    REQUIRE(p.size() == 5);
+    // Specific energy: the power over the hold-up, times the time.
+    CHECK(p[1]["specific_energy_kWh_t"].get<double>() == Approx(power_W / 1000 * 4 / 60 / (H / 1000)).epsilon(1e-9));
+    // Finer with time, all below the feed's F80.
+    const double f80 = j["F80_um"].get<double>();
+    CHECK(p[0]["P80_um"].get<double>() < f80);
+    CHECK(p[1]["P80_um"].get<double>() < p[0]["P80_um"].get<double>());
+    CHECK(p[2]["P80_um"].get<double>() < p[1]["P80_um"].get<double>());
+    // The throughput that gives the target P80.
+    CHECK(p[4]["P80_um"].get<double>() == Approx(200).epsilon(1e-6));
+    CHECK(j["throughput_at_target_t_h"].get<double>() == Approx(p[4]["feed_rate_t_h"].get<double>()));
+    for (const char* f : {"grind.csv", "rates.csv", "grind.png"}) CHECK(fs::file_size(fs::path(o.out) / f) > 100);
+  }
+}
+
+TEST_CASE("grind refuses bad ore files and run folders by name, writing nothing", "[grind][failures]") {
+  const fs::path run = short_run();
+  const fs::path out = fs::temp_directory_path() / ("millcharge_test_grind_bad_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  auto refuses = [&](const fs::path& ore, const fs::path& dir, const std::string& says) {
+    mc::app::GrindOptions o;
+    o.run_dir = dir.string();
+    o.ore = ore.string();
+    o.out = out.string();
+    o.quiet = true;
+    INFO("expected: " << says);
+    CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains(says));
+    CHECK(!fs::exists(out));
+  };
+  refuses(edited_ore("passing  = [1.00,", "passing  = [0.90,"), run, "feed.passing");
+  refuses(edited_ore("passing  = [1.00,", "passing  = [0.90,"), run, "must sum to 1");
+  refuses(edited_ore("top_mm = 3.35", "top_mm = 2.0"), run, "sizes.top_mm");
+  refuses(edited_ore("top_mm = 3.35", "top_mm = 2.0"), run, "does not cover the feed");
+  refuses(edited_ore("model = \"energy\"", "model = \"kick\""), run, "rates.model");
+  refuses(edited_ore("zeta1 = 0.6", "zeta1 = 60"), run, "rates.zeta1");
+  refuses(edited_ore("density = 2700", "density = -1"), run, "density");
+  refuses(edited_ore("phi = 0.55", "phi = 0.55\nchi = 1"), run, "breakage.chi: unknown key");
+  refuses(ore_file("example_energy.toml"), run / "snapshots", "summary.json: missing");
+  // A run from before the normal energy spectrum.
+  const fs::path old = out.string() + "-old-run";
+  fs::remove_all(old);
+  fs::create_directories(old);
+  for (const char* f : {"summary.json", "case.toml"}) fs::copy_file(run / f, old / f);
+  {
+    std::ifstream in(run / "spectra.csv");
+    std::ofstream o(old / "spectra.csv");
+    for (std::string l; std::getline(in, l);) {
+      for (int k = 0; k < 2; ++k) l = l.substr(0, l.rfind(','));
+      o << l << '\n';
+    }
+  }
+  refuses(ore_file("example_spectrum.toml"), old, "has no normal energy spectrum");
+  // The binary: exit status 2 and the message.
+  const std::string cmd = std::string(MC_BINARY) + " grind " + run.string() + " --ore " +
+                          edited_ore("model = \"energy\"", "model = \"kick\"").string() + " --out " + out.string() +
+                          " > " + out.string() + ".log 2>&1";
+  const int status = std::system(cmd.c_str());
+  CHECK(WEXITSTATUS(status) == 2);
+  CHECK(text_of(out.string() + ".log").find("rates.model") != std::string::npos);
+  CHECK(!fs::exists(out));
+  fs::remove_all(old);
+}
