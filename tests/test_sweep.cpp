@@ -313,6 +313,12 @@ TEST_CASE("sweep collect: a row per case, status and cause, open spectra and lin
   CHECK(done["liner.impact_point_deg"].get<double>() == Approx(215.0));
   CHECK(done["toe_deg"].get<double>() == Approx(225.5));
   CHECK(done["error"].is_null());
+  // The case's grind (grind/grind.json): a column per product and figure.
+  CHECK(has("grind.batch 4 min.P80_um"));
+  CHECK(done["grind.batch 4 min.P80_um"].get<double>() == Approx(267.8));
+  CHECK(done["grind.batch 4 min.specific_energy_kWh_t"].get<double>() == Approx(3.19));
+  CHECK(done["grind.throughput_at_target_t_h"].get<double>() == Approx(0.0566));
+  CHECK(j["cases"][1]["grind.batch 4 min.P80_um"].is_null());
 
   const auto& own_metre = j["cases"][1];  // the run's own power_per_metre_W wins
   CHECK(own_metre["power_per_metre_W.torque"].get<double>() == Approx(321.0));

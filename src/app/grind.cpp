@@ -379,7 +379,7 @@ int cmd_grind(const GrindOptions& o) {
       }
       target_rate = std::sqrt(lo * hi);
       Product p = continuous(target_rate);
-      p.label = fmt::format("continuous at P80 {:g} um: {:.4g} t/h", o.target_p80_um, target_rate);
+      p.label = fmt::format("continuous at P80 {:g} um", o.target_p80_um);
       products.push_back(p);
     }
   }
@@ -459,7 +459,9 @@ int cmd_grind(const GrindOptions& o) {
     std::printf("ore %s, %s rates; mill power %.1f W, hold-up %.3g kg, F80 %s um\n", ore.name.c_str(),
                 j["model"].get<std::string>().c_str(), run.power_W, holdup_kg, fmt_um(ore.f80_m).c_str());
     for (const Product& p : products)
-      std::printf("  %-40s %8.3g kWh/t  P80 %s um\n", p.label.c_str(), p.kWh_t, fmt_um(p.p80_m).c_str());
+      std::printf("  %-28s %s %8.3g kWh/t  P80 %s um\n", p.label.c_str(),
+                  p.feed_t_h > 0 ? fmt::format("{:9.4g} t/h", p.feed_t_h).c_str() : "             ", p.kWh_t,
+                  fmt_um(p.p80_m).c_str());
     if (o.target_p80_um > 0 && !std::isfinite(target_rate))
       std::printf("  no feed rate from 1e-9 to 1e6 t/h gives P80 %g um\n", o.target_p80_um);
     std::printf("wrote %s/{grind.csv, rates.csv, grind.json, grind.png}\n", out.string().c_str());

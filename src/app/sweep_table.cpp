@@ -164,6 +164,33 @@ SweepTable collect_table(const fs::path& sweep_dir) {
           open_columns.push_back(column);
       }
     }
+    // The grind of the case's run, where `millcharge grind` wrote one in
+    // its default folder: P80 and specific energy per product, and the
+    // throughput at the target P80.
+    if (have) {
+      nlohmann::json grind;
+      try {
+        std::ifstream g(folder / "grind" / "grind.json");
+        if (g) g >> grind;
+      } catch (const nlohmann::json::exception&) {
+        grind = nullptr;
+      }
+      auto put = [&](const std::string& column, const json& v) {
+        row[column] = v;
+        if (std::find(open_columns.begin(), open_columns.end(), column) == open_columns.end())
+          open_columns.push_back(column);
+      };
+      if (grind.is_object() && grind.contains("products") && grind["products"].is_array()) {
+        for (const auto& p : grind["products"]) {
+          if (!p.is_object() || !p.contains("label") || !p["label"].is_string()) continue;
+          const std::string label = "grind." + p["label"].get<std::string>();
+          put(label + ".P80_um", number_at(p, "/P80_um"));
+          put(label + ".specific_energy_kWh_t", number_at(p, "/specific_energy_kWh_t"));
+        }
+        if (grind.contains("throughput_at_target_t_h"))
+          put("grind.throughput_at_target_t_h", number_at(grind, "/throughput_at_target_t_h"));
+      }
+    }
     row["wall_s"] = have ? number_at(summary, "/wall_s") : json();
     row["exit_status"] = st.exit_status >= 0 ? json(st.exit_status) : json();
     if (!row.contains("error")) {
