@@ -3,6 +3,7 @@
 // appearance function, the breakage probability and the size read-outs.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -252,4 +253,38 @@ TEST_CASE("grind refuses bad ore files and run folders by name, writing nothing"
   CHECK(text_of(out.string() + ".log").find("rates.model") != std::string::npos);
   CHECK(!fs::exists(out));
   fs::remove_all(old);
+}
+
+TEST_CASE("grind --bond: a locked-cycle test that settles at 250 % and Bond's formula", "[grind]") {
+  const fs::path run = short_run();
+  mc::app::GrindOptions o;
+  o.run_dir = run.string();
+  o.ore = ore_file("example_energy.toml").string();
+  o.bond_p1_um = 150;
+  o.out = (run / "grind-bond").string();
+  o.quiet = true;
+  REQUIRE(mc::app::cmd_grind(o) == 0);
+  const nlohmann::json j = nlohmann::json::parse(text_of(fs::path(o.out) / "grind.json"));
+  const auto& b = j["bond"];
+  CHECK(b["steady"] == true);
+  CHECK(b["cycles"].get<int>() >= 6);
+  CHECK(b["circulating_load"].get<double>() == Approx(2.5).margin(0.075));
+  CHECK(b["charge_g"].get<double>() == Approx(700 * 2.7 * 0.6));  // 700 cm³ at the bed's bulk density
+  const double gbp = b["Gbp_g_per_rev"].get<double>(), p80 = b["P80_um"].get<double>(), f80 = b["F80_um"].get<double>();
+  CHECK(gbp > 0);
+  CHECK(p80 < 150);
+  CHECK(b["work_index_kWh_t"].get<double>() ==
+        Approx(1.1 * 44.5 / (std::pow(150.0, 0.23) * std::pow(gbp, 0.82) * (10 / std::sqrt(p80) - 10 / std::sqrt(f80))))
+            .epsilon(1e-9));
+  // The last three cycles' Gbp agree within 3 %.
+  const auto& g = b["Gbp_by_cycle"];
+  const std::size_t n = g.size();
+  const double hi = std::max({g[n - 1].get<double>(), g[n - 2].get<double>(), g[n - 3].get<double>()});
+  const double lo = std::min({g[n - 1].get<double>(), g[n - 2].get<double>(), g[n - 3].get<double>()});
+  CHECK((hi - lo) / hi < 0.03);
+  // A closing sieve above the feed's F80 is refused.
+  o.bond_p1_um = 3000;
+  o.out = (run / "grind-bond-bad").string();
+  CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains("--bond 3000"));
+  CHECK(!fs::exists(o.out));
 }

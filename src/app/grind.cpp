@@ -37,8 +37,11 @@ struct Ore {
   double holdup_kg = 0;      // ore in the mill; or from powder_filling
   double powder_filling = 0; // U: the ball bed's voids the ore fills
   double bed_porosity = 0.4; // of the ore's own bed
+  double bulk_density = 0;   // kg/m³ of the packed feed (Bond's 700 cm³), 0: density (1 - bed_porosity)
   SizeSeries sizes;
   std::vector<double> feed;  // class masses
+  std::vector<double> sieve_m, sieve_passing;  // the feed as given
+  double ratio = 0;
   double f80_m = 0;
   AustinBreakage breakage;
   RateModel model = RateModel::energy;
@@ -125,8 +128,8 @@ Ore read_ore(const fs::path& path) {
   const std::string file = path.string();
   OreReader r(top, file);
   Ore o;
-  r.knows(top, "", {"name", "density", "holdup_kg", "powder_filling", "bed_porosity", "tanks", "sizes", "feed",
-                    "breakage", "rates"});
+  r.knows(top, "", {"name", "density", "holdup_kg", "powder_filling", "bed_porosity", "bulk_density", "tanks",
+                    "sizes", "feed", "breakage", "rates"});
   if (const toml::node* n = top.get("name")) o.name = n->value<std::string>().value_or("");
   o.density = r.number(top, "", "density", 500, 25000, "kg/m^3 of the ore's solid, 500 to 25000");
   const bool has_holdup = top.get("holdup_kg"), has_u = top.get("powder_filling");
@@ -138,6 +141,10 @@ Ore read_ore(const fs::path& path) {
   if (o.holdup_kg == 0 && has_holdup) r.fail("holdup_kg", top.get("holdup_kg"), "must be > 0 kg");
   if (has_u) o.powder_filling = r.number(top, "", "powder_filling", 0.01, 3, "0.01 to 3 (1: the voids just full)");
   o.bed_porosity = r.number(top, "", "bed_porosity", 0.2, 0.7, "0.2 to 0.7", 0.4);
+  o.bulk_density = r.number(top, "", "bulk_density", 300, 15000, "kg/m^3 of the packed feed, 300 to 15000",
+                            o.density * (1 - o.bed_porosity));
+  if (o.bulk_density >= o.density)
+    r.fail("bulk_density", top.get("bulk_density"), "must be below the solid's density");
   o.tanks = static_cast<int>(r.number(top, "", "tanks", 1, 1000, "1 to 1000 tanks in series", 1));
 
   const toml::table& sz = *r.table("sizes", true);
@@ -175,6 +182,9 @@ Ore read_ore(const fs::path& path) {
   std::vector<double> sieve_m;
   for (double s : sieve) sieve_m.push_back(s * 1e-3);
   o.feed = feed_masses(o.sizes, sieve_m, pass);
+  o.sieve_m = sieve_m;
+  o.sieve_passing = pass;
+  o.ratio = ratio;
   o.f80_m = passing_size(o.sizes, o.feed, 0.8);
 
   const toml::table& bk = *r.table("breakage", true);
@@ -218,6 +228,7 @@ Ore read_ore(const fs::path& path) {
 }
 
 struct Run {
+  double speed_rpm = 0;
   double power_W = 0, filling = 0, mill_volume = 0, porosity = 0.4, ball_radius_m = 0;
   std::vector<SpectrumBin> normal;  // the normal energy spectrum
   std::string title;
@@ -249,6 +260,7 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
     r.power_W = j.at("power_W").at("torque").get<double>();
     r.filling = j.at("filling").get<double>();
     r.title = j.value("title", std::string());
+    r.speed_rpm = j.value("speed_rpm", 0.0);
   } catch (const std::exception&) {
     throw std::invalid_argument(sj.string() + ": power_W.torque or filling missing; not a millcharge run's summary");
   }
@@ -300,16 +312,129 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
   return r;
 }
 
+// Mass of class masses m finer than x (uniform in log size inside a class).
+double mass_below(const SizeSeries& s, const std::vector<double>& m, double x) {
+  double below = 0;
+  const int n = s.size();
+  for (int i = 0; i < n; ++i) {
+    const double hi = s.top_m[i], lo = i + 1 < n ? s.top_m[i + 1] : 0.0;
+    if (hi <= x) below += m[i];
+    else if (lo < x) below += m[i] * (lo > 0 ? std::log(x / lo) / std::log(hi / lo) : 1.0);
+  }
+  return below;
+}
+
+// The part of m finer than x (the class that x cuts, in log proportion).
+std::vector<double> part_below(const SizeSeries& s, const std::vector<double>& m, double x) {
+  std::vector<double> u(m.size(), 0.0);
+  const int n = s.size();
+  for (int i = 0; i < n; ++i) {
+    const double hi = s.top_m[i], lo = i + 1 < n ? s.top_m[i + 1] : 0.0;
+    if (hi <= x) u[i] = m[i];
+    else if (lo < x) u[i] = m[i] * (lo > 0 ? std::log(x / lo) / std::log(hi / lo) : 1.0);
+  }
+  return u;
+}
+
+// Bond's locked-cycle test (F. C. Bond 1961, the standard procedure): 700
+// cm³ of feed, ground, screened at P1; the undersize replaced by fresh
+// feed; the revolutions of each cycle set so that the undersize is 1/3.5
+// of the charge (a circulating load of 250 %); Gbp the net grams of
+// undersize made per revolution, over the last three cycles once they
+// agree within 3 % with the load within 3 % of 250 %.
+struct BondResult {
+  double p1_um = 0, gbp_g_rev = 0, p80_um = 0, f80_um = 0, wi_kWh_t = 0, charge_g = 0, circulating_load = 0;
+  int cycles = 0;
+  bool steady = false;
+  std::vector<double> gbp_by_cycle, revs_by_cycle;
+};
+
+BondResult bond_test(const SizeSeries& s, const std::vector<double>& feed, const std::vector<double>& S_per_min,
+                     const std::vector<std::vector<double>>& b, double rpm, double charge_kg, double p1_m) {
+  BondResult r;
+  r.p1_um = p1_m * 1e6;
+  r.charge_g = charge_kg * 1000;
+  const double fresh_fines = mass_below(s, feed, p1_m);  // fraction of fresh feed already below P1
+  std::vector<double> m(feed.size());
+  for (std::size_t i = 0; i < m.size(); ++i) m[i] = feed[i] * r.charge_g;  // grams
+  double revs = 100;
+  std::vector<double> product;
+  for (int c = 1; c <= 30; ++c) {
+    const double fines_in = mass_below(s, m, p1_m);
+    m = batch_grind(m, S_per_min, b, revs / rpm);
+    const std::vector<double> under = part_below(s, m, p1_m);
+    double u = 0;
+    for (double x : under) u += x;
+    const double gbp = (u - fines_in) / revs;
+    r.gbp_by_cycle.push_back(gbp);
+    r.revs_by_cycle.push_back(revs);
+    product = under;
+    // Replace the undersize by fresh feed of the same mass.
+    for (std::size_t i = 0; i < m.size(); ++i) m[i] += -under[i] + feed[i] * u;
+    r.cycles = c;
+    const std::size_t k = r.gbp_by_cycle.size();
+    if (c >= 6) {
+      const double g0 = r.gbp_by_cycle[k - 3], g1 = r.gbp_by_cycle[k - 2], g2 = r.gbp_by_cycle[k - 1];
+      const double hi = std::max({g0, g1, g2}), lo = std::min({g0, g1, g2});
+      const double cl = (r.charge_g - u) / u;
+      if (lo > 0 && (hi - lo) / hi < 0.03 && std::fabs(cl - 2.5) < 0.075) {
+        r.steady = true;
+        r.gbp_g_rev = (g0 + g1 + g2) / 3;
+        r.circulating_load = cl;
+        break;
+      }
+    }
+    // Next cycle: undersize made to 1/3.5 of the charge.
+    const double target = r.charge_g / 3.5 - fresh_fines * u;
+    revs = gbp > 0 ? std::clamp(target / gbp, 10.0, 5000.0) : 5000.0;
+  }
+  if (!r.steady) {
+    r.gbp_g_rev = r.gbp_by_cycle.back();
+    double u = 0;
+    for (double x : product) u += x;
+    r.circulating_load = (r.charge_g - u) / u;
+  }
+  r.p80_um = passing_size(s, product, 0.8) * 1e6;
+  r.f80_um = passing_size(s, feed, 0.8) * 1e6;
+  // Bond's formula, in kWh per metric tonne (1.1 x the short-ton form).
+  r.wi_kWh_t = 1.1 * 44.5 /
+               (std::pow(r.p1_um, 0.23) * std::pow(r.gbp_g_rev, 0.82) *
+                (10 / std::sqrt(r.p80_um) - 10 / std::sqrt(r.f80_um)));
+  return r;
+}
+
+double s_finest_top(const SizeSeries& s) { return s.top_m.back(); }
+
 std::string fmt_um(double m) { return std::isfinite(m) ? fmt::format("{:.1f}", m * 1e6) : "below the finest class"; }
 
 }  // namespace
 
 int cmd_grind(const GrindOptions& o) {
-  const Ore ore = read_ore(o.ore);
+  Ore ore = read_ore(o.ore);
+  if (o.bond_p1_um > 0) {
+    // Bond's test screens at P1: the series is moved up to put P1 on a
+    // class top (it still covers the feed; the classes keep their count).
+    const double p1 = o.bond_p1_um * 1e-6, top = ore.sizes.top_m.front();
+    const double k = std::ceil(std::log(top / p1) / std::log(ore.ratio) - 1e-9);
+    ore.sizes = geometric_series(p1 * std::pow(ore.ratio, k), ore.ratio, ore.sizes.size());
+    ore.feed = feed_masses(ore.sizes, ore.sieve_m, ore.sieve_passing);
+  }
   const Run run = read_run(o.run_dir, ore.model == RateModel::spectrum);
   const int tanks = o.tanks > 0 ? o.tanks : ore.tanks;
   // The ore in the mill.
-  const double holdup_kg = ore.holdup_kg > 0 ? ore.holdup_kg
+  // In Bond's test the mill holds 700 cm³ of packed feed.
+  const double bond_charge_kg = 700e-6 * ore.bulk_density;
+  if (o.bond_p1_um > 0) {
+    if (!(o.bond_p1_um * 1e-6 < ore.f80_m))
+      throw std::invalid_argument(fmt::format("--bond {:g}: the closing sieve must lie below the feed's F80 ({} um)",
+                                              o.bond_p1_um, fmt_um(ore.f80_m)));
+    if (o.bond_p1_um * 1e-6 < s_finest_top(ore.sizes))
+      throw std::invalid_argument(fmt::format("--bond {:g}: below the finest class top ({:.1f} um): more sizes.classes",
+                                              o.bond_p1_um, s_finest_top(ore.sizes) * 1e6));
+    if (!(run.speed_rpm > 0)) throw std::invalid_argument(o.run_dir + "/summary.json: speed_rpm missing");
+  }
+  const double holdup_kg = o.bond_p1_um > 0  ? bond_charge_kg
+                           : ore.holdup_kg > 0 ? ore.holdup_kg
                                              : ore.powder_filling * run.porosity * run.filling * run.mill_volume *
                                                    ore.density * (1 - ore.bed_porosity);
   const SizeSeries& s = ore.sizes;
@@ -331,7 +456,8 @@ int cmd_grind(const GrindOptions& o) {
   S[n - 1] = SE[n - 1] = 0;
   const auto b = breakage_matrix(s, ore.breakage);
 
-  const std::vector<double> times = o.times_min.empty() && !(o.feed_rate_t_h > 0) && !(o.target_p80_um > 0)
+  const std::vector<double> times = o.times_min.empty() && !(o.feed_rate_t_h > 0) && !(o.target_p80_um > 0) &&
+                                            !(o.bond_p1_um > 0)
                                         ? std::vector<double>{1, 2, 4, 8, 16}
                                         : o.times_min;
   struct Product {
@@ -384,6 +510,9 @@ int cmd_grind(const GrindOptions& o) {
     }
   }
 
+  BondResult bond;
+  if (o.bond_p1_um > 0) bond = bond_test(s, ore.feed, S, b, run.speed_rpm, bond_charge_kg, o.bond_p1_um * 1e-6);
+
   // Everything computed; now the files.
   const fs::path out = o.out.empty() ? fs::path(o.run_dir) / "grind" : fs::path(o.out);
   std::error_code ec;
@@ -428,6 +557,21 @@ int cmd_grind(const GrindOptions& o) {
   }
   if (o.target_p80_um > 0)
     j["throughput_at_target_t_h"] = std::isfinite(target_rate) ? nlohmann::json(target_rate) : nlohmann::json();
+  if (o.bond_p1_um > 0) {
+    nlohmann::ordered_json q;
+    q["P1_um"] = bond.p1_um;
+    q["charge_g"] = bond.charge_g;
+    q["cycles"] = bond.cycles;
+    q["steady"] = bond.steady;
+    q["Gbp_g_per_rev"] = bond.gbp_g_rev;
+    q["circulating_load"] = bond.circulating_load;
+    q["F80_um"] = bond.f80_um;
+    q["P80_um"] = bond.p80_um;
+    q["work_index_kWh_t"] = bond.wi_kWh_t;
+    q["revolutions_by_cycle"] = bond.revs_by_cycle;
+    q["Gbp_by_cycle"] = bond.gbp_by_cycle;
+    j["bond"] = q;
+  }
   io::write_file_atomic(out / "grind.json", j.dump(2) + "\n");
 
   static const std::uint32_t colours[] = {0x1f77b4, 0xd62728, 0x2ca02c, 0xff7f0e, 0x9467bd, 0x8c564b, 0xe377c2, 0x17becf};
@@ -462,6 +606,11 @@ int cmd_grind(const GrindOptions& o) {
       std::printf("  %-28s %s %8.3g kWh/t  P80 %s um\n", p.label.c_str(),
                   p.feed_t_h > 0 ? fmt::format("{:9.4g} t/h", p.feed_t_h).c_str() : "             ", p.kWh_t,
                   fmt_um(p.p80_m).c_str());
+    if (o.bond_p1_um > 0)
+      std::printf("  Bond test at P1 %g um: %d cycles%s, Gbp %.3f g/rev, CL %.0f %%, F80 %.0f um, P80 %.0f um, Wi %.2f "
+                  "kWh/t\n",
+                  bond.p1_um, bond.cycles, bond.steady ? "" : " (not steady)", bond.gbp_g_rev,
+                  100 * bond.circulating_load, bond.f80_um, bond.p80_um, bond.wi_kWh_t);
     if (o.target_p80_um > 0 && !std::isfinite(target_rate))
       std::printf("  no feed rate from 1e-9 to 1e6 t/h gives P80 %g um\n", o.target_p80_um);
     std::printf("wrote %s/{grind.csv, rates.csv, grind.json, grind.png}\n", out.string().c_str());

@@ -15,6 +15,7 @@ struct GrindOptions {
   double feed_rate_t_h = 0;        // --feed-rate, a continuous mill (t/h)
   double target_p80_um = 0;        // --target-p80: the feed rate that gives it
   int tanks = 0;                   // --tanks, 0: the ore file's (default 1)
+  double bond_p1_um = 0;           // --bond: the locked-cycle test at this closing sieve
   std::string out;                 // --out, default RUN_DIR/grind
   bool quiet = false;
 };

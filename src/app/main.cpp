@@ -10,7 +10,7 @@
 //                    [--precision float|double] [--set KEY=VALUE]... [--quiet]
 //   millcharge devices
 //   millcharge grind RUN_DIR --ore ORE.toml [--time MIN,...] [--feed-rate T/H] [--target-p80 UM]
-//                    [--tanks N] [--out DIR] [--quiet]
+//                    [--tanks N] [--bond P1_UM] [--out DIR] [--quiet]
 //   millcharge sweep check FILE | run FILE --local [N]|--slurm|--print | collect DIR
 // Exit status: 0 done; 2 bad input (a message names the key; nothing written);
 // 1 any other failure (device, blow-up, disk).
@@ -153,6 +153,10 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   grind->add_option("--tanks", go.tanks, "tanks in series for the continuous mill (default: the ore file's, or 1)")
       ->check(CLI::Range(1, 1000));
+  grind->add_option("--bond", go.bond_p1_um,
+                    "Bond's locked-cycle ball mill test closed at this sieve (um): Gbp and the work index")
+      ->check(CLI::PositiveNumber)
+      ->type_name("P1_UM");
   grind->add_option("--out", go.out, "folder for the results (default RUN/grind)");
   grind->add_flag("--quiet", go.quiet, "no summary lines");
 
