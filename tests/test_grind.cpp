@@ -244,6 +244,24 @@ TEST_CASE("grind refuses bad ore files and run folders by name, writing nothing"
     }
   }
   refuses(ore_file("example_spectrum.toml"), old, "has no normal energy spectrum");
+  // A run resumed from an older checkpoint: its normal spectrum holds part
+  // of the collisions only.
+  {
+    std::ifstream in(run / "spectra.csv");
+    std::ofstream o(old / "spectra.csv");
+    std::string l;
+    std::getline(in, l);
+    o << l << '\n';
+    while (std::getline(in, l)) {
+      std::vector<std::string> f;
+      std::stringstream ss(l);
+      for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+      f[f.size() - 2] = std::to_string(0.5 * std::stod(f[f.size() - 2]));
+      for (std::size_t k = 0; k < f.size(); ++k) o << (k ? "," : "") << f[k];
+      o << '\n';
+    }
+  }
+  refuses(ore_file("example_spectrum.toml"), old, "holds 50.0 % of the collisions");
   // The binary: exit status 2 and the message.
   const std::string cmd = std::string(MC_BINARY) + " grind " + run.string() + " --ore " +
                           edited_ore("model = \"energy\"", "model = \"kick\"").string() + " --out " + out.string() +

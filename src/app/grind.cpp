@@ -291,9 +291,13 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
     throw std::invalid_argument(sc.string() +
                                 ": has no normal energy spectrum (columns normal_spectrum_collisions_per_s, "
                                 "normal_spectrum_W): the run is from an older millcharge; run it again");
+  const int c_all = col("collisions_per_s");
+  double all_collisions = 0, normal_collisions = 0;
   while (std::getline(in, line)) {
     const std::vector<std::string> f = split_csv(line);
-    if (static_cast<int>(f.size()) <= std::max({c_pair, c_n, c_w})) continue;
+    if (static_cast<int>(f.size()) <= std::max({c_pair, c_n, c_w, c_all})) continue;
+    if (c_all >= 0) all_collisions += std::stod(f[c_all]);
+    normal_collisions += std::stod(f[c_n]);
     SpectrumBin b;
     b.collisions_per_s = std::stod(f[c_n]);
     const double w = std::stod(f[c_w]);
@@ -308,6 +312,11 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
     b.r_eff_m = wall ? r.ball_radius_m : 0.5 * r.ball_radius_m;
     r.normal.push_back(b);
   }
+  if (c_all >= 0 && all_collisions > 0 && std::fabs(normal_collisions - all_collisions) > 0.01 * all_collisions)
+    throw std::invalid_argument(fmt::format(
+        "{}: the normal energy spectrum holds {:.1f} % of the collisions (a run resumed from an older millcharge's "
+        "checkpoint); run it again",
+        sc.string(), 100 * normal_collisions / all_collisions));
   if (r.normal.empty()) throw std::invalid_argument(sc.string() + ": no collisions in the normal energy spectrum");
   return r;
 }

@@ -1030,6 +1030,26 @@ bool has_array(const SolverState& st, const char* name) {
   return false;
 }
 
+// The spectra of a checkpoint written before the normal energy spectrum
+// (six fields a cell) widen to today's eight: the normal spectrum's fields
+// start at zero, so it holds only the collisions that close after the load
+// (millcharge grind checks that it covers them all).
+constexpr int kSpectraFieldsBefore = 6;
+bool widen_old_spectra(const SolverState& st, compute::Buffer<std::uint32_t>& b) {
+  for (const auto& [key, bytes] : st.arrays) {
+    if (key != "spectra") continue;
+    const std::size_t cells = b.size() / (2 * MC_SPECTRA_FIELDS);
+    if (bytes.size() != cells * 2 * kSpectraFieldsBefore * sizeof(std::uint32_t)) return false;
+    std::fill(b.host.begin(), b.host.end(), 0u);
+    for (std::size_t c = 0; c < cells; ++c)
+      std::memcpy(b.host.data() + c * 2 * MC_SPECTRA_FIELDS, bytes.data() + c * 2 * kSpectraFieldsBefore * 4,
+                  2 * kSpectraFieldsBefore * sizeof(std::uint32_t));
+    b.write_to_device();
+    return true;
+  }
+  return false;
+}
+
 template <class T>
 void get_array(const SolverState& st, const char* name, compute::Buffer<T>& b, bool resize) {
   for (const auto& [key, bytes] : st.arrays) {
@@ -1139,7 +1159,7 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
     records_.resize(2 * static_cast<std::size_t>(rec_capacity_));
     get_array(st, "records", records_, true);
     get_array(st, "rec_state", rec_state_, false);
-    get_array(st, "spectra", spectra_, false);
+    if (!widen_old_spectra(st, spectra_)) get_array(st, "spectra", spectra_, false);
     get_array(st, "liner", liner_, false);
     get_array(st, "impact_profile", impact_profile_, false);
   } else {
