@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <string>
 #include <vector>
@@ -112,6 +113,18 @@ TEST_CASE("STL: bad meshes are refused with the file and the triangle named", "[
     std::memcpy(&b[84 + 50 + 12 + 12 * 2 + 4], &inf, 4);  // triangle 2, vertex 3, y
     CHECK(message_of(b) == "bad.stl: triangle 2: vertex 3 is not a finite number (0, inf, 0)");
   }
+  // A vertex far out of range is named as such, not as a zero-area triangle, in both forms.
+  CHECK(message_of("solid s\n" + f1 + ascii_facet("0 0 0", "1 0 0", "0 1e30 0") + "endsolid\n") ==
+        "bad.stl:9: triangle 2: vertex 3 is out of range: its y coordinate is 1e+30 m (after scaling), beyond the "
+        "limit |y| <= 10000 m (is the file in the units that mesh.scale assumes?)");
+  {
+    std::string b = good_binary;
+    const float far = -2e4f;
+    std::memcpy(&b[84 + 12 + 12 * 1], &far, 4);  // triangle 1, vertex 2, x
+    CHECK_THAT(message_of(b), Catch::StartsWith("bad.stl: triangle 1: vertex 2 is out of range: its x coordinate is "
+                                                "-20000 m") &&
+                                  Catch::Contains("limit |x| <= 10000 m"));
+  }
   // Zero area: repeated vertices, and three vertices on a line.
   CHECK_THAT(message_of("solid s\n" + f1 + ascii_facet("0 0 0", "1 1 0", "1 1 0") + "endsolid\n"),
              Catch::Contains("triangle 2: has zero area (vertices 2 and 3 coincide)"));
@@ -129,5 +142,13 @@ TEST_CASE("STL: bad meshes are refused with the file and the triangle named", "[
     FAIL("accepted a missing file");
   } catch (const MeshError& e) {
     CHECK_THAT(e.what(), Catch::Contains("/nonexistent/liner.stl: cannot be read"));
+  }
+  // And a directory where a file was meant.
+  try {
+    mc::io::read_stl(std::filesystem::temp_directory_path());
+    FAIL("accepted a directory");
+  } catch (const MeshError& e) {
+    CHECK(std::string(e.what()) == std::filesystem::temp_directory_path().string() +
+                                       ": is a directory, not a file (give the path of an .stl file)");
   }
 }

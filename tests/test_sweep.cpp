@@ -156,6 +156,15 @@ TEST_CASE("sweep file: a bad sweep is named by the file, the line and the key", 
              Catch::Contains("axes.mill.speed_fraction: is also in [set]"));
   CHECK_THAT(sweep_error(head + "[axes]\nmill.speed_fraction = [0.5]\n[slurm]\nqueue = \"gpu\"\n"),
              Catch::Contains("slurm.queue: unknown key"));
+  CHECK(sweep_error(head + "[axes]\nmill.speed_fraction = [0.5]\n[slurm]\ntime = \"4 hours\"\n") ==
+        (fs::path(MC_TEST_DATA) / "sweep.toml").string() +
+            ":5: slurm.time: \"4 hours\" is not a Slurm time limit: expected MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM "
+            "or D-HH:MM:SS, e.g. 90, 04:00:00 or 1-12:00:00");
+  for (const char* bad : {"04:00:00:00", "1-24", "10:60", "1-", "-4", ":30", "04::00", "1-2-3", ""})
+    CHECK_THAT(sweep_error(head + "[axes]\nmill.speed_fraction = [0.5]\n[slurm]\ntime = \"" + bad + "\"\n"),
+               Catch::Contains(":5: slurm.time: \"" + std::string(bad) + "\" is not a Slurm time limit"));
+  for (const char* good : {"90", "90:30", "04:00:00", "100:00:00", "1-12", "1-12:30", "1-12:30:15"})
+    CHECK(io::slurm_time_valid(good));
   CHECK_THAT(sweep_error("case = \"no_such.toml\"\n[axes]\nmill.speed_fraction = [0.5]\n"),
              Catch::Contains("sweep.toml:1: case: \"no_such.toml\": no such case file"));
 }

@@ -309,8 +309,9 @@ int cmd_sweep_run(const SweepRunOptions& o) {
   sl.sbatch_args.insert(sl.sbatch_args.end(), o.sbatch_args.begin(), o.sbatch_args.end());
   for (const std::string& a : sl.sbatch_args)
     if (a.rfind("--", 0) != 0) throw std::invalid_argument("--sbatch-arg " + a + ": expected an sbatch option, e.g. --qos=long");
-  if (!sl.time.empty() && sl.time.find_first_not_of("0123456789:-") != std::string::npos)
-    throw std::invalid_argument("time limit \"" + sl.time + "\": expected sbatch's form, e.g. 90, 04:00:00 or 1-12:00:00");
+  if (!o.time.empty() && !io::slurm_time_valid(o.time))
+    throw std::invalid_argument("--time \"" + o.time + "\" is not a Slurm time limit: expected " +
+                                std::string(io::kSlurmTimeForms));
 
   const Checked k = check_all(std::move(sweep));
   const io::Sweep& s = k.sweep;

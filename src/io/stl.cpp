@@ -155,6 +155,9 @@ TriangleMesh parse_binary(std::string_view b, double scale) {
   return m;
 }
 
+// No mill part is 10 km across: a coordinate beyond this is a corrupt or mis-scaled file.
+constexpr double kMaxCoordinate = 1e4;
+
 void check(const TriangleMesh& m, const std::string& source, const std::vector<int>& lines) {
   auto where = [&](std::size_t k) {
     return lines.empty() ? fmt::format("{}: triangle {}", source, k + 1)
@@ -168,6 +171,15 @@ void check(const TriangleMesh& m, const std::string& source, const std::vector<i
       if (!std::isfinite(t.v[v].x) || !std::isfinite(t.v[v].y) || !std::isfinite(t.v[v].z))
         throw MeshError(fmt::format("{}: vertex {} is not a finite number ({}, {}, {})", where(k), v + 1, t.v[v].x,
                                     t.v[v].y, t.v[v].z));
+    for (int v = 0; v < 3; ++v) {
+      const double c[3] = {t.v[v].x, t.v[v].y, t.v[v].z};
+      for (int d = 0; d < 3; ++d)
+        if (std::abs(c[d]) > kMaxCoordinate)
+          throw MeshError(fmt::format(
+              "{}: vertex {} is out of range: its {} coordinate is {:.6g} m (after scaling), beyond the limit "
+              "|{}| <= {:g} m (is the file in the units that mesh.scale assumes?)",
+              where(k), v + 1, "xyz"[d], c[d], "xyz"[d], kMaxCoordinate));
+    }
     for (int a = 0; a < 3; ++a)
       for (int c = a + 1; c < 3; ++c)
         if ((t.v[a] - t.v[c]).norm() == 0)
@@ -232,6 +244,9 @@ TriangleMesh parse_stl(std::string_view bytes, const std::string& source, double
 }
 
 TriangleMesh read_stl(const std::filesystem::path& path, double scale) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw MeshError(fmt::format("{}: is a directory, not a file (give the path of an .stl file)", path.string()));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw MeshError(fmt::format("{}: cannot be read (no such file, or no permission)", path.string()));
   std::ostringstream buf;

@@ -354,7 +354,11 @@ Sweep parse_sweep(const std::string& text, const fs::path& file) {
         return *v.value<std::string>();
       };
       if (k.str() == "partition") s.slurm.partition = text();
-      else if (k.str() == "time") s.slurm.time = text();
+      else if (k.str() == "time") {
+        s.slurm.time = text();
+        if (!slurm_time_valid(s.slurm.time))
+          r.fail(key, &v, "\"" + s.slurm.time + "\" is not a Slurm time limit: expected " + kSlurmTimeForms);
+      }
       else if (k.str() == "gpus_per_task") s.slurm.gpus_per_task = integer(0, 64);
       else if (k.str() == "cpus_per_task") s.slurm.cpus_per_task = integer(0, 4096);
       else if (k.str() == "max_running") s.slurm.max_running = integer(0, 100000);
@@ -376,6 +380,33 @@ Sweep parse_sweep(const std::string& text, const fs::path& file) {
     }
   }
   return s;
+}
+
+bool slurm_time_valid(const std::string& t) {
+  std::vector<std::string> fields;
+  std::string days;
+  std::string rest = t;
+  if (const auto dash = t.find('-'); dash != std::string::npos) {
+    days = t.substr(0, dash);
+    rest = t.substr(dash + 1);
+    if (days.empty() || days.find_first_not_of("0123456789") != std::string::npos) return false;
+  }
+  std::size_t from = 0;
+  while (true) {
+    const auto colon = rest.find(':', from);
+    fields.push_back(rest.substr(from, colon == std::string::npos ? std::string::npos : colon - from));
+    if (colon == std::string::npos) break;
+    from = colon + 1;
+  }
+  if (fields.size() > 3) return false;
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    const std::string& f = fields[i];
+    if (f.empty() || f.find_first_not_of("0123456789") != std::string::npos) return false;
+    const bool leading = i == 0 && days.empty();
+    if (!leading && (f.size() > 2 || std::stoi(f) >= (i == 0 ? 24 : 60))) return false;
+    if (leading && f.size() > 9) return false;
+  }
+  return true;
 }
 
 Sweep read_sweep(const fs::path& file) {

@@ -81,6 +81,12 @@ std::vector<SweepCase> expand(const Sweep& s);
 // "key=value, key=value" of a case, for messages and tables.
 std::string case_label(const Sweep& s, const SweepCase& c);
 
+// Whether `t` is a time limit in one of sbatch's forms: MM, MM:SS, HH:MM:SS,
+// D-HH, D-HH:MM or D-HH:MM:SS (digits only; minutes and seconds after the
+// first field below 60, hours after D- below 24).
+bool slurm_time_valid(const std::string& t);
+inline constexpr const char* kSlurmTimeForms = "MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS, e.g. 90, 04:00:00 or 1-12:00:00";
+
 // The key's last part, or the whole key where two axes share a last part.
 std::vector<std::string> short_axis_names(const Sweep& s);
 
