@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -321,18 +320,6 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
   return r;
 }
 
-// Mass of class masses m finer than x (uniform in log size inside a class).
-double mass_below(const SizeSeries& s, const std::vector<double>& m, double x) {
-  double below = 0;
-  const int n = s.size();
-  for (int i = 0; i < n; ++i) {
-    const double hi = s.top_m[i], lo = i + 1 < n ? s.top_m[i + 1] : 0.0;
-    if (hi <= x) below += m[i];
-    else if (lo < x) below += m[i] * (lo > 0 ? std::log(x / lo) / std::log(hi / lo) : 1.0);
-  }
-  return below;
-}
-
 // The part of m finer than x (the class that x cuts, in log proportion).
 std::vector<double> part_below(const SizeSeries& s, const std::vector<double>& m, double x) {
   std::vector<double> u(m.size(), 0.0);
@@ -343,6 +330,12 @@ std::vector<double> part_below(const SizeSeries& s, const std::vector<double>& m
     else if (lo < x) u[i] = m[i] * (lo > 0 ? std::log(x / lo) / std::log(hi / lo) : 1.0);
   }
   return u;
+}
+
+double mass_below(const SizeSeries& s, const std::vector<double>& m, double x) {
+  double below = 0;
+  for (double v : part_below(s, m, x)) below += v;
+  return below;
 }
 
 // Bond's locked-cycle test (F. C. Bond 1961, the standard procedure): 700
@@ -412,8 +405,6 @@ BondResult bond_test(const SizeSeries& s, const std::vector<double>& feed, const
   return r;
 }
 
-double s_finest_top(const SizeSeries& s) { return s.top_m.back(); }
-
 std::string fmt_um(double m) { return std::isfinite(m) ? fmt::format("{:.1f}", m * 1e6) : "below the finest class"; }
 
 }  // namespace
@@ -437,9 +428,9 @@ int cmd_grind(const GrindOptions& o) {
     if (!(o.bond_p1_um * 1e-6 < ore.f80_m))
       throw std::invalid_argument(fmt::format("--bond {:g}: the closing sieve must lie below the feed's F80 ({} um)",
                                               o.bond_p1_um, fmt_um(ore.f80_m)));
-    if (o.bond_p1_um * 1e-6 < s_finest_top(ore.sizes))
+    if (o.bond_p1_um * 1e-6 < ore.sizes.top_m.back())
       throw std::invalid_argument(fmt::format("--bond {:g}: below the finest class top ({:.1f} um): more sizes.classes",
-                                              o.bond_p1_um, s_finest_top(ore.sizes) * 1e6));
+                                              o.bond_p1_um, ore.sizes.top_m.back() * 1e6));
     if (!(run.speed_rpm > 0)) throw std::invalid_argument(o.run_dir + "/summary.json: speed_rpm missing");
   }
   const double holdup_kg = o.bond_p1_um > 0  ? bond_charge_kg
