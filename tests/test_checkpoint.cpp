@@ -18,9 +18,13 @@
 #include <sstream>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
 #include "helpers.h"
 #include "core/drum.h"
+#include "io/case_file.h"
 #include "io/checkpoint.h"
+#include "sim/mill_run.h"
 #include "sim/layout.hpp"
 
 namespace fs = std::filesystem;
@@ -433,4 +437,119 @@ TEST_CASE("a state saved before the normal energy spectrum loads: its spectra ke
           by_normal += later.at(t, k, MC_SPECTRA_BY_NORMAL);
   CHECK(closed > 10);
   CHECK(by_normal == closed);
+}
+
+TEST_CASE("a finished run extended with --resume --duration equals an unbroken run row for row", "[checkpoint]") {
+  // 0.1 s of turning, then extended to 0.2 s, against 0.2 s unbroken. The
+  // window (from the warm-up, less than a revolution) is the one already
+  // begun, so the averages go on as well.
+  const std::string common =
+      " --quiet --set run.settle=0.05 --set run.warmup=0.05 --set run.checkpoint_interval=0.05"
+      " --set run.snapshot_interval=0.1";
+  const fs::path a = scratch("ext-unbroken"), b = scratch("ext-extended");
+  REQUIRE(run_cmd("run" + common + " --set run.duration=0.2 --out '" + a.string() + "'") == 0);
+  REQUIRE(run_cmd("run" + common + " --set run.duration=0.1 --out '" + b.string() + "'") == 0);
+  const std::string rows_before = slurp(b / "timeseries.csv");
+
+  std::string err;
+  // Shorter than it has turned, or another key: refused by name, nothing changed.
+  CHECK(run_cmd("run --quiet --resume '" + b.string() + "' --duration 0.05", &err) == 2);
+  CHECK(err.find("run.duration") != std::string::npos);
+  CHECK(err.find("has turned 0.1 s") != std::string::npos);
+  CHECK(run_cmd("run --quiet --resume '" + b.string() + "' --duration 0.3 --set mill.speed_fraction=0.8", &err) == 2);
+  CHECK(err.find("--set mill.speed_fraction") != std::string::npos);
+  CHECK(slurp(b / "timeseries.csv") == rows_before);
+  CHECK(slurp(b / "case.toml").find("duration = 0.1") != std::string::npos);
+
+  REQUIRE(run_cmd("run --quiet --resume '" + b.string() + "' --duration 0.2", &err) == 0);
+  INFO(err);
+  CHECK(slurp(a / "timeseries.csv") == slurp(b / "timeseries.csv"));
+  CHECK(slurp(a / "charge.pvd") == slurp(b / "charge.pvd"));
+  CHECK(slurp(a / "case.toml") == slurp(b / "case.toml"));
+  const io::Checkpoint ca = io::read_checkpoint(a / io::kCheckpointFile);
+  const io::Checkpoint cb = io::read_checkpoint(b / io::kCheckpointFile);
+  require_same_state(ca, cb);
+  // The summary over the same window: the same sums, bit for bit.
+  const auto ja = nlohmann::json::parse(slurp(a / "summary.json"));
+  const auto jb = nlohmann::json::parse(slurp(b / "summary.json"));
+  CHECK(ja["power_W"]["torque"].get<double>() == jb["power_W"]["torque"].get<double>());
+  CHECK(ja["power_W"]["dissipation"].get<double>() == jb["power_W"]["dissipation"].get<double>());
+  CHECK(ja["average"]["from_s"].get<double>() == jb["average"]["from_s"].get<double>());
+  CHECK(ja["turning_s"].get<double>() == Approx(0.2).margin(1e-4));
+  CHECK(jb["turning_s"].get<double>() == ja["turning_s"].get<double>());
+  // Complete again: a plain resume has nothing to do, and says how to extend.
+  CHECK(run_cmd("run --quiet --resume '" + b.string() + "'", &err) == 2);
+  CHECK(err.find("--duration") != std::string::npos);
+  fs::remove_all(a);
+  fs::remove_all(b);
+}
+
+TEST_CASE("an extension keeps the window begun where it can, else begins one after the point reached", "[checkpoint]") {
+  // The lab mill's turning planned in steps: a revolution is 1.769 s.
+  const auto lab = [](const std::string& duration) {
+    std::vector<std::string> ov = {"run.warmup=0.5", "run.duration=" + duration};
+    MillCase c = io::read_case(io::default_case(), ov);
+    return std::make_pair(c, derive(c));
+  };
+  const auto [c3, d3] = lab("3");
+  const double dt = d3.dt;
+  const TurnPlan p3 = plan_turning(c3, d3, dt);
+  REQUIRE(p3.revolutions == 1);  // [3 − 1.77, 3] s
+  CHECK(p3.window_start == p3.turn_steps - std::lround(p3.rev_steps));
+  RunState done;
+  done.phase = 3;
+  done.turn_step = p3.turn_steps;
+  done.window_begun = 1;
+  done.batches.resize(kBatchesPerRevolution);
+  done.work = 1;
+  done.window_profile.assign(kProfileBins, 3);
+
+  SECTION("6 s: an unbroken run's window begins at 6 − 3 revolutions = 0.69 s, before the 3 s reached") {
+    const auto [c6, d6] = lab("6");
+    const RunState st = extend_run(done, c3, d3, c6, d6, dt);
+    CHECK(st.phase == 2);
+    CHECK(st.window_begun == 0);  // a new window, its books from zero
+    CHECK(st.window_floor_step == p3.turn_steps);
+    CHECK(st.batches.empty());
+    CHECK(st.work == 0);
+    CHECK(st.window_profile == std::vector<long>(kProfileBins, 0));
+    const TurnPlan p = plan_turning(c6, d6, dt, st.window_floor_step);
+    CHECK(p.revolutions == 1);  // [6 − 1.77, 6] s, after 3 s
+    CHECK(p.window_start >= p3.turn_steps);
+    CHECK(p.turn_steps == std::lround(6 / dt));
+  }
+  SECTION("0.6 s to 6 s: the unbroken run's window [0.69, 6] s begins after 0.6 s: the same window") {
+    const auto [c06, d06] = lab("0.6");
+    const auto [c6, d6] = lab("6");
+    RunState short_run = done;
+    short_run.turn_step = plan_turning(c06, d06, dt).turn_steps;
+    short_run.batches.clear();
+    const RunState st = extend_run(short_run, c06, d06, c6, d6, dt);
+    CHECK(st.window_begun == 0);
+    const TurnPlan unbroken = plan_turning(c6, d6, dt);
+    CHECK(plan_turning(c6, d6, dt, st.window_floor_step).window_start == unbroken.window_start);
+    CHECK(unbroken.revolutions == 3);
+  }
+  SECTION("a duration at or below what has turned is refused, naming the key") {
+    const auto [c2, d2] = lab("3");
+    REQUIRE_THROWS_WITH(extend_run(done, c3, d3, c2, d2, dt), Catch::Contains("run.duration") &&
+                                                                   Catch::Contains("has turned 3 s"));
+  }
+  SECTION("an auto run stopped at its cap goes on with a larger cap, its window kept") {
+    std::vector<std::string> ov = {"run.warmup=0.5", "run.duration=\"auto\"", "run.max_duration=2.5"};
+    const MillCase ca = io::read_case(io::default_case(), ov);
+    const MillDerived da = derive(ca);
+    const TurnPlan pa = plan_turning(ca, da, dt);
+    REQUIRE(pa.revolutions == 1);
+    RunState capped = done;
+    capped.turn_step = pa.turn_steps;
+    ov.back() = "run.max_duration=6";
+    const MillCase cb = io::read_case(io::default_case(), ov);
+    const MillDerived db = derive(cb);
+    const RunState st = extend_run(capped, ca, da, cb, db, dt);
+    CHECK(st.window_begun == 1);
+    CHECK(st.batches.size() == capped.batches.size());
+    CHECK(st.work == 1);
+    CHECK(plan_turning(cb, db, dt, st.window_floor_step).revolutions == 3);
+  }
 }

@@ -52,9 +52,8 @@ struct Prepared {
   Scene scene;
 };
 
-Prepared prepare(const CaseOptions& o, const fs::path& default_path = io::default_case()) {
-  Prepared p;
-  p.path = o.case_path.empty() ? default_path : fs::path(o.case_path);
+// --set, --duration and --precision as overrides of the case's keys.
+std::vector<std::string> case_overrides(const CaseOptions& o) {
   std::vector<std::string> overrides = o.overrides;
   if (o.duration_auto) {
     overrides.push_back("run.duration=\"auto\"");
@@ -65,7 +64,13 @@ Prepared prepare(const CaseOptions& o, const fs::path& default_path = io::defaul
     overrides.push_back(s.str());
   }
   if (!o.precision.empty()) overrides.push_back("run.precision=\"" + o.precision + "\"");
-  p.c = io::read_case(p.path, overrides);
+  return overrides;
+}
+
+Prepared prepare(const CaseOptions& o, const fs::path& default_path = io::default_case()) {
+  Prepared p;
+  p.path = o.case_path.empty() ? default_path : fs::path(o.case_path);
+  p.c = io::read_case(p.path, case_overrides(o));
   p.d = derive(p.c);
   try {
     p.scene = build_scene(p.c, p.d);
@@ -414,7 +419,7 @@ class StopSignals {
 
 // The first `rows` data rows of an earlier timeseries.csv, and the file cut
 // back to them (atomically), for a resumed run.
-std::vector<std::string> keep_rows(const fs::path& csv, long rows) {
+std::vector<std::string> keep_rows(const fs::path& csv, long rows, bool clear_averaged = false) {
   std::ifstream in(csv);
   if (!in) throw std::invalid_argument(csv.string() + ": missing; the run folder is incomplete");
   std::vector<std::string> lines;
@@ -423,6 +428,9 @@ std::vector<std::string> keep_rows(const fs::path& csv, long rows) {
   if (static_cast<long>(lines.size()) < rows + 1)
     throw std::invalid_argument(csv.string() + ": holds " + std::to_string(lines.size() ? lines.size() - 1 : 0) +
                                 " rows, the checkpoint " + std::to_string(rows));
+  if (clear_averaged)  // the last column, `averaged`
+    for (std::size_t k = 1; k < lines.size(); ++k)
+      if (lines[k].size() >= 2 && lines[k].compare(lines[k].size() - 2, 2, ",1") == 0) lines[k].back() = '0';
   std::string text;
   for (const std::string& l : lines) text += l + "\n";
   io::write_file_atomic(csv, text);
@@ -432,21 +440,72 @@ std::vector<std::string> keep_rows(const fs::path& csv, long rows) {
 
 }  // namespace
 
+// The keys a resumed run may change: how long it turns (to extend it).
+constexpr const char* kExtendKeys[] = {"run.duration", "run.max_duration", "run.tolerance"};
+
+// A resumed run given a new duration (or an auto run's cap or tolerance):
+// the case with those keys changed, and the state it goes on from. Other
+// keys are refused by name: the charge, the mill and the contacts are the
+// checkpoint's.
+void extend_from_checkpoint(const RunOptions& o, Prepared& p, io::Checkpoint& cp) {
+  const std::string where = "--resume " + o.resume + ": ";
+  for (const std::string& ov : o.c.overrides) {
+    const std::string key = ov.substr(0, ov.find('='));
+    if (std::find(std::begin(kExtendKeys), std::end(kExtendKeys), key) == std::end(kExtendKeys))
+      throw std::invalid_argument(where + "--set " + key +
+                                  ": a resumed run keeps its case; only run.duration, run.max_duration and "
+                                  "run.tolerance may change (to turn it longer)");
+  }
+  // A duration no longer than what has turned, by its own name (before the
+  // case's checks, which would name the warm-up it no longer exceeds).
+  double asked = o.c.duration;
+  for (const std::string& ov : o.c.overrides)
+    if (ov.rfind("run.duration=", 0) == 0) {
+      char* end = nullptr;
+      const double v = std::strtod(ov.c_str() + 13, &end);
+      if (end && *end == '\0' && end != ov.c_str() + 13) asked = v;
+    }
+  const double turned = cp.run.phase >= 2 ? cp.run.turn_step * p.d.dt : 0;
+  if (asked > 0 && !o.c.duration_auto && asked <= turned + 0.5 * p.d.dt) {
+    char m[200];
+    std::snprintf(m, sizeof m, "run.duration: %.4g s ends where the run already is: it has turned %.4g s; give a "
+                  "longer duration to extend it", asked, turned);
+    throw std::invalid_argument(where + m);
+  }
+  const fs::path dir(o.resume);
+  MillCase nc = io::parse_case(cp.case_toml, (dir / "case.toml").string(), case_overrides(o.c));
+  nc.name = cp.case_name;
+  const MillDerived nd = derive(nc);
+  try {
+    cp.run = extend_run(cp.run, p.c, p.d, nc, nd, p.d.dt);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(where + e.what());
+  }
+  p.c = nc;
+  p.d = nd;
+  cp.case_toml = io::case_to_toml(nc);
+}
+
 int cmd_run(const RunOptions& o) {
   const bool resume = !o.resume.empty();
+  const bool extend = resume && (o.c.duration > 0 || o.c.duration_auto || !o.c.overrides.empty());
   Prepared p;
   io::Checkpoint cp;
+  long window_begun_before = 0;
   if (resume) {
-    if (!o.c.case_path.empty() || !o.c.overrides.empty() || o.c.duration > 0 || o.c.duration_auto ||
-        !o.c.precision.empty())
+    if (!o.c.case_path.empty() || !o.c.precision.empty())
       throw std::invalid_argument("--resume " + o.resume +
-                                  ": continues the run with its own case; a CASE, --set, --duration or --precision "
-                                  "cannot be given with it");
+                                  ": continues the run with its own case; a CASE or --precision cannot be given "
+                                  "with it (--duration may, to turn it longer)");
     const fs::path dir(o.resume);
     p = prepare_from_checkpoint(dir, cp, "; the run cannot be resumed from it");
     std::error_code ec;
-    if (cp.run.phase == 3 && fs::exists(dir / "summary.json", ec))
-      throw std::invalid_argument("--resume " + o.resume + ": the run there is complete (summary.json); nothing to do");
+    if (!extend && cp.run.phase == 3 && fs::exists(dir / "summary.json", ec))
+      throw std::invalid_argument("--resume " + o.resume +
+                                  ": the run there is complete (summary.json); nothing to do. To turn it longer, "
+                                  "give --duration S (longer than it has turned) or --duration auto");
+    window_begun_before = cp.run.window_begun;
+    if (extend) extend_from_checkpoint(o, p, cp);
   } else {
     p = prepare(o.c);
   }
@@ -466,7 +525,11 @@ int cmd_run(const RunOptions& o) {
   const std::string case_text = resume ? cp.case_toml : io::case_to_toml(c);
   std::vector<std::string> kept_rows;
   if (resume) {
-    kept_rows = keep_rows(out / "timeseries.csv", cp.run.rows);
+    // A new window (an extension that could not keep the one begun): the
+    // rows before it are no longer averaged.
+    const bool new_window = extend && cp.run.window_begun == 0 && window_begun_before != 0;
+    kept_rows = keep_rows(out / "timeseries.csv", cp.run.rows, new_window);
+    if (extend) io::write_file_atomic(out / "case.toml", case_text);
   } else {
     make_run_dir(out, o.force);
     io::write_file_atomic(out / "case.toml", case_text);
@@ -479,6 +542,15 @@ int cmd_run(const RunOptions& o) {
   if (resume)
     std::printf("millcharge: resuming at t = %.4f s (step %s, %ld rows written)\n", solver->time_s(),
                 thousands(solver->steps()).c_str(), cp.run.rows);
+  if (extend) {
+    const TurnPlan plan = plan_turning(c, d, d.dt, cp.run.window_floor_step, cp.run.stop_step);
+    std::printf("millcharge: extended: the mill turns to %.4g s; the window %s at %.4g s%s\n",
+                plan.turn_steps * d.dt, cp.run.window_begun == 0 ? "begins" : "goes on from its start",
+                plan.window_start * d.dt,
+                cp.run.window_begun == 0 && window_begun_before != 0
+                    ? " (the window already begun could not be kept: its books started elsewhere)"
+                    : "");
+  }
   std::fflush(stdout);
 
   std::ofstream csv;

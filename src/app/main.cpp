@@ -1,7 +1,7 @@
 // millcharge — the command line (DESIGN.md, "Command line"):
 //   millcharge run   [CASE] [--out DIR] [--duration S] [--device SPEC]
 //                    [--precision float|double] [--set KEY=VALUE]... [--force] [--quiet]
-//   millcharge run   --resume DIR [--device SPEC] [--quiet]
+//   millcharge run   --resume DIR [--duration S|auto] [--set run.max_duration=S] [--device SPEC] [--quiet]
 //   millcharge view  [CASE] [same options] [--frames N --screenshot FILE.png]
 //                    [--steps-per-frame N] [--camera end|iso] [--colour MODE] [--liner MODE] [--size WxH]
 //                    [--no-panel] [--edit FRAME:KEY=VALUE]...
@@ -76,7 +76,9 @@ int main(int argc, char** argv) {
   run->add_option("--out", ro.out, "output folder (default runs/CASE-DATE-TIME)");
   run->add_flag("--force", ro.force, "replace an earlier run in --out");
   run->add_flag("--quiet", ro.quiet, "no progress lines");
-  run->add_option("--resume", ro.resume, "continue the run in DIR from its checkpoint (checkpoint.bin)")
+  run->add_option("--resume", ro.resume,
+                  "continue the run in DIR from its checkpoint (checkpoint.bin); with --duration (or --set "
+                  "run.max_duration=, run.tolerance=) a finished run is turned longer")
       ->type_name("DIR");
   // Fault injection for the failure tests; not for users.
   run->add_option("--inject-nan-at", ro.poison_at_s, "")->group("");

@@ -124,6 +124,22 @@ void run_fields(R& r, F&& f) {
   f("stop_step", r.stop_step);
   f("settle_wall_s", r.settle_wall_s);
   f("batches_per_revolution", r.batches_per_revolution);
+  f("window_floor_step", r.window_floor_step);
+  f("window_begun", r.window_begun);
+  f("pre_span", r.pre_span);
+  f("pre_work", r.pre_work);
+  f("pre_diss", r.pre_diss);
+  f("pre_torque_time", r.pre_torque_time);
+}
+
+// Fields added after version 1 began: older files lack them, and the run
+// keeps their defaults (no floor, the window's start judged from the step,
+// windows that began on a row boundary).
+bool optional_run_field(const std::string& key) {
+  for (const char* k : {"open_loss_start", "stop_step", "settle_wall_s", "batches_per_revolution", "window_floor_step",
+                        "window_begun", "pre_span", "pre_work", "pre_diss", "pre_torque_time"})
+    if (key == k) return true;
+  return false;
 }
 
 // Doubles as raw bytes (every bit kept).
@@ -257,8 +273,7 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
   // Fields added after version 1 began keep their defaults in older files.
   run_fields(r, [&](const char* k, auto& v) {
     const std::string key(k);
-    if ((key == "open_loss_start" || key == "stop_step" || key == "settle_wall_s") && !rs.has(k)) return;
-    if (key == "batches_per_revolution" && !rs.has(k)) return;
+    if (optional_run_field(key) && !rs.has(k)) return;
     rs.get(k, v);
   });
   // Older files kept one batch per whole revolution.

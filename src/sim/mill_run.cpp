@@ -48,6 +48,114 @@ class Rate {
 
 }  // namespace
 
+// The turning: a fixed duration averaged over the largest whole number of
+// revolutions that end with it, or (auto) revolutions from the end of the
+// warm-up until the power's mean converges, at most as many as the cap
+// holds. Revolution k of the window ends at step window_start + k·rev_steps;
+// each is cut into batches, the base batches of the errors. Neither window
+// begins before the floor (an extended run's window, after the point the
+// run it extends had reached).
+TurnPlan plan_turning(const MillCase& c, const MillDerived& d, double dt, long window_floor_step, long stop_step) {
+  TurnPlan p;
+  p.rev_steps = d.revolution_s / dt;
+  const long floor_steps = std::max(0L, window_floor_step);
+  if (c.duration_auto) {
+    p.warm_steps = static_cast<long>(std::ceil(c.warmup / dt));
+    p.window_start = std::max(p.warm_steps, floor_steps);
+    const long limit = std::lround(d.turn_limit_s / dt);
+    p.revolutions =
+        std::max(1L, static_cast<long>(std::floor((limit - p.window_start) / p.rev_steps + 1e-9)));
+    p.turn_steps = p.window_start + std::lround(p.revolutions * p.rev_steps);
+    p.whole = true;
+  } else {
+    p.turn_steps = std::max(1L, std::lround(c.duration / dt));
+    p.warm_steps = std::min(p.turn_steps, static_cast<long>(std::ceil(c.warmup / dt)));
+    const long lo = std::min(p.turn_steps, std::max(p.warm_steps, floor_steps));
+    p.revolutions = static_cast<long>(std::floor((p.turn_steps - lo) / p.rev_steps));
+    if (p.revolutions >= 1) {
+      p.window_start = p.turn_steps - std::lround(p.revolutions * p.rev_steps);
+      p.whole = true;
+    } else {
+      p.window_start = lo;
+      p.revolutions = 0;
+    }
+  }
+  if (stop_step >= 0) p.turn_steps = stop_step;  // an auto run that stopped (converged)
+  return p;
+}
+
+namespace {
+
+// Batches of the window that have ended by turning step s under a plan.
+long batches_ended_by(const TurnPlan& p, int per_rev, long s) {
+  const long n = p.revolutions * per_rev;
+  long k = 0;
+  while (k < n) {
+    const long next = k + 1;
+    const long end = p.window_start + (next % per_rev == 0 ? std::lround((next / per_rev) * p.rev_steps)
+                                                           : std::lround(next * p.rev_steps / per_rev));
+    if (end > s) break;
+    k = next;
+  }
+  return k;
+}
+
+std::string seconds_text(double s) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.4g s", s);
+  return b;
+}
+
+}  // namespace
+
+RunState extend_run(const RunState& st, const MillCase& old_c, const MillDerived& old_d, const MillCase& new_c,
+                    const MillDerived& new_d, double dt) {
+  RunState out = st;
+  if (st.phase < 2) return out;  // still settling: the turning is planned when it begins
+  const long s = st.turn_step;
+  const int per_rev = std::max(1, st.batches_per_revolution);
+  const TurnPlan before = plan_turning(old_c, old_d, dt, st.window_floor_step, st.stop_step);
+  // The new plan with the window where an unbroken run of the new case has it.
+  TurnPlan after = plan_turning(new_c, new_d, dt, st.window_floor_step, -1);
+  const std::string key = new_c.duration_auto ? "run.max_duration" : "run.duration";
+  const double turned = s * dt;
+  if (after.turn_steps <= s) {
+    const double asked = new_c.duration_auto ? new_d.turn_limit_s : new_c.duration;
+    throw std::invalid_argument(key + ": " + seconds_text(asked) + " ends where the run already is: it has turned " +
+                                seconds_text(turned) + "; give a longer duration to extend it");
+  }
+  const bool begun = st.window_begun == 1 || (st.window_begun < 0 && s >= before.window_start);
+  out.phase = 2;
+  out.stop_step = -1;
+  if (!begun) {
+    // Nothing booked yet: the window may begin anywhere from here on.
+    if (after.window_start < s) out.window_floor_step = s;
+    return out;
+  }
+  // The window already begun goes on when the new plan keeps it: same start,
+  // the same batches closed by now (an auto run given a larger cap or a
+  // smaller tolerance; a run whose window still begins at the warm-up).
+  if (after.window_start == before.window_start &&
+      batches_ended_by(after, per_rev, s) == static_cast<long>(st.batches.size()))
+    return out;
+  // Otherwise a new window, no earlier than here: its books from zero.
+  out.window_floor_step = s;
+  after = plan_turning(new_c, new_d, dt, s, -1);
+  if (after.turn_steps <= s)
+    throw std::invalid_argument(key + ": " + seconds_text(new_c.duration_auto ? new_d.turn_limit_s : new_c.duration) +
+                                " leaves no turning after " + seconds_text(turned) + "; give a longer duration");
+  out.window_begun = 0;
+  out.window_profile.assign(out.window_profile.size(), 0);
+  out.batch_profile.assign(out.batch_profile.size(), 0);
+  out.batches.clear();
+  out.batch = BatchTally{};
+  out.work = out.diss = out.torque_time = out.arm_time = out.span = out.comx = out.comy = out.neigh = 0;
+  out.rows_in_window = 0;
+  out.pre_span = out.pre_work = out.pre_diss = out.pre_torque_time = 0;
+  out.batches_per_revolution = kBatchesPerRevolution;
+  return out;
+}
+
 RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const MillDerived& d,
                     const RunHooks& hooks, RunState st) {
   RunSummary sum;
@@ -59,33 +167,11 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   if (st.window_profile.empty()) st.window_profile.assign(kProfileBins, 0);
   if (st.batch_profile.empty()) st.batch_profile.assign(kProfileBins, 0);
 
-  // The turning: a fixed duration averaged over the largest whole number of
-  // revolutions that end with it, or (auto) revolutions from the end of the
-  // warm-up until the power's mean converges, at most as many as the cap
-  // holds. Revolution k of the window ends at step window_start + k·rev_steps;
-  // each is cut into per_rev batches, the base batches of the errors.
-  const double rev_steps = d.revolution_s / dt;
-  long turn_steps, warm_steps, window_start, revs;
-  if (c.duration_auto) {
-    warm_steps = static_cast<long>(std::ceil(c.warmup / dt));
-    const long limit = std::lround(d.turn_limit_s / dt);
-    revs = std::max(1L, static_cast<long>(std::floor((limit - warm_steps) / rev_steps + 1e-9)));
-    window_start = warm_steps;
-    turn_steps = window_start + std::lround(revs * rev_steps);
-    sum.whole_revolutions = true;
-  } else {
-    turn_steps = std::max(1L, std::lround(c.duration / dt));
-    warm_steps = std::min(turn_steps, static_cast<long>(std::ceil(c.warmup / dt)));
-    revs = static_cast<long>(std::floor((turn_steps - warm_steps) / rev_steps));
-    if (revs >= 1) {
-      window_start = turn_steps - std::lround(revs * rev_steps);
-      sum.whole_revolutions = true;
-    } else {
-      window_start = warm_steps;
-      revs = 0;
-    }
-  }
-  if (st.stop_step >= 0) turn_steps = st.stop_step;  // resumed after an auto run stopped
+  const TurnPlan plan = plan_turning(c, d, dt, st.window_floor_step, st.stop_step);
+  const double rev_steps = plan.rev_steps;
+  long turn_steps = plan.turn_steps;
+  const long window_start = plan.window_start, revs = plan.revolutions;
+  sum.whole_revolutions = plan.whole;
   const int per_rev = std::max(1, st.batches_per_revolution);
   const long n_batches = revs * per_rev;
   sum.batches_per_revolution = per_rev;
@@ -202,13 +288,17 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   const long out_steps = std::max(1L, std::lround(c.output_interval / dt));
   const long profile_every = std::max(1L, out_steps / 10);
   const long snap_steps = c.snapshot_interval > 0 ? std::max(1L, std::lround(c.snapshot_interval / dt)) : 0;
-  // Row boundaries fall on window_start + k·out_steps, so the window starts
-  // exactly at a row boundary.
+  // Row k ends at the step nearest k output intervals after the start of the
+  // turning, wherever the window begins, so that a run and the same run
+  // extended write the same rows (a duration that is a whole number of
+  // intervals ends on a row's end). A window that begins inside a row takes
+  // the row's part after its start (pre_*).
+  auto row_end_step = [&](long k) { return std::lround(k * c.output_interval / dt); };
   auto next_boundary = [&](long s) {
-    long k = (s - window_start) / out_steps;
-    long b = window_start + k * out_steps;
-    while (b <= s) b += out_steps;
-    return std::min(b, turn_steps);
+    long k = std::max(1L, static_cast<long>(std::floor(s * dt / c.output_interval)));
+    while (k > 1 && row_end_step(k - 1) > s) --k;
+    while (row_end_step(k) <= s) ++k;
+    return std::min(row_end_step(k), turn_steps);
   };
   // The end of the batch being turned (none before the window, or when the
   // window holds no whole revolution). A batch that closes a revolution ends
@@ -233,9 +323,11 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     st.e_window_start = o.total_energy();
     st.open_loss_start = o.open_loss_J();
     solver.reset_books();
+    st.window_begun = window_start == 0 ? 1 : 0;
     st.phase = 2;
   }
   const double time0 = st.turn_start_s;
+  if (st.window_begun < 0) st.window_begun = st.turn_step >= window_start ? 1 : 0;  // an older checkpoint
 
   long& s = st.turn_step;
   BatchTally& rev = st.batch;
@@ -266,18 +358,16 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     r.torque_arm_power_W = omega * o.charge_mass_kg * kG * o.com_x_m;
     r.neighbours_per_ball = o.neighbours_per_ball;
     r.averaged = s > window_start;
-    if (s == window_start) {  // the books of the window begin
-      st.e_window_start = o.total_energy();
-      st.open_loss_start = o.open_loss_J();
-      solver.reset_books();
-    }
     if (r.averaged) {
+      // the row's part inside the window: all of it but what came before
+      // the window's start, when the window began inside it
+      const double in_span = o.interval_s - st.pre_span;
       for (int k = 0; k < kProfileBins; ++k) st.window_profile[k] += prof[k];
-      st.work += o.wall_work_J;
-      st.diss += o.dissipated_J;
-      st.torque_time += o.wall_torque_Nm * o.interval_s;
-      st.arm_time += r.torque_arm_power_W * o.interval_s;
-      st.span += o.interval_s;
+      st.work += o.wall_work_J - st.pre_work;
+      st.diss += o.dissipated_J - st.pre_diss;
+      st.torque_time += o.wall_torque_Nm * o.interval_s - st.pre_torque_time;
+      st.arm_time += r.torque_arm_power_W * in_span;
+      st.span += in_span;
       st.comx += o.com_x_m;
       st.comy += o.com_y_m;
       st.neigh += o.neighbours_per_ball;
@@ -286,12 +376,13 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
         add_row_share(o.interval_s, o.wall_work_J, o.dissipated_J, o.wall_torque_Nm * o.interval_s);
         rev.row_span = rev.row_work = rev.row_diss = rev.row_torque_time = 0;
         for (int k = 0; k < kProfileBins; ++k) st.batch_profile[k] += prof[k];
-        rev.arm_time += r.torque_arm_power_W * o.interval_s;
-        rev.rows_span += o.interval_s;
+        rev.arm_time += r.torque_arm_power_W * in_span;
+        rev.rows_span += in_span;
         rev.comx += o.com_x_m;
         rev.comy += o.com_y_m;
         rev.rows += 1;
       }
+      st.pre_span = st.pre_work = st.pre_diss = st.pre_torque_time = 0;
     }
     st.e_end = o.total_energy();
     ++st.rows;
@@ -348,6 +439,23 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     }
   };
 
+  // The window's books begin: the energies and the open contacts' losses
+  // now, the books from zero, and the part of the row turned so far kept
+  // out of the window's sums (and out of its first batch's).
+  auto begin_window = [&]() {
+    const Observables o = solver.observe(false);
+    st.e_window_start = o.total_energy();
+    st.open_loss_start = o.open_loss_J();
+    solver.reset_books();
+    st.pre_span = o.interval_s;
+    st.pre_work = o.wall_work_J;
+    st.pre_diss = o.dissipated_J;
+    st.pre_torque_time = o.wall_torque_Nm * o.interval_s;
+    rev.row_span = st.pre_span, rev.row_work = st.pre_work, rev.row_diss = st.pre_diss;
+    rev.row_torque_time = st.pre_torque_time;
+    st.window_begun = 1;
+  };
+
   // A checkpoint written before runs kept their revolutions: those already
   // turned count as unknown.
   while (st.phase == 2 && batch_end() != LONG_MAX && batch_end() <= s) {
@@ -355,10 +463,12 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     for (auto field : kWindowBatchFields) unknown.*field = std::numeric_limits<double>::quiet_NaN();
     st.batches.push_back(unknown);
   }
+  if (st.phase == 2 && s == window_start && !st.window_begun) begin_window();
   while (st.phase == 2 && s < turn_steps) {
     const long row_end = next_boundary(s);
     const long rev_end = batch_end();
     long next = std::min(row_end, rev_end);
+    if (!st.window_begun && window_start > s) next = std::min(next, window_start);
     const long next_profile = (s / profile_every + 1) * profile_every;
     next = std::min(next, next_profile);
     if (snap_steps > 0) next = std::min(next, (s / snap_steps + 1) * snap_steps);
@@ -373,6 +483,7 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     }
     if (s == rev_end) end_batch();
     if (s != row_end && s == turn_steps) end_row();  // stopped inside a row: a short last row
+    if (s == window_start && !st.window_begun) begin_window();
     if (hooks.on_snapshot && snap_steps > 0 && (s % snap_steps == 0 || s == turn_steps)) {
       hooks.on_snapshot(solver.time_s() - time0);
       ++st.snapshots;

@@ -150,7 +150,40 @@ struct RunState {
   long rows = 0;                 // rows handed to on_row
   long snapshots = 0;            // snapshots handed to on_snapshot
   double wall_s = 0;             // wall seconds spent before this call
+  // An extended run: the turning step before which its window may not begin
+  // (where the run it extends had ended; 0: anywhere after the warm-up).
+  long window_floor_step = 0;
+  // Whether the window's books have begun: 1 yes, 0 no, -1 not recorded
+  // (older checkpoints: begun once the step passed the window's start).
+  int window_begun = -1;
+  // The part of the row that straddles the window's start turned before it
+  // (rows fall on multiples of the output interval, the window anywhere).
+  double pre_span = 0, pre_work = 0, pre_diss = 0, pre_torque_time = 0;
 };
+
+// Where the turning ends and the averaging window lies, in steps of the
+// turning mill: what run_mill follows, from the case, the state's floor
+// and an auto run's stop.
+struct TurnPlan {
+  long turn_steps = 0;    // the turning ends here
+  long warm_steps = 0;
+  long window_start = 0;  // the averaging window begins here
+  long revolutions = 0;   // whole revolutions in the window (0: less than one)
+  double rev_steps = 0;   // steps of one revolution
+  bool whole = false;     // the window holds whole revolutions
+};
+TurnPlan plan_turning(const MillCase& c, const MillDerived& d, double dt, long window_floor_step = 0,
+                      long stop_step = -1);
+
+// The state from which a run goes on with a changed duration (`run
+// --resume DIR --duration S`): the finished or interrupted run's state `st`
+// under `old_c`, carried on under `new_c`. Where the new plan's window is the
+// one already begun (same start, same batches so far) it goes on; where it
+// would begin before the point reached, a new window begins no earlier than
+// that point, with its books from zero. Throws std::invalid_argument naming
+// the key when the new duration ends at or before the point reached.
+RunState extend_run(const RunState& st, const MillCase& old_c, const MillDerived& old_d, const MillCase& new_c,
+                    const MillDerived& new_d, double dt);
 
 struct RunHooks {
   std::function<void(const TimeRow&)> on_row;
