@@ -138,7 +138,7 @@ def main():
     w("")
     w("millcharge against published and analytic values: the checks the test suite asserts on "
       "(`tests/checks.cpp`), run again and reported with their numbers. The references are those of "
-      "`../shared/reference/VERIFICATION.md` (Chung & Ooi 2011, closed forms, Morrell 1996). "
+      "Chung & Ooi (2011, Granular Matter 13, 643–656) for the impacts, closed forms of single-ball motion, and Morrell's C-model (1996, Trans. IMM C105) for the mill. "
       "This page is written by `bash scripts/validate.sh`; do not edit it by hand, run the script again. "
       "What the checks mean for the physics: [physics.md](physics.md).")
     w("")

@@ -100,7 +100,7 @@ void chung_ooi(compute::Context& ctx) {
   {
     const std::string g = "Chung & Ooi test 1";
     about(g, "Two equal spheres head-on, R 10 mm, 10 m/s each, e = 1, Hertz law, float. Reference: Hertz theory "
-             "(VERIFICATION.md §1); the paper's rounded table value in brackets.");
+             "(Chung & Ooi 2011, test 1); the paper's rounded table value in brackets.");
     for (const checks::BenchMaterial& m : checks::chung_ooi_1_materials()) {
       const checks::NormalImpact r = checks::chung_ooi_1(ctx, m, Precision::single);
       const std::string n = m.name;
@@ -179,7 +179,7 @@ void chung_ooi(compute::Context& ctx) {
 void single(compute::Context& ctx) {
   {
     const std::string g = "Sliding to rolling";
-    about(g, "A steel ball (r 10 mm) sliding on a floor from 1 m/s with μ 0.3 (VERIFICATION.md §2): it stops "
+    about(g, "A steel ball (r 10 mm) sliding on a floor from 1 m/s with μ 0.3 (a closed form): it stops "
              "sliding at 5/7 of its start speed, then rolls with ω r = v. While it slides its contact point slips "
              "s = v0²/(7 μ g), and the floor's liner books take the shear work μ m g s and Archard's wear k m g s "
              "(k = 10⁻¹³ m³/(N·m)).");
@@ -287,7 +287,7 @@ void morrell(compute::Context& ctx) {
            "of critical, linear law) turned 4.6 s, averaged over the whole revolutions after 1 s, against "
            "Morrell's C-model (Morrell 1996; k = 1.26 times the net power) for the same mill, speed, filling and "
            "charge density. The model is an engineering band, not the truth: as the tests do, the power passes "
-           "within ±30 % and the toe and shoulder inside the ranges DESIGN.md gives for mills (with a margin), "
+           "within ±30 % and the toe and shoulder inside the ranges usual for mills, toe 200–250° and shoulder 30–70° (with a margin), "
            "with the model's empirical angles shown as the reference. Published DEM agrees with measured mill "
            "power within about 10 %.");
   const checks::LabRun r = lab_75(ctx);
