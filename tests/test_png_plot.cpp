@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <random>
 #include <set>
@@ -253,4 +254,85 @@ TEST_CASE("pictures into a missing folder throw", "[png]") {
   view.shell_radius = 1;
   CHECK_THROWS_AS(write_end_view_png(missing / "view.png", view), std::runtime_error);
   CHECK_FALSE(fs::exists(missing));
+}
+
+TEST_CASE("text: anti-aliased, the y label reads upwards", "[png]") {
+  TempDir dir;
+  LinePlot plot;
+  plot.title = "Power draw of the mill";
+  plot.x_label = "time since the mill started (s)";
+  plot.y_label = "power drawn by the mill (W)";
+  plot.series = {PlotSeries{"", {0, 1, 2}, {1, 3, 2}, 0x1f77b4}};
+  const fs::path file = dir.path / "text.png";
+  write_line_plot_png(file, plot, 640, 400);
+  const Image im = load(file);
+
+  // The title: grey levels between ink and paper on its edges, not just the
+  // two of a bitmap font.
+  std::set<int> greys;
+  int ink = 0, coloured = 0;
+  for (int y = 0; y < 40; ++y)
+    for (int x = im.w / 4; x < im.w * 3 / 4; ++x) {
+      const Rgb c = im.at(x, y);
+      coloured += std::abs(c.r - c.g) > 2 || std::abs(c.g - c.b) > 2;
+      if (c.r < 80) ++ink;
+      if (c.r >= 80 && c.r <= 200) greys.insert(c.r);
+    }
+  CHECK(ink > 40);
+  CHECK(greys.size() > 30);
+  CHECK(coloured == 0);  // grey ink on white: no colour fringes
+
+  // The y label, left of the tick labels: taller than wide.
+  int x0 = im.w, x1 = -1, y0 = im.h, y1 = -1;
+  for (int y = 0; y < im.h; ++y)
+    for (int x = 0; x < 30; ++x)
+      if (im.at(x, y).r < 128) x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+  REQUIRE(x1 >= x0);
+  CHECK(y1 - y0 > 100);        // the label's length, along y
+  CHECK(x1 - x0 < 20);         // one line's height, along x
+  CHECK(std::abs((y0 + y1) / 2 - im.h / 2) < 40);  // centred on the plot area
+
+  // The x label under the plot, centred.
+  int xl0 = im.w, xl1 = -1;
+  for (int y = im.h - 24; y < im.h; ++y)
+    for (int x = 0; x < im.w; ++x)
+      if (im.at(x, y).r < 128) xl0 = std::min(xl0, x), xl1 = std::max(xl1, x);
+  REQUIRE(xl1 > xl0);
+  CHECK(xl1 - xl0 > 150);
+  CHECK(std::abs((xl0 + xl1) / 2 - im.w / 2) < 40);
+}
+
+TEST_CASE("a missing font: the message names the file and the package", "[png]") {
+  TempDir dir;
+  struct Restore {  // MILLCHARGE_FONT as it was
+    std::string old;
+    bool had = false;
+    Restore() {
+      if (const char* v = std::getenv("MILLCHARGE_FONT")) old = v, had = true;
+    }
+    ~Restore() {
+      if (had) setenv("MILLCHARGE_FONT", old.c_str(), 1);
+      else unsetenv("MILLCHARGE_FONT");
+    }
+  } restore;
+  const std::string missing = (dir.path / "no-such-font.ttf").string();
+  setenv("MILLCHARGE_FONT", missing.c_str(), 1);
+  CHECK(plot_font_path() == fs::path(missing));
+  LinePlot plot;
+  plot.series = {PlotSeries{"a", {0, 1}, {0, 1}}};
+  using Catch::Matchers::Contains;
+  CHECK_THROWS_WITH(write_line_plot_png(dir.path / "plot.png", plot), Contains(missing) && Contains(kPlotFontPackage));
+  CHECK_THROWS_WITH(check_plot_font(), Contains(missing) && Contains("MILLCHARGE_FONT"));
+  CHECK_FALSE(fs::exists(dir.path / "plot.png"));
+
+  // Not a TrueType file.
+  const fs::path junk = dir.path / "junk.ttf";
+  { std::ofstream(junk) << "not a font"; }
+  setenv("MILLCHARGE_FONT", junk.string().c_str(), 1);
+  CHECK_THROWS_WITH(check_plot_font(), Contains(junk.string()) && Contains("not a TrueType font"));
+
+  // Unset: the default, Debian's DejaVu Sans.
+  unsetenv("MILLCHARGE_FONT");
+  CHECK(plot_font_path() == fs::path(kPlotFont));
+  CHECK_NOTHROW(check_plot_font());
 }

@@ -1,7 +1,8 @@
 // PNG pictures of a run, drawn in software (no GL needed): a line plot of
 // series against time, and an end view of the charge with toe and shoulder.
-// Text is drawn with stb_easy_font; files are written with stb_image_write
-// through io/atomic_file.h.
+// Shapes and text are anti-aliased; text is DejaVu Sans (Debian's
+// fonts-dejavu-core) rendered with stb_truetype, and files are written with
+// stb_image_write through io/atomic_file.h.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +13,17 @@
 #include "core/vec.h"
 
 namespace mc::io {
+
+// The font every picture's text is drawn in, and the Debian package that
+// installs it. MILLCHARGE_FONT, when set, names another TrueType file.
+inline constexpr const char* kPlotFont = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+inline constexpr const char* kPlotFontPackage = "fonts-dejavu-core";
+std::filesystem::path plot_font_path();  // MILLCHARGE_FONT or kPlotFont
+
+// Reads the font once (again only when MILLCHARGE_FONT changes). Throws
+// std::runtime_error naming the file and the package when it cannot be read:
+// every write_*_png below does, before it draws.
+void check_plot_font();
 
 struct PlotSeries {
   std::string label;
