@@ -510,6 +510,11 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
       for (double& x : s.x) x = x > 0 ? std::log10(x) : NAN;
     plot.span_from = plot.span_from > 0 ? std::log10(plot.span_from) : NAN;
     plot.span_to = plot.span_to > 0 ? std::log10(plot.span_to) : NAN;
+    for (RefLine& r : plot.ref_lines)
+      if (r.x_to > r.x_from) {
+        r.x_from = r.x_from > 0 ? std::log10(r.x_from) : NAN;
+        r.x_to = r.x_to > 0 ? std::log10(r.x_to) : NAN;
+      }
   }
 
   // Data ranges over the finite points and the span.
@@ -520,6 +525,12 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
         x0 = std::min(x0, s.x[i]), x1 = std::max(x1, s.x[i]), y0 = std::min(y0, s.y[i]), y1 = std::max(y1, s.y[i]);
   const bool span = plot.span_to > plot.span_from && std::isfinite(plot.span_from) && std::isfinite(plot.span_to);
   if (span) x0 = std::min(x0, plot.span_from), x1 = std::max(x1, plot.span_to);
+  for (const RefLine& r : plot.ref_lines)
+    if (std::isfinite(r.value)) {
+      y0 = std::min(y0, r.value), y1 = std::max(y1, r.value);
+      if (r.x_to > r.x_from && std::isfinite(r.x_from) && std::isfinite(r.x_to))
+        x0 = std::min(x0, r.x_from), x1 = std::max(x1, r.x_to);
+    }
   if (!(x0 <= x1)) x0 = 0, x1 = 1;
   if (!(y0 <= y1)) y0 = 0, y1 = 1;
   const Axis ax = nice_axis(x0, x1, plot.pad_x ? 0.04 : 0), ay = nice_axis(y0, y1, 0.05);
@@ -567,6 +578,25 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
       if (s.markers) cv.disc(p, 3.5, s.rgb);
     }
   }
+  // Reference lines over the data, each on a white halo so that it shows
+  // on lines of its own colour.
+  struct Ref {
+    const RefLine* line;
+    P a, b;  // its ends, in pixels
+  };
+  std::vector<Ref> refs;
+  for (const RefLine& r : plot.ref_lines) {
+    const bool part = r.x_to > r.x_from;
+    if (!std::isfinite(r.value) || (part && !(std::isfinite(r.x_from) && std::isfinite(r.x_to)))) continue;
+    const double y = std::floor(Y(r.value)) + 0.5;  // on a pixel row's centre: sharp
+    refs.push_back({&r, {part ? X(r.x_from) : L, y}, {part ? X(r.x_to) : R, y}});
+  }
+  for (const Ref& r : refs) cv.line(r.a, r.b, 0xffffff, kDataWidth + 3, 0.8);
+  for (const Ref& r : refs) {
+    double dash = 0;
+    if (r.line->dashed) dashed_line(cv, r.a, r.b, r.line->rgb, kDataWidth + 0.4, dash);
+    else cv.line(r.a, r.b, r.line->rgb, kDataWidth + 0.4);
+  }
   cv.unclip();
 
   // Frame, ticks and their labels.
@@ -592,20 +622,34 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
   }
   if (!plot.title.empty()) cv.text(width / 2.0, 16, plot.title, kInk, title_px, 0.5, 0);
 
-  // Legend: the labelled series, then the span, in the inner corner that
-  // covers the least of the lines.
+  // Legend: the labelled series, the reference lines, then the span, where
+  // it hides the least of the lines (matplotlib's "best": the corners
+  // first, then the middles of the sides, then the centre).
   std::vector<LegendEntry> entries;
   for (const PlotSeries& s : plot.series)
     if (!s.label.empty()) entries.push_back({s.label, s.rgb, s.dashed, s.markers});
+  for (const RefLine& r : plot.ref_lines)
+    if (!r.label.empty() && std::isfinite(r.value)) entries.push_back({r.label, r.rgb, r.dashed});
   if (span && !plot.span_label.empty()) entries.push_back({plot.span_label, kSpan, false, false, true, 0.6});
   if (!entries.empty()) {
     double label_w = 0;
     for (const LegendEntry& e : entries) label_w = std::max(label_w, cv.text_width(e.label, kLegendPx));
     const double row = std::round(1.45 * kLegendPx), sample = 28;
     const double lw = std::ceil(10 + sample + 8 + label_w + 10), lh = 8 + row * entries.size() + 4;
-    const double corners[4][2] = {{R - 10 - lw, T + 10.0}, {L + 10.0, T + 10.0}, {R - 10 - lw, B - 10 - lh}, {L + 10.0, B - 10 - lh}};
-    // What each corner would hide: the lines sampled every 2 pixels.
-    double hidden[4] = {0, 0, 0, 0};
+    const double xl = L + 10.0, xr = R - 10 - lw, xm = (L + R - lw) / 2;
+    const double yt = T + 10.0, yb = B - 10 - lh, ym = (T + B - lh) / 2;
+    constexpr int kPlaces = 9;
+    const double corners[kPlaces][2] = {{xr, yt}, {xl, yt}, {xl, yb}, {xr, yb}, {xl, ym},
+                                        {xr, ym}, {xm, yb}, {xm, yt}, {xm, ym}};
+    // What each place would hide: the lines sampled every 2 pixels.
+    double hidden[kPlaces] = {};
+    auto hide = [&](double px, double py, double weight) {
+      for (int c = 0; c < kPlaces; ++c)
+        hidden[c] += weight * (px >= corners[c][0] - 4 && px <= corners[c][0] + lw + 4 && py >= corners[c][1] - 4 &&
+                               py <= corners[c][1] + lh + 4);
+    };
+    for (const Ref& r : refs)  // a reference line counts more than data
+      for (double px = r.a.x; px <= r.b.x; px += 2) hide(px, r.a.y, 4);
     for (const PlotSeries& s : plot.series) {
       const std::size_t n = std::min(s.x.size(), s.y.size());
       for (std::size_t i = 0; i < n; ++i) {
@@ -614,15 +658,10 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
         const bool next = i + 1 < n && std::isfinite(s.x[i + 1]) && std::isfinite(s.y[i + 1]);
         const P b = next ? P{X(s.x[i + 1]), Y(s.y[i + 1])} : a;
         const int steps = std::clamp(static_cast<int>(std::hypot(b.x - a.x, b.y - a.y) / 2), 1, 1000);
-        for (int k = 0; k < steps; ++k) {
-          const double px = a.x + (b.x - a.x) * k / steps, py = a.y + (b.y - a.y) * k / steps;
-          for (int c = 0; c < 4; ++c)
-            hidden[c] += px >= corners[c][0] - 4 && px <= corners[c][0] + lw + 4 && py >= corners[c][1] - 4 &&
-                         py <= corners[c][1] + lh + 4;
-        }
+        for (int k = 0; k < steps; ++k) hide(a.x + (b.x - a.x) * k / steps, a.y + (b.y - a.y) * k / steps, 1);
       }
     }
-    const int best = static_cast<int>(std::min_element(hidden, hidden + 4) - hidden);
+    const int best = static_cast<int>(std::min_element(hidden, hidden + kPlaces) - hidden);
     const double bx = corners[best][0], by = corners[best][1];
     cv.round_box(bx, by, bx + lw, by + lh, 4, 0xffffff, 0.85, 0xcccccc);
     for (std::size_t k = 0; k < entries.size(); ++k) {
@@ -646,6 +685,19 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
 }
 
 }  // namespace
+
+std::string value_with_error(double value, double sem, const std::string& unit) {
+  char buf[128];
+  const std::string u = unit.empty() ? "" : " " + unit;
+  if (!std::isfinite(value)) return "n/a" + u;
+  if (!(sem > 0) || !std::isfinite(sem)) {
+    std::snprintf(buf, sizeof buf, "%.1f", value);
+    return minus(buf) + u;
+  }
+  const int digits = std::clamp(1 - static_cast<int>(std::floor(std::log10(sem))), 0, 9);
+  std::snprintf(buf, sizeof buf, "%.*f \u00b1 %.*f", digits, value, digits, sem);
+  return minus(buf) + u;
+}
 
 void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot, int width, int height) {
   write_file_atomic(path, render_line_plot(plot, width, height).png());

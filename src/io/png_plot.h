@@ -33,15 +33,32 @@ struct PlotSeries {
   bool dashed = false;           // a dashed line (a model beside the data)
 };
 
+// A horizontal line at y = value (a mean, a target) from x_from to x_to
+// (across the whole plot when x_to <= x_from), its label in the legend.
+struct RefLine {
+  double value = 0;
+  double x_from = 0, x_to = 0;
+  std::uint32_t rgb = 0x222222;
+  bool dashed = false;
+  std::string label;
+};
+
 struct LinePlot {
   std::string title, x_label, y_label;
   std::vector<PlotSeries> series;
-  // Optional shaded span on the x axis (the averaging window), with a label.
+  std::vector<RefLine> ref_lines;  // drawn over the series, listed after them in the legend
+  // Optional shaded span on the x axis (the averaging window), its label in
+  // the legend beside a swatch of its colour.
   double span_from = 0, span_to = 0;
   std::string span_label;
   bool pad_x = false;  // leave room beside the first and last x (for markers)
   bool log_x = false;  // a log x axis (x <= 0 left out)
 };
+
+// "874.4 ± 2.8 W": a value and its standard error to the error's second
+// significant digit (whole numbers for errors of 10 and more); the value
+// alone, to one decimal, without a finite positive error.
+std::string value_with_error(double value, double sem, const std::string& unit);
 
 // Throws std::runtime_error when the file cannot be written.
 void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot, int width = 960,
