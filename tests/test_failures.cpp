@@ -1,17 +1,21 @@
 // Device failures say what failed and how to fix it, in one line (or a short
 // block for a build log), with exit status 1 and no run folder: no OpenCL
-// platform, a kernel that does not compile, a device out of memory.
+// platform, a kernel that does not compile, a device out of memory, a
+// --device that matches nothing (and the short names that do match).
 #include <catch2/catch.hpp>
 
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "compute/buffer.h"
 #include "compute/context.h"
@@ -223,5 +227,74 @@ TEST_CASE("a run that does not fit the device stops with the bytes and the fix, 
   CHECK(bad.status == 1);
   CHECK_THAT(bad.err, Catch::Contains("MILLCHARGE_DEVICE_MEMORY='lots': expected bytes, e.g. 512M or 2G"));
   CHECK_FALSE(fs::exists(out));
+  fs::remove_all(work);
+}
+
+TEST_CASE("device choice: short names find the implementation, case-insensitively", "[device]") {
+  const std::vector<mc::compute::DeviceInfo> all = mc::compute::list_devices();
+  const auto pocl = std::find_if(all.begin(), all.end(), [](const mc::compute::DeviceInfo& d) {
+    return d.platform_name == "Portable Computing Language";
+  });
+  if (pocl == all.end()) {
+    WARN("no PoCL device here (scripts/setup.sh installs pocl-opencl-icd): `pocl` not checked");
+    return;
+  }
+  // PoCL's platform is "Portable Computing Language", its vendor "The pocl
+  // project": `pocl` finds it by either, whatever the case.
+  for (const char* spec : {"pocl", "PoCL", "POCL"}) {
+    INFO(spec);
+    const mc::compute::DeviceInfo d = mc::compute::choose_device(spec);
+    CHECK(d.platform_name == "Portable Computing Language");
+    CHECK(d.label() == pocl->label());
+  }
+  CHECK(pocl->platform_vendor.find("pocl") != std::string::npos);
+  CHECK_FALSE(pocl->vendor.empty());
+  // Part of a name as before, and the indices.
+  CHECK(mc::compute::choose_device("portable").label() == pocl->label());
+  CHECK(mc::compute::choose_device(std::to_string(pocl->platform_index) + ":" + std::to_string(pocl->device_index))
+            .label() == pocl->label());
+  // Every short name either finds a device whose platform or device names
+  // it, or fails with the list.
+  for (const std::string& n : mc::compute::device_short_names()) {
+    INFO(n);
+    try {
+      const mc::compute::DeviceInfo d = mc::compute::choose_device(n);
+      std::string text = d.platform_name + " " + d.platform_vendor + " " + d.name + " " + d.vendor;
+      std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
+      const bool named = n == "pocl"   ? text.find("portable computing language") != std::string::npos
+                         : n == "cuda" ? text.find("nvidia") != std::string::npos
+                         : n == "mesa" ? text.find("mesa") != std::string::npos
+                         : n == "amd"  ? text.find("amd") != std::string::npos ||
+                                            text.find("advanced micro devices") != std::string::npos
+                                       : text.find(n) != std::string::npos;
+      CHECK(named);
+    } catch (const Error& e) {
+      CHECK_THAT(e.what(), Catch::Contains("'" + n + "' matches no OpenCL device"));
+    }
+  }
+}
+
+TEST_CASE("device choice: a spec that matches nothing names itself, the devices and the short names", "[device][cli]") {
+  if (mc::compute::list_devices().empty()) return;  // the no-platform message instead (above)
+  const std::string msg = error_of([] { mc::compute::choose_device("No-Such-Device-42"); });
+  INFO(msg);
+  CHECK_THAT(msg, Catch::StartsWith("--device 'No-Such-Device-42' matches no OpenCL device; available:\n"));
+  for (const mc::compute::DeviceInfo& d : mc::compute::list_devices()) CHECK_THAT(msg, Catch::Contains("\n  " + d.label()));
+  CHECK_THAT(msg, Catch::Contains("a short name (pocl, nvidia, cuda, amd, intel, rusticl, mesa)"));
+  CHECK_THAT(msg, Catch::EndsWith("or part of a device or platform name"));
+
+  // The same from the command line: status 1, no run folder; and
+  // `millcharge devices` runs to the end with MILLCHARGE_DEVICE=pocl.
+  const fs::path work = temp_dir("no_such_device");
+  const fs::path out = work / "run";
+  const Outcome o = run_binary("", "run --quiet --device no-such-device-42 --out '" + out.string() + "'", work);
+  INFO(o.err);
+  CHECK(o.status == 1);
+  CHECK_THAT(o.err, Catch::Contains("--device 'no-such-device-42' matches no OpenCL device"));
+  CHECK_THAT(o.err, Catch::Contains("pocl, nvidia, cuda, amd, intel, rusticl, mesa"));
+  CHECK_FALSE(fs::exists(out));
+  const Outcome d = run_binary("MILLCHARGE_DEVICE=pocl", "devices", work);
+  INFO(d.err);
+  CHECK(d.status == 0);
   fs::remove_all(work);
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <random>
 #include <set>
@@ -253,4 +254,164 @@ TEST_CASE("pictures into a missing folder throw", "[png]") {
   view.shell_radius = 1;
   CHECK_THROWS_AS(write_end_view_png(missing / "view.png", view), std::runtime_error);
   CHECK_FALSE(fs::exists(missing));
+}
+
+TEST_CASE("text: anti-aliased, the y label reads upwards", "[png]") {
+  TempDir dir;
+  LinePlot plot;
+  plot.title = "Power draw of the mill";
+  plot.x_label = "time since the mill started (s)";
+  plot.y_label = "power drawn by the mill (W)";
+  plot.series = {PlotSeries{"", {0, 1, 2}, {1, 3, 2}, 0x1f77b4}};
+  const fs::path file = dir.path / "text.png";
+  write_line_plot_png(file, plot, 640, 400);
+  const Image im = load(file);
+
+  // The title: grey levels between ink and paper on its edges, not just the
+  // two of a bitmap font.
+  std::set<int> greys;
+  int ink = 0, coloured = 0;
+  for (int y = 0; y < 40; ++y)
+    for (int x = im.w / 4; x < im.w * 3 / 4; ++x) {
+      const Rgb c = im.at(x, y);
+      coloured += std::abs(c.r - c.g) > 2 || std::abs(c.g - c.b) > 2;
+      if (c.r < 80) ++ink;
+      if (c.r >= 80 && c.r <= 200) greys.insert(c.r);
+    }
+  CHECK(ink > 40);
+  CHECK(greys.size() > 30);
+  CHECK(coloured == 0);  // grey ink on white: no colour fringes
+
+  // The y label, left of the tick labels: taller than wide.
+  int x0 = im.w, x1 = -1, y0 = im.h, y1 = -1;
+  for (int y = 0; y < im.h; ++y)
+    for (int x = 0; x < 30; ++x)
+      if (im.at(x, y).r < 128) x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+  REQUIRE(x1 >= x0);
+  CHECK(y1 - y0 > 100);        // the label's length, along y
+  CHECK(x1 - x0 < 20);         // one line's height, along x
+  CHECK(std::abs((y0 + y1) / 2 - im.h / 2) < 40);  // centred on the plot area
+
+  // The x label under the plot, centred.
+  int xl0 = im.w, xl1 = -1;
+  for (int y = im.h - 24; y < im.h; ++y)
+    for (int x = 0; x < im.w; ++x)
+      if (im.at(x, y).r < 128) xl0 = std::min(xl0, x), xl1 = std::max(xl1, x);
+  REQUIRE(xl1 > xl0);
+  CHECK(xl1 - xl0 > 150);
+  CHECK(std::abs((xl0 + xl1) / 2 - im.w / 2) < 40);
+}
+
+TEST_CASE("a missing font: the message names the file and the package", "[png]") {
+  TempDir dir;
+  struct Restore {  // MILLCHARGE_FONT as it was
+    std::string old;
+    bool had = false;
+    Restore() {
+      if (const char* v = std::getenv("MILLCHARGE_FONT")) old = v, had = true;
+    }
+    ~Restore() {
+      if (had) setenv("MILLCHARGE_FONT", old.c_str(), 1);
+      else unsetenv("MILLCHARGE_FONT");
+    }
+  } restore;
+  const std::string missing = (dir.path / "no-such-font.ttf").string();
+  setenv("MILLCHARGE_FONT", missing.c_str(), 1);
+  CHECK(plot_font_path() == fs::path(missing));
+  LinePlot plot;
+  plot.series = {PlotSeries{"a", {0, 1}, {0, 1}}};
+  using Catch::Matchers::Contains;
+  CHECK_THROWS_WITH(write_line_plot_png(dir.path / "plot.png", plot), Contains(missing) && Contains(kPlotFontPackage));
+  CHECK_THROWS_WITH(check_plot_font(), Contains(missing) && Contains("MILLCHARGE_FONT"));
+  CHECK_FALSE(fs::exists(dir.path / "plot.png"));
+
+  // Not a TrueType file.
+  const fs::path junk = dir.path / "junk.ttf";
+  { std::ofstream(junk) << "not a font"; }
+  setenv("MILLCHARGE_FONT", junk.string().c_str(), 1);
+  CHECK_THROWS_WITH(check_plot_font(), Contains(junk.string()) && Contains("not a TrueType font"));
+
+  // Unset: the default, Debian's DejaVu Sans.
+  unsetenv("MILLCHARGE_FONT");
+  CHECK(plot_font_path() == fs::path(kPlotFont));
+  CHECK_NOTHROW(check_plot_font());
+}
+
+TEST_CASE("line plot: reference lines across the averaging window, in the legend", "[png]") {
+  TempDir dir;
+  LinePlot plot;
+  plot.title = "reference lines";
+  PlotSeries lo{"", {}, {}, 0x1f77b4}, hi{"", {}, {}, 0xd62728};
+  for (int i = 0; i <= 100; ++i) lo.x.push_back(0.1 * i), lo.y.push_back(0), hi.x.push_back(0.1 * i), hi.y.push_back(10);
+  plot.series = {lo, hi};
+  plot.span_from = 4, plot.span_to = 8;
+  const std::uint32_t mean_rgb = 0x7b00d4, dash_rgb = 0x00a060;
+  plot.ref_lines = {{5.0, 4, 8, mean_rgb, false, ""}, {7.5, 4, 8, dash_rgb, true, ""}};
+  // First without labels: no legend.
+  const fs::path file = dir.path / "ref.png";
+  write_line_plot_png(file, plot, 800, 480);
+  const Image im = load(file);
+
+  // The rows of the two series (0 and 10) fix the y scale: 5 lies halfway.
+  auto rows_of = [&](std::uint32_t rgb, int x) {
+    std::vector<int> rows;
+    for (int y = 0; y < im.h; ++y)
+      if (near(im.at(x, y), rgb, 40)) rows.push_back(y);
+    return rows;
+  };
+  const std::vector<int> r0 = rows_of(0x1f77b4, im.w / 2), r10 = rows_of(0xd62728, im.w / 2);
+  REQUIRE(!r0.empty());
+  REQUIRE(!r10.empty());
+  const double y0 = (r0.front() + r0.back()) / 2.0, y10 = (r10.front() + r10.back()) / 2.0;
+  const int mean_row = static_cast<int>(std::lround((y0 + y10) / 2 - 0.5));
+  const int dash_row = static_cast<int>(std::lround(y0 + (y10 - y0) * 0.75 - 0.5));
+
+  // The span's columns, from its shading halfway between the lines.
+  const int probe = (mean_row + dash_row) / 2;
+  int sa = im.w, sb = -1;
+  for (int x = 0; x < im.w; ++x)
+    if (near(im.at(x, probe), 0xfbe3b0, 25) || near(im.at(x, probe), 0xfdeed0, 12)) sa = std::min(sa, x), sb = std::max(sb, x);
+  REQUIRE(sb - sa > im.w / 5);
+
+  // The mean: in its colour at its row in every column of the span, and
+  // nowhere in that band outside the span.
+  auto has = [&](int x, int row, std::uint32_t rgb) {
+    for (int y = row - 1; y <= row + 1; ++y)
+      if (near(im.at(x, y), rgb, 30)) return true;
+    return false;
+  };
+  int across = 0, outside = 0, dashed = 0;
+  for (int x = sa + 2; x <= sb - 2; ++x) across += has(x, mean_row, mean_rgb), dashed += has(x, dash_row, dash_rgb);
+  for (int x = 0; x < im.w; ++x)
+    if (x < sa - 3 || x > sb + 3) outside += has(x, mean_row, mean_rgb) + has(x, dash_row, dash_rgb);
+  CHECK(across == sb - sa - 3);
+  CHECK(outside == 0);
+  // The dashed one: dashes and gaps.
+  CHECK(dashed > (sb - sa) * 45 / 100);
+  CHECK(dashed < (sb - sa) * 85 / 100);
+
+  // With labels, each is in the legend: more pixels of its colour.
+  auto count = [](const Image& m, std::uint32_t rgb) {
+    int n = 0;
+    for (int y = 0; y < m.h; ++y)
+      for (int x = 0; x < m.w; ++x) n += near(m.at(x, y), rgb, 30);
+    return n;
+  };
+  plot.ref_lines[0].label = "mean 5.0 \u00b1 0.1";
+  plot.ref_lines[1].label = "dashed 7.5";
+  const fs::path labelled = dir.path / "ref_labelled.png";
+  write_line_plot_png(labelled, plot, 800, 480);
+  const Image lm = load(labelled);
+  CHECK(count(lm, mean_rgb) > count(im, mean_rgb) + 20);
+  CHECK(count(lm, dash_rgb) > count(im, dash_rgb) + 10);
+}
+
+TEST_CASE("a value with its standard error", "[png]") {
+  CHECK(value_with_error(874.43, 2.83, "W") == "874.4 \u00b1 2.8 W");
+  CHECK(value_with_error(871.7, 6.3, "W") == "871.7 \u00b1 6.3 W");
+  CHECK(value_with_error(0.123456, 0.00123, "") == "0.1235 \u00b1 0.0012");
+  CHECK(value_with_error(1234567.8, 2345, "W") == "1234568 \u00b1 2345 W");
+  CHECK(value_with_error(-5.0, 0.12, "W") == "\u22125.00 \u00b1 0.12 W");
+  CHECK(value_with_error(871.66, kNaN, "W") == "871.7 W");
+  CHECK(value_with_error(871.66, 0, "W") == "871.7 W");
 }

@@ -753,6 +753,10 @@ int cmd_run(const RunOptions& o) {
   plot.span_from = s.window_from_s;
   plot.span_to = s.window_to_s;
   plot.span_label = "averaged";
+  plot.ref_lines = {{s.torque_power_W, s.window_from_s, s.window_to_s, 0x0d3a5c, false,
+                     "mean torque power " + io::value_with_error(s.torque_power_W, err.power.sem, "W")},
+                    {s.dissipation_power_W, s.window_from_s, s.window_to_s, 0x7a1014, true,
+                     "mean dissipation " + io::value_with_error(s.dissipation_power_W, err.dissipation.sem, "W")}};
   io::write_line_plot_png(out / "power.png", plot);
   io::EndView view;
   view.title = c.name + " at t = " + std::to_string(s.turning_s).substr(0, 5) + " s";

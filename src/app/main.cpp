@@ -57,7 +57,7 @@ void add_case_options(CLI::App* cmd, mc::app::CaseOptions& o, bool with_run_opti
            },
            "seconds of turning, or auto: until the power converges (overrides run.duration)")
         ->type_name("S|auto");
-    cmd->add_option("--device", o.device, "OpenCL device: auto, gpu, cpu, P:D or part of a name");
+    cmd->add_option("--device", o.device, "OpenCL device: auto, gpu, cpu, P:D, pocl, nvidia, amd, intel, rusticl, mesa or part of a name");
     cmd->add_option("--precision", o.precision, "float or double (overrides run.precision)")
         ->check(CLI::IsMember({"float", "double"}));
   }
@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
   mc::app::ViewOptions vo;
   auto* view = app.add_subcommand("view", "watch the charge in a window and change the mill while it turns");
   add_case_options(view, vo.c, false);  // no --duration: the window runs until it is closed
-  view->add_option("--device", vo.c.device, "OpenCL device: auto, gpu, cpu, P:D or part of a name");
+  view->add_option("--device", vo.c.device, "OpenCL device: auto, gpu, cpu, P:D, pocl, nvidia, amd, intel, rusticl, mesa or part of a name");
   view->add_option("--precision", vo.c.precision, "float or double (overrides run.precision)")
       ->check(CLI::IsMember({"float", "double"}));
   view->add_option("--frames", vo.frames, "draw N frames, then exit (scripted: fixed steps per frame)")

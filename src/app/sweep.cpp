@@ -491,7 +491,7 @@ void add_sweep_commands(CLI::App& app, SweepCli& cli) {
   cli.run->add_flag("--slurm", r.slurm, "write the job-array script and submit it with sbatch");
   cli.run->add_flag("--print", r.print, "write the job-array script only (SWEEP/sweep.sh)");
   cli.run->add_option("--out", r.out, "the sweep folder (default runs/NAME)")->type_name("DIR");
-  cli.run->add_option("--device", r.device, "OpenCL device of every run: auto, gpu, cpu, P:D or part of a name");
+  cli.run->add_option("--device", r.device, "OpenCL device of every run: auto, gpu, cpu, P:D, pocl, nvidia, amd, intel, rusticl, mesa or part of a name");
   cli.run->add_flag("--retry-failed", r.retry_failed, "run failed cases again too");
   cli.run->add_option("--partition", r.partition, "Slurm partition")->group("Slurm");
   cli.run->add_option("--time", r.time, "time limit per task, e.g. 04:00:00")->group("Slurm");

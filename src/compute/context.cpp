@@ -5,7 +5,10 @@
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
 #include <sstream>
+#include <string>
+#include <vector>
 
 namespace mc::compute {
 
@@ -57,7 +60,9 @@ std::vector<Found> enumerate() {
       i.platform_index = static_cast<int>(p);
       i.device_index = static_cast<int>(d);
       i.platform_name = platforms[p].getInfo<CL_PLATFORM_NAME>();
+      i.platform_vendor = platforms[p].getInfo<CL_PLATFORM_VENDOR>();
       i.name = devices[d].getInfo<CL_DEVICE_NAME>();
+      i.vendor = devices[d].getInfo<CL_DEVICE_VENDOR>();
       i.type = type_name(devices[d].getInfo<CL_DEVICE_TYPE>());
       i.version = devices[d].getInfo<CL_DEVICE_VERSION>();
       i.c_version = devices[d].getInfo<CL_DEVICE_OPENCL_C_VERSION>();
@@ -68,13 +73,29 @@ std::vector<Found> enumerate() {
       i.max_alloc_bytes = devices[d].getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
       i.compute_units = static_cast<int>(devices[d].getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
       // Strip the padding some drivers leave in names.
-      for (std::string* t : {&i.name, &i.version, &i.c_version})
+      for (std::string* t : {&i.platform_name, &i.platform_vendor, &i.name, &i.vendor, &i.version, &i.c_version})
         while (!t->empty() && (t->back() == ' ' || t->back() == '\0')) t->pop_back();
       out.push_back(std::move(f));
     }
   }
   return out;
 }
+
+// The short names of implementations and vendors, and the words (lower
+// case) each looks for in the platform's name and vendor, then the device's.
+struct ShortName {
+  const char* name;
+  std::vector<std::string> words;
+};
+const ShortName kShortNames[] = {
+    {"pocl", {"portable computing language", "pocl"}},  // vendor "The pocl project"
+    {"nvidia", {"nvidia"}},                               // platform "NVIDIA CUDA"
+    {"cuda", {"nvidia", "cuda"}},
+    {"amd", {"amd", "advanced micro devices"}},           // "AMD Accelerated Parallel Processing"
+    {"intel", {"intel"}},                                 // "Intel(R) OpenCL", "Intel(R) Corporation"
+    {"rusticl", {"rusticl"}},                             // Mesa's, vendor "Mesa/X.org"
+    {"mesa", {"mesa", "rusticl", "clover"}},              // rusticl or Clover
+};
 
 Found pick(const std::string& spec_in) {
   const std::vector<Found> all = enumerate();
@@ -102,16 +123,38 @@ Found pick(const std::string& spec_in) {
       for (const Found& f : all)
         if (f.info.platform_index == p && f.info.device_index == d) return f;
     } else {
-      for (const Found& f : all)
-        if (lower(f.info.name).find(spec) != std::string::npos ||
-            lower(f.info.platform_name).find(spec) != std::string::npos)
-          return f;
+      // A short name looks for its words in the platform's name and vendor,
+      // then in the device's; any other spec in the device's or platform's
+      // name, then in their vendors.
+      std::vector<std::string> words = {spec};
+      bool short_name = false;
+      for (const ShortName& n : kShortNames)
+        if (spec == n.name) words.assign(n.words.begin(), n.words.end()), short_name = true;
+      auto has = [&](const std::string& text) {
+        const std::string t = lower(text);
+        return std::any_of(words.begin(), words.end(), [&](const std::string& w) { return t.find(w) != std::string::npos; });
+      };
+      for (int pass = 0; pass < 2; ++pass)
+        for (const Found& f : all) {
+          const DeviceInfo& i = f.info;
+          const bool hit = short_name ? (pass == 0 ? has(i.platform_name) || has(i.platform_vendor)
+                                                   : has(i.name) || has(i.vendor))
+                                      : (pass == 0 ? has(i.name) || has(i.platform_name)
+                                                   : has(i.vendor) || has(i.platform_vendor));
+          if (hit) return f;
+        }
     }
   }
   std::ostringstream msg;
   msg << "--device '" << spec_in << "' matches no OpenCL device; available:";
   for (const Found& f : all) msg << "\n  " << f.info.label();
-  msg << "\nuse auto, gpu, cpu, P:D, or part of a name";
+  for (const auto& [index, name] : platforms_without_devices()) {
+    msg << "\n  platform " << index << " (" << name << "): no devices";
+    if (lower(name) == "rusticl") msg << " (RUSTICL_ENABLE=llvmpipe makes it offer its CPU device)";
+  }
+  msg << "\nuse auto, gpu, cpu, accelerator, P:D, a short name (";
+  for (std::size_t k = 0; k < std::size(kShortNames); ++k) msg << (k ? ", " : "") << kShortNames[k].name;
+  msg << ") or part of a device or platform name";
   throw Error(msg.str());
 }
 
@@ -146,6 +189,12 @@ std::vector<DeviceInfo> list_devices() {
 }
 
 DeviceInfo choose_device(const std::string& spec) { return pick(spec).info; }
+
+std::vector<std::string> device_short_names() {
+  std::vector<std::string> out;
+  for (const ShortName& n : kShortNames) out.push_back(n.name);
+  return out;
+}
 
 std::vector<std::pair<int, std::string>> platforms_without_devices() {
   std::vector<std::pair<int, std::string>> out;

@@ -23,7 +23,9 @@ struct DeviceInfo {
   int platform_index = 0;
   int device_index = 0;
   std::string platform_name;
+  std::string platform_vendor;  // CL_PLATFORM_VENDOR, e.g. "The pocl project", "Mesa/X.org"
   std::string name;
+  std::string vendor;  // CL_DEVICE_VENDOR, e.g. "NVIDIA Corporation", "GenuineIntel"
   std::string type;  // "gpu", "cpu", "accelerator", "other"
   std::string version;
   std::string c_version;  // CL_DEVICE_OPENCL_C_VERSION, e.g. "OpenCL C 1.2"
@@ -47,10 +49,18 @@ std::vector<std::pair<int, std::string>> platforms_without_devices();
 // without devices), and how to fix it.
 std::string no_device_message();
 
-// Picks a device from a spec: "" or "auto" (a GPU when there is one, else the
-// first device), "gpu", "cpu", "P:D" (platform and device index), or a part
-// of the device or platform name. Throws Error naming the spec and listing the
-// devices when none matches.
+// The short names of OpenCL implementations and vendors that choose_device
+// knows: pocl, nvidia, cuda, amd, intel, rusticl, mesa.
+std::vector<std::string> device_short_names();
+
+// Picks a device from a spec, case-insensitively: "" or "auto" (a GPU when
+// there is one, else the first device), "gpu", "cpu", "accelerator", "P:D"
+// (platform and device index), a short name (device_short_names(): the first
+// device whose platform's name or vendor fits it, else the first whose own
+// name or vendor does; "pocl" finds "Portable Computing Language"), or a
+// part of the device's or platform's name (or, failing that, vendor). Throws
+// Error naming the spec, listing the devices and the short names when none
+// matches.
 DeviceInfo choose_device(const std::string& spec);
 
 class Context {

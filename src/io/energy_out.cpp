@@ -254,7 +254,7 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
   HeatMap impact, wear;
   impact.title = title + ": impact power on the liner";
   wear.title = "wear rate";
-  impact.unit = "W/m^2";
+  impact.unit = "W/m\u00b2";
   wear.unit = "mm/1000 h";
   for (HeatMap* m : {&impact, &wear}) {
     m->x_label = nl > 0 ? "degrees from a lifter row's centre, counter-clockwise (rows outlined: trailing | top | leading "

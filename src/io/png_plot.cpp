@@ -2,7 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <mutex>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -13,11 +20,76 @@
 #define STB_IMAGE_WRITE_STATIC
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include "stb_image_write.h"
-#include "stb_easy_font.h"
+#define STBTT_STATIC
+#define STB_TRUETYPE_IMPLEMENTATION
+#include "stb_truetype.h"
 
 namespace mc::io {
 
+std::filesystem::path plot_font_path() {
+  const char* env = std::getenv("MILLCHARGE_FONT");
+  return env && *env ? std::filesystem::path(env) : std::filesystem::path(kPlotFont);
+}
+
 namespace {
+
+// -------------------------------------------------------------------- font --
+
+// A TrueType font read whole into memory, with the metrics the layout uses
+// (font units; scale() turns them into pixels).
+struct Font {
+  std::string path;
+  std::vector<unsigned char> data;
+  stbtt_fontinfo info{};
+  int ascent = 0, descent = 0, cap = 0;
+
+  explicit Font(std::string file) : path(std::move(file)) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+      const std::string why = std::strerror(errno);
+      throw std::runtime_error("cannot read the plot font " + path + ": " + why + "; fix: install Debian's " +
+                               kPlotFontPackage + " package, or set MILLCHARGE_FONT to a TrueType font file");
+    }
+    data.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    const int offset = data.empty() ? -1 : stbtt_GetFontOffsetForIndex(data.data(), 0);
+    if (offset < 0 || !stbtt_InitFont(&info, data.data(), offset))
+      throw std::runtime_error("the plot font " + path + " is not a TrueType font; fix: install Debian's " +
+                               kPlotFontPackage + " package, or set MILLCHARGE_FONT to a TrueType font file");
+    int gap = 0;
+    stbtt_GetFontVMetrics(&info, &ascent, &descent, &gap);
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    cap = stbtt_GetCodepointBox(&info, 'H', &x0, &y0, &x1, &y1) ? y1 : ascent * 7 / 10;
+  }
+
+  float scale(double px) const { return stbtt_ScaleForMappingEmToPixels(&info, static_cast<float>(px)); }
+
+  double width(const std::vector<int>& cps, float sc) const {
+    double w = 0;
+    int prev = 0;
+    for (int cp : cps) {
+      const int g = stbtt_FindGlyphIndex(&info, cp);
+      int advance = 0, lsb = 0;
+      stbtt_GetGlyphHMetrics(&info, g, &advance, &lsb);
+      w += sc * (advance + (prev ? stbtt_GetGlyphKernAdvance(&info, prev, g) : 0));
+      prev = g;
+    }
+    return w;
+  }
+};
+
+// The font, read on first use and kept; read again only when
+// MILLCHARGE_FONT names another file.
+std::shared_ptr<const Font> plot_font() {
+  static std::mutex mutex;
+  static std::shared_ptr<const Font> font;
+  const std::string path = plot_font_path().string();
+  std::lock_guard<std::mutex> lock(mutex);
+  if (!font || font->path != path) font = std::make_shared<const Font>(path);
+  return font;
+}
+
+// Sizes of text (em, pixels).
+constexpr double kTickPx = 13, kLabelPx = 14, kTitlePx = 17, kLegendPx = 13, kNotePx = 12.5;
 
 // ------------------------------------------------------------------ canvas --
 
@@ -131,34 +203,102 @@ class Canvas {
     }
   }
 
-  // stb_easy_font text, top-left at (x, y), `scale` pixels per font unit.
-  // `up`: rotated to read bottom to top, starting at (x, y) with the tops of
-  // the letters facing left (for a y-axis label).
-  void text(double x, double y, const std::string& s, std::uint32_t rgb, int scale = 1,
+  // Text in the plot font, anti-aliased. The anchor (x, y) sits at a
+  // fraction `ax` of the advance width (0 left, 0.5 centre, 1 right) and a
+  // fraction `ay` down the capital height (0 the top of the capitals, 0.5
+  // their middle, 1 the baseline); descenders hang below. `px` is the em
+  // size in pixels. `up`: rotated to read bottom to top, the tops of the
+  // letters facing left (for a y-axis label); the anchor is then taken
+  // along the rotated text.
+  void text(double x, double y, const std::string& s, std::uint32_t rgb, double px, double ax = 0, double ay = 0,
             bool up = false) {
-    std::string t = printable(s);
-    std::vector<char> buf(t.size() * 1200 + 64);
-    const int quads = stb_easy_font_print(0, 0, t.data(), nullptr, buf.data(), static_cast<int>(buf.size()));
-    x = std::round(x), y = std::round(y);
-    for (int q = 0; q < quads; ++q) {
-      const float* v = reinterpret_cast<const float*>(buf.data() + q * 64);  // 4 × {x, y, z, rgba}
-      const double u0 = v[0] * scale, v0 = v[1] * scale, u1 = v[8] * scale, v1 = v[9] * scale;
-      if (up)
-        fill_rect(x + v0, y - u1, x + v1, y - u0, rgb);
-      else
-        fill_rect(x + u0, y + v0, x + u1, y + v1, rgb);
+    const std::vector<int> cps = utf8(s);
+    if (cps.empty() || !(px > 0) || !std::isfinite(x) || !std::isfinite(y)) return;
+    const Font& f = *font_;
+    const float sc = f.scale(px);
+    const double ua = ax * f.width(cps, sc), va = -f.cap * sc * (1 - ay);  // the anchor: along, down from the baseline
+    // The baseline's start on the canvas: (ox + u, oy + v), or (ox + v, oy - u) when up.
+    const double ox = up ? std::round(x - va) : x - ua, oy = up ? std::round(y + ua) : std::round(y - va);
+    const int oi = static_cast<int>(std::floor(ox)), oj = static_cast<int>(oy);
+    double pen = up ? 0 : ox - oi;
+    int prev = 0;
+    std::vector<unsigned char> bmp;
+    for (int cp : cps) {
+      const int g = stbtt_FindGlyphIndex(&f.info, cp);
+      if (prev) pen += sc * stbtt_GetGlyphKernAdvance(&f.info, prev, g);
+      const float shift = static_cast<float>(pen - std::floor(pen));
+      int x0, y0, x1, y1;
+      stbtt_GetGlyphBitmapBoxSubpixel(&f.info, g, sc, sc, shift, 0, &x0, &y0, &x1, &y1);
+      if (x1 > x0 && y1 > y0) {
+        const int gw = x1 - x0, gh = y1 - y0;
+        bmp.assign(static_cast<std::size_t>(gw) * gh, 0);
+        stbtt_MakeGlyphBitmapSubpixel(&f.info, bmp.data(), gw, gh, gw, sc, sc, shift, 0, g);
+        const int u0 = static_cast<int>(std::floor(pen)) + x0;
+        for (int j = 0; j < gh; ++j)
+          for (int i = 0; i < gw; ++i) {
+            const unsigned char c = bmp[static_cast<std::size_t>(j) * gw + i];
+            if (!c) continue;
+            if (up)
+              blend(oi + y0 + j, oj - (u0 + i) - 1, rgb, c / 255.0);
+            else
+              blend(oi + u0 + i, oj + y0 + j, rgb, c / 255.0);
+          }
+      }
+      int advance, lsb;
+      stbtt_GetGlyphHMetrics(&f.info, g, &advance, &lsb);
+      pen += sc * advance;
+      prev = g;
     }
   }
-  static int text_width(const std::string& s, int scale = 1) {
-    std::string t = printable(s);
-    return t.empty() ? 0 : stb_easy_font_width(t.data()) * scale;
+  // The advance width of a line of text, in pixels.
+  double text_width(const std::string& s, double px) const { return font_->width(utf8(s), font_->scale(px)); }
+  // The height of the capitals, of the tallest letters above the baseline
+  // and of the descenders below it, in pixels.
+  double cap_height(double px) const { return font_->cap * font_->scale(px); }
+  double ascent(double px) const { return font_->ascent * font_->scale(px); }
+  double descent(double px) const { return -font_->descent * font_->scale(px); }
+  // The largest size up to `px` (and no less than `min_px`) at which `s`
+  // fits in `w` pixels.
+  double fit(const std::string& s, double px, double w, double min_px = 10) const {
+    const double tw = text_width(s, px);
+    return tw <= w || !(tw > 0) ? px : std::max(min_px, px * w / tw);
   }
-  static constexpr int kCapHeight = 7;  // font units from the top of a line to the baseline
 
-  // Text with a translucent white box behind it.
-  void label(double x, double y, const std::string& s, std::uint32_t rgb, int scale = 1) {
-    fill_rect(x - 3, y - 3, x + text_width(s, scale) + 2, y + kCapHeight * scale + 3, 0xffffff, 0.85);
-    text(x, y, s, rgb, scale);
+  // `s` broken at spaces into lines no wider than `w` (a word wider than
+  // that stays whole on a line of its own).
+  std::vector<std::string> wrap(const std::string& s, double px, double w) const {
+    std::vector<std::string> lines;
+    std::string line;
+    std::size_t i = 0;
+    while (i < s.size()) {
+      const std::size_t j = std::min(s.find(' ', i), s.size());
+      const std::string word = s.substr(i, j - i);
+      if (!line.empty() && text_width(line + " " + word, px) > w) lines.push_back(line), line.clear();
+      line += (line.empty() ? "" : " ") + word;
+      i = j + 1;
+    }
+    if (!line.empty()) lines.push_back(line);
+    return lines;
+  }
+
+  // Text on a translucent white box, anchored as for text().
+  void label(double x, double y, const std::string& s, std::uint32_t rgb, double px, double ax = 0, double ay = 0) {
+    const double w = text_width(s, px), cap = cap_height(px);
+    const double left = x - ax * w, top = y - ay * cap;
+    fill_rect(left - 4, top - 4, left + w + 4, top + cap + descent(px) + 3, 0xffffff, 0.85);
+    text(x, y, s, rgb, px, ax, ay);
+  }
+
+  // A filled box with rounded corners and a 1-pixel border (a legend's).
+  void round_box(double x0, double y0, double x1, double y1, double r, std::uint32_t fill, double alpha,
+                 std::uint32_t border) {
+    auto sd = [=](double x, double y) {  // signed distance to the box's edge, > 0 outside
+      const double qx = std::abs(x - (x0 + x1) / 2) - ((x1 - x0) / 2 - r);
+      const double qy = std::abs(y - (y0 + y1) / 2) - ((y1 - y0) / 2 - r);
+      return std::hypot(std::max(qx, 0.0), std::max(qy, 0.0)) + std::min(std::max(qx, qy), 0.0) - r;
+    };
+    cover(x0 - 1, y0 - 1, x1 + 1, y1 + 1, fill, alpha, [&](double x, double y) { return 0.5 - sd(x, y); });
+    cover(x0 - 1, y0 - 1, x1 + 1, y1 + 1, border, 1, [&](double x, double y) { return 1.0 - std::abs(sd(x, y) + 0.5); });
   }
 
   std::string png() const {
@@ -186,17 +326,37 @@ class Canvas {
         if (c > 0) blend(i, j, rgb, alpha * std::min(c, 1.0));
       }
   }
-  static std::string printable(const std::string& s) {
-    std::string t = s;
-    for (char& c : t)
-      if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) c = '?';
-    return t;
+  // The code points of UTF-8 text; a malformed byte or a control character
+  // becomes U+FFFD.
+  static std::vector<int> utf8(const std::string& s) {
+    std::vector<int> out;
+    for (std::size_t i = 0; i < s.size();) {
+      const unsigned char c = static_cast<unsigned char>(s[i]);
+      const int n = c < 0x80 ? 1 : (c >> 5) == 6 ? 2 : (c >> 4) == 14 ? 3 : (c >> 3) == 30 ? 4 : 0;
+      int cp = n == 1 ? c : n == 2 ? c & 0x1f : n == 3 ? c & 0x0f : c & 0x07;
+      bool ok = n > 0 && i + n <= s.size();
+      for (int k = 1; ok && k < n; ++k) {
+        const unsigned char d = static_cast<unsigned char>(s[i + k]);
+        ok = (d >> 6) == 2;
+        cp = (cp << 6) | (d & 0x3f);
+      }
+      out.push_back(!ok || cp < 32 || (cp >= 0x7f && cp < 0xa0) ? 0xfffd : cp);
+      i += ok ? n : 1;
+    }
+    return out;
   }
 
+  std::shared_ptr<const Font> font_ = plot_font();
   int w_, h_;
   std::vector<unsigned char> px_;
   int cx0_ = 0, cy0_ = 0, cx1_ = 0, cy1_ = 0;
 };
+
+}  // namespace
+
+void check_plot_font() { plot_font(); }
+
+namespace {
 
 void check_size(int w, int h) {
   if (w < 16 || h < 16 || w > 16384 || h > 16384)
@@ -259,7 +419,7 @@ Axis nice_axis(double lo, double hi, double pad) {
 
 // A segment drawn as 8-pixel dashes with 5-pixel gaps; `phase` carries the
 // pattern from one segment of a polyline to the next.
-void dashed_line(Canvas& cv, P a, P b, std::uint32_t rgb, double& phase) {
+void dashed_line(Canvas& cv, P a, P b, std::uint32_t rgb, double width, double& phase) {
   constexpr double kOn = 8, kPeriod = 13;
   const double len = std::hypot(b.x - a.x, b.y - a.y);
   if (!(len > 0) || !std::isfinite(len)) return;
@@ -270,11 +430,38 @@ void dashed_line(Canvas& cv, P a, P b, std::uint32_t rgb, double& phase) {
     if (in < kOn) {
       const P p{a.x + (b.x - a.x) * t / len, a.y + (b.y - a.y) * t / len};
       const P q{a.x + (b.x - a.x) * (t + piece) / len, a.y + (b.y - a.y) * (t + piece) / len};
-      cv.line(p, q, rgb, 2);
+      cv.line(p, q, rgb, width);
     }
     t += piece;
   }
   phase = std::fmod(phase + len, kPeriod);
+}
+
+// A number with a true minus sign (U+2212), as typeset.
+std::string minus(std::string s) {
+  if (!s.empty() && s[0] == '-') s.replace(0, 1, "\u2212");
+  return s;
+}
+
+// An exponent in superscript digits.
+std::string superscript(long k) {
+  static const char* const sup[] = {"\u2070", "\u00b9", "\u00b2", "\u00b3", "\u2074",
+                                    "\u2075", "\u2076", "\u2077", "\u2078", "\u2079"};
+  std::string s;
+  for (char c : std::to_string(k)) s += c == '-' ? "\u207b" : sup[c - '0'];
+  return s;
+}
+
+// A number printed with `fmt` (a %g format), its exponent, if any, typeset:
+// 4.7e-05 as 4.7×10⁻⁵, 1e+06 as 10⁶.
+std::string number(const char* fmt, double v) {
+  const std::string s = format(fmt, v);
+  const std::size_t e = s.find_first_of("eE");
+  if (e == std::string::npos || !std::isfinite(v)) return minus(s);
+  const std::string mantissa = s.substr(0, e);
+  const std::string power = "10" + superscript(std::strtol(s.c_str() + e + 1, nullptr, 10));
+  if (mantissa == "1" || mantissa == "-1") return minus(mantissa == "1" ? power : "-" + power);
+  return minus(mantissa + "\u00d7" + power);
 }
 
 std::string tick_label(double v, double step) {
@@ -284,20 +471,38 @@ std::string tick_label(double v, double step) {
     const int digits = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-    return buf;
+    return minus(buf);
   }
-  return format("%.3g", v);
+  return number("%.3g", v);
+}
+
+// A tick of a log axis at log10 x = e: 10 with a superscript power for a
+// whole power, else the value.
+std::string log_tick_label(double e, double step) {
+  const double k = std::round(e);
+  if (step < 1 || std::abs(e - k) > 1e-6) return number("%.2g", std::pow(10.0, e));
+  return "10" + superscript(static_cast<long>(k));
 }
 
 }  // namespace
 
 namespace {
 
+// A legend's entry: a line (solid or dashed, with or without a marker) or,
+// with `patch`, a filled swatch.
+struct LegendEntry {
+  std::string label;
+  std::uint32_t rgb = 0;
+  bool dashed = false, markers = false, patch = false;
+  double alpha = 1;
+};
+
 // The line plot drawn on a canvas of its own.
 Canvas render_line_plot(const LinePlot& given, int width, int height) {
   check_size(width, height);
   Canvas cv(width, height);
-  constexpr std::uint32_t kInk = 0x222222, kFrame = 0x555555, kGrid = 0xe8e8e8;
+  constexpr std::uint32_t kInk = 0x222222, kFrame = 0x444444, kGrid = 0xe6e6e6, kSpan = 0xfbe3b0;
+  constexpr double kDataWidth = 1.8;
   // A log x axis: the plot of log10 x, ticks labelled with powers of ten.
   LinePlot plot = given;
   if (plot.log_x) {
@@ -305,6 +510,11 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
       for (double& x : s.x) x = x > 0 ? std::log10(x) : NAN;
     plot.span_from = plot.span_from > 0 ? std::log10(plot.span_from) : NAN;
     plot.span_to = plot.span_to > 0 ? std::log10(plot.span_to) : NAN;
+    for (RefLine& r : plot.ref_lines)
+      if (r.x_to > r.x_from) {
+        r.x_from = r.x_from > 0 ? std::log10(r.x_from) : NAN;
+        r.x_to = r.x_to > 0 ? std::log10(r.x_to) : NAN;
+      }
   }
 
   // Data ranges over the finite points and the span.
@@ -315,18 +525,31 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
         x0 = std::min(x0, s.x[i]), x1 = std::max(x1, s.x[i]), y0 = std::min(y0, s.y[i]), y1 = std::max(y1, s.y[i]);
   const bool span = plot.span_to > plot.span_from && std::isfinite(plot.span_from) && std::isfinite(plot.span_to);
   if (span) x0 = std::min(x0, plot.span_from), x1 = std::max(x1, plot.span_to);
+  for (const RefLine& r : plot.ref_lines)
+    if (std::isfinite(r.value)) {
+      y0 = std::min(y0, r.value), y1 = std::max(y1, r.value);
+      if (r.x_to > r.x_from && std::isfinite(r.x_from) && std::isfinite(r.x_to))
+        x0 = std::min(x0, r.x_from), x1 = std::max(x1, r.x_to);
+    }
   if (!(x0 <= x1)) x0 = 0, x1 = 1;
   if (!(y0 <= y1)) y0 = 0, y1 = 1;
   const Axis ax = nice_axis(x0, x1, plot.pad_x ? 0.04 : 0), ay = nice_axis(y0, y1, 0.05);
+  auto x_tick_label = [&](int i) {
+    return plot.log_x ? log_tick_label(ax.tick(i), ax.step) : tick_label(ax.tick(i), ax.step);
+  };
 
   // Layout: title on top, y tick labels and y label left, x ones below.
-  int ytick_w = 0;
-  for (int i = 0; i < ay.ticks(); ++i)
-    ytick_w = std::max(ytick_w, Canvas::text_width(tick_label(ay.tick(i), ay.step)));
-  const int left = 12 + (plot.y_label.empty() ? 0 : 16) + ytick_w + 8;
-  const int top = plot.title.empty() ? 16 : 44;
-  const int bottom = 8 + 14 + (plot.x_label.empty() ? 0 : 18) + 6;
-  const int right = 20;
+  const double title_px = cv.fit(plot.title, kTitlePx, width - 24.0);
+  const double tick_cap = cv.cap_height(kTickPx), tick_line = tick_cap + cv.descent(kTickPx);
+  const double label_line = cv.cap_height(kLabelPx) + cv.descent(kLabelPx);
+  double ytick_w = 0;
+  for (int i = 0; i < ay.ticks(); ++i) ytick_w = std::max(ytick_w, cv.text_width(tick_label(ay.tick(i), ay.step), kTickPx));
+  const double ylabel_x = 10;  // the y label's cap line
+  const int left = static_cast<int>(std::ceil((plot.y_label.empty() ? 10 : ylabel_x + label_line + 10) + ytick_w + 10));
+  const int top = plot.title.empty() ? 14 : static_cast<int>(std::ceil(16 + cv.cap_height(title_px) + 16));
+  const int bottom = static_cast<int>(std::ceil(10 + tick_line + (plot.x_label.empty() ? 0 : 9 + label_line) + 10));
+  double last_w = ax.ticks() > 0 ? cv.text_width(x_tick_label(ax.ticks() - 1), kTickPx) : 0;
+  const int right = static_cast<int>(std::max(20.0, std::ceil(last_w / 2 + 8)));
   const int L = std::min(left, width / 2), T = std::min(top, height / 2);
   const int R = std::max(L + 2, width - right), B = std::max(T + 2, height - bottom);
   auto X = [&](double x) { return L + 0.5 + (x - ax.lo) / (ax.hi - ax.lo) * (R - L - 1); };
@@ -334,15 +557,7 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
 
   // Span and grid behind the data.
   cv.clip(L, T, R, B);
-  if (span) {
-    const double sa = X(plot.span_from), sb = X(plot.span_to);
-    cv.fill_rect(std::floor(sa), T, std::ceil(sb), B, 0xfbe3b0, 0.6);
-    if (!plot.span_label.empty()) {
-      const int tw = Canvas::text_width(plot.span_label);
-      const double tx = tw + 8 < sb - sa ? (sa + sb - tw) / 2 : sa + 4;
-      cv.text(tx, T + 6, plot.span_label, 0x8a5a00);
-    }
-  }
+  if (span) cv.fill_rect(std::floor(X(plot.span_from)), T, std::ceil(X(plot.span_to)), B, kSpan, 0.6);
   for (int i = 0; i < ax.ticks(); ++i) cv.fill_rect(std::floor(X(ax.tick(i))), T, std::floor(X(ax.tick(i))) + 1, B, kGrid);
   for (int i = 0; i < ay.ticks(); ++i) cv.fill_rect(L, std::floor(Y(ay.tick(i))), R, std::floor(Y(ay.tick(i))) + 1, kGrid);
 
@@ -355,13 +570,32 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
       if (!ok(i)) continue;
       const P p{X(s.x[i]), Y(s.y[i])};
       if (ok(i + 1) && s.dashed)
-        dashed_line(cv, p, {X(s.x[i + 1]), Y(s.y[i + 1])}, s.rgb, dash);
+        dashed_line(cv, p, {X(s.x[i + 1]), Y(s.y[i + 1])}, s.rgb, kDataWidth, dash);
       else if (ok(i + 1))
-        cv.line(p, {X(s.x[i + 1]), Y(s.y[i + 1])}, s.rgb, 2);
+        cv.line(p, {X(s.x[i + 1]), Y(s.y[i + 1])}, s.rgb, kDataWidth);
       else if (i == 0 || !ok(i - 1))
         cv.disc(p, 2.5, s.rgb);
       if (s.markers) cv.disc(p, 3.5, s.rgb);
     }
+  }
+  // Reference lines over the data, each on a white halo so that it shows
+  // on lines of its own colour.
+  struct Ref {
+    const RefLine* line;
+    P a, b;  // its ends, in pixels
+  };
+  std::vector<Ref> refs;
+  for (const RefLine& r : plot.ref_lines) {
+    const bool part = r.x_to > r.x_from;
+    if (!std::isfinite(r.value) || (part && !(std::isfinite(r.x_from) && std::isfinite(r.x_to)))) continue;
+    const double y = std::floor(Y(r.value)) + 0.5;  // on a pixel row's centre: sharp
+    refs.push_back({&r, {part ? X(r.x_from) : L, y}, {part ? X(r.x_to) : R, y}});
+  }
+  for (const Ref& r : refs) cv.line(r.a, r.b, 0xffffff, kDataWidth + 3, 0.8);
+  for (const Ref& r : refs) {
+    double dash = 0;
+    if (r.line->dashed) dashed_line(cv, r.a, r.b, r.line->rgb, kDataWidth + 0.4, dash);
+    else cv.line(r.a, r.b, r.line->rgb, kDataWidth + 0.4);
   }
   cv.unclip();
 
@@ -370,54 +604,80 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
   cv.fill_rect(L, T, L + 1, B, kFrame), cv.fill_rect(R - 1, T, R, B, kFrame);
   for (int i = 0; i < ax.ticks(); ++i) {
     const double x = std::floor(X(ax.tick(i)));
-    const std::string s = plot.log_x ? format(ax.step >= 1 ? "%.0e" : "%.2g", std::pow(10.0, ax.tick(i)))
-                                     : tick_label(ax.tick(i), ax.step);
     cv.fill_rect(x, B, x + 1, B + 5, kFrame);
-    cv.text(x + 0.5 - Canvas::text_width(s) / 2.0, B + 9, s, kInk);
+    cv.text(x + 0.5, B + 10, x_tick_label(i), kInk, kTickPx, 0.5, 0);
   }
   for (int i = 0; i < ay.ticks(); ++i) {
     const double y = std::floor(Y(ay.tick(i)));
-    const std::string s = tick_label(ay.tick(i), ay.step);
     cv.fill_rect(L - 5, y, L, y + 1, kFrame);
-    cv.text(L - 8 - Canvas::text_width(s), y - 3, s, kInk);
+    cv.text(L - 9, y + 0.5, tick_label(ay.tick(i), ay.step), kInk, kTickPx, 1, 0.5);
   }
-  if (!plot.x_label.empty())
-    cv.text((L + R - Canvas::text_width(plot.x_label)) / 2.0, B + 27, plot.x_label, kInk);
-  if (!plot.y_label.empty())
-    cv.text(10, (T + B + Canvas::text_width(plot.y_label)) / 2.0, plot.y_label, kInk, 1, true);
-  if (!plot.title.empty())
-    cv.text((width - Canvas::text_width(plot.title, 2)) / 2.0, 14, plot.title, kInk, 2);
+  if (!plot.x_label.empty()) {
+    const double px = cv.fit(plot.x_label, kLabelPx, width - 16.0);
+    cv.text((L + R) / 2.0, B + 10 + tick_line + 9, plot.x_label, kInk, px, 0.5, 0);
+  }
+  if (!plot.y_label.empty()) {
+    const double px = cv.fit(plot.y_label, kLabelPx, B - T + 0.0);
+    cv.text(ylabel_x, (T + B) / 2.0, plot.y_label, kInk, px, 0.5, 0, true);
+  }
+  if (!plot.title.empty()) cv.text(width / 2.0, 16, plot.title, kInk, title_px, 0.5, 0);
 
-  // Legend in the inner corner that covers the fewest data points.
-  std::vector<const PlotSeries*> entries;
-  int label_w = 0;
+  // Legend: the labelled series, the reference lines, then the span, where
+  // it hides the least of the lines (matplotlib's "best": the corners
+  // first, then the middles of the sides, then the centre).
+  std::vector<LegendEntry> entries;
   for (const PlotSeries& s : plot.series)
-    if (!s.label.empty()) entries.push_back(&s), label_w = std::max(label_w, Canvas::text_width(s.label));
+    if (!s.label.empty()) entries.push_back({s.label, s.rgb, s.dashed, s.markers});
+  for (const RefLine& r : plot.ref_lines)
+    if (!r.label.empty() && std::isfinite(r.value)) entries.push_back({r.label, r.rgb, r.dashed});
+  if (span && !plot.span_label.empty()) entries.push_back({plot.span_label, kSpan, false, false, true, 0.6});
   if (!entries.empty()) {
-    const double lw = 8 + 22 + 6 + label_w + 8, lh = 6 + 14.0 * entries.size() + 2;
-    const double corners[4][2] = {{R - 8 - lw, T + 8.0}, {L + 8.0, T + 8.0}, {R - 8 - lw, B - 8 - lh}, {L + 8.0, B - 8 - lh}};
-    int best = 0;
-    std::size_t best_count = SIZE_MAX;
-    for (int c = 0; c < 4; ++c) {
-      std::size_t count = 0;
-      for (const PlotSeries& s : plot.series)
-        for (std::size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i) {
-          const double px = X(s.x[i]), py = Y(s.y[i]);
-          count += px >= corners[c][0] && px <= corners[c][0] + lw && py >= corners[c][1] && py <= corners[c][1] + lh;
-        }
-      if (count < best_count) best = c, best_count = count;
+    double label_w = 0;
+    for (const LegendEntry& e : entries) label_w = std::max(label_w, cv.text_width(e.label, kLegendPx));
+    const double row = std::round(1.45 * kLegendPx), sample = 28;
+    const double lw = std::ceil(10 + sample + 8 + label_w + 10), lh = 8 + row * entries.size() + 4;
+    const double xl = L + 10.0, xr = R - 10 - lw, xm = (L + R - lw) / 2;
+    const double yt = T + 10.0, yb = B - 10 - lh, ym = (T + B - lh) / 2;
+    constexpr int kPlaces = 9;
+    const double corners[kPlaces][2] = {{xr, yt}, {xl, yt}, {xl, yb}, {xr, yb}, {xl, ym},
+                                        {xr, ym}, {xm, yb}, {xm, yt}, {xm, ym}};
+    // What each place would hide: the lines sampled every 2 pixels.
+    double hidden[kPlaces] = {};
+    auto hide = [&](double px, double py, double weight) {
+      for (int c = 0; c < kPlaces; ++c)
+        hidden[c] += weight * (px >= corners[c][0] - 4 && px <= corners[c][0] + lw + 4 && py >= corners[c][1] - 4 &&
+                               py <= corners[c][1] + lh + 4);
+    };
+    for (const Ref& r : refs)  // a reference line counts more than data
+      for (double px = r.a.x; px <= r.b.x; px += 2) hide(px, r.a.y, 4);
+    for (const PlotSeries& s : plot.series) {
+      const std::size_t n = std::min(s.x.size(), s.y.size());
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+        const P a{X(s.x[i]), Y(s.y[i])};
+        const bool next = i + 1 < n && std::isfinite(s.x[i + 1]) && std::isfinite(s.y[i + 1]);
+        const P b = next ? P{X(s.x[i + 1]), Y(s.y[i + 1])} : a;
+        const int steps = std::clamp(static_cast<int>(std::hypot(b.x - a.x, b.y - a.y) / 2), 1, 1000);
+        for (int k = 0; k < steps; ++k) hide(a.x + (b.x - a.x) * k / steps, a.y + (b.y - a.y) * k / steps, 1);
+      }
     }
+    const int best = static_cast<int>(std::min_element(hidden, hidden + kPlaces) - hidden);
     const double bx = corners[best][0], by = corners[best][1];
-    cv.fill_rect(bx, by, bx + lw, by + lh, 0xffffff, 0.9);
-    cv.fill_rect(bx, by, bx + lw, by + 1, 0xbbbbbb), cv.fill_rect(bx, by + lh - 1, bx + lw, by + lh, 0xbbbbbb);
-    cv.fill_rect(bx, by, bx + 1, by + lh, 0xbbbbbb), cv.fill_rect(bx + lw - 1, by, bx + lw, by + lh, 0xbbbbbb);
+    cv.round_box(bx, by, bx + lw, by + lh, 4, 0xffffff, 0.85, 0xcccccc);
     for (std::size_t k = 0; k < entries.size(); ++k) {
-      const double y = by + 6 + 14.0 * k;
+      const LegendEntry& e = entries[k];
+      const double y = by + 8 + row * k + row / 2 - 1;  // the entry's middle
+      const P a{bx + 10, y}, b{bx + 10 + sample, y};
       double dash = 0;
-      if (entries[k]->dashed) dashed_line(cv, {bx + 9, y + 3.5}, {bx + 29, y + 3.5}, entries[k]->rgb, dash);
-      else cv.line({bx + 9, y + 3.5}, {bx + 29, y + 3.5}, entries[k]->rgb, 2);
-      if (entries[k]->markers) cv.disc({bx + 19, y + 3.5}, 3.5, entries[k]->rgb);
-      cv.text(bx + 8 + 22 + 6, y, entries[k]->label, kInk);
+      if (e.patch) {
+        cv.fill_rect(a.x, y - 6, b.x, y + 6, e.rgb, e.alpha);
+      } else if (e.dashed) {
+        dashed_line(cv, a, b, e.rgb, kDataWidth, dash);
+      } else {
+        cv.line(a, b, e.rgb, kDataWidth);
+      }
+      if (e.markers) cv.disc({(a.x + b.x) / 2, y}, 3.5, e.rgb);
+      cv.text(b.x + 8, y, e.label, kInk, kLegendPx, 0, 0.5);
     }
   }
 
@@ -425,6 +685,19 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
 }
 
 }  // namespace
+
+std::string value_with_error(double value, double sem, const std::string& unit) {
+  char buf[128];
+  const std::string u = unit.empty() ? "" : " " + unit;
+  if (!std::isfinite(value)) return "n/a" + u;
+  if (!(sem > 0) || !std::isfinite(sem)) {
+    std::snprintf(buf, sizeof buf, "%.1f", value);
+    return minus(buf) + u;
+  }
+  const int digits = std::clamp(1 - static_cast<int>(std::floor(std::log10(sem))), 0, 9);
+  std::snprintf(buf, sizeof buf, "%.*f \u00b1 %.*f", digits, value, digits, sem);
+  return minus(buf) + u;
+}
 
 void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot, int width, int height) {
   write_file_atomic(path, render_line_plot(plot, width, height).png());
@@ -514,13 +787,13 @@ void write_end_view_png(const std::filesystem::path& path, const EndView& view, 
     if (!(deg >= 0) || !std::isfinite(deg)) return;
     const double a = deg * (3.14159265358979323846 / 180), ca = std::cos(a), sa = std::sin(a);
     cv.line(centre, map(shell * ca, shell * sa), rgb, 2.5);
-    const std::string s = std::string(name) + " " + format("%.0f", deg) + " deg";
-    const double tw = Canvas::text_width(s), th = Canvas::kCapHeight;
-    const P p{centre.x + (rpx + 10) * ca, centre.y - (rpx + 10) * sa};
+    const std::string s = std::string(name) + " " + format("%.0f", deg) + "\u00b0";
+    const double tw = cv.text_width(s, kNotePx), th = cv.cap_height(kNotePx);
+    const P p{centre.x + (rpx + 12) * ca, centre.y - (rpx + 12) * sa};
     double x = ca > 0.3 ? p.x : ca < -0.3 ? p.x - tw : p.x - tw / 2;
     double y = sa > 0.3 ? p.y - th : sa < -0.3 ? p.y : p.y - th / 2;
-    x = std::clamp(x, 4.0, size - 4 - tw), y = std::clamp(y, 4.0, size - 4 - th);
-    cv.label(x, y, s, rgb);
+    x = std::clamp(x, 6.0, size - 6 - tw), y = std::clamp(y, 6.0, size - 8 - th);
+    cv.label(x, y, s, rgb, kNotePx);
   };
   mark(view.toe_deg, "toe", kToe);
   mark(view.shoulder_deg, "shoulder", kShoulder);
@@ -542,11 +815,13 @@ void write_end_view_png(const std::filesystem::path& path, const EndView& view, 
     cv.fill_rect(x0 - 1, y0 - 1, x1 + 1, y0, kShell), cv.fill_rect(x0 - 1, y1, x1 + 1, y1 + 1, kShell);
     cv.fill_rect(x0 - 1, y0, x0, y1, kShell), cv.fill_rect(x1, y0, x1 + 1, y1, kShell);
     const std::string hi = format("%.3g m/s", vmax);
-    cv.text(x0 - 6 - Canvas::text_width(hi), y0, hi, kInk);
-    cv.text(x0 - 6 - Canvas::text_width("0"), y1 - Canvas::kCapHeight, "0", kInk);
-    cv.text(x1 - Canvas::text_width("speed"), y0 - 16, "speed", kInk);
+    cv.fill_rect(x0 - 4, y0, x0 - 1, y0 + 1, kShell), cv.fill_rect(x0 - 4, y1 - 1, x0 - 1, y1, kShell);
+    cv.text(x0 - 7, y0 + 0.5, hi, kInk, kNotePx, 1, 0.5);
+    cv.text(x0 - 7, y1 - 0.5, "0", kInk, kNotePx, 1, 0.5);
+    cv.text(x1, y0 - 12, "speed", kInk, kNotePx, 1, 1);
   }
-  if (!view.title.empty()) cv.text((size - Canvas::text_width(view.title, 2)) / 2.0, 12, view.title, kInk, 2);
+  if (!view.title.empty())
+    cv.text(size / 2.0, 14, view.title, kInk, cv.fit(view.title, kTitlePx, size - 24.0), 0.5, 0);
 
   write_file_atomic(path, cv.png());
 }
@@ -563,12 +838,52 @@ std::uint32_t heat(double t) {
   return mix(table[i], table[i + 1], t - i);
 }
 
+// The frame of a panel inside (x, y, w, h): a title on top, y ticks and a
+// y label on the left, x ticks and an x label (wrapped to the panel's
+// width) below, `right` pixels kept on the right.
+struct Panel {
+  int L = 0, T = 0, R = 0, B = 0;
+  double title_px = kTitlePx;
+  std::vector<std::string> x_label;
+};
+
+Panel panel(const Canvas& cv, int x, int y, int w, int h, const std::string& title, const std::string& x_label,
+            bool y_label, double ytick_w, int right, bool x_ticks = true) {
+  Panel p;
+  const double label_line = cv.cap_height(kLabelPx) + cv.descent(kLabelPx);
+  p.L = x + static_cast<int>(std::ceil(std::max(60.0, (y_label ? 10 + label_line + 10 : 10) + ytick_w + 10)));
+  p.R = x + w - right;
+  p.title_px = cv.fit(title, kTitlePx, p.R - p.L);
+  p.T = y + (title.empty() ? 12 : static_cast<int>(std::ceil(10 + cv.cap_height(p.title_px) + 14)));
+  if (!x_label.empty()) p.x_label = cv.wrap(x_label, kLabelPx, p.R - p.L);
+  const double below = (x_ticks ? 10 + cv.cap_height(kTickPx) + cv.descent(kTickPx) : 6) +
+                       (p.x_label.empty() ? 0 : 9 + 1.25 * kLabelPx * (p.x_label.size() - 1) + label_line) + 10;
+  p.B = y + h - static_cast<int>(std::ceil(below));
+  p.B = std::max(p.B, p.T + 20);
+  return p;
+}
+
+void draw_panel_labels(Canvas& cv, const Panel& p, int x, const std::string& title, const std::string& y_label,
+                       bool x_ticks = true) {
+  constexpr std::uint32_t kInk = 0x222222;
+  const double tick_line = x_ticks ? 10 + cv.cap_height(kTickPx) + cv.descent(kTickPx) : 6;
+  for (std::size_t k = 0; k < p.x_label.size(); ++k)
+    cv.text((p.L + p.R) / 2.0, p.B + tick_line + 9 + 1.25 * kLabelPx * k, p.x_label[k], kInk, kLabelPx, 0.5, 0);
+  if (!y_label.empty())
+    cv.text(x + 10, (p.T + p.B) / 2.0, y_label, kInk, cv.fit(y_label, kLabelPx, p.B - p.T), 0.5, 0, true);
+  if (!title.empty()) cv.text(p.L, p.T - 14 - cv.cap_height(p.title_px), title, kInk, p.title_px, 0, 0);
+}
+
 void draw_heat_map(Canvas& cv, const HeatMap& m, int x, int y, int w, int h) {
-  constexpr std::uint32_t kInk = 0x222222, kFrame = 0x555555, kEmpty = 0xdddddd;
+  constexpr std::uint32_t kInk = 0x222222, kFrame = 0x444444, kEmpty = 0xdddddd;
   double hi = 0;
   for (const HeatCell& c : m.cells)
     if (std::isfinite(c.value)) hi = std::max(hi, c.value);
-  const int L = x + 56, T = y + 28, R = x + w - 110, B = y + h - 40;
+  const Axis ax = nice_axis(m.x_lo, m.x_hi, 0), ay = nice_axis(m.y_lo, m.y_hi, 0);
+  double ytick_w = 0;
+  for (int i = 0; i < ay.ticks(); ++i) ytick_w = std::max(ytick_w, cv.text_width(tick_label(ay.tick(i), ay.step), kTickPx));
+  const Panel p = panel(cv, x, y, w, h, m.title, m.x_label, !m.y_label.empty(), ytick_w, 120);
+  const int L = p.L, T = p.T, R = p.R, B = p.B;
   auto X = [&](double v) { return L + (v - m.x_lo) / (m.x_hi - m.x_lo) * (R - L); };
   auto Y = [&](double v) { return B - (v - m.y_lo) / (m.y_hi - m.y_lo) * (B - T); };
   cv.clip(L, T, R, B);
@@ -582,61 +897,65 @@ void draw_heat_map(Canvas& cv, const HeatMap& m, int x, int y, int w, int h) {
   for (const HeatCell& c : m.cells)
     if (c.outline) {
       const P a{X(c.x0), Y(c.y0)}, b{X(c.x1), Y(c.y0)}, d{X(c.x1), Y(c.y1)}, e{X(c.x0), Y(c.y1)};
-      for (auto [p, q] : {std::pair{a, b}, {b, d}, {d, e}, {e, a}}) cv.line(p, q, 0x111111, 1);
+      for (auto [p0, q] : {std::pair{a, b}, {b, d}, {d, e}, {e, a}}) cv.line(p0, q, 0x111111, 1);
     }
-  int nth = 0;  // labels one under the other, so that near marks stay legible
+  // The marks, then their labels over them, one under the other so that
+  // near marks stay legible.
+  for (const auto& [mx, label] : m.marks_x)
+    if (std::isfinite(mx)) cv.line({X(mx), double(T)}, {X(mx), double(B)}, 0xc51b8a, 2);
+  int nth = 0;
   for (const auto& [mx, label] : m.marks_x) {
     if (!std::isfinite(mx)) continue;
-    cv.line({X(mx), double(T)}, {X(mx), double(B)}, 0xc51b8a, 2);
-    const double tx = X(mx) + 4 + Canvas::text_width(label) > R ? X(mx) - 4 - Canvas::text_width(label) : X(mx) + 4;
-    cv.label(tx, T + 6 + 16 * nth++, label, 0xc51b8a);
+    const double tw = cv.text_width(label, kNotePx);
+    const double tx = X(mx) + 6 + tw > R - 4 ? X(mx) - 6 - tw : X(mx) + 6;
+    cv.label(tx, T + 10 + 22 * nth++, label, 0xc51b8a, kNotePx);
   }
   cv.unclip();
   cv.fill_rect(L, T, R, T + 1, kFrame), cv.fill_rect(L, B - 1, R, B, kFrame);
   cv.fill_rect(L, T, L + 1, B, kFrame), cv.fill_rect(R - 1, T, R, B, kFrame);
-  const Axis ax = nice_axis(m.x_lo, m.x_hi, 0), ay = nice_axis(m.y_lo, m.y_hi, 0);
   for (int i = 0; i < ax.ticks(); ++i) {
     const double v = ax.tick(i);
     if (v < m.x_lo - 1e-9 || v > m.x_hi + 1e-9) continue;
-    const std::string s = tick_label(v, ax.step);
     cv.fill_rect(std::floor(X(v)), B, std::floor(X(v)) + 1, B + 5, kFrame);
-    cv.text(X(v) - Canvas::text_width(s) / 2.0, B + 9, s, kInk);
+    cv.text(std::floor(X(v)) + 0.5, B + 10, tick_label(v, ax.step), kInk, kTickPx, 0.5, 0);
   }
   for (int i = 0; i < ay.ticks(); ++i) {
     const double v = ay.tick(i);
     if (v < m.y_lo - 1e-9 || v > m.y_hi + 1e-9) continue;
-    const std::string s = tick_label(v, ay.step);
     cv.fill_rect(L - 5, std::floor(Y(v)), L, std::floor(Y(v)) + 1, kFrame);
-    cv.text(L - 8 - Canvas::text_width(s), Y(v) - 3, s, kInk);
+    cv.text(L - 9, std::floor(Y(v)) + 0.5, tick_label(v, ay.step), kInk, kTickPx, 1, 0.5);
   }
-  if (!m.x_label.empty()) cv.text((L + R - Canvas::text_width(m.x_label)) / 2.0, B + 24, m.x_label, kInk);
-  if (!m.y_label.empty()) cv.text(x + 8, (T + B + Canvas::text_width(m.y_label)) / 2.0, m.y_label, kInk, 1, true);
-  if (!m.title.empty()) cv.text(L, y + 6, m.title, kInk, 2);
+  draw_panel_labels(cv, p, x, m.title, m.y_label);
   // The colour bar: the top decade labelled, log steps below it.
-  const double bx0 = R + 24, bx1 = R + 38;
+  const double bx0 = R + 20, bx1 = R + 34;
   for (int j = 0; j < B - T; ++j) cv.fill_rect(bx0, T + j, bx1, T + j + 1, heat(1 - (j + 0.5) / (B - T)));
   cv.fill_rect(bx0 - 1, T - 1, bx1 + 1, T, kFrame), cv.fill_rect(bx0 - 1, B, bx1 + 1, B + 1, kFrame);
+  cv.fill_rect(bx0 - 1, T, bx0, B, kFrame), cv.fill_rect(bx1, T, bx1 + 1, B, kFrame);
   for (int d = 0; d <= static_cast<int>(m.decades); ++d) {
     const double v = hi * std::pow(10.0, -d);
-    const double yy = T + (B - T) * d / m.decades;
-    cv.text(bx1 + 4, yy - 3, hi > 0 ? format("%.2g", v) : "0", kInk);
+    const double yy = std::floor(T + (B - T) * d / m.decades);
+    cv.fill_rect(bx1, yy, bx1 + 4, yy + 1, kFrame);
+    cv.text(bx1 + 7, yy + 0.5, hi > 0 ? number("%.2g", v) : "0", kInk, kTickPx, 0, 0.5);
   }
-  cv.text(bx0, T - 14, m.unit, kInk);
+  cv.text(bx0, T - 9, m.unit, kInk, kTickPx, 0, 1);
 }
 
 void draw_bars(Canvas& cv, const BarChart& b, int x, int y, int w, int h) {
-  constexpr std::uint32_t kInk = 0x222222, kFrame = 0x555555;
+  constexpr std::uint32_t kInk = 0x222222, kFrame = 0x444444;
   double hi = 0;
   for (const auto& [name, v] : b.bars)
     if (std::isfinite(v)) hi = std::max(hi, v);
-  const Axis ay = nice_axis(0, hi > 0 ? hi : 1, 0);
-  const int L = x + 56, T = y + 28, R = x + w - 110, B = y + h - 40;
+  const Axis ay = nice_axis(0, hi > 0 ? 1.08 * hi : 1, 0);  // room for the values above the bars
+  double ytick_w = 0;
+  for (int i = 0; i < ay.ticks(); ++i) ytick_w = std::max(ytick_w, cv.text_width(tick_label(ay.tick(i), ay.step), kTickPx));
+  const Panel p = panel(cv, x, y, w, h, b.title, "", !b.y_label.empty(), ytick_w, 120);
+  const int L = p.L, T = p.T, R = p.R, B = p.B;
   auto Y = [&](double v) { return B - v / ay.hi * (B - T); };
   for (int i = 0; i < ay.ticks(); ++i) {
     const double v = ay.tick(i);
-    cv.fill_rect(L, std::floor(Y(v)), R, std::floor(Y(v)) + 1, 0xe8e8e8);
-    const std::string s = tick_label(v, ay.step);
-    cv.text(L - 8 - Canvas::text_width(s), Y(v) - 3, s, kInk);
+    cv.fill_rect(L, std::floor(Y(v)), R, std::floor(Y(v)) + 1, 0xe6e6e6);
+    cv.fill_rect(L - 5, std::floor(Y(v)), L, std::floor(Y(v)) + 1, kFrame);
+    cv.text(L - 9, std::floor(Y(v)) + 0.5, tick_label(v, ay.step), kInk, kTickPx, 1, 0.5);
   }
   const int n = static_cast<int>(b.bars.size());
   for (int k = 0; k < n; ++k) {
@@ -644,20 +963,18 @@ void draw_bars(Canvas& cv, const BarChart& b, int x, int y, int w, int h) {
     const double x0 = L + slot * (k + 0.2), x1 = L + slot * (k + 0.8);
     const double v = std::isfinite(b.bars[k].second) ? b.bars[k].second : 0;
     cv.fill_rect(x0, Y(v), x1, B, b.rgb);
-    const std::string val = format("%.3g", v);
-    cv.text((x0 + x1 - Canvas::text_width(val)) / 2, Y(v) - 12, val, kInk);
-    cv.text((x0 + x1 - Canvas::text_width(b.bars[k].first)) / 2, B + 9, b.bars[k].first, kInk);
+    cv.text((x0 + x1) / 2, Y(v) - 6, number("%.3g", v), kInk, kTickPx, 0.5, 1);
+    cv.text((x0 + x1) / 2, B + 10, b.bars[k].first, kInk, cv.fit(b.bars[k].first, kTickPx, slot - 6), 0.5, 0);
   }
   cv.fill_rect(L, B - 1, R, B, kFrame), cv.fill_rect(L, T, L + 1, B, kFrame);
-  if (!b.y_label.empty()) cv.text(x + 8, (T + B + Canvas::text_width(b.y_label)) / 2.0, b.y_label, kInk, 1, true);
-  if (!b.title.empty()) cv.text(L, y + 6, b.title, kInk, 2);
+  draw_panel_labels(cv, p, x, b.title, b.y_label);
 }
 
 }  // namespace
 
 void write_heat_maps_png(const std::filesystem::path& path, const std::vector<HeatMap>& maps, const BarChart& bars,
                          int width) {
-  const int map_h = 300, bar_h = bars.bars.empty() ? 0 : 260;
+  const int map_h = 320, bar_h = bars.bars.empty() ? 0 : 270;
   const int height = static_cast<int>(maps.size()) * map_h + bar_h;
   check_size(width, height);
   Canvas cv(width, height);

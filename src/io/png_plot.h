@@ -1,7 +1,8 @@
 // PNG pictures of a run, drawn in software (no GL needed): a line plot of
 // series against time, and an end view of the charge with toe and shoulder.
-// Text is drawn with stb_easy_font; files are written with stb_image_write
-// through io/atomic_file.h.
+// Shapes and text are anti-aliased; text is DejaVu Sans (Debian's
+// fonts-dejavu-core) rendered with stb_truetype, and files are written with
+// stb_image_write through io/atomic_file.h.
 #pragma once
 
 #include <cstdint>
@@ -13,6 +14,17 @@
 
 namespace mc::io {
 
+// The font every picture's text is drawn in, and the Debian package that
+// installs it. MILLCHARGE_FONT, when set, names another TrueType file.
+inline constexpr const char* kPlotFont = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+inline constexpr const char* kPlotFontPackage = "fonts-dejavu-core";
+std::filesystem::path plot_font_path();  // MILLCHARGE_FONT or kPlotFont
+
+// Reads the font once (again only when MILLCHARGE_FONT changes). Throws
+// std::runtime_error naming the file and the package when it cannot be read:
+// every write_*_png below does, before it draws.
+void check_plot_font();
+
 struct PlotSeries {
   std::string label;
   std::vector<double> x, y;
@@ -21,15 +33,32 @@ struct PlotSeries {
   bool dashed = false;           // a dashed line (a model beside the data)
 };
 
+// A horizontal line at y = value (a mean, a target) from x_from to x_to
+// (across the whole plot when x_to <= x_from), its label in the legend.
+struct RefLine {
+  double value = 0;
+  double x_from = 0, x_to = 0;
+  std::uint32_t rgb = 0x222222;
+  bool dashed = false;
+  std::string label;
+};
+
 struct LinePlot {
   std::string title, x_label, y_label;
   std::vector<PlotSeries> series;
-  // Optional shaded span on the x axis (the averaging window), with a label.
+  std::vector<RefLine> ref_lines;  // drawn over the series, listed after them in the legend
+  // Optional shaded span on the x axis (the averaging window), its label in
+  // the legend beside a swatch of its colour.
   double span_from = 0, span_to = 0;
   std::string span_label;
   bool pad_x = false;  // leave room beside the first and last x (for markers)
   bool log_x = false;  // a log x axis (x <= 0 left out)
 };
+
+// "874.4 ± 2.8 W": a value and its standard error to the error's second
+// significant digit (whole numbers for errors of 10 and more); the value
+// alone, to one decimal, without a finite positive error.
+std::string value_with_error(double value, double sem, const std::string& unit);
 
 // Throws std::runtime_error when the file cannot be written.
 void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot, int width = 960,
