@@ -511,7 +511,10 @@ int cmd_run(const RunOptions& o) {
   }
   const MillCase& c = p.c;
   const MillDerived& d = p.d;
-  // Device and kernels before any file is written.
+  // The pictures' font, the device and the kernels before any file is
+  // written: a run that could not draw its pictures would end without
+  // summary.json.
+  io::check_plot_font();
   compute::Context ctx(o.c.device);
   auto solver = make_solver(ctx, p.scene);
   if (resume) {

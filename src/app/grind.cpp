@@ -411,6 +411,7 @@ std::string fmt_um(double m) { return std::isfinite(m) ? fmt::format("{:.1f}", m
 
 int cmd_grind(const GrindOptions& o) {
   Ore ore = read_ore(o.ore);
+  io::check_plot_font();  // before anything is written
   if (o.bond_p1_um > 0) {
     // Bond's test screens at P1: the series is moved up to put P1 on a
     // class top (it still covers the feed; the classes keep their count).

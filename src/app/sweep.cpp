@@ -27,6 +27,7 @@
 #include "core/scene.h"
 #include "io/atomic_file.h"
 #include "io/case_file.h"
+#include "io/png_plot.h"
 #include "io/sweep_file.h"
 
 namespace mc::app {
@@ -435,6 +436,7 @@ int cmd_sweep_run(const SweepRunOptions& o) {
 int cmd_sweep_collect(const SweepCollectOptions& o) {
   const fs::path dir = fs::absolute(o.dir).lexically_normal();
   const SweepTable t = collect_table(dir);
+  io::check_plot_font();  // before anything is written
   io::write_file_atomic(dir / "sweep.csv", table_csv(t));
   io::write_file_atomic(dir / "sweep.json", table_json(t).dump(2) + "\n");
   const std::vector<fs::path> plots = write_sweep_plots(t, dir);
