@@ -83,6 +83,77 @@ TEST_CASE("a continuous mill: one tank's closed form, plug flow in the limit of 
   CHECK(one[0] > plug[0]);
 }
 
+TEST_CASE("Whiten's classification curve: C at the fines, C/2 at d50c, none of the coarse", "[grind]") {
+  for (double beta : {0.0, 0.5}) {
+    INFO("beta " << beta);
+    WhitenClassifier c{150e-6, 3.0, 0.2, beta};
+    CHECK(c.to_overflow(150e-6) == Approx(0.8 / 2).epsilon(1e-9));
+    CHECK(c.to_overflow(1e-3) < 1e-3);
+    CHECK(c.to_overflow(5e-3) < 1e-30);
+    if (beta == 0) {
+      CHECK(c.beta_star() == 1.0);
+      CHECK(c.to_overflow(1e-9) == Approx(0.8).epsilon(1e-5));
+      // The curve's form at one point: E = C (e^a - 1) / (e^(a y) + e^a - 2).
+      const double ea = std::exp(3.0);
+      CHECK(c.to_overflow(300e-6) == Approx(0.8 * (ea - 1) / (std::exp(6.0) + ea - 2)).epsilon(1e-12));
+    } else {
+      // The fish hook: fines below a size report less to the overflow than
+      // somewhat larger ones.
+      CHECK(c.to_overflow(1e-6) < c.to_overflow(60e-6));
+    }
+  }
+  // Sharper: closer to a step at d50c.
+  const WhitenClassifier blunt{150e-6, 1.0}, sharp{150e-6, 8.0};
+  CHECK(sharp.to_overflow(100e-6) > blunt.to_overflow(100e-6));
+  CHECK(sharp.to_overflow(220e-6) < blunt.to_overflow(220e-6));
+}
+
+TEST_CASE("a closed circuit: the two-class closed form, the mass kept, the open mill in the limit", "[grind]") {
+  // One class and the sink, a perfect-mixing mill, the fresh feed F all in
+  // the class. With Q the mill's whole feed, tau = H/Q, e_c and e_s the
+  // shares of the class and the sink to the overflow, the class leaves the
+  // mill at C = F / (S tau + e_c), and the overflow carries F out:
+  // Q = C + (F - e_c C) / e_s. Solved here by bisection on Q.
+  SizeSeries two;
+  two.top_m = {1e-3, 0.5e-3};
+  const std::vector<std::vector<double>> b = {{0.0, 0.0}, {1.0, 0.0}};
+  const double S = 0.5, H = 0.02, F = 0.3;  // per min, t, t/h
+  const WhitenClassifier c{two.mid_m(0) / 1.1, 4.0};
+  const double ec = c.to_overflow(two.mid_m(0)), es = c.to_overflow(two.mid_m(1));
+  REQUIRE(ec < 0.5);
+  REQUIRE(es > 0.5);
+  auto class_out = [&](double Q) { return F / (S * H * 60 / Q + ec); };
+  auto g = [&](double Q) { return Q - (class_out(Q) + (F - ec * class_out(Q)) / es); };
+  double lo = F, hi = 1e3 * F;
+  REQUIRE(g(lo) < 0);
+  REQUIRE(g(hi) > 0);
+  for (int k = 0; k < 300; ++k) (g(0.5 * (lo + hi)) < 0 ? lo : hi) = 0.5 * (lo + hi);
+  const double Q = 0.5 * (lo + hi), C = class_out(Q);
+  const ClosedCircuit cc = closed_circuit(two, {F, 0.0}, {S, 0.0}, b, H, 1, c);
+  REQUIRE(cc.converged);
+  CHECK(cc.underflow[0] == Approx((1 - ec) * C).epsilon(1e-9));
+  CHECK(cc.underflow[1] == Approx((1 - es) * (Q - C)).epsilon(1e-9));
+  CHECK(cc.circulating_load == Approx((Q - F) / F).epsilon(1e-9));
+  CHECK(cc.residence_min == Approx(H / Q * 60).epsilon(1e-9));
+  CHECK(sum(cc.product) == Approx(F).epsilon(1e-10));  // the overflow carries the fresh feed out
+
+  // A real series: mass kept, finer than the open mill at the same feed, and
+  // the open mill when the cut lies far above the feed.
+  Mill m;
+  const double H2 = 0.05, F2 = 0.4;
+  std::vector<double> fresh(m.feed);
+  for (double& f : fresh) f *= F2;
+  const ClosedCircuit closed = closed_circuit(m.s, fresh, m.S, m.b, H2, 1, WhitenClassifier{300e-6, 3.0});
+  REQUIRE(closed.converged);
+  CHECK(sum(closed.product) == Approx(F2).epsilon(1e-10));
+  CHECK(closed.circulating_load > 0.5);
+  std::vector<double> open = continuous_grind(fresh, m.S, m.b, H2 / F2 * 60, 1);
+  CHECK(passing_size(m.s, closed.product, 0.8) < passing_size(m.s, open, 0.8));
+  const ClosedCircuit wide = closed_circuit(m.s, fresh, m.S, m.b, H2, 1, WhitenClassifier{1.0, 50.0});
+  CHECK(wide.circulating_load < 1e-12);
+  for (std::size_t i = 0; i < open.size(); ++i) CHECK(wide.product[i] == Approx(open[i]).margin(1e-12));
+}
+
 TEST_CASE("sizes passing: P80 of a known distribution, feed interpolated at the class tops", "[grind]") {
   const SizeSeries s = geometric_series(4e-3, 2.0, 6);  // 4, 2, 1, 0.5, 0.25, 0.125 mm
   // Rosin-free check: passing 1, 0.8, 0.5, 0.3, 0.2, 0.1 at the tops.
@@ -205,6 +276,60 @@ TEST_CASE("grind: a run's product size in batch and continuous, both rate models
     CHECK(j["throughput_at_target_t_h"].get<double>() == Approx(p[4]["feed_rate_t_h"].get<double>()));
     for (const char* f : {"grind.csv", "rates.csv", "grind.png"}) CHECK(fs::file_size(fs::path(o.out) / f) > 100);
   }
+}
+
+TEST_CASE("grind --classifier: the continuous mill closed, its throughput at a target P80", "[grind][outputs]") {
+  const fs::path run = short_run();
+  auto grind = [&](double d50c_um, const std::string& name) {
+    mc::app::GrindOptions o;
+    o.run_dir = run.string();
+    o.ore = ore_file("example_energy.toml").string();
+    o.feed_rate_t_h = 0.02;
+    o.target_p80_um = 200;
+    o.classifier_d50c_um = d50c_um;
+    o.out = (run / name).string();
+    o.quiet = true;
+    REQUIRE(mc::app::cmd_grind(o) == 0);
+    return nlohmann::json::parse(text_of(fs::path(o.out) / "grind.json"));
+  };
+  const nlohmann::json open = grind(0, "grind-open"), closed = grind(250, "grind-closed");
+  CHECK(!open.contains("classifier"));
+  CHECK(closed["classifier"]["d50c_um"].get<double>() == 250);
+  const auto& po = open["products"];
+  const auto& pc = closed["products"];
+  REQUIRE(po.size() == 2);
+  REQUIRE(pc.size() == 2);
+  // At the same feed rate the closed circuit's product is finer, with a
+  // circulating load and a shorter residence in the mill.
+  CHECK(pc[0]["circulating_load"].get<double>() > 0.1);
+  CHECK(pc[0]["steady"].get<bool>());
+  CHECK(pc[0]["P80_um"].get<double>() < po[0]["P80_um"].get<double>());
+  CHECK(pc[0]["time_min"].get<double>() < po[0]["time_min"].get<double>());
+  CHECK(pc[0]["specific_energy_kWh_t"].get<double>() == Approx(po[0]["specific_energy_kWh_t"].get<double>()));
+  // And it makes the target P80 at a higher throughput.
+  CHECK(pc[1]["P80_um"].get<double>() == Approx(200).epsilon(1e-6));
+  CHECK(closed["throughput_at_target_t_h"].get<double>() > open["throughput_at_target_t_h"].get<double>());
+
+  // Bad input, by option, nothing written.
+  const fs::path out = run / "grind-bad";
+  auto refuses = [&](mc::app::GrindOptions o, const std::string& says) {
+    o.run_dir = run.string();
+    o.ore = ore_file("example_energy.toml").string();
+    o.out = out.string();
+    o.quiet = true;
+    INFO("expected: " << says);
+    CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains(says));
+    CHECK(!fs::exists(out));
+  };
+  mc::app::GrindOptions o;
+  o.classifier_d50c_um = 250;
+  refuses(o, "give --feed-rate or --target-p80");
+  o.feed_rate_t_h = 0.02;
+  o.classifier_d50c_um = 9000;
+  refuses(o, "--classifier 9000: the cut size must lie inside the size classes");
+  o.classifier_d50c_um = 0;
+  o.classifier_bypass = 0.1;
+  refuses(o, "give --classifier D50C_UM with them");
 }
 
 TEST_CASE("grind refuses bad ore files and run folders by name, writing nothing", "[grind][failures]") {

@@ -420,6 +420,19 @@ int cmd_grind(const GrindOptions& o) {
     ore.sizes = geometric_series(p1 * std::pow(ore.ratio, k), ore.ratio, ore.sizes.size());
     ore.feed = feed_masses(ore.sizes, ore.sieve_m, ore.sieve_passing);
   }
+  if (o.classifier_d50c_um > 0) {
+    if (!(o.feed_rate_t_h > 0) && !(o.target_p80_um > 0))
+      throw std::invalid_argument(fmt::format(
+          "--classifier {:g}: closes a continuous mill; give --feed-rate or --target-p80 with it", o.classifier_d50c_um));
+    const double d = o.classifier_d50c_um * 1e-6;
+    if (!(d > ore.sizes.top_m.back() && d < ore.sizes.top_m.front()))
+      throw std::invalid_argument(fmt::format("--classifier {:g}: the cut size must lie inside the size classes ({:.1f} "
+                                              "to {:.0f} um)",
+                                              o.classifier_d50c_um, ore.sizes.top_m.back() * 1e6,
+                                              ore.sizes.top_m.front() * 1e6));
+  } else if (o.classifier_alpha != 3 || o.classifier_bypass != 0) {
+    throw std::invalid_argument("--sharpness and --bypass describe the classifier: give --classifier D50C_UM with them");
+  }
   const Run run = read_run(o.run_dir, ore.model == RateModel::spectrum);
   const int tanks = o.tanks > 0 ? o.tanks : ore.tanks;
   // The ore in the mill.
@@ -464,6 +477,8 @@ int cmd_grind(const GrindOptions& o) {
   struct Product {
     std::string label;
     double t_min = 0, feed_t_h = 0, kWh_t = 0, p80_m = 0;
+    double circulating_load = -1;  // a closed circuit's; < 0: open
+    bool converged = true;
     std::vector<double> m;
   };
   std::vector<Product> products;
@@ -476,14 +491,31 @@ int cmd_grind(const GrindOptions& o) {
     p.p80_m = passing_size(s, p.m, 0.8);
     products.push_back(p);
   }
+  const bool closed = o.classifier_d50c_um > 0;
+  WhitenClassifier classifier;
+  classifier.d50c_m = o.classifier_d50c_um * 1e-6;
+  classifier.alpha = o.classifier_alpha;
+  classifier.bypass = o.classifier_bypass;
   auto continuous = [&](double feed_t_h) {
     Product p;
     p.feed_t_h = feed_t_h;
-    p.t_min = holdup_t / feed_t_h * 60;  // mean residence time
-    p.m = continuous_grind(ore.feed, S, b, p.t_min, tanks);
+    if (closed) {
+      std::vector<double> fresh(ore.feed);
+      for (double& f : fresh) f *= feed_t_h;
+      const ClosedCircuit cc = closed_circuit(s, fresh, S, b, holdup_t, tanks, classifier);
+      p.m = cc.product;
+      for (double& m : p.m) m /= feed_t_h;
+      p.t_min = cc.residence_min;
+      p.circulating_load = cc.circulating_load;
+      p.converged = cc.converged;
+      p.label = fmt::format("closed circuit {:.4g} t/h", feed_t_h);
+    } else {
+      p.t_min = holdup_t / feed_t_h * 60;  // mean residence time
+      p.m = continuous_grind(ore.feed, S, b, p.t_min, tanks);
+      p.label = fmt::format("continuous {:.4g} t/h", feed_t_h);
+    }
     p.kWh_t = power_kW / feed_t_h;
     p.p80_m = passing_size(s, p.m, 0.8);
-    p.label = fmt::format("continuous {:.4g} t/h", feed_t_h);
     return p;
   };
   if (o.feed_rate_t_h > 0) products.push_back(continuous(o.feed_rate_t_h));
@@ -506,7 +538,7 @@ int cmd_grind(const GrindOptions& o) {
       }
       target_rate = std::sqrt(lo * hi);
       Product p = continuous(target_rate);
-      p.label = fmt::format("continuous at P80 {:g} um", o.target_p80_um);
+      p.label = fmt::format("{} at P80 {:g} um", closed ? "closed circuit" : "continuous", o.target_p80_um);
       products.push_back(p);
     }
   }
@@ -545,6 +577,11 @@ int cmd_grind(const GrindOptions& o) {
   j["holdup_kg"] = holdup_kg;
   j["mean_ball_diameter_mm"] = 2e3 * run.ball_radius_m;
   j["tanks"] = tanks;
+  if (closed)
+    j["classifier"] = {{"model", "whiten"},
+                       {"d50c_um", o.classifier_d50c_um},
+                       {"sharpness", o.classifier_alpha},
+                       {"bypass", o.classifier_bypass}};
   j["F80_um"] = std::isfinite(ore.f80_m) ? nlohmann::json(ore.f80_m * 1e6) : nlohmann::json();
   j["products"] = nlohmann::json::array();
   for (const Product& p : products) {
@@ -553,6 +590,10 @@ int cmd_grind(const GrindOptions& o) {
     q["time_min"] = p.t_min;
     if (p.feed_t_h > 0) q["feed_rate_t_h"] = p.feed_t_h;
     q["specific_energy_kWh_t"] = p.kWh_t;
+    if (p.circulating_load >= 0) {
+      q["circulating_load"] = p.circulating_load;
+      q["steady"] = p.converged;
+    }
     q["P80_um"] = std::isfinite(p.p80_m) ? nlohmann::json(p.p80_m * 1e6) : nlohmann::json();
     j["products"].push_back(q);
   }
@@ -604,9 +645,14 @@ int cmd_grind(const GrindOptions& o) {
     std::printf("ore %s, %s rates; mill power %.1f W, hold-up %.3g kg, F80 %s um\n", ore.name.c_str(),
                 j["model"].get<std::string>().c_str(), run.power_W, holdup_kg, fmt_um(ore.f80_m).c_str());
     for (const Product& p : products)
-      std::printf("  %-28s %s %8.3g kWh/t  P80 %s um\n", p.label.c_str(),
+      std::printf("  %-28s %s %8.3g kWh/t  P80 %s um%s\n", p.label.c_str(),
                   p.feed_t_h > 0 ? fmt::format("{:9.4g} t/h", p.feed_t_h).c_str() : "             ", p.kWh_t,
-                  fmt_um(p.p80_m).c_str());
+                  fmt_um(p.p80_m).c_str(),
+                  p.circulating_load >= 0
+                      ? fmt::format("  circulating load {:.0f} %{}", 100 * p.circulating_load,
+                                    p.converged ? "" : " (not steady)")
+                            .c_str()
+                      : "");
     if (o.bond_p1_um > 0)
       std::printf("  Bond test at P1 %g um: %d cycles%s, Gbp %.3f g/rev, CL %.0f %%, F80 %.0f um, P80 %.0f um, Wi %.2f "
                   "kWh/t\n",

@@ -16,6 +16,9 @@ struct GrindOptions {
   double target_p80_um = 0;        // --target-p80: the feed rate that gives it
   int tanks = 0;                   // --tanks, 0: the ore file's (default 1)
   double bond_p1_um = 0;           // --bond: the locked-cycle test at this closing sieve
+  double classifier_d50c_um = 0;   // --classifier: the continuous mill closed by a classifier
+  double classifier_alpha = 3;     // --sharpness
+  double classifier_bypass = 0;    // --bypass
   std::string out;                 // --out, default RUN_DIR/grind
   bool quiet = false;
 };

@@ -10,6 +10,7 @@
 //                    [--precision float|double] [--set KEY=VALUE]... [--quiet]
 //   millcharge devices
 //   millcharge grind RUN_DIR --ore ORE.toml [--time MIN,...] [--feed-rate T/H] [--target-p80 UM]
+//                    [--classifier D50C_UM [--sharpness A] [--bypass B]]
 //                    [--tanks N] [--bond P1_UM] [--out DIR] [--quiet]
 //   millcharge sweep check FILE | run FILE --local [N]|--slurm|--print | collect DIR
 // Exit status: 0 done; 2 bad input (a message names the key; nothing written);
@@ -159,6 +160,16 @@ int main(int argc, char** argv) {
                     "Bond's locked-cycle ball mill test closed at this sieve (um): Gbp and the work index")
       ->check(CLI::PositiveNumber)
       ->type_name("P1_UM");
+  grind->add_option("--classifier", go.classifier_d50c_um,
+                    "close the continuous mill with a classifier of this corrected cut size d50c (um): its "
+                    "underflow returns to the mill (Whiten's curve)")
+      ->check(CLI::PositiveNumber)
+      ->type_name("D50C_UM");
+  grind->add_option("--sharpness", go.classifier_alpha, "the classifier's sharpness alpha (default 3)")
+      ->check(CLI::PositiveNumber);
+  grind->add_option("--bypass", go.classifier_bypass,
+                    "the share of the fines that bypasses the classifier to the underflow (default 0)")
+      ->check(CLI::Range(0.0, 0.95));
   grind->add_option("--out", go.out, "folder for the results (default RUN/grind)");
   grind->add_flag("--quiet", go.quiet, "no summary lines");
 

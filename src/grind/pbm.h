@@ -53,6 +53,38 @@ std::vector<double> reid_batch(const std::vector<double>& m0, const std::vector<
 std::vector<double> continuous_grind(const std::vector<double>& feed, const std::vector<double>& S,
                                      const std::vector<std::vector<double>>& b, double tau, int tanks);
 
+// Whiten's classification curve (as given by Napier-Munn, Morrell, Morrison
+// & Kojovic 1996, Mineral Comminution Circuits, JKMRC): the fraction of
+// particles of size x that reports to the overflow (the fine product),
+//   E(x) = C (1 + beta beta* y) (e^alpha - 1) / (e^(alpha beta* y) + e^alpha - 2),
+// y = x / d50c, C = 1 - bypass (the share of the fines that is classified;
+// the rest goes to the underflow with the water), alpha the sharpness and
+// beta the fish hook (0: none), beta* chosen so that E(d50c) = C / 2.
+struct WhitenClassifier {
+  double d50c_m = 0, alpha = 3, bypass = 0, beta = 0;
+  double beta_star() const;
+  double to_overflow(double x_m) const;
+};
+
+// A continuous mill closed by a classifier: fresh feed (class flows, t/h)
+// joined by the classifier's underflow, ground in the mill (tanks in series,
+// mean residence time holdup / the mill's whole feed), the mill's product
+// split by the classifier at each class's geometric mean size. Solved by
+// substitution to the steady state, where the overflow carries out the
+// fresh feed's mass.
+struct ClosedCircuit {
+  std::vector<double> product;       // overflow, t/h by class
+  std::vector<double> underflow;     // returned to the mill, t/h
+  std::vector<double> mill_product;  // t/h
+  double circulating_load = 0;       // underflow / fresh feed
+  double residence_min = 0;          // the mill's, at the steady state
+  int iterations = 0;
+  bool converged = false;
+};
+ClosedCircuit closed_circuit(const SizeSeries& s, const std::vector<double>& fresh_t_h, const std::vector<double>& S,
+                             const std::vector<std::vector<double>>& b, double holdup_t, int tanks,
+                             const WhitenClassifier& c);
+
 // Cumulative passing at each class's top (passing[i]: finer than top[i]).
 std::vector<double> passing(const std::vector<double>& m);
 
