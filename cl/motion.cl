@@ -7,6 +7,7 @@
 #include "layout.h"
 #include "periodic.h"
 #include "motion.h"
+#include "rigid.h" /* compiled here so that the kernels build it; no kernel calls it yet */
 
 __kernel void motion(__global const SimParams* sp, __global real4* pos,
                      __global real4* vel, __global real4* omega,
