@@ -491,7 +491,9 @@ int cmd_run(const RunOptions& o) {
   const bool extend = resume && (o.c.duration > 0 || o.c.duration_auto || !o.c.overrides.empty());
   Prepared p;
   io::Checkpoint cp;
-  long window_begun_before = 0;
+  // An extension that could not keep the window already begun starts a new
+  // one: the rows before it are no longer averaged.
+  bool window_restarted = false;
   if (resume) {
     if (!o.c.case_path.empty() || !o.c.precision.empty())
       throw std::invalid_argument("--resume " + o.resume +
@@ -504,8 +506,9 @@ int cmd_run(const RunOptions& o) {
       throw std::invalid_argument("--resume " + o.resume +
                                   ": the run there is complete (summary.json); nothing to do. To turn it longer, "
                                   "give --duration S (longer than it has turned) or --duration auto");
-    window_begun_before = cp.run.window_begun;
+    const int window_begun_before = cp.run.window_begun;
     if (extend) extend_from_checkpoint(o, p, cp);
+    window_restarted = extend && cp.run.window_begun == 0 && window_begun_before != 0;
   } else {
     p = prepare(o.c);
   }
@@ -528,10 +531,7 @@ int cmd_run(const RunOptions& o) {
   const std::string case_text = resume ? cp.case_toml : io::case_to_toml(c);
   std::vector<std::string> kept_rows;
   if (resume) {
-    // A new window (an extension that could not keep the one begun): the
-    // rows before it are no longer averaged.
-    const bool new_window = extend && cp.run.window_begun == 0 && window_begun_before != 0;
-    kept_rows = keep_rows(out / "timeseries.csv", cp.run.rows, new_window);
+    kept_rows = keep_rows(out / "timeseries.csv", cp.run.rows, window_restarted);
     if (extend) io::write_file_atomic(out / "case.toml", case_text);
   } else {
     make_run_dir(out, o.force);
@@ -550,9 +550,7 @@ int cmd_run(const RunOptions& o) {
     std::printf("millcharge: extended: the mill turns to %.4g s; the window %s at %.4g s%s\n",
                 plan.turn_steps * d.dt, cp.run.window_begun == 0 ? "begins" : "goes on from its start",
                 plan.window_start * d.dt,
-                cp.run.window_begun == 0 && window_begun_before != 0
-                    ? " (the window already begun could not be kept: its books started elsewhere)"
-                    : "");
+                window_restarted ? " (the window already begun could not be kept: its books started elsewhere)" : "");
   }
   std::fflush(stdout);
 

@@ -140,10 +140,6 @@ RunState extend_run(const RunState& st, const MillCase& old_c, const MillDerived
     return out;
   // Otherwise a new window, no earlier than here: its books from zero.
   out.window_floor_step = s;
-  after = plan_turning(new_c, new_d, dt, s, -1);
-  if (after.turn_steps <= s)
-    throw std::invalid_argument(key + ": " + seconds_text(new_c.duration_auto ? new_d.turn_limit_s : new_c.duration) +
-                                " leaves no turning after " + seconds_text(turned) + "; give a longer duration");
   out.window_begun = 0;
   out.window_profile.assign(out.window_profile.size(), 0);
   out.batch_profile.assign(out.batch_profile.size(), 0);
