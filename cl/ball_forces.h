@@ -318,10 +318,11 @@ MC_FN BallSums ball_sums_zero(void) {
   return s;
 }
 
-/* Gravity: where a ball's sums start. */
-MC_FN BallSums ball_sums_start(MC_GLOBAL const SimParams* sp, real4 vi) {
+/* Gravity: where a ball's sums start. A body's component starts from
+ * zero: its body takes gravity once (cl/body.h). */
+MC_FN BallSums ball_sums_start(MC_GLOBAL const SimParams* sp, real4 vi, int id) {
   BallSums s = ball_sums_zero();
-  s.f = (R(1.0) / vi.w) * xyz_of(sp->gravity);
+  if (!MC_IS_COMPONENT(sp, id)) s.f = (R(1.0) / vi.w) * xyz_of(sp->gravity);
   return s;
 }
 
@@ -452,9 +453,10 @@ MC_FN void ball_forces(
   const real4 pi4 = pos[i];
   const real4 vi = vel[i];
   const real4 wi = omega[i];
-  const int mat_i = info[i].y;
+  const int2 info_i = info[i];
+  const int mat_i = info_i.y;
   const v3 p = v3_of(xyz_of(pi4));
-  BallSums s = ball_sums_start(sp, vi);
+  BallSums s = ball_sums_start(sp, vi, info_i.x);
 
   /* ---- ball–ball ---- */
   /* The list holds the partners j > i. An entry's link says whether the

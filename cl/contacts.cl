@@ -36,13 +36,25 @@ MC_FN int is_neighbour(__global const SimParams* sp, real4 a, real4 b) {
   return dot(d, d) < cut * cut;
 }
 
+/* Two components of one rigid body are never a pair (cl/body.h): body_of
+ * gives each component's body, by id − first_component. */
+MC_FN int same_body(__global const SimParams* sp, __global const int2* info,
+                    __global const int* body_of, int id_i, int j) {
+  if (!MC_IS_COMPONENT(sp, id_i)) return 0;
+  const int id_j = info[j].x;
+  return MC_IS_COMPONENT(sp, id_j) &&
+         body_of[id_i - sp->first_component] == body_of[id_j - sp->first_component];
+}
+
 __kernel void contacts_count(__global const SimParams* sp,
                              __global const real4* pos,
                              __global const int* cell_start,
-                             __global int* neigh_count) {
+                             __global int* neigh_count,
+                             __global const int2* info, __global const int* body_of) {
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
   const real4 pi = pos[i];
+  const int id_i = info[i].x;
   const int4 c = grid_cell_of(sp, xyz_of(pi));
   int count = 0;
   const int periodic = sp->period > R(0.0);
@@ -56,7 +68,7 @@ __kernel void contacts_count(__global const SimParams* sp,
         const int b = cell_start[cell];
         const int e = cell_start[cell + 1];
         for (int j = max(b, i + 1); j < e; ++j)
-          if (is_neighbour(sp, pi, pos[j])) ++count;
+          if (is_neighbour(sp, pi, pos[j]) && !same_body(sp, info, body_of, id_i, j)) ++count;
       }
   }
   neigh_count[i] = count;
@@ -85,10 +97,12 @@ __kernel void contacts_fill(__global const SimParams* sp,
                             __global const int* carry_count,
                             __global const int* carry_index,
                             __global const int* carry_rec,
-                            __global real4* records) {
+                            __global real4* records,
+                            __global const int2* info, __global const int* body_of) {
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
   const real4 pi = pos[i];
+  const int id_i = info[i].x;
   const int4 c = grid_cell_of(sp, xyz_of(pi));
   const int oi = perm[i];
   int k = neigh_start[i];
@@ -103,7 +117,7 @@ __kernel void contacts_fill(__global const SimParams* sp,
         const int b = cell_start[cell];
         const int e = cell_start[cell + 1];
         for (int j = max(b, i + 1); j < e; ++j) {
-          if (!is_neighbour(sp, pi, pos[j])) continue;
+          if (!is_neighbour(sp, pi, pos[j]) || same_body(sp, info, body_of, id_i, j)) continue;
           const int oj = perm[j];
           int rec = MC_NO_RECORD;
           /* The old list of the lower old index held the pair. */

@@ -270,8 +270,9 @@ void forces_grouped(__global const SimParams* sp,
     const real4 pi4 = pos[i];
     const real4 vi = vel[i];
     const real4 wi = omega[i];
-    const int mat_i = info[i].y;
-    BallSums s = ball_sums_start(sp, vi);
+    const int2 info_i = info[i];
+    const int mat_i = info_i.y;
+    BallSums s = ball_sums_start(sp, vi, info_i.x);
     const int f0 = first[lid];
     for (int q = 0; q < nq; ++q) {
       const int fq = f0 + q;

@@ -167,8 +167,16 @@ typedef struct {
   int status_every;  /* steps between the host's reads of the status word
                         (>= 1): the rebuild flag goes up that many steps'
                         travel earlier */
-  int pad1;
+  int first_component; /* balls with ids from here on are the component
+                        spheres of rigid bodies (clumps, cl/body.h), the
+                        components of each body side by side; n_balls
+                        when there are none */
+  int n_bodies;
+  int pad1, pad2, pad3;
 } SimParams;
+
+/* Whether the ball with this id is a component sphere of a rigid body. */
+#define MC_IS_COMPONENT(sp, id) ((id) >= (sp)->first_component)
 
 /* How the energy is booked: the spectra's pair types and the liner's
  * elements (src/sim/liner.h lays them out), derived on the host. */

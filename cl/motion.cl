@@ -7,15 +7,51 @@
 #include "layout.h"
 #include "periodic.h"
 #include "motion.h"
-#include "rigid.h" /* compiled here so that the kernels build it; no kernel calls it yet */
+#include "rigid.h"
+#include "body.h"
 
+/* The free balls; a body's components move with their body (body_move). */
 __kernel void motion(__global const SimParams* sp, __global real4* pos,
                      __global real4* vel, __global real4* omega,
                      __global const real4* force, __global const real4* torque,
-                     __global const real4* pos_at_build, __global int* status) {
+                     __global const real4* pos_at_build, __global int* status,
+                     __global const int2* info) {
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
+  if (sp->first_component < sp->n_balls && MC_IS_COMPONENT(sp, info[i].x)) return;
   const int flags = integrate_ball(i, sp, pos, vel, omega, force, torque, pos_at_build);
+  if (flags) MC_ATOMIC_OR(status, flags);
+}
+
+/* Rigid bodies (body.h): where each component lies now, after the balls
+ * were put in cell order; the forces summed to each body; a step of each. */
+__kernel void body_slots(__global const SimParams* sp, __global const int2* info, __global int* slot_of) {
+  const int i = get_global_id(0);
+  if (i >= sp->n_balls) return;
+  const int id = info[i].x;
+  if (MC_IS_COMPONENT(sp, id)) slot_of[id - sp->first_component] = i;
+}
+
+__kernel void body_sums(__global const SimParams* sp, __global const real4* pos, __global const real4* force,
+                        __global const real4* torque, __global const int* slot_of,
+                        __global const int2* body_comp, __global const real4* body_pos,
+                        __global real4* body_force, __global real4* body_torque) {
+  const int b = get_global_id(0);
+  if (b >= sp->n_bodies) return;
+  body_sum(b, sp, pos, force, torque, slot_of, body_comp, body_pos, body_force, body_torque);
+}
+
+__kernel void body_motion(__global const SimParams* sp, __global real4* pos, __global real4* vel,
+                          __global real4* omega, __global const real4* pos_at_build,
+                          __global const int* slot_of, __global const int2* body_comp,
+                          __global const real4* comp_offset, __global real4* body_pos,
+                          __global real4* body_vel, __global real4* body_quat, __global real4* body_angmom,
+                          __global const real4* body_inv_inertia, __global const real4* body_force,
+                          __global const real4* body_torque, __global int* status) {
+  const int b = get_global_id(0);
+  if (b >= sp->n_bodies) return;
+  const int flags = body_move(b, sp, pos, vel, omega, pos_at_build, slot_of, body_comp, comp_offset, body_pos,
+                              body_vel, body_quat, body_angmom, body_inv_inertia, body_force, body_torque);
   if (flags) MC_ATOMIC_OR(status, flags);
 }
 

@@ -4,32 +4,12 @@
 #ifndef MC_MOTION_H
 #define MC_MOTION_H
 
-MC_FN int integrate_ball(int i, MC_GLOBAL const SimParams* sp,
-                         MC_GLOBAL real4* pos, MC_GLOBAL real4* vel,
-                         MC_GLOBAL real4* omega, MC_GLOBAL const real4* force,
-                         MC_GLOBAL const real4* torque,
-                         MC_GLOBAL const real4* pos_at_build) {
-  const real dt = sp->dt;
-  real4 v = vel[i];
-  real4 p = pos[i];
-  real4 w = omega[i];
-  const real4 f = force[i];
-  const real4 t = torque[i];
-  v.x += dt * f.x * v.w; v.y += dt * f.y * v.w; v.z += dt * f.z * v.w;
-  p.x += dt * v.x; p.y += dt * v.y; p.z += dt * v.z;
-  p.z = wrap_z(sp, p.z); /* a slice: leaving one end is entering at the other */
-  w.x += dt * t.x * w.w; w.y += dt * t.y * w.w; w.z += dt * t.z * w.w;
-  if (sp->velocity_damping > R(0.0)) { /* only while settling: the turning
-                                          mill's steps stay as they were */
-    const real keep = R(1.0) - sp->velocity_damping;
-    v.x *= keep; v.y *= keep; v.z *= keep;
-    w.x *= keep; w.y *= keep; w.z *= keep;
-  }
-  vel[i] = v;
-  pos[i] = p;
-  omega[i] = w;
+/* The status flags of a ball now at p (radius in w) with velocity v and
+ * spin w, listed at b: shared by the balls' update and the rigid bodies'
+ * (cl/body.h). */
+MC_FN int ball_flags(MC_GLOBAL const SimParams* sp, real4 p, real4 v, real4 w, real4 b) {
   int flags = 0;
-  const real4 b = pos_at_build[i];
+  const real dt = sp->dt;
   const real dx = p.x - b.x, dy = p.y - b.y, dz = image_dz(sp, p.z - b.z); /* wrapped or not */
   /* The host reads the status word every status_every steps, without
    * stalling the queue, and acts on it one step after the read: a flag
@@ -56,6 +36,33 @@ MC_FN int integrate_ball(int i, MC_GLOBAL const SimParams* sp,
             fabs(w.x) + fabs(w.y) + fabs(w.z) < big))
     flags |= MC_FLAG_NOT_FINITE;
   return flags;
+}
+
+MC_FN int integrate_ball(int i, MC_GLOBAL const SimParams* sp,
+                         MC_GLOBAL real4* pos, MC_GLOBAL real4* vel,
+                         MC_GLOBAL real4* omega, MC_GLOBAL const real4* force,
+                         MC_GLOBAL const real4* torque,
+                         MC_GLOBAL const real4* pos_at_build) {
+  const real dt = sp->dt;
+  real4 v = vel[i];
+  real4 p = pos[i];
+  real4 w = omega[i];
+  const real4 f = force[i];
+  const real4 t = torque[i];
+  v.x += dt * f.x * v.w; v.y += dt * f.y * v.w; v.z += dt * f.z * v.w;
+  p.x += dt * v.x; p.y += dt * v.y; p.z += dt * v.z;
+  p.z = wrap_z(sp, p.z); /* a slice: leaving one end is entering at the other */
+  w.x += dt * t.x * w.w; w.y += dt * t.y * w.w; w.z += dt * t.z * w.w;
+  if (sp->velocity_damping > R(0.0)) { /* only while settling: the turning
+                                          mill's steps stay as they were */
+    const real keep = R(1.0) - sp->velocity_damping;
+    v.x *= keep; v.y *= keep; v.z *= keep;
+    w.x *= keep; w.y *= keep; w.z *= keep;
+  }
+  vel[i] = v;
+  pos[i] = p;
+  omega[i] = w;
+  return ball_flags(sp, p, v, w, pos_at_build[i]);
 }
 
 #endif /* MC_MOTION_H */

@@ -19,6 +19,9 @@
 #include "mc_shim.h"
 #include "layout.h"
 #include "periodic.h"
+#include "motion.h"
+#include "rigid.h"
+#include "body.h"
 
 #ifndef MC_ENERGY_BOOKS
 #define MC_ENERGY_BOOKS 1
@@ -35,7 +38,12 @@ void reduce_observables(__global const SimParams* sp,
                         __global const int* neigh_start, __global const int* neigh_count,
                         __global const int* neigh_index, __global const int* neigh_rec,
                         __global const int* wall_key, __global const int* wall_rec,
-                        __global const real4* records, int reset, __global real* partial) {
+                        __global const real4* records, int reset, __global real* partial,
+                        __global const int2* info, __global const int2* body_comp,
+                        __global const int* body_of, __global const real4* body_pos,
+                        __global const real4* body_vel, __global const real4* body_quat,
+                        __global const real4* body_angmom, __global const real4* body_inv_inertia,
+                        __global const real4* body_force, __global const real4* body_torque) {
   __local real tmp[MC_REDUCE_WG * MC_N_OBSERVABLES];
   const int i = get_global_id(0);
   const int lid = get_local_id(0);
@@ -53,12 +61,27 @@ void reduce_observables(__global const SimParams* sp,
     v[1] = a.y;
     v[2] = a.z;
     v[3] = a.w;
-    v[4] = R(0.5) * mass * dot(vn, vn);
-    v[5] = R(0.5) * dot(wn, wn) / wh.w;
-    v[6] = -mass * dot(xyz_of(sp->gravity), xyz_of(pos[i]));
+    const int id = info[i].x;
+    if (!MC_IS_COMPONENT(sp, id)) {
+      v[4] = R(0.5) * mass * dot(vn, vn);
+      v[5] = R(0.5) * dot(wn, wn) / wh.w;
+      v[6] = -mass * dot(xyz_of(sp->gravity), xyz_of(pos[i]));
+      v[8] = mass * pos[i].x;
+      v[9] = mass * pos[i].y;
+    } else {
+      /* A body is counted once, by its first component, at its centre. */
+      const int b = body_of[id - sp->first_component];
+      if (body_comp[b].x == id) {
+        body_energy(b, sp, body_pos, body_vel, body_quat, body_angmom, body_inv_inertia, body_force,
+                    body_torque, &v[4], &v[5]);
+        const real4 c = body_pos[b];
+        const real m = R(1.0) / c.w;
+        v[6] = -m * dot(xyz_of(sp->gravity), xyz_of(c));
+        v[8] = m * c.x;
+        v[9] = m * c.y;
+      }
+    }
     v[7] = (real)(2 * neigh_count[i]); /* each listed pair, from both sides */
-    v[8] = mass * pos[i].x;
-    v[9] = mass * pos[i].y;
 #if MC_ENERGY_BOOKS
     const int n = sp->n_balls;
     const int b = neigh_start[i];

@@ -1,4 +1,5 @@
 #include "app/commands.h"
+#include "core/clump.h"
 
 #include <unistd.h>
 
@@ -325,8 +326,25 @@ int cmd_check(const CaseOptions& o) {
     char dia[64];
     if (s.diameter_min == s.diameter_max) std::snprintf(dia, sizeof dia, "%.4g mm", 1000 * s.diameter_min);
     else std::snprintf(dia, sizeof dia, "%.4g-%.4g mm", 1000 * s.diameter_min, 1000 * s.diameter_max);
-    std::printf("  size %-9zu %s %s: %s balls, %s fraction %.3f\n", k, dia, s.material.c_str(),
-                thousands(d.class_counts[k]).c_str(), c.number_fractions ? "number" : "mass", s.fraction);
+    std::printf("  size %-9zu %s %s: %s %s, %s fraction %.3f\n", k, dia, s.material.c_str(),
+                thousands(d.class_counts[k]).c_str(), s.shape.empty() ? "balls" : "clumps", c.number_fractions ? "number" : "mass",
+                s.fraction);
+    if (!s.shape.empty()) {
+      // The clump at a volume-equivalent diameter of 1: its spheres, its
+      // extent along its principal axes and its moments over m d².
+      const ClumpShape u = normalised_shape(size_class_shape(c, s.shape, "charge.size"), 1.0);
+      const ClumpMassProperties mp = clump_mass_properties(u);
+      double ext[3] = {0, 0, 0};
+      for (const ClumpSphere& q : u.spheres) {
+        ext[0] = std::max(ext[0], std::fabs(q.centre.x) + q.radius);
+        ext[1] = std::max(ext[1], std::fabs(q.centre.y) + q.radius);
+        ext[2] = std::max(ext[2], std::fabs(q.centre.z) + q.radius);
+      }
+      std::printf("    shape \"%s\": a rigid body of %zu spheres, %.3g x %.3g x %.3g d along its principal axes, "
+                  "moments %.4g, %.4g, %.4g m d^2 (a ball: 0.1)\n",
+                  s.shape.c_str(), u.spheres.size(), 2 * ext[0], 2 * ext[1], 2 * ext[2], mp.principal.x / mp.volume,
+                  mp.principal.y / mp.volume, mp.principal.z / mp.volume);
+    }
   }
   if (c.ends.cones())
     std::printf("cones           %.4g deg from the end plane, trunnion %.4g m: each head %.4g m deep (the mill "
@@ -597,7 +615,21 @@ int cmd_run(const RunOptions& o) {
   hooks.on_snapshot = [&](double t) {
     char name[64];
     std::snprintf(name, sizeof name, "snapshots/charge_%06d.vtp", n_snap++);
-    io::write_vtp(out / name, snapshot_of(solver->balls(), t));
+    io::Snapshot snap = snapshot_of(solver->balls(), t);
+    if (!p.scene.bodies.empty()) {  // each component's body and its orientation
+      const std::vector<BodyState> bodies = solver->bodies();
+      std::vector<int> body_of(p.scene.balls.size(), -1);
+      for (const Ball& b : p.scene.balls) body_of[b.id] = b.body;
+      snap.body.resize(snap.size());
+      snap.orientation.resize(snap.size());
+      for (std::size_t i = 0; i < snap.size(); ++i) {
+        const int b = body_of[snap.id[i]];
+        snap.body[i] = b;
+        const auto& q = b >= 0 ? bodies[b].orientation : std::array<double, 4>{0, 0, 0, 1};
+        snap.orientation[i] = {float(q[0]), float(q[1]), float(q[2]), float(q[3])};
+      }
+    }
+    io::write_vtp(out / name, snap);
     pvd.add(t, name);
   };
   ProgressPrinter progress(o.quiet);
@@ -865,6 +897,10 @@ Prepared tile_charge(compute::Context& ctx, const Prepared& p, const io::Checkpo
     solver->restore_state(cp.solver);
     slice = solver->balls();
   }
+  for (const SizeClass& sc : p.c.sizes)
+    if (!sc.shape.empty())
+      throw std::invalid_argument("--tile: " + p.c.name + "'s charge is of clumps (charge.size.shape = \"" + sc.shape +
+                                  "\"), and only a charge of balls is tiled; run the longer mill from its case");
   const long total = static_cast<long>(slice.size()) * tile;
   if (total > 500'000'000L)
     throw std::invalid_argument("--tile " + std::to_string(tile) + ": " + thousands(total) +

@@ -1,6 +1,7 @@
 #include "core/mill_case.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <queue>
@@ -451,6 +452,19 @@ Scene build_walls(const MillCase& c, const MillDerived& d) {
   return s;
 }
 
+ClumpShape size_class_shape(const MillCase& c, const std::string& name, const std::string& key) {
+  for (const ClumpShape& sh : c.shapes)
+    if (sh.name == name) return sh;
+  try {
+    return library_shape(name);
+  } catch (const std::invalid_argument& e) {
+    std::string list;
+    for (const ClumpShape& sh : c.shapes) list += (list.empty() ? "" : ", ") + sh.name;
+    throw std::invalid_argument(key + ": " + e.what() +
+                                (list.empty() ? std::string() : "; the case's [[charge.shape]] are " + list));
+  }
+}
+
 Scene build_scene(const MillCase& c, const MillDerived& d) {
   Scene s = build_walls(c, d);
   const double R = 0.5 * c.diameter;
@@ -468,9 +482,32 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
   auto image_dz = [&](double dz) { return periodic ? dz - L * std::floor(dz / L + 0.5) : dz; };
   std::mt19937_64 rng(c.seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // A class of clumps: its shape at a volume-equivalent diameter of 1 in
+  // its principal frame, that shape's volume and principal moments (per
+  // unit density), and the radius of the sphere about its centre that
+  // holds it (which places it clear of the walls).
+  struct ClassShape {
+    bool clump = false;
+    ClumpShape unit;
+    double volume = 0, bound = 0.5;
+    Vec3 moments;
+  };
+  std::vector<ClassShape> shapes(c.sizes.size());
+  for (std::size_t k = 0; k < c.sizes.size(); ++k) {
+    if (c.sizes[k].shape.empty()) continue;
+    ClassShape& cs = shapes[k];
+    cs.clump = true;
+    cs.unit = normalised_shape(size_class_shape(c, c.sizes[k].shape, "charge.size[" + std::to_string(k) + "].shape"), 1.0);
+    const ClumpMassProperties mp = clump_mass_properties(cs.unit);
+    cs.volume = mp.volume;
+    cs.moments = mp.principal;
+    cs.bound = 0;
+    for (const ClumpSphere& q : cs.unit.spheres) cs.bound = std::max(cs.bound, q.centre.norm() + q.radius);
+  }
   struct Pending {
-    double radius;
+    double radius;  // a ball's; a clump's volume-equivalent one
     int material;
+    int size_class;
   };
   std::vector<Pending> pending;
   pending.reserve(d.n_balls);
@@ -480,9 +517,18 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
     const int mat = material_index(c, sc.material);
     rmin = std::min(rmin, 0.5 * sc.diameter_min);
     for (long i = 0; i < d.class_counts[k]; ++i)
-      pending.push_back({0.5 * (sc.diameter_min + (sc.diameter_max - sc.diameter_min) * unit(rng)), mat});
+      pending.push_back(
+          {0.5 * (sc.diameter_min + (sc.diameter_max - sc.diameter_min) * unit(rng)), mat, static_cast<int>(k)});
   }
   std::shuffle(pending.begin(), pending.end(), rng);
+  // The bodies placed so far, and each placed ball's body (-1: free); ids
+  // are renumbered at the end so that the components come last.
+  struct Placed {
+    Body body;
+    int size_class;
+  };
+  std::vector<Placed> placed_bodies;
+  std::vector<int> ball_body;
 
   const double rmax = 0.5 * d.largest_ball_diameter;
   const double gap = 0.02 * rmin;
@@ -606,8 +652,54 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
     return y;
   };
 
+  // A clump's components about the point (x, y, z) at orientation q: the
+  // lowest y >= y0 where none of them overlaps a placed ball.
+  auto rest_height_clump = [&](const std::vector<Vec3>& offsets, const std::vector<double>& radii, double x,
+                               double y0, double z) {
+    double y = y0;
+    for (bool moved = true; moved;) {
+      moved = false;
+      for (std::size_t q = 0; q < offsets.size(); ++q) {
+        const Vec3& o = offsets[q];
+        const double zq = periodic ? z + o.z - L * std::floor((z + o.z) / L) : z + o.z;
+        const double yq = rest_height(x + o.x, y + o.y, zq, radii[q]);
+        if (yq > y + o.y) {
+          y = yq - o.y;
+          moved = true;
+        }
+      }
+    }
+    return y;
+  };
+  auto add_to_grid = [&](const Ball& b) {
+    const std::size_t at =
+        cell_index(cell_of(b.position.x, -R, gx), cell_of(b.position.y, -R, gx), cell_z_of(b.position.z));
+    next_in_cell.push_back(-1);
+    if (grid_last[at] >= 0) next_in_cell[grid_last[at]] = b.id;
+    else grid[at] = b.id;
+    grid_last[at] = b.id;
+  };
+
   s.balls.reserve(pending.size());
-  for (const Pending& p : pending) {
+  for (const Pending& pend : pending) {
+    const ClassShape& cs = shapes[pend.size_class];
+    const double d_eq = 2 * pend.radius;
+    // A clump: a random orientation (uniform on the rotations, Shoemake's
+    // method) and its components about its centre; the sphere that holds
+    // it stands for it at the walls.
+    std::array<double, 4> orient{0, 0, 0, 1};
+    std::vector<Vec3> offsets;
+    std::vector<double> radii;
+    if (cs.clump) {
+      const double u1 = unit(rng), u2 = 2 * kPi * unit(rng), u3 = 2 * kPi * unit(rng);
+      const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
+      orient = {a * std::sin(u2), a * std::cos(u2), b * std::sin(u3), b * std::cos(u3)};
+      for (const ClumpSphere& q : cs.unit.spheres) {
+        offsets.push_back(rotate(orient, q.centre * d_eq));
+        radii.push_back(q.radius * d_eq);
+      }
+    }
+    const Pending p{cs.clump ? cs.bound * d_eq : pend.radius, pend.material, pend.size_class};
     bool placed = false;
     while (!lowest.empty() && !placed) {
       const auto [top, k] = lowest.top();
@@ -624,9 +716,9 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
         continue;
       }
       const double ceil_y = std::sqrt(ring * ring - x * x);
-      double y = std::max(-ceil_y, col.top + p.radius + gap);
+      double y = std::max(-ceil_y, col.top + (cs.clump ? pend.radius : p.radius) + gap);
       for (;;) {
-        y = rest_height(x, y, z, p.radius);
+        y = cs.clump ? rest_height_clump(offsets, radii, x, y, z) : rest_height(x, y, z, p.radius);
         if (y > ceil_y || clear_of_lifters(x, y, p.radius)) break;
         y += 0.25 * p.radius;
       }
@@ -634,28 +726,77 @@ Scene build_scene(const MillCase& c, const MillDerived& d) {
         closed[k] = 1;  // this column is full
         continue;
       }
-      Ball b;
-      b.id = static_cast<int>(s.balls.size());
-      b.material = p.material;
-      b.radius = p.radius;
-      b.position = {x, y, z};
-      const std::size_t at = cell_index(cell_of(x, -R, gx), cell_of(y, -R, gx), cell_z_of(z));
-      next_in_cell.push_back(-1);
-      if (grid_last[at] >= 0) next_in_cell[grid_last[at]] = b.id;
-      else grid[at] = b.id;
-      grid_last[at] = b.id;
-      s.balls.push_back(b);
-      columns[k].top = y + p.radius;
+      if (!cs.clump) {
+        Ball b;
+        b.id = static_cast<int>(s.balls.size());
+        b.material = p.material;
+        b.radius = p.radius;
+        b.position = {x, y, z};
+        add_to_grid(b);
+        s.balls.push_back(b);
+        ball_body.push_back(-1);
+        columns[k].top = y + p.radius;
+      } else {
+        Body body;
+        const double density = c.materials[p.material].density;
+        body.mass = density * cs.volume * std::pow(d_eq, 3);
+        body.inertia = cs.moments * (density * std::pow(d_eq, 5));
+        body.position = {x, y, z};
+        body.orientation = orient;
+        body.first = static_cast<int>(s.balls.size());
+        body.count = static_cast<int>(offsets.size());
+        double top = y;
+        for (std::size_t q = 0; q < offsets.size(); ++q) {
+          Ball b;
+          b.id = static_cast<int>(s.balls.size());
+          b.material = p.material;
+          b.radius = radii[q];
+          b.position = {x + offsets[q].x, y + offsets[q].y, z + offsets[q].z};
+          if (periodic) b.position.z -= L * std::floor(b.position.z / L);
+          b.body = static_cast<int>(placed_bodies.size());
+          b.offset = cs.unit.spheres[q].centre * d_eq;
+          add_to_grid(b);
+          s.balls.push_back(b);
+          ball_body.push_back(b.body);
+          top = std::max(top, b.position.y + b.radius);
+        }
+        placed_bodies.push_back({body, p.size_class});
+        columns[k].top = top;
+      }
       lowest.push({columns[k].top, k});
       placed = true;
     }
     if (!placed) {
       std::ostringstream m;
-      m << "charge.filling: only " << s.balls.size() << " of " << d.n_balls
-        << " balls fit in the mill before settling; lower the filling or use fewer, larger size classes";
+      const long free_balls = std::count(ball_body.begin(), ball_body.end(), -1);
+      m << "charge.filling: only " << free_balls + static_cast<long>(placed_bodies.size()) << " of " << d.n_balls
+        << " particles fit in the mill before settling; lower the filling or use fewer, larger size classes";
       throw std::invalid_argument(m.str());
     }
   }
+  if (placed_bodies.empty()) return s;
+  // Ids: the free balls first, in the order placed, then each body's
+  // components (core/scene.h).
+  std::vector<Ball> balls;
+  balls.reserve(s.balls.size());
+  for (std::size_t i = 0; i < s.balls.size(); ++i)
+    if (ball_body[i] < 0) {
+      balls.push_back(s.balls[i]);
+      balls.back().id = static_cast<int>(balls.size()) - 1;
+    }
+  std::vector<std::vector<int>> members(placed_bodies.size());
+  for (std::size_t i = 0; i < s.balls.size(); ++i)
+    if (ball_body[i] >= 0) members[ball_body[i]].push_back(static_cast<int>(i));
+  for (std::size_t b = 0; b < placed_bodies.size(); ++b) {
+    Body body = placed_bodies[b].body;
+    body.first = static_cast<int>(balls.size());
+    for (int i : members[b]) {
+      balls.push_back(s.balls[i]);
+      balls.back().id = static_cast<int>(balls.size()) - 1;
+    }
+    s.bodies.push_back(body);
+  }
+  s.balls = std::move(balls);
   return s;
 }
 

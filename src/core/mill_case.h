@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/clump.h"
 #include "core/lifters.h"
 #include "core/morrell.h"
 #include "core/scene.h"
@@ -20,6 +21,10 @@ struct SizeClass {
   double diameter_max = 0;  // m; within a range diameters are uniform by number
   std::string material;
   double fraction = 1.0;    // of the charge's mass or number (MillCase::number_fractions)
+  // "" or "sphere": balls. Otherwise a clump (core/clump.h) of a library
+  // shape or of a [[charge.shape]] the case defines: a rigid body of
+  // spheres whose volume-equivalent diameter is the class's diameter.
+  std::string shape;
 };
 
 struct PairOverride {
@@ -72,6 +77,7 @@ struct MillCase {
   double porosity = 0.4;     // of the bulk charge
   bool number_fractions = false;
   std::vector<SizeClass> sizes;
+  std::vector<ClumpShape> shapes;  // [[charge.shape]]: the case's own clump shapes
   std::uint32_t seed = 1;
   // [materials]
   std::vector<Material> materials;
@@ -146,6 +152,10 @@ MillDerived derive(const MillCase& c);
 // the case's speed. build_scene adds the packed charge; the viewer keeps the
 // balls it has when the case changes.
 Scene build_walls(const MillCase& c, const MillDerived& d);
+
+// The shape a size class names: a [[charge.shape]] of the case, else one
+// of the library's; throws std::invalid_argument naming `key` otherwise.
+ClumpShape size_class_shape(const MillCase& c, const std::string& name, const std::string& key);
 
 // The solver's scene: materials, pair table, walls and the charge placed
 // without overlaps in the lower part of the mill, at rest (not yet settled).

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace mc {
 
@@ -55,6 +56,60 @@ double ball_mass(const Scene& scene, const Ball& b) {
   return scene.materials.at(b.material).density * 4.0 / 3.0 * kPi * b.radius * b.radius * b.radius;
 }
 
+Vec3 rotate(const std::array<double, 4>& q, const Vec3& v) {
+  const Vec3 u{q[0], q[1], q[2]};
+  auto cross = [](const Vec3& a, const Vec3& b) {
+    return Vec3{a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+  };
+  const Vec3 t = cross(u, v) * 2.0;
+  return v + t * q[3] + cross(u, t);
+}
+
+namespace {
+
+// Bodies: each a block of component ids after every free ball, in order,
+// with a finite positive mass and inertia and a unit orientation.
+void validate_bodies(const Scene& scene) {
+  auto fail = [](const std::string& m) { throw std::invalid_argument(m); };
+  if (scene.bodies.empty()) {
+    for (const Ball& b : scene.balls)
+      if (b.body != -1) fail("ball " + std::to_string(b.id) + ": names body " + std::to_string(b.body) + " of none");
+    return;
+  }
+  const int n = static_cast<int>(scene.balls.size());
+  int n_comp = 0;
+  for (const Body& b : scene.bodies) n_comp += b.count;
+  const int first = n - n_comp;
+  std::vector<int> body_of(n, -2);
+  for (const Ball& b : scene.balls) {
+    if (b.id < 0 || b.id >= n || body_of[b.id] != -2)
+      fail("ball " + std::to_string(b.id) + ": ids of a scene with bodies run from 0 to " + std::to_string(n - 1) +
+           ", each once");
+    body_of[b.id] = b.body;
+  }
+  int next = first;
+  for (std::size_t k = 0; k < scene.bodies.size(); ++k) {
+    const Body& b = scene.bodies[k];
+    const std::string at = "body " + std::to_string(k);
+    if (b.count < 1) fail(at + ": no component spheres");
+    if (b.first != next) fail(at + ": its components must follow the previous body's (first id " + std::to_string(next) + ")");
+    for (int c = b.first; c < b.first + b.count; ++c)
+      if (body_of[c] != static_cast<int>(k)) fail(at + ": ball " + std::to_string(c) + " is not its component");
+    next += b.count;
+    if (!(std::isfinite(b.mass) && b.mass > 0)) fail(at + ": the mass of its union must be finite and > 0");
+    if (!(std::isfinite(b.inertia.x) && std::isfinite(b.inertia.y) && std::isfinite(b.inertia.z) &&
+          b.inertia.x > 0 && b.inertia.y > 0 && b.inertia.z > 0))
+      fail(at + ": its principal moments of inertia must be finite and > 0");
+    const auto& q = b.orientation;
+    const double qn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!(std::abs(qn - 1) < 1e-6)) fail(at + ": its orientation is not a unit quaternion");
+  }
+  for (int c = 0; c < first; ++c)
+    if (body_of[c] != -1) fail("ball " + std::to_string(c) + ": a free ball's id must come before every component's");
+}
+
+}  // namespace
+
 void validate(const Scene& scene) {
   auto fail = [](const std::string& m) { throw std::invalid_argument(m); };
   if (scene.materials.empty()) fail("scene: no ball material");
@@ -82,6 +137,7 @@ void validate(const Scene& scene) {
     if (b.material < 0 || b.material >= scene.wall_index())
       fail("ball " + std::to_string(b.id) + ": unknown material " + std::to_string(b.material));
   }
+  validate_bodies(scene);
   if (scene.walls.periodic && !(scene.walls.length > 0)) fail("walls.length: a periodic slice needs a length > 0");
   for (const auto& poly : scene.walls.lifters) {
     if (poly.size() < 3 || poly.size() > 8) fail("lifter polygon needs 3 to 8 vertices");

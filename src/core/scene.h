@@ -3,6 +3,7 @@
 // or the viewer; the solver takes it as it is. No OpenCL here.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -60,7 +61,31 @@ struct Ball {
   int material = 0;
   double radius = 0.01;
   Vec3 position, velocity, omega;
+  // A component sphere of rigid body `body` (Scene::bodies), or -1 for a
+  // ball of its own. A component's position is its body's centre plus its
+  // offset turned by the body's orientation; its velocity and spin follow
+  // from the body's (the solver sets them).
+  int body = -1;
+  Vec3 offset;  // m, in the body's principal frame
 };
+
+// A rigid body of overlapping spheres (a clump, core/clump.h): the rock of
+// autogenous and semi-autogenous mills. Its components are the balls with
+// ids first .. first + count - 1; the components of all bodies come after
+// every free ball (their ids are the highest), body by body.
+struct Body {
+  int first = 0;
+  int count = 0;
+  double mass = 0;   // kg, of the union of the spheres
+  Vec3 inertia;      // kg·m², the principal moments (the body frame's axes)
+  Vec3 position;     // m, the centre of mass
+  Vec3 velocity;     // m/s
+  Vec3 omega;        // rad/s, the angular velocity in the lab frame
+  std::array<double, 4> orientation{0, 0, 0, 1};  // unit quaternion (x, y, z, w), body → lab
+};
+
+// q v q* for a unit quaternion (x, y, z, w).
+Vec3 rotate(const std::array<double, 4>& q, const Vec3& v);
 
 // What a mesh wall stands for in the books (the spectra's wall types, the
 // impact profile): shell liner, lifters, or the ends (cl/layout.h
@@ -119,6 +144,7 @@ struct Scene {
   Walls walls;
   LinerGrid liner;
   std::vector<Ball> balls;
+  std::vector<Body> bodies;  // empty: every ball is free
   Numerics numerics;
   double mill_omega = 0.0;  // rad/s, counter-clockwise about +z
   double mill_angle = 0.0;  // rad at t = 0

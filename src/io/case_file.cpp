@@ -70,6 +70,12 @@ class Reader {
   std::map<std::string, std::string> located_;
 };
 
+// A message that begins with its key, without it (the reader adds it).
+std::string without_key(const std::string& what, const std::string& key) {
+  const std::string prefix = key + ": ";
+  return what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what;
+}
+
 // One table of the case: typed getters that remember where each key is;
 // knows() rejects the keys the table may not have.
 class Section {
@@ -540,18 +546,55 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
   }
   {
     Section s(r, *top.table("charge", true), "charge");
-    s.knows({"filling", "porosity", "fractions", "seed", "size"});
+    s.knows({"filling", "porosity", "fractions", "seed", "size", "shape"});
     c.filling = s.number("filling");
     c.porosity = s.number("porosity", 0.4);
     c.number_fractions = s.string("fractions", std::string("mass"), {"mass", "number"}) == "number";
     const long seed = s.integer("seed", 1);
     if (seed < 0 || seed > 0xffffffffL) r.fail("charge.seed", s.node("seed"), "must be in [0, 2^32)");
     c.seed = static_cast<std::uint32_t>(seed);
+    // The case's own clump shapes: spheres [x, y, z, r] in any unit (the
+    // shape is scaled to each size class's diameter).
+    const auto shapes = s.tables("shape");
+    for (std::size_t k = 0; k < shapes.size(); ++k) {
+      Section z(r, *shapes[k], "charge.shape[" + std::to_string(k) + "]");
+      z.knows({"name", "spheres"});
+      ClumpShape sh;
+      sh.name = z.string("name");
+      if (sh.name.empty() || sh.name == "sphere")
+        r.fail(z.key("name"), z.node("name"), "a shape needs a name other than \"\" and \"sphere\"");
+      for (const ClumpShape& o : c.shapes)
+        if (o.name == sh.name) r.fail(z.key("name"), z.node("name"), "\"" + sh.name + "\" is defined twice");
+      const toml::node* n = z.node("spheres");
+      if (!n) r.fail(z.key("spheres"), z.self_node(), "missing (an array of spheres [x, y, z, radius] is required)");
+      const toml::array* a = n->as_array();
+      if (!a || a->empty())
+        r.fail(z.key("spheres"), n, "expected an array of spheres [x, y, z, radius], at least one");
+      for (std::size_t q = 0; q < a->size(); ++q) {
+        const toml::array* e = (*a)[q].as_array();
+        const std::string at = z.key("spheres") + "[" + std::to_string(q) + "]";
+        if (!e || e->size() != 4) r.fail(at, &(*a)[q], "expected four numbers [x, y, z, radius]");
+        double v[4];
+        for (int i = 0; i < 4; ++i) {
+          const auto x = (*e)[i].value<double>();
+          if (!x || !((*e)[i].is_floating_point() || (*e)[i].is_integer()) || !std::isfinite(*x))
+            r.fail(at, &(*a)[q], "expected four finite numbers [x, y, z, radius]");
+          v[i] = *x;
+        }
+        sh.spheres.push_back({{v[0], v[1], v[2]}, v[3]});
+      }
+      try {
+        check_shape(sh, z.key("spheres"));
+      } catch (const std::invalid_argument& e) {
+        r.fail(z.key("spheres"), n, without_key(e.what(), z.key("spheres")));
+      }
+      c.shapes.push_back(sh);
+    }
     const auto sizes = s.tables("size");
     if (sizes.empty()) r.fail("charge.size", s.self_node(), "the charge needs at least one [[charge.size]] class");
     for (std::size_t k = 0; k < sizes.size(); ++k) {
       Section z(r, *sizes[k], "charge.size[" + std::to_string(k) + "]");
-      z.knows({"diameter", "diameter_min", "diameter_max", "material", "fraction"});
+      z.knows({"diameter", "diameter_min", "diameter_max", "material", "fraction", "shape"});
       SizeClass sc;
       const bool one = z.has("diameter"), range = z.has("diameter_min") || z.has("diameter_max");
       if (one == range)
@@ -564,6 +607,15 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       }
       sc.material = z.string("material");
       sc.fraction = z.number("fraction", sizes.size() == 1 ? std::optional<double>(1.0) : std::nullopt);
+      sc.shape = z.string("shape", std::string());
+      if (sc.shape == "sphere") sc.shape.clear();
+      if (!sc.shape.empty()) {
+        try {
+          size_class_shape(c, sc.shape, z.key("shape"));
+        } catch (const std::invalid_argument& e) {
+          r.fail(z.key("shape"), z.node("shape"), without_key(e.what(), z.key("shape")));
+        }
+      }
       c.sizes.push_back(sc);
     }
   }
@@ -716,6 +768,7 @@ std::string case_to_toml(const MillCase& c) {
   toml::array sizes;
   for (const SizeClass& s : c.sizes) {
     toml::table t{{"material", s.material}, {"fraction", s.fraction}};
+    if (!s.shape.empty()) t.insert("shape", s.shape);
     if (s.diameter_min == s.diameter_max) {
       t.insert("diameter", s.diameter_min);
     } else {
@@ -724,11 +777,22 @@ std::string case_to_toml(const MillCase& c) {
     }
     sizes.push_back(t);
   }
-  root.insert("charge", toml::table{{"filling", c.filling},
-                                    {"porosity", c.porosity},
-                                    {"fractions", c.number_fractions ? "number" : "mass"},
-                                    {"seed", static_cast<int64_t>(c.seed)},
-                                    {"size", sizes}});
+  toml::table charge{{"filling", c.filling},
+                     {"porosity", c.porosity},
+                     {"fractions", c.number_fractions ? "number" : "mass"},
+                     {"seed", static_cast<int64_t>(c.seed)},
+                     {"size", sizes}};
+  if (!c.shapes.empty()) {
+    toml::array shapes;
+    for (const ClumpShape& sh : c.shapes) {
+      toml::array spheres;
+      for (const ClumpSphere& q : sh.spheres)
+        spheres.push_back(toml::array{q.centre.x, q.centre.y, q.centre.z, q.radius});
+      shapes.push_back(toml::table{{"name", sh.name}, {"spheres", spheres}});
+    }
+    charge.insert("shape", shapes);
+  }
+  root.insert("charge", charge);
   toml::table materials;
   for (const Material& m : c.materials)
     materials.insert(m.name, toml::table{{"density", m.density},

@@ -203,6 +203,9 @@ void write_vtp(const std::filesystem::path& path, const Snapshot& s) {
                                 std::to_string(s.material.size()) + ", id " + std::to_string(s.id.size()) +
                                 ")");
   }
+  const bool bodies = !s.body.empty();
+  if (bodies && (s.body.size() != n || s.orientation.size() != n))
+    throw std::invalid_argument("write_vtp: " + path.string() + ": body or orientation arrays of another length");
   const std::uint64_t N = n;
   for (std::size_t i = 0; i < n; ++i) {
     if (s.material[i] < std::numeric_limits<std::int32_t>::min() ||
@@ -243,6 +246,17 @@ void write_vtp(const std::filesystem::path& path, const Snapshot& s) {
   for (int i : s.id) put_u32(d, static_cast<std::uint32_t>(static_cast<std::int32_t>(i)));
   app.end();
 
+  std::uint64_t off_body = 0, off_orient = 0;
+  if (bodies) {
+    off_body = app.begin(N * 4);
+    for (int b : s.body) put_u32(d, static_cast<std::uint32_t>(static_cast<std::int32_t>(b)));
+    app.end();
+    off_orient = app.begin(N * 16);
+    for (const auto& q : s.orientation)
+      for (float c : q) put_f32(d, c);
+    app.end();
+  }
+
   const std::uint64_t off_pos = app.begin(N * 12);
   for (const auto& p : s.position)
     for (float c : p) put_f32(d, c);
@@ -278,6 +292,10 @@ void write_vtp(const std::filesystem::path& path, const Snapshot& s) {
   x += tag("Float32", "speed", 1, off_speed);
   x += tag("Int32", "material", 1, off_mat);
   x += tag("Int32", "id", 1, off_id);
+  if (bodies) {
+    x += tag("Int32", "body", 1, off_body);
+    x += tag("Float32", "orientation", 4, off_orient);
+  }
   x += "</PointData>\n";
   x += "<Points>\n";
   x += tag("Float32", "Points", 3, off_pos);
@@ -487,6 +505,9 @@ Snapshot read_vtp(const std::filesystem::path& path) {
   const unsigned char* mat = block("PointData/material", "Int32", 1, n, 4);
   const unsigned char* ids = block("PointData/id", "Int32", 1, n, 4);
   block("PointData/speed", "Float32", 1, n, 4);
+  const bool has_bodies = arrays.count("PointData/body") > 0;
+  const unsigned char* bod = has_bodies ? block("PointData/body", "Int32", 1, n, 4) : nullptr;
+  const unsigned char* ori = has_bodies ? block("PointData/orientation", "Float32", 4, n, 4) : nullptr;
   block("Verts/connectivity", "Int64", 1, n, 8);
   block("Verts/offsets", "Int64", 1, n, 8);
 
@@ -510,6 +531,11 @@ Snapshot read_vtp(const std::filesystem::path& path) {
     }
     s.radius[i] = get_f32(rad + 4 * i);
     s.material[i] = static_cast<std::int32_t>(get_u32(mat + 4 * i));
+    if (has_bodies) {
+      s.body.push_back(static_cast<std::int32_t>(get_u32(bod + 4 * i)));
+      s.orientation.push_back({get_f32(ori + 16 * i), get_f32(ori + 16 * i + 4), get_f32(ori + 16 * i + 8),
+                               get_f32(ori + 16 * i + 12)});
+    }
     s.id[i] = static_cast<std::int32_t>(get_u32(ids + 4 * i));
   }
   return s;

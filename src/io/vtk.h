@@ -17,6 +17,12 @@ struct Snapshot {
   std::vector<float> radius;                   // m
   std::vector<int> material;
   std::vector<int> id;
+  // A charge of rigid bodies (clumps): each point's body (-1: a free ball)
+  // and that body's orientation, a unit quaternion (x, y, z, w) taking the
+  // body frame to the lab frame; both empty without bodies (and then not
+  // written).
+  std::vector<int> body;
+  std::vector<std::array<float, 4>> orientation;
   std::size_t size() const { return position.size(); }
 };
 

@@ -28,6 +28,8 @@ using real = double;
 #include "../../cl/mesh.h"
 #include "../../cl/ball_forces.h"
 #include "../../cl/motion.h"
+#include "../../cl/rigid.h"
+#include "../../cl/body.h"
 }  // namespace mc::f64
 
 namespace mc {
@@ -35,10 +37,10 @@ namespace mc {
 static_assert(sizeof(f32::real4) == 16 && alignof(f32::real4) == 16);
 static_assert(sizeof(f64::real4) == 32 && alignof(f64::real4) == 32);
 static_assert(sizeof(f32::PairParams) == 8 * 4 && sizeof(f64::PairParams) == 8 * 8);
-// Eleven reals and nine ints after the two 4-vectors; in double the struct
-// ends padded to its 32-byte alignment (OpenCL C pads it the same way).
-static_assert(sizeof(f32::SimParams) == 2 * 16 + 11 * 4 + 9 * 4);
-static_assert(sizeof(f64::SimParams) == 2 * 32 + 11 * 8 + 9 * 4 + 4);
+// Eleven reals and thirteen ints after the two 4-vectors; in double the
+// struct ends padded to its 32-byte alignment (OpenCL C pads it the same way).
+static_assert(sizeof(f32::SimParams) == 2 * 16 + 11 * 4 + 13 * 4);
+static_assert(sizeof(f64::SimParams) == 2 * 32 + 11 * 8 + 13 * 4 + 20);
 static_assert(sizeof(f32::MeshTriangle) == 4 * 16 + 8 * 4 && sizeof(f64::MeshTriangle) == 4 * 32 + 8 * 4);
 static_assert(sizeof(f32::MeshGrid) == 16 + 4 * 4 + 8 * 4 && sizeof(f64::MeshGrid) == 32 + 4 * 8 + 8 * 4);
 static_assert(sizeof(f32::BookParams) == 4 * 4 + 8 * 4 && sizeof(f64::BookParams) == 4 * 8 + 8 * 4);

@@ -25,6 +25,13 @@ struct ReferenceSolver::State {
   std::vector<PairParams> mesh_pairs;
   std::vector<real4> pos, vel, omega, force, torque, accum, pos_at_build;
   std::vector<int2> info;
+  // Rigid bodies (cl/body.h): balls keep their order here, so a component's
+  // slot is its id.
+  int n_bodies = 0;
+  std::vector<int> body_of, slot_of;
+  std::vector<int2> body_comp;
+  std::vector<real4> comp_offset, body_pos, body_vel, body_quat, body_angmom, body_inv_inertia, body_force,
+      body_torque;
   std::vector<int> wall_key;
   std::vector<int> wall_rec;    // each slot's contact record
   std::vector<int> neigh_start, neigh_count, neigh_index;  // partners j > i
@@ -54,6 +61,9 @@ struct ReferenceSolver::State {
         const double dz = image_dz(&sp, pos[i].z - pos[j].z);  // the minimum image in a slice
         const double cut = pos[i].w + pos[j].w;
         if (dx * dx + dy * dy + dz * dz >= cut * cut) continue;
+        if (MC_IS_COMPONENT(&sp, info[i].x) && MC_IS_COMPONENT(&sp, info[j].x) &&
+            body_of[info[i].x - sp.first_component] == body_of[info[j].x - sp.first_component])
+          continue;
         auto it = history.find({i, j});
         incoming[j].push_back(static_cast<int>(neigh_index.size()));
         neigh_index.push_back(it != history.end() ? MC_LINK_TOUCHED(j) : j);
@@ -107,6 +117,9 @@ struct ReferenceSolver::State {
                   force.data(), torque.data(), accum.data(), &books, &meshes);
     for (int j = 0; j < n; ++j)
       ball_reactions(j, in_start.data(), pair_out.data(), force.data(), torque.data(), accum.data());
+    for (int b = 0; b < n_bodies; ++b)
+      body_sum(b, &sp, pos.data(), force.data(), torque.data(), slot_of.data(), body_comp.data(), body_pos.data(),
+               body_force.data(), body_torque.data());
     save_history();
   }
 };
@@ -130,8 +143,7 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
   s.impact_profile.assign(2 * MC_IMPACT_BINS, 0u);
   const SimParams& sp = s.sp;
 
-  std::vector<Ball> balls = scene.balls;
-  std::sort(balls.begin(), balls.end(), [](const Ball& a, const Ball& b) { return a.id < b.id; });
+  const std::vector<DeviceBall> balls = device_balls(scene);
   const int n = s.n;
   s.pos.resize(n); s.vel.resize(n); s.omega.resize(n); s.force.resize(n); s.torque.resize(n);
   s.accum.assign(n, real4{0, 0, 0, 0}); s.pos_at_build.resize(n); s.info.resize(n);
@@ -140,12 +152,28 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
   s.neigh_start.assign(n, 0); s.neigh_count.assign(n, 0);
   s.in_start.assign(n + 1, 0);
   for (int i = 0; i < n; ++i) {
-    const Ball& b = balls[i];
-    const double m = ball_mass(scene, b);
+    const Ball& b = balls[i].ball;
     s.pos[i] = {b.position.x, b.position.y, wrap_z(&s.sp, b.position.z), b.radius};
-    s.vel[i] = {b.velocity.x, b.velocity.y, b.velocity.z, 1.0 / m};
-    s.omega[i] = {b.omega.x, b.omega.y, b.omega.z, 1.0 / (0.4 * m * b.radius * b.radius)};
+    s.vel[i] = {b.velocity.x, b.velocity.y, b.velocity.z, balls[i].inv_mass};
+    s.omega[i] = {b.omega.x, b.omega.y, b.omega.z, balls[i].inv_inertia};
     s.info[i] = {b.id, b.material};
+  }
+  {
+    BodyTables bt = body_tables(scene);
+    s.n_bodies = bt.n_bodies;
+    s.body_of = bt.body_of;
+    s.slot_of.resize(bt.body_of.size());
+    for (std::size_t c = 0; c < s.slot_of.size(); ++c) s.slot_of[c] = bt.first_component + static_cast<int>(c);
+    s.body_comp = bt.body_comp;
+    s.comp_offset = bt.comp_offset;
+    s.body_pos = bt.body_pos;
+    for (auto& c : s.body_pos) c.z = wrap_z(&s.sp, c.z);
+    s.body_vel = bt.body_vel;
+    s.body_quat = bt.body_quat;
+    s.body_angmom = bt.body_angmom;
+    s.body_inv_inertia = bt.body_inv_inertia;
+    s.body_force.assign(s.body_pos.size(), real4{0, 0, 0, 0});
+    s.body_torque = s.body_force;
   }
   s.pos_at_build = s.pos;
   s.angle = scene.mill_angle;
@@ -160,6 +188,15 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
     s.omega[i].y -= h * s.torque[i].y * s.omega[i].w;
     s.omega[i].z -= h * s.torque[i].z * s.omega[i].w;
   }
+  for (int b = 0; b < s.n_bodies; ++b) {
+    s.body_vel[b].x -= h * s.body_force[b].x * s.body_pos[b].w;
+    s.body_vel[b].y -= h * s.body_force[b].y * s.body_pos[b].w;
+    s.body_vel[b].z -= h * s.body_force[b].z * s.body_pos[b].w;
+    const real3 tb = quat_rotate_inverse(s.body_quat[b], xyz_of(s.body_torque[b]));
+    s.body_angmom[b].x -= h * tb.x;
+    s.body_angmom[b].y -= h * tb.y;
+    s.body_angmom[b].z -= h * tb.z;
+  }
 }
 
 ReferenceSolver::~ReferenceSolver() = default;
@@ -168,8 +205,14 @@ void ReferenceSolver::advance(long steps) {
   State& s = *s_;
   for (long k = 0; k < steps; ++k) {
     for (int i = 0; i < s.n; ++i)
-      s.status |= integrate_ball(i, &s.sp, s.pos.data(), s.vel.data(), s.omega.data(),
-                                 s.force.data(), s.torque.data(), s.pos_at_build.data());
+      if (!MC_IS_COMPONENT(&s.sp, s.info[i].x))
+        s.status |= integrate_ball(i, &s.sp, s.pos.data(), s.vel.data(), s.omega.data(),
+                                   s.force.data(), s.torque.data(), s.pos_at_build.data());
+    for (int b = 0; b < s.n_bodies; ++b)
+      s.status |= body_move(b, &s.sp, s.pos.data(), s.vel.data(), s.omega.data(), s.pos_at_build.data(),
+                            s.slot_of.data(), s.body_comp.data(), s.comp_offset.data(), s.body_pos.data(),
+                            s.body_vel.data(), s.body_quat.data(), s.body_angmom.data(), s.body_inv_inertia.data(),
+                            s.body_force.data(), s.body_torque.data());
     if (s.status & MC_FLAG_NOT_FINITE) throw std::runtime_error("reference: blow-up");
     s.status = 0;
     s.time += s.sp.dt;
@@ -184,6 +227,15 @@ std::vector<BallState> ReferenceSolver::balls() const {
   for (int i = 0; i < s.n; ++i)
     out[i] = ball_state(s.info[i].x, s.info[i].y, s.pos[i], s.vel[i], s.omega[i], s.force[i], s.torque[i], s.sp.dt);
   std::sort(out.begin(), out.end(), [](const BallState& a, const BallState& b) { return a.id < b.id; });
+  return out;
+}
+
+std::vector<BodyState> ReferenceSolver::bodies() const {
+  const State& s = *s_;
+  std::vector<BodyState> out;
+  for (int b = 0; b < s.n_bodies; ++b)
+    out.push_back(body_state(s.body_pos[b], s.body_vel[b], s.body_quat[b], s.body_angmom[b], s.body_inv_inertia[b],
+                             s.body_force[b], s.body_torque[b], s.sp.dt));
   return out;
 }
 

@@ -18,6 +18,7 @@ class ReferenceSolver {
   ~ReferenceSolver();
   void advance(long steps);
   std::vector<BallState> balls() const;  // sorted by id
+  std::vector<BodyState> bodies() const;
   double time_s() const;
 
  private:

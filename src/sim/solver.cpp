@@ -68,6 +68,7 @@ class SolverImpl final : public Solver {
 
   void advance(long steps) override;
   std::vector<BallState> balls() override;
+  std::vector<BodyState> bodies() override;
   Observables observe(bool reset) override;
   std::vector<std::pair<int, int>> neighbour_pairs() override;
   void set_mill_omega(double w) override { mill_omega_ = w; }
@@ -154,6 +155,14 @@ class SolverImpl final : public Solver {
   // ball state, in cell order after each rebuild
   Buffer<real4> pos_, vel_, omega_, force_, torque_, accum_, pos_at_build_;
   Buffer<int2> info_;  // (id, material)
+  // Rigid bodies (cl/body.h; one dummy entry each when there are none):
+  // each component's body and offset and where it lies now (by id −
+  // first component), each body's components and state.
+  int n_bodies_ = 0;
+  Buffer<int> body_of_, slot_of_;
+  Buffer<real4> comp_offset_;
+  Buffer<int2> body_comp_;
+  Buffer<real4> body_pos_, body_vel_, body_quat_, body_angmom_, body_inv_inertia_, body_force_, body_torque_;
   Buffer<int> wall_key_;
   Buffer<int> wall_rec_;  // each slot's contact record
   // binning
@@ -215,7 +224,7 @@ class SolverImpl final : public Solver {
       k_gather_wall_, k_put_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
       k_layout_, k_profile_, k_count_contacts_, k_clear_flag_, k_carry_count_, k_carry_fill_, k_in_count_,
       k_in_scatter_, k_in_sort_, k_reactions_, k_forces_grouped_, k_records_count_, k_records_pack_, k_mesh_bin_,
-      k_mesh_copy_, k_mesh_sort_;
+      k_mesh_copy_, k_mesh_sort_, k_body_slots_, k_body_sums_, k_body_motion_;
   bool grouped_forces_ = false;
   // The viewer's kernel, built on first use so that headless runs skip it.
   std::unique_ptr<compute::Program> view_program_;
@@ -262,6 +271,17 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       accum_(ctx, n_, "accumulators"),
       pos_at_build_(ctx, n_, "positions at list build"),
       info_(ctx, n_, "ids and materials"),
+      body_of_(ctx, 1, "component bodies"),
+      slot_of_(ctx, 1, "component slots"),
+      comp_offset_(ctx, 1, "component offsets"),
+      body_comp_(ctx, 1, "body components"),
+      body_pos_(ctx, 1, "body centres"),
+      body_vel_(ctx, 1, "body velocities"),
+      body_quat_(ctx, 1, "body orientations"),
+      body_angmom_(ctx, 1, "body angular momenta"),
+      body_inv_inertia_(ctx, 1, "body inverse inertias"),
+      body_force_(ctx, 1, "body forces"),
+      body_torque_(ctx, 1, "body torques"),
       wall_key_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "wall contact keys"),
       wall_rec_(ctx, static_cast<std::size_t>(n_) * MC_MAX_WALL_CONTACTS, "wall contact records"),
       ball_cell_(ctx, n_, "ball cell"),
@@ -311,7 +331,10 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_records_pack_(program_, "records_pack"),
       k_mesh_bin_(program_, "mesh_bin"),
       k_mesh_copy_(program_, "mesh_copy"),
-      k_mesh_sort_(program_, "mesh_sort_cells") {
+      k_mesh_sort_(program_, "mesh_sort_cells"),
+      k_body_slots_(program_, "body_slots"),
+      k_body_sums_(program_, "body_sums"),
+      k_body_motion_(program_, "body_motion") {
   if (const char* e = std::getenv("MILLCHARGE_FORCES"); e && *e) {
     const std::string v = e;
     if (v != "ball" && v != "grouped")
@@ -343,20 +366,49 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
 
   setup_params(scene);
 
-  std::vector<Ball> balls = scene.balls;
-  std::sort(balls.begin(), balls.end(), [](const Ball& a, const Ball& b) { return a.id < b.id; });
+  // A slice keeps its balls and bodies in [0, period) (cl/periodic.h).
+  auto wrap = [&](double z) {
+    return scene.walls.periodic ? z - scene.walls.length * std::floor(z / scene.walls.length) : z;
+  };
+  const std::vector<DeviceBall> balls = device_balls(scene);
   for (int i = 0; i < n_; ++i) {
-    const Ball& b = balls[i];
-    const double m = ball_mass(scene, b);
-    const double inertia = 0.4 * m * b.radius * b.radius;
-    total_mass_ += m;
-    // A slice keeps its balls in [0, period) (cl/periodic.h).
-    const double z = scene.walls.periodic ? b.position.z - scene.walls.length * std::floor(b.position.z / scene.walls.length)
-                                          : b.position.z;
-    pos_.host[i] = {Real(b.position.x), Real(b.position.y), Real(z), Real(b.radius)};
-    vel_.host[i] = {Real(b.velocity.x), Real(b.velocity.y), Real(b.velocity.z), Real(1.0 / m)};
-    omega_.host[i] = {Real(b.omega.x), Real(b.omega.y), Real(b.omega.z), Real(1.0 / inertia)};
+    const Ball& b = balls[i].ball;
+    if (b.body < 0) total_mass_ += 1.0 / balls[i].inv_mass;
+    pos_.host[i] = {Real(b.position.x), Real(b.position.y), Real(wrap(b.position.z)), Real(b.radius)};
+    vel_.host[i] = {Real(b.velocity.x), Real(b.velocity.y), Real(b.velocity.z), Real(balls[i].inv_mass)};
+    omega_.host[i] = {Real(b.omega.x), Real(b.omega.y), Real(b.omega.z), Real(balls[i].inv_inertia)};
     info_.host[i] = {b.id, b.material};
+  }
+  {
+    const BodyTables bt = body_tables(scene);
+    n_bodies_ = bt.n_bodies;
+    auto put4 = [](const std::vector<f64::real4>& from, Buffer<real4>& to) {
+      to.resize(from.size());
+      for (std::size_t k = 0; k < from.size(); ++k)
+        to.host[k] = {Real(from[k].x), Real(from[k].y), Real(from[k].z), Real(from[k].w)};
+      to.write_to_device();
+    };
+    body_of_.resize(bt.body_of.size());
+    body_of_.host = bt.body_of;
+    body_of_.write_to_device();
+    slot_of_.resize(bt.body_of.size());
+    slot_of_.write_to_device();
+    put4(bt.comp_offset, comp_offset_);
+    body_comp_.resize(bt.body_comp.size());
+    for (std::size_t k = 0; k < bt.body_comp.size(); ++k) body_comp_.host[k] = {bt.body_comp[k].x, bt.body_comp[k].y};
+    body_comp_.write_to_device();
+    std::vector<f64::real4> centres = bt.body_pos;
+    for (auto& c : centres) c.z = wrap(c.z);
+    put4(centres, body_pos_);
+    put4(bt.body_vel, body_vel_);
+    put4(bt.body_quat, body_quat_);
+    put4(bt.body_angmom, body_angmom_);
+    put4(bt.body_inv_inertia, body_inv_inertia_);
+    for (auto* b : {&body_force_, &body_torque_}) {
+      b->resize(bt.body_pos.size());
+      b->write_to_device();
+    }
+    for (const Body& b : scene.bodies) total_mass_ += b.mass;
   }
   std::fill(wall_key_.host.begin(), wall_key_.host.end(), MC_WALL_NONE);
   std::fill(wall_rec_.host.begin(), wall_rec_.host.end(), MC_NO_RECORD);
@@ -388,6 +440,28 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
   }
   vel_.write_to_device();
   omega_.write_to_device();
+  if (n_bodies_ > 0) {  // likewise each body: v(−½) and L(−½) from F(0), T(0)
+    for (auto* b : {&body_vel_, &body_angmom_, &body_force_, &body_torque_, &body_pos_, &body_quat_})
+      b->read_from_device();
+    const Real h = Real(0.5) * Real(dt_);
+    for (int k = 0; k < n_bodies_; ++k) {
+      auto& v = body_vel_.host[k];
+      const auto& f = body_force_.host[k];
+      const Real inv_m = body_pos_.host[k].w;
+      v.x -= h * f.x * inv_m;
+      v.y -= h * f.y * inv_m;
+      v.z -= h * f.z * inv_m;
+      const auto& q = body_quat_.host[k];
+      const auto& t = body_torque_.host[k];
+      const Vec3 tb = rotate({-double(q.x), -double(q.y), -double(q.z), double(q.w)}, Vec3{t.x, t.y, t.z});
+      auto& L = body_angmom_.host[k];
+      L.x -= h * Real(tb.x);
+      L.y -= h * Real(tb.y);
+      L.z -= h * Real(tb.z);
+    }
+    body_vel_.write_to_device();
+    body_angmom_.write_to_device();
+  }
   observe(true);  // start the first interval here
 }
 
@@ -462,6 +536,8 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   sp.n_balls = tp.n_balls;
   sp.n_materials = tp.n_materials;
   sp.n_lifters = tp.n_lifters;
+  sp.first_component = tp.first_component;
+  sp.n_bodies = tp.n_bodies;
   sp.law = tp.law;
   // Reads every status_every_ steps need balls that take twice as many
   // steps to cross half the skin; a scene that starts faster reads every
@@ -560,6 +636,7 @@ void SolverImpl<Real>::rebuild() {
   }
   k_gather2_.args(n, sorted_index_, info_, pair_out_).launch(n);
   ctx_.queue().enqueueCopyBuffer(pair_out_.device(), info_.device(), 0, 0, info_.bytes());
+  if (n_bodies_ > 0) k_body_slots_.args(params_, info_, slot_of_).launch(n);
   for (int slot = 0; slot < MC_MAX_WALL_CONTACTS; ++slot) {
     k_gather_wall_.args(n, slot, sorted_index_, wall_key_, wall_rec_, ball_cell_, pair_out_).launch(n);
     k_put_wall_.args(n, slot, ball_cell_, pair_out_, wall_key_, wall_rec_).launch(n);
@@ -584,7 +661,7 @@ void SolverImpl<Real>::rebuild() {
   k_carry_fill_.args(n, neigh_start_, neigh_count_, neigh_index_, neigh_rec_, carry_start, carry_index, carry_rec)
       .launch(n);
   // New lists in their place.
-  k_contacts_count_.args(params_, pos_, cell_start_, neigh_count_).launch(n);
+  k_contacts_count_.args(params_, pos_, cell_start_, neigh_count_, info_, body_of_).launch(n);
   scan_.run(neigh_count_, neigh_start_, n);
   const int total = scan_.read_total();
   if (static_cast<std::size_t>(total) > neigh_index_.size()) {
@@ -594,7 +671,7 @@ void SolverImpl<Real>::rebuild() {
     neigh_rec_.resize(cap);
   }
   k_contacts_fill_.args(params_, pos_, cell_start_, neigh_start_, neigh_index_, neigh_rec_, sorted_index_,
-                        carry_start, carry_count, carry_index, carry_rec, records_)
+                        carry_start, carry_count, carry_index, carry_rec, records_, info_, body_of_)
       .launch(n);
   pack_records(true);
   index_incoming();
@@ -689,6 +766,9 @@ void SolverImpl<Real>::forces() {
       .launch(n_, grouped_forces_ ? kForcesGroupWG : 0);
   k_reactions_.args(n_, in_start_, pair_out_, force_, torque_, accum_)
       .launch(n_);
+  if (n_bodies_ > 0)
+    k_body_sums_.args(params_, pos_, force_, torque_, slot_of_, body_comp_, body_pos_, body_force_, body_torque_)
+        .launch(n_bodies_);
   lap(&StageTimes::forces_s);
 }
 
@@ -772,7 +852,12 @@ void SolverImpl<Real>::index_incoming() {
 
 template <class Real>
 void SolverImpl<Real>::motion() {
-  k_motion_.args(params_, pos_, vel_, omega_, force_, torque_, pos_at_build_, status_).launch(n_);
+  k_motion_.args(params_, pos_, vel_, omega_, force_, torque_, pos_at_build_, status_, info_).launch(n_);
+  if (n_bodies_ > 0)
+    k_body_motion_
+        .args(params_, pos_, vel_, omega_, pos_at_build_, slot_of_, body_comp_, comp_offset_, body_pos_, body_vel_,
+              body_quat_, body_angmom_, body_inv_inertia_, body_force_, body_torque_, status_)
+        .launch(n_bodies_);
 }
 
 template <class Real>
@@ -904,7 +989,8 @@ Observables SolverImpl<Real>::observe(bool reset) {
   const int groups = (n_ + kReduceWG - 1) / kReduceWG;
   k_reduce_
       .args(params_, pos_, vel_, omega_, force_, torque_, accum_, neigh_start_, neigh_count_, neigh_index_, neigh_rec_,
-            wall_key_, wall_rec_, records_, reset ? 1 : 0, partial_)
+            wall_key_, wall_rec_, records_, reset ? 1 : 0, partial_, info_, body_comp_, body_of_, body_pos_,
+            body_vel_, body_quat_, body_angmom_, body_inv_inertia_, body_force_, body_torque_)
       .launch(static_cast<std::size_t>(groups) * kReduceWG, kReduceWG);
   partial_.read_from_device();
   lap(&StageTimes::reductions_s);
@@ -1099,6 +1185,15 @@ SolverState SolverImpl<Real>::save_state() {
   put_array(st, "accum", accum_, n);
   put_array(st, "pos_at_build", pos_at_build_, n);
   put_array(st, "info", info_, n);
+  if (n_bodies_ > 0) {  // a run without bodies writes what it always has
+    const std::size_t nb = n_bodies_;
+    put_array(st, "body_pos", body_pos_, nb);
+    put_array(st, "body_vel", body_vel_, nb);
+    put_array(st, "body_quat", body_quat_, nb);
+    put_array(st, "body_angmom", body_angmom_, nb);
+    put_array(st, "body_force", body_force_, nb);
+    put_array(st, "body_torque", body_torque_, nb);
+  }
   put_array(st, "wall_key", wall_key_, slots);
   put_array(st, "wall_rec", wall_rec_, slots);
   put_array(st, "neigh_start", neigh_start_, n);
@@ -1141,6 +1236,17 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
   get_array(st, "accum", accum_, false);
   get_array(st, "pos_at_build", pos_at_build_, false);
   get_array(st, "info", info_, false);
+  if (n_bodies_ > 0) {
+    get_array(st, "body_pos", body_pos_, false);
+    get_array(st, "body_vel", body_vel_, false);
+    get_array(st, "body_quat", body_quat_, false);
+    get_array(st, "body_angmom", body_angmom_, false);
+    get_array(st, "body_force", body_force_, false);
+    get_array(st, "body_torque", body_torque_, false);
+    k_body_slots_.args(params_, info_, slot_of_).launch(n_);
+  } else if (has_array(st, "body_pos")) {
+    throw std::invalid_argument("the state holds rigid bodies, the scene none");
+  }
   get_array(st, "wall_key", wall_key_, false);
   get_array(st, "neigh_start", neigh_start_, false);
   get_array(st, "neigh_count", neigh_count_, false);
@@ -1287,7 +1393,9 @@ void SolverImpl<Real>::write_instances(const cl::Buffer& out) {
                                                        compute::BuildOptions(), std::is_same_v<Real, double>);
     k_instances_ = std::make_unique<Kernel>(*view_program_, "write_instances");
   }
-  k_instances_->args(params_, pos_, vel_, force_, info_, accum_, time_ - observed_since_, out).launch(n_);
+  k_instances_->args(params_, pos_, vel_, force_, info_, accum_, time_ - observed_since_, out, body_of_, body_pos_,
+                     body_vel_, body_force_)
+      .launch(n_);
 }
 
 template <class Real>
@@ -1299,6 +1407,18 @@ std::vector<BallState> SolverImpl<Real>::balls() {
     out[i] = ball_state(info_.host[i].x, info_.host[i].y, pos_.host[i], vel_.host[i], omega_.host[i],
                         force_.host[i], torque_.host[i], dt_);
   std::sort(out.begin(), out.end(), [](const BallState& a, const BallState& b) { return a.id < b.id; });
+  return out;
+}
+
+template <class Real>
+std::vector<BodyState> SolverImpl<Real>::bodies() {
+  std::vector<BodyState> out;
+  if (n_bodies_ == 0) return out;
+  for (auto* b : {&body_pos_, &body_vel_, &body_quat_, &body_angmom_, &body_inv_inertia_, &body_force_, &body_torque_})
+    b->read_from_device();
+  for (int k = 0; k < n_bodies_; ++k)
+    out.push_back(body_state(body_pos_.host[k], body_vel_.host[k], body_quat_.host[k], body_angmom_.host[k],
+                             body_inv_inertia_.host[k], body_force_.host[k], body_torque_.host[k], dt_));
   return out;
 }
 
@@ -1320,7 +1440,10 @@ std::size_t SolverImpl<Real>::device_bytes() const {
   std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + mesh_grid_.bytes() + mesh_tris_.bytes() +
                   mesh_feature_.bytes() + mesh_cell_start_.bytes() + mesh_cell_tris_.bytes() + mesh_pairs_.bytes() + status_.bytes() + profile_.bytes() + counts_.bytes() +
                   partial_.bytes() + scan_.bytes();
-  for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_}) b += x->bytes();
+  for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_, &comp_offset_, &body_pos_,
+                        &body_vel_, &body_quat_, &body_angmom_, &body_inv_inertia_, &body_force_, &body_torque_})
+    b += x->bytes();
+  b += body_of_.bytes() + slot_of_.bytes() + body_comp_.bytes();
   b += pair_out_.bytes() + records_.bytes() + book_params_.bytes() + spectra_.bytes() + liner_.bytes() +
        impact_profile_.bytes();
   for (const auto* x : {&wall_key_, &wall_rec_, &neigh_rec_, &rec_state_, &cell_start_, &ball_cell_,

@@ -3,6 +3,7 @@
 // entirely in OpenCL kernels. Observers read device reductions.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <memory>
 #include <string>
@@ -106,11 +107,23 @@ struct SolverState {
   std::vector<std::pair<std::string, std::vector<unsigned char>>> arrays;  // name → bytes
 };
 
+// A rigid body (core/scene.h Body) as the solver has it at the step:
+// velocities synchronised as a ball's (v(n), L(n)).
+struct BodyState {
+  Vec3 position;                       // centre of mass, m
+  Vec3 velocity;                       // m/s
+  Vec3 omega;                          // rad/s, lab frame
+  Vec3 angular_momentum;               // kg·m²/s, lab frame
+  std::array<double, 4> orientation{};  // unit quaternion (x, y, z, w), body → lab
+  double kinetic_J = 0, rotational_J = 0;
+};
+
 class Solver {
  public:
   virtual ~Solver() = default;
   virtual void advance(long steps) = 0;
   virtual std::vector<BallState> balls() = 0;  // sorted by id
+  virtual std::vector<BodyState> bodies() = 0;  // in the scene's order
   virtual Observables observe(bool reset = true) = 0;
   // Each listed pair as (id, neighbour id), once (as the list holding it
   // has it), for tests.

@@ -145,6 +145,8 @@ SceneTables scene_tables(const Scene& scene) {
   sp.lifter_first_angle = w.lifter_first_angle;
   sp.lifter_spacing = nl > 0 ? 2.0 * M_PI / nl : 1.0;
   sp.n_balls = static_cast<int>(scene.balls.size());
+  sp.n_bodies = static_cast<int>(scene.bodies.size());
+  sp.first_component = scene.bodies.empty() ? sp.n_balls : scene.bodies.front().first;
   sp.n_materials = nm;
   sp.n_lifters = nl;
   sp.law = scene.numerics.law == ContactLaw::hertz ? MC_LAW_HERTZ : MC_LAW_LINEAR;
@@ -181,6 +183,64 @@ SceneTables scene_tables(const Scene& scene) {
     sp.escape_z1 = t.mesh_z1;
   }
   return t;
+}
+
+BodyTables body_tables(const Scene& scene) {
+  BodyTables t;
+  const int n = static_cast<int>(scene.balls.size());
+  t.n_bodies = static_cast<int>(scene.bodies.size());
+  t.first_component = scene.bodies.empty() ? n : scene.bodies.front().first;
+  const int n_comp = n - t.first_component;
+  t.body_of.assign(std::max(n_comp, 1), 0);
+  t.comp_offset.assign(std::max(n_comp, 1), f64::real4{0, 0, 0, 0});
+  for (const Ball& b : scene.balls)
+    if (b.body >= 0) {
+      t.body_of[b.id - t.first_component] = b.body;
+      t.comp_offset[b.id - t.first_component] = {b.offset.x, b.offset.y, b.offset.z, 0};
+    }
+  for (const Body& b : scene.bodies) {
+    t.body_comp.push_back({b.first, b.count});
+    t.body_pos.push_back({b.position.x, b.position.y, b.position.z, 1.0 / b.mass});
+    t.body_vel.push_back({b.velocity.x, b.velocity.y, b.velocity.z, 0});
+    const auto& q = b.orientation;
+    t.body_quat.push_back({q[0], q[1], q[2], q[3]});
+    // L in the body frame: I ω_body, with ω_body = q* ω q.
+    const Vec3 wb = rotate({-q[0], -q[1], -q[2], q[3]}, b.omega);
+    t.body_angmom.push_back({b.inertia.x * wb.x, b.inertia.y * wb.y, b.inertia.z * wb.z, 0});
+    t.body_inv_inertia.push_back({1 / b.inertia.x, 1 / b.inertia.y, 1 / b.inertia.z, 0});
+  }
+  if (t.body_comp.empty()) {
+    t.body_comp.push_back({0, 0});
+    for (auto* v : {&t.body_pos, &t.body_vel, &t.body_angmom, &t.body_inv_inertia}) v->push_back({0, 0, 0, 0});
+    t.body_quat.push_back({0, 0, 0, 1});
+  }
+  return t;
+}
+
+std::vector<DeviceBall> device_balls(const Scene& scene) {
+  std::vector<DeviceBall> out;
+  out.reserve(scene.balls.size());
+  for (const Ball& b : scene.balls) {
+    DeviceBall d;
+    d.ball = b;
+    if (b.body < 0) {
+      const double m = ball_mass(scene, b);
+      d.inv_mass = 1.0 / m;
+      d.inv_inertia = 1.0 / (0.4 * m * b.radius * b.radius);
+    } else {
+      const Body& body = scene.bodies.at(b.body);
+      const Vec3 r = rotate(body.orientation, b.offset);
+      const Vec3& w = body.omega;
+      d.ball.position = body.position + r;
+      d.ball.velocity = body.velocity + Vec3{w.y * r.z - w.z * r.y, w.z * r.x - w.x * r.z, w.x * r.y - w.y * r.x};
+      d.ball.omega = w;
+      d.inv_mass = 1.0 / body.mass;
+      d.inv_inertia = 1.0 / std::min({body.inertia.x, body.inertia.y, body.inertia.z});
+    }
+    out.push_back(d);
+  }
+  std::sort(out.begin(), out.end(), [](const DeviceBall& a, const DeviceBall& b) { return a.ball.id < b.ball.id; });
+  return out;
 }
 
 void mesh_cells_host(const SceneTables& t, std::vector<int>& starts, std::vector<int>& tris) {

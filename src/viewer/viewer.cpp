@@ -320,7 +320,7 @@ void App::apply_case(const MillCase& next) {
       message_ = buf;
       return;
     }
-    if (!same_sizes(case_, next)) {
+    if (!same_sizes(case_, next) || !scene_.bodies.empty()) {  // clumps are packed afresh
       Scene s = build_scene(next, nd);
       s.mill_angle = solver_->mill_angle();
       install_solver(std::move(s), true);
