@@ -69,7 +69,11 @@ void App::draw_panel() {
 }
 
 void App::panel_stats() {
-  ImGui::Text("%s: %d balls", case_.name.c_str(), n_balls_);
+  if (scene_.bodies.empty())
+    ImGui::Text("%s: %d balls", case_.name.c_str(), n_balls_);
+  else  // a charge of clumps: its spheres are what the kernels step
+    ImGui::Text("%s: %zu clumps and balls, %d spheres", case_.name.c_str(),
+                scene_.bodies.size() + static_cast<std::size_t>(scene_.bodies.front().first), n_balls_);
   ImGui::TextWrapped("device %s", solver_->device().label().c_str());
   ImGui::TextWrapped("data path: %s", feed_->path().c_str());
   ImGui::Text("%.1f fps drawn, %d steps/frame", fps_, last_steps_);
