@@ -12,10 +12,12 @@
 #   devices     clinfo, `millcharge devices`, nvidia-smi      -> devices.txt
 #   kernels     the kernels built once, the driver's build log kept
 #               (-cl-nv-verbose on NVIDIA: registers, spills)  -> kernels.log
-#   tests       kernel against CPU reference, books, poison    -> tests.log
+#   tests       kernel against CPU reference (balls and clumps),
+#               books, poison                                  -> tests.log
 #   validation  the analytic validation checks                 -> validation.jsonl
 #   bench       rows lab (and lab with the status word read every step),
-#               tile-10k, tile-1M (its stage split in its JSON), mill D,
+#               tile-10k, tile-1M (its stage split in its JSON), the lab
+#               mill's charge as rock clumps, mill D,
 #               few steps each; a row whose budget is gone is
 #               skipped, and the ledger says so                -> bench.jsonl
 #   law probe   the contact law's cost per pair                -> law_probe.txt
@@ -121,7 +123,7 @@ unset MILLCHARGE_BUILD_LOG
 
 # Kernel against reference (forces, contacts, motion), the books, the
 # poison test; a test process stops at the first fault a GPU makes sticky.
-step tests 150 env MILLCHARGE_DEVICE="$device" "$tests_bin" "[forces],[contacts],[motion],[books],[poison]" \
+step tests 150 env MILLCHARGE_DEVICE="$device" "$tests_bin" "[forces],[contacts],[motion],[books],[poison],[bodies][reference]" \
   --durations yes > "$out/tests.log" 2>&1
 
 vlog=$(mktemp)
@@ -147,6 +149,8 @@ if [ -f "$settled/checkpoint.bin" ]; then
 else
   log "bench tile-10k, tile-1M: skipped, the settled 10k charge was not made"
 fi
+# Clumps: the lab mill's charge as 12-sphere rocks (32,568 spheres).
+bench_row "lab, rock clumps" 40 assets/cases/lab.toml --set charge.size.0.shape=rock --steps 500 --warmup 0.05
 bench_row D 120 assets/cases/mill_d.toml --steps 100 --warmup 0.05
 step "law probe" 30 "$bin/millcharge_law_probe" --device "$device" > "$out/law_probe.txt" 2>&1
 rm -rf "$(dirname "$settled")" "$vlog"
