@@ -404,7 +404,13 @@ int cmd_check(const CaseOptions& o) {
   const MorrellResult m = morrell_c_model(morrell_input(c, d));
   std::printf("morrell c-model power %.4g W (k %.2f x net %.4g W), toe %.1f deg, shoulder %.1f deg\n",
               m.charge_power_W, kMorrellK, m.net_power_W, m.toe_deg, m.shoulder_deg);
-  std::printf("packing         %s balls placed without overlaps\n", thousands(static_cast<long>(p.scene.balls.size())).c_str());
+  if (p.scene.bodies.empty())
+    std::printf("packing         %s balls placed without overlaps\n", thousands(static_cast<long>(p.scene.balls.size())).c_str());
+  else
+    std::printf("packing         %s clumps (%s spheres) and %s balls placed without overlaps\n",
+                thousands(static_cast<long>(p.scene.bodies.size())).c_str(),
+                thousands(static_cast<long>(p.scene.balls.size()) - p.scene.bodies.front().first).c_str(),
+                thousands(static_cast<long>(p.scene.bodies.front().first)).c_str());
   return 0;
 }
 
