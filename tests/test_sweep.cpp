@@ -238,6 +238,43 @@ charge.filling = [0.25, 0.35]
   fs::remove_all(work);
 }
 
+TEST_CASE("sweep check: a charge of clumps costs its spheres", "[sweep][bodies]") {
+  const fs::path work = temp_dir("clumps");
+  write_text(work / "shapes.toml", R"(
+case = "lab.toml"
+[set]
+mill.length = 0.05
+run.duration = 2.0
+run.settle = 0.5
+[axes]
+charge.size.0.shape = ["sphere", "peanut", "rock"]
+)");
+  const Outcome o = run_binary("sweep check '" + (work / "shapes.toml").string() + "' --throughput 2e6", work);
+  REQUIRE(o.status == 0);
+  // The same particles in each case; a peanut is 2 spheres, a rock 12.
+  const io::Sweep s = io::read_sweep(work / "shapes.toml");
+  const auto cases = io::expand(s);
+  REQUIRE(cases.size() == 3);
+  const MillCase mc = io::read_case(s.base_case, cases[0].overrides);
+  const MillDerived d = derive(mc);
+  const long n = d.n_balls;
+  const double steps = std::round(2.5 / d.dt);
+  auto with_commas = [](long v) {
+    std::string t = std::to_string(v);
+    for (int i = static_cast<int>(t.size()) - 3; i > 0; i -= 3) t.insert(i, ",");
+    return t;
+  };
+  const std::string expected =
+      "3 cases, all valid: " + with_commas(3 * n) + " particles (" + with_commas(15 * n) + " spheres)";
+  CHECK_THAT(o.out, Catch::Contains(expected));
+  const std::size_t at = o.out.find("steps, ");
+  REQUIRE(at != std::string::npos);
+  CHECK(std::strtod(o.out.c_str() + at + 7, nullptr) == Approx(15.0 * n * steps).epsilon(5e-3));
+  CHECK_THAT(o.out, Catch::Contains("sphere-steps in all"));
+  CHECK_THAT(o.out, Catch::Contains("at 2e+06 sphere-updates/s (--throughput"));
+  fs::remove_all(work);
+}
+
 TEST_CASE("sweep job script: a task per case, Slurm options, resume from the checkpoint", "[sweep]") {
   CHECK(app::array_spec({0, 1, 2, 5, 7, 8}) == "0-2,5,7-8");
   CHECK(app::array_spec({3}, 2) == "3%2");

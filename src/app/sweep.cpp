@@ -87,7 +87,8 @@ std::string number_text(double v, const char* fmt = "%.4g") {
 // overrides, derived and packed.
 struct CaseCheck {
   std::string error;         // empty: valid
-  long balls = 0;
+  long balls = 0;            // particles: balls and clumps
+  long spheres = 0;          // what the kernels step: balls and the clumps' spheres
   double steps = 0;          // settling (at its limit when "auto") and turning
   bool settle_auto = false;
   std::string resolved;      // case_to_toml, to compare with a run folder's
@@ -99,7 +100,7 @@ CaseCheck check_case(const io::Sweep& s, const io::SweepCase& sc) {
     const MillCase c = io::read_case(s.base_case, sc.overrides);
     const MillDerived d = derive(c);
     try {
-      (void)build_scene(c, d);
+      r.spheres = static_cast<long>(build_scene(c, d).balls.size());
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(s.base_case.filename().string() + ": " + e.what());
     }
@@ -255,8 +256,15 @@ int cmd_sweep_check(const SweepCheckOptions& o) {
   std::vector<std::vector<std::string>> table;
   table.push_back({"case"});
   table[0].insert(table[0].end(), names.begin(), names.end());
-  for (const char* h : {"balls", "steps", "ball-steps", "wall"}) table[0].push_back(h);
-  double total_balls = 0, total_steps = 0, total_work = 0;
+  // A charge of clumps costs per sphere: the spheres are what the kernels
+  // step, so the work and the estimate count them (bench's sphere-updates).
+  bool clumps = false;
+  for (const CaseCheck& c : k.checks) clumps = clumps || (c.error.empty() && c.spheres != c.balls);
+  const char* work_name = clumps ? "sphere-steps" : "ball-steps";
+  table[0].push_back(clumps ? "particles" : "balls");
+  if (clumps) table[0].push_back("spheres");
+  for (const char* h : {"steps", work_name, "wall"}) table[0].push_back(h);
+  double total_balls = 0, total_spheres = 0, total_steps = 0, total_work = 0;
   for (std::size_t i = 0; i < k.cases.size(); ++i) {
     const CaseCheck& c = k.checks[i];
     std::vector<std::string> row = {std::to_string(i)};
@@ -264,9 +272,11 @@ int cmd_sweep_check(const SweepCheckOptions& o) {
     if (!c.error.empty()) {
       row.push_back("NOT VALID (below)");
     } else {
-      const double work = c.balls * c.steps;
-      total_balls += c.balls, total_steps += c.steps, total_work += work;
-      row.insert(row.end(), {thousands(c.balls), thousands(static_cast<long>(c.steps)), number_text(work, "%.3g"),
+      const double work = static_cast<double>(c.spheres) * c.steps;
+      total_balls += c.balls, total_spheres += c.spheres, total_steps += c.steps, total_work += work;
+      row.push_back(thousands(c.balls));
+      if (clumps) row.push_back(thousands(c.spheres));
+      row.insert(row.end(), {thousands(static_cast<long>(c.steps)), number_text(work, "%.3g"),
                              duration_text(work / throughput)});
     }
     table.push_back(row);
@@ -277,15 +287,22 @@ int cmd_sweep_check(const SweepCheckOptions& o) {
     report_bad(k, "");
     return 2;
   }
-  std::printf("%zu cases, all valid: %s balls, %.3g steps, %.3g ball-steps in all;\n", k.cases.size(),
-              thousands(static_cast<long>(total_balls)).c_str(), total_steps, total_work);
+  if (clumps)
+    std::printf("%zu cases, all valid: %s particles (%s spheres), %.3g steps, %.3g sphere-steps in all;\n",
+                k.cases.size(), thousands(static_cast<long>(total_balls)).c_str(),
+                thousands(static_cast<long>(total_spheres)).c_str(), total_steps, total_work);
+  else
+    std::printf("%zu cases, all valid: %s balls, %.3g steps, %.3g ball-steps in all;\n", k.cases.size(),
+                thousands(static_cast<long>(total_balls)).c_str(), total_steps, total_work);
   bool any_auto = false;
   for (const CaseCheck& c : k.checks) any_auto = any_auto || c.settle_auto;
-  std::printf("estimated %s of device time at %.3g particle-updates/s (%s; `millcharge bench` measures a device)%s\n",
+  std::printf("estimated %s of device time at %.3g %s/s (%s; `millcharge bench` measures a device%s)%s\n",
               duration_text(total_work / throughput).c_str(), throughput,
+              clumps ? "sphere-updates" : "particle-updates",
               o.throughput > 0   ? "--throughput"
               : s.throughput > 0 ? "the file's throughput"
                                  : "a stated round figure, not a measurement",
+              clumps ? "; for clumps, bench a case of the same shapes" : "",
               any_auto ? ";\nsettling counted at its limit, 2 s + 4 sqrt(D/g), where run.settle is \"auto\"" : "");
   return 0;
 }
