@@ -6,6 +6,8 @@
 // state resumes bit for bit; the case keys and their refusals.
 #include <catch2/catch.hpp>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -16,12 +18,14 @@
 #include "core/mill_case.h"
 #include "checks.h"
 #include "helpers.h"
+#include "text_file.h"
 #include "io/case_file.h"
 #include "sim/mill_run.h"
 #include "sim/reference.h"
 
 using namespace mc;
 using namespace mc::test;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -268,6 +272,47 @@ TEST_CASE("a charge of clumps: counts and mass as the case asks, no overlaps, in
     CHECK(worst_overlap < 0);
     CHECK(worst_out < 0);
   }
+}
+
+TEST_CASE("a rock shape from its ellipsoid: count spheres, the axes' order, written out as spheres", "[bodies][case]") {
+  const fs::path dir = fs::temp_directory_path() / ("millcharge_ellipsoid_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path file = dir / "slab.toml";
+  {
+    std::string text = read_text(io::default_case());
+    text += "\n[[charge.shape]]\nname = \"slab\"\nellipsoid = [30, 60, 20]  # mm, any order\ncount = 9\nseed = 4\n";
+    std::ofstream(file) << text;
+  }
+  const MillCase c = io::read_case(file, {"charge.size.0.shape=slab", "mill.length=0.05"});
+  REQUIRE(c.shapes.size() == 1);
+  const ClumpShape& sh = c.shapes[0];
+  CHECK(sh.name == "slab");
+  CHECK(sh.spheres.size() == 9);
+  // The library's rock generator on the sorted axes 1 : 0.5 : 0.333.
+  const ClumpShape same = rock_shape(9, 0.5, 1.0 / 3.0, 4);
+  REQUIRE(same.spheres.size() == 9);
+  for (std::size_t k = 0; k < 9; ++k) CHECK(sh.spheres[k].radius == same.spheres[k].radius);
+  // Its principal moments follow the axes: the spread along them 1 : 0.5 : 0.33.
+  const ClumpMassProperties p = clump_mass_properties(sh);
+  const double var_x = (p.principal.y + p.principal.z - p.principal.x) / 2;  // ∫x² per unit density
+  const double var_z = (p.principal.x + p.principal.y - p.principal.z) / 2;
+  std::printf("slab from ellipsoid [30, 60, 20]: 9 spheres, principal moments %.4g %.4g %.4g (x 1e3), "
+              "rms extent ratio %.3f (ellipsoid 0.333)\n",
+              1e3 * p.principal.x, 1e3 * p.principal.y, 1e3 * p.principal.z, std::sqrt(var_z / var_x));
+  CHECK(std::sqrt(var_z / var_x) == Approx(1.0 / 3.0).epsilon(0.25));
+  // The resolved case lists the spheres, so a run folder's case.toml reads
+  // back to the same shape without the generator.
+  const fs::path resolved = dir / "resolved.toml";
+  std::ofstream(resolved) << io::case_to_toml(c);
+  const MillCase back = io::read_case(resolved);
+  REQUIRE(back.shapes.size() == 1);
+  REQUIRE(back.shapes[0].spheres.size() == 9);
+  for (std::size_t k = 0; k < 9; ++k) {
+    CHECK(back.shapes[0].spheres[k].radius == Approx(sh.spheres[k].radius).epsilon(1e-12));
+    CHECK(back.shapes[0].spheres[k].centre.y == Approx(sh.spheres[k].centre.y).epsilon(1e-12).margin(1e-15));
+  }
+  CHECK(derive(back).n_balls == derive(c).n_balls);
+  fs::remove_all(dir);
 }
 
 TEST_CASE("a turning mill of clumps: torque power = dissipation + dE/dt, both laws", "[bodies][power][books]") {

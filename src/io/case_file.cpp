@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
@@ -558,31 +559,63 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
     const auto shapes = s.tables("shape");
     for (std::size_t k = 0; k < shapes.size(); ++k) {
       Section z(r, *shapes[k], "charge.shape[" + std::to_string(k) + "]");
-      z.knows({"name", "spheres"});
+      z.knows({"name", "spheres", "ellipsoid", "count", "seed"});
       ClumpShape sh;
       sh.name = z.string("name");
       if (sh.name.empty() || sh.name == "sphere")
         r.fail(z.key("name"), z.node("name"), "a shape needs a name other than \"\" and \"sphere\"");
       for (const ClumpShape& o : c.shapes)
         if (o.name == sh.name) r.fail(z.key("name"), z.node("name"), "\"" + sh.name + "\" is defined twice");
-      const toml::node* n = z.node("spheres");
-      if (!n) r.fail(z.key("spheres"), z.self_node(), "missing (an array of spheres [x, y, z, radius] is required)");
-      const toml::array* a = n->as_array();
-      if (!a || a->empty())
-        r.fail(z.key("spheres"), n, "expected an array of spheres [x, y, z, radius], at least one");
-      for (std::size_t q = 0; q < a->size(); ++q) {
-        const toml::array* e = (*a)[q].as_array();
-        const std::string at = z.key("spheres") + "[" + std::to_string(q) + "]";
-        if (!e || e->size() != 4) r.fail(at, &(*a)[q], "expected four numbers [x, y, z, radius]");
-        double v[4];
-        for (int i = 0; i < 4; ++i) {
-          const auto x = (*e)[i].value<double>();
-          if (!x || !((*e)[i].is_floating_point() || (*e)[i].is_integer()) || !std::isfinite(*x))
-            r.fail(at, &(*a)[q], "expected four finite numbers [x, y, z, radius]");
-          v[i] = *x;
+      const bool listed = z.has("spheres"), filled = z.has("ellipsoid");
+      if (listed && filled)
+        r.fail(z.key("ellipsoid"), z.node("ellipsoid"),
+               "give either spheres = [[x, y, z, radius], ...] or ellipsoid = [a, b, c], not both");
+      if (filled) {
+        // A rock: `count` spheres filling the ellipsoid of these axes (any
+        // unit, any order), as the library's rock fills 1 : 0.8 : 0.6.
+        const toml::node* n = z.node("ellipsoid");
+        const Vec3 ax = z.vec3("ellipsoid", {});
+        if (!(ax.x > 0 && ax.y > 0 && ax.z > 0))
+          r.fail(z.key("ellipsoid"), n, "the three axes must be > 0");
+        double a[3] = {ax.x, ax.y, ax.z};
+        std::sort(a, a + 3, std::greater<double>());
+        if (!(a[2] / a[0] > 0.2))
+          r.fail(z.key("ellipsoid"), n,
+                 "the shortest axis must be more than 0.2 of the longest (got " + [&] { char b[32]; std::snprintf(b, sizeof b, "%.3g", a[2] / a[0]); return std::string(b); }() +
+                     "): a flatter rock needs more spheres than a clump should carry");
+        const long count = z.integer("count", 12);
+        if (count < 2 || count > 64) r.fail(z.key("count"), z.node("count"), "must be in [2, 64]");
+        const long seed = z.integer("seed", 1);
+        if (seed < 0 || seed > 0xffffffffL) r.fail(z.key("seed"), z.node("seed"), "must be in [0, 2^32)");
+        const std::string name = sh.name;
+        sh = rock_shape(static_cast<int>(count), a[1] / a[0], a[2] / a[0], static_cast<unsigned>(seed));
+        sh.name = name;
+      } else {
+        if (z.has("count") || z.has("seed"))
+          r.fail(z.key(z.has("count") ? "count" : "seed"), z.node(z.has("count") ? "count" : "seed"),
+                 "goes with ellipsoid = [a, b, c] (a rock filled with spheres), not with spheres");
+        const toml::node* n = z.node("spheres");
+        if (!n)
+          r.fail(z.key("spheres"), z.self_node(),
+                 "missing (an array of spheres [x, y, z, radius], or ellipsoid = [a, b, c], is required)");
+        const toml::array* a = n->as_array();
+        if (!a || a->empty())
+          r.fail(z.key("spheres"), n, "expected an array of spheres [x, y, z, radius], at least one");
+        for (std::size_t q = 0; q < a->size(); ++q) {
+          const toml::array* e = (*a)[q].as_array();
+          const std::string at = z.key("spheres") + "[" + std::to_string(q) + "]";
+          if (!e || e->size() != 4) r.fail(at, &(*a)[q], "expected four numbers [x, y, z, radius]");
+          double v[4];
+          for (int i = 0; i < 4; ++i) {
+            const auto x = (*e)[i].value<double>();
+            if (!x || !((*e)[i].is_floating_point() || (*e)[i].is_integer()) || !std::isfinite(*x))
+              r.fail(at, &(*a)[q], "expected four finite numbers [x, y, z, radius]");
+            v[i] = *x;
+          }
+          sh.spheres.push_back({{v[0], v[1], v[2]}, v[3]});
         }
-        sh.spheres.push_back({{v[0], v[1], v[2]}, v[3]});
       }
+      const toml::node* n = z.node(filled ? "ellipsoid" : "spheres");
       try {
         check_shape(sh, z.key("spheres"));
       } catch (const std::invalid_argument& e) {
