@@ -26,7 +26,7 @@
  * Written on plain structs of three reals (v3) and with selects instead of
  * branches, so that a kernel running one contact per work-item can be put in
  * SIMD lanes by PoCL: a float3 value or a branch between vectors stops its
- * work-group vectoriser (branch wip/contact-slots has such a kernel). */
+ * work-group vectoriser (forces_grouped in forces.cl runs the law so). */
 #ifndef MC_CONTACT_LAW_H
 #define MC_CONTACT_LAW_H
 
