@@ -359,6 +359,60 @@ TEST_CASE("a saved state of clumps resumes bit for bit", "[bodies][checkpoint]")
   CHECK(a->observe(false).kinetic_J > 0);
 }
 
+namespace {
+
+// A charge of clumps fallen and tumbling for 0.3 s (so that most components
+// touch something), then 200 steps on the device and in the CPU reference,
+// in double: positions, body velocities and spins compared.
+void clumps_against_reference(const fs::path& case_file, const std::vector<std::string>& sets,
+                              const std::string& label) {
+  const MillCase c = io::read_case(case_file, sets);
+  const MillDerived d = derive(c);
+  Scene sc = build_scene(c, d);
+  {
+    auto pre = make_solver(context(), sc);
+    pre->advance(static_cast<long>(0.3 / sc.numerics.dt));
+    take_motion(*pre, sc);
+    const auto bodies = pre->bodies();
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      sc.bodies[k].position = bodies[k].position;
+      sc.bodies[k].velocity = bodies[k].velocity;
+      sc.bodies[k].omega = bodies[k].omega;
+      sc.bodies[k].orientation = bodies[k].orientation;
+    }
+  }
+  auto dev = make_solver(context(), sc);
+  ReferenceSolver ref(sc);
+  dev->advance(200);
+  ref.advance(200);
+  const auto a = dev->balls(), b = ref.balls();
+  const auto ka = dev->bodies(), kb = ref.bodies();
+  double dx = 0, dv = 0, dw = 0, vmax = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    dx = std::max(dx, dist(a[i].position, b[i].position));
+    vmax = std::max(vmax, b[i].velocity.norm());
+  }
+  for (std::size_t k = 0; k < ka.size(); ++k) {
+    dv = std::max(dv, dist(ka[k].velocity, kb[k].velocity));
+    dw = std::max(dw, dist(ka[k].omega, kb[k].omega));
+  }
+  const ContactStats cs = dev->contact_stats();
+  const double per_body = static_cast<double>(a.size()) / ka.size();
+  std::printf("clumps, kernels vs reference, %s, %zu bodies, 200 steps: max |dx| %.3g m, body |dv| %.3g m/s, "
+              "|dw| %.3g rad/s (vmax %.3g m/s; per body %.2f contacts with others, %.2f with walls)\n",
+              label.c_str(), ka.size(), dx, dv, dw, vmax, cs.ball_contacts_per_ball * per_body,
+              cs.wall_contacts_per_ball * per_body);
+  INFO(label);
+  CHECK(vmax > 0.05);
+  CHECK(cs.ball_contacts_per_ball * per_body > 1.5);  // a bed, not a cloud
+  CHECK(cs.wall_contacts_per_ball > 0);
+  CHECK(dx < 1e-10);
+  CHECK(dv < 1e-8);
+  CHECK(dw < 1e-6);
+}
+
+}  // namespace
+
 TEST_CASE("clumps tumbling in a turning mill: the kernels equal the CPU reference", "[bodies][reference]") {
   if (!context().info().fp64) {
     WARN("no cl_khr_fp64 on " << context().info().label() << ": skipped");
@@ -367,47 +421,25 @@ TEST_CASE("clumps tumbling in a turning mill: the kernels equal the CPU referenc
   for (const char* law : {"linear", "hertz"}) {
     std::vector<std::string> sets = small_mill("rock", law);
     sets.push_back("run.precision=double");
-    const MillCase c = io::read_case(io::default_case(), sets);
-    const MillDerived d = derive(c);
-    Scene sc = build_scene(c, d);
-    {  // fallen and tumbling for 0.3 s, so that most components touch something
-      auto pre = make_solver(context(), sc);
-      pre->advance(static_cast<long>(0.3 / sc.numerics.dt));
-      take_motion(*pre, sc);
-      const auto bodies = pre->bodies();
-      for (std::size_t k = 0; k < bodies.size(); ++k) {
-        sc.bodies[k].position = bodies[k].position;
-        sc.bodies[k].velocity = bodies[k].velocity;
-        sc.bodies[k].omega = bodies[k].omega;
-        sc.bodies[k].orientation = bodies[k].orientation;
-      }
-    }
-    auto dev = make_solver(context(), sc);
-    ReferenceSolver ref(sc);
-    dev->advance(200);
-    ref.advance(200);
-    const auto a = dev->balls(), b = ref.balls();
-    const auto ka = dev->bodies(), kb = ref.bodies();
-    double dx = 0, dv = 0, dw = 0, vmax = 0;
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      dx = std::max(dx, dist(a[i].position, b[i].position));
-      vmax = std::max(vmax, b[i].velocity.norm());
-    }
-    for (std::size_t k = 0; k < ka.size(); ++k) {
-      dv = std::max(dv, dist(ka[k].velocity, kb[k].velocity));
-      dw = std::max(dw, dist(ka[k].omega, kb[k].omega));
-    }
-    const ContactStats cs = dev->contact_stats();
-    const double per_body = static_cast<double>(a.size()) / ka.size();
-    std::printf("clumps, kernels vs reference, %s, 200 steps: max |dx| %.3g m, body |dv| %.3g m/s, |dw| %.3g rad/s "
-                "(vmax %.3g m/s; per body %.2f contacts with others, %.2f with walls)\n",
-                law, dx, dv, dw, vmax, cs.ball_contacts_per_ball * per_body, cs.wall_contacts_per_ball * per_body);
-    INFO(law);
-    CHECK(vmax > 0.05);
-    CHECK(cs.ball_contacts_per_ball * per_body > 1.5);  // a bed, not a cloud
-    CHECK(cs.wall_contacts_per_ball > 0);
-    CHECK(dx < 1e-10);
-    CHECK(dv < 1e-8);
-    CHECK(dw < 1e-6);
+    clumps_against_reference(io::default_case(), sets, std::string("rock, ") + law);
   }
+}
+
+TEST_CASE("clumps against STL lifters and across a slice's seam: the kernels equal the CPU reference",
+          "[bodies][reference][mesh][slice]") {
+  if (!context().info().fp64) {
+    WARN("no cl_khr_fp64 on " << context().info().label() << ": skipped");
+    return;
+  }
+  // The lab mill with its lifters from an STL file, a thin charge of peanuts.
+  clumps_against_reference(io::case_dir() / "lab_stl.toml",
+                           {"charge.size.0.shape=peanut", "charge.filling=0.08", "contact.law=hertz",
+                            "run.precision=double"},
+                           "peanut, STL lifters");
+  // A periodic slice: bodies and pairs cross the seam.
+  std::vector<std::string> sets = small_mill("flat4", "linear");
+  sets.push_back("mill.ends=periodic");
+  sets.push_back("mill.length=0.11");
+  sets.push_back("run.precision=double");
+  clumps_against_reference(io::default_case(), sets, "flat4, periodic slice");
 }
