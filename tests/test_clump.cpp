@@ -142,6 +142,23 @@ TEST_CASE("a shape normalised: its volume-equivalent diameter, centred, on its p
   for (const ClumpSphere& s : n.spheres) CHECK(std::hypot(s.centre.y, s.centre.z) < 1e-5 * L);
 }
 
+TEST_CASE("a shape in any unit: radii of 1e-200 or 1e200 normalise as radii of 1 do", "[clump]") {
+  const ClumpShape one{"pebble", {{{0, 0, 0}, 1.0}, {{0.9, 0, 0}, 0.8}, {{0.4, 0.6, 0}, 0.7}}};
+  const ClumpShape ref = normalised_shape(one, 0.05);
+  for (double unit : {1e-200, 1e200}) {
+    INFO(unit);
+    ClumpShape s = one;
+    for (ClumpSphere& b : s.spheres) b.centre = b.centre * unit, b.radius *= unit;
+    CHECK_NOTHROW(check_shape(s, "charge.shape[0].spheres"));
+    const ClumpShape n = normalised_shape(s, 0.05);
+    REQUIRE(n.spheres.size() == ref.spheres.size());
+    for (std::size_t k = 0; k < n.spheres.size(); ++k) {
+      CHECK(n.spheres[k].radius == Approx(ref.spheres[k].radius).epsilon(1e-9));
+      CHECK((n.spheres[k].centre - ref.spheres[k].centre).norm() < 1e-9 * 0.05);
+    }
+  }
+}
+
 TEST_CASE("the shape library: each shape valid, a rock as flat as its ellipsoid", "[clump]") {
   for (const std::string& name : library_shape_names()) {
     INFO(name);

@@ -126,7 +126,29 @@ ClumpMassProperties clump_mass_properties(const ClumpShape& s, int n) {
   return p;
 }
 
-ClumpShape normalised_shape(const ClumpShape& s, double d_eq, int n) {
+namespace {
+
+// A shape in units far from 1 (radii of 1e-200 or 1e200: a shape scales, so
+// any unit is allowed) would overflow or underflow in its volume (r³) and
+// moments (r⁵). Such a shape is brought near 1 by a power of two, which is
+// exact; a shape already near 1 is left as it is, to the bit.
+ClumpShape near_unit(const ClumpShape& s) {
+  double r_max = 0;
+  for (const ClumpSphere& b : s.spheres) r_max = std::max(r_max, b.radius);
+  if (!(r_max > 0) || !std::isfinite(r_max) || (r_max > 0x1p-20 && r_max < 0x1p20)) return s;
+  const int e = std::ilogb(r_max);
+  ClumpShape out = s;
+  for (ClumpSphere& b : out.spheres) {
+    b.centre = {std::ldexp(b.centre.x, -e), std::ldexp(b.centre.y, -e), std::ldexp(b.centre.z, -e)};
+    b.radius = std::ldexp(b.radius, -e);
+  }
+  return out;
+}
+
+}  // namespace
+
+ClumpShape normalised_shape(const ClumpShape& shape, double d_eq, int n) {
+  const ClumpShape s = near_unit(shape);
   const ClumpMassProperties p = clump_mass_properties(s, n);
   if (!(p.volume > 0) || !(d_eq > 0)) throw std::invalid_argument("shape " + s.name + ": no volume to scale");
   const double k = d_eq / p.equivalent_diameter();
@@ -159,11 +181,15 @@ void check_shape(const ClumpShape& s, const std::string& key) {
   }
   // Every sphere within 100 largest radii of the first's centre: a body,
   // not a scatter of unrelated balls (a typo in a coordinate, or mm for m).
+  // In units of the largest radius, so that no unit overflows.
+  const ClumpShape u = near_unit(s);
+  double u_max = 0;
+  for (const ClumpSphere& b : u.spheres) u_max = std::max(u_max, b.radius);
   for (std::size_t k = 1; k < s.spheres.size(); ++k) {
-    const double d = (s.spheres[k].centre - s.spheres[0].centre).norm();
-    if (d > 100 * r_max) {
+    const double d = (u.spheres[k].centre - u.spheres[0].centre).norm() / u_max;
+    if (!(d <= 100)) {
       std::ostringstream m;
-      m << key << ": " << sphere_text(k) << " lies " << d << " from sphere 0, more than 100 times the largest radius ("
+      m << key << ": " << sphere_text(k) << " lies " << d * r_max << " from sphere 0, more than 100 times the largest radius ("
         << r_max << "): a body's spheres overlap or nearly touch";
       throw std::invalid_argument(m.str());
     }
