@@ -125,3 +125,39 @@ TEST_CASE("run writes summary.json, timeseries.csv, snapshots with charge.pvd an
   CHECK_THROWS_WITH(mc::app::cmd_run(o), Catch::Contains("already holds a run"));
   fs::remove_all(out);
 }
+
+TEST_CASE("a window whose charge is still gaining energy: the console says so, and the books with it counted",
+          "[outputs][books][cli]") {
+  const fs::path out = fs::temp_directory_path() / ("millcharge_test_transient_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  const fs::path log = out.string() + ".log";
+  // A charge settled for only 0.1 s and a window from 0.05 s of turning:
+  // its energy still changes a lot (it is still falling, and being lifted).
+  const std::string cmd = std::string(MC_BINARY) +
+                          " run --set mill.length=0.04 --set run.settle=0.1 --set run.warmup=0.05 --set "
+                          "run.duration=0.2 --set run.snapshot_interval=0 --out '" +
+                          out.string() + "' > '" + log.string() + "' 2>&1";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  std::ifstream in(log);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string text = ss.str();
+  std::size_t at = text.find("the charge's energy rose by ");
+  if (at == std::string::npos) at = text.find("the charge's energy fell by ");
+  INFO(text);
+  REQUIRE(at != std::string::npos);
+  const std::size_t books = text.find("that change: ", at);
+  REQUIRE(books != std::string::npos);
+  const double percent = std::strtod(text.c_str() + books + 13, nullptr);
+  std::ifstream js(out / "summary.json");
+  const nlohmann::json j = nlohmann::json::parse(js);
+  const double torque = j["power_W"]["torque"], diss = j["power_W"]["dissipation"], de = j["power_W"]["energy_change"];
+  std::printf("transient window: torque %.4g W, dissipation %.4g W, dE/dt %.4g W, books %+.2f %%\n", torque, diss, de,
+              percent);
+  CHECK(std::fabs(de) > 0.01 * torque);
+  CHECK(std::fabs(j["power_W"]["imbalance"].get<double>()) > 0.02);
+  CHECK(std::fabs(percent) < 2.0);
+  CHECK(percent == Approx(100 * (torque - diss - de) / torque).margin(0.01));
+  fs::remove_all(out);
+  fs::remove(log);
+}

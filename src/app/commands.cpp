@@ -835,6 +835,14 @@ int cmd_run(const RunOptions& o) {
               plus_minus(s.torque_arm_power_W, err.arm.sem, " W").c_str());
   std::printf("                averaged over %.2f revolutions from t = %.3f s to %.3f s\n", s.window_revolutions,
               s.window_from_s, s.window_to_s);
+  // An imbalance from a charge whose energy still changes (a window that
+  // starts before the charge has settled into its motion) is not an error
+  // of the books: say so, and what the books give with the change counted.
+  if (s.torque_power_W != 0 && std::fabs(s.energy_change_W) > 0.01 * std::fabs(s.torque_power_W))
+    std::printf("                the charge's energy %s by %.4g W over the window (not yet in a steady motion: "
+                "a longer warm-up helps); torque - dissipation - that change: %+.2f %% of torque\n",
+                s.energy_change_W < 0 ? "fell" : "rose", std::fabs(s.energy_change_W),
+                100 * (s.torque_power_W - s.dissipation_power_W - s.energy_change_W) / s.torque_power_W);
   std::printf("per metre       torque %s, dissipation %s, torque %.4g N m/m over %.4g m%s\n",
               plus_minus(s.torque_power_W / c.length, err.power.sem / c.length, " W/m").c_str(),
               plus_minus(s.dissipation_power_W / c.length, err.dissipation.sem / c.length, " W/m").c_str(),
