@@ -287,13 +287,10 @@ int cmd_sweep_check(const SweepCheckOptions& o) {
     report_bad(k, "");
     return 2;
   }
-  if (clumps)
-    std::printf("%zu cases, all valid: %s particles (%s spheres), %.3g steps, %.3g sphere-steps in all;\n",
-                k.cases.size(), thousands(static_cast<long>(total_balls)).c_str(),
-                thousands(static_cast<long>(total_spheres)).c_str(), total_steps, total_work);
-  else
-    std::printf("%zu cases, all valid: %s balls, %.3g steps, %.3g ball-steps in all;\n", k.cases.size(),
-                thousands(static_cast<long>(total_balls)).c_str(), total_steps, total_work);
+  const std::string spheres_text = clumps ? " (" + thousands(static_cast<long>(total_spheres)) + " spheres)" : "";
+  std::printf("%zu cases, all valid: %s %s%s, %.3g steps, %.3g %s in all;\n", k.cases.size(),
+              thousands(static_cast<long>(total_balls)).c_str(), clumps ? "particles" : "balls", spheres_text.c_str(),
+              total_steps, total_work, work_name);
   bool any_auto = false;
   for (const CaseCheck& c : k.checks) any_auto = any_auto || c.settle_auto;
   std::printf("estimated %s of device time at %.3g %s/s (%s; `millcharge bench` measures a device%s)%s\n",

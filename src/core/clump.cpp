@@ -182,11 +182,10 @@ void check_shape(const ClumpShape& s, const std::string& key) {
   // Every sphere within 100 largest radii of the first's centre: a body,
   // not a scatter of unrelated balls (a typo in a coordinate, or mm for m).
   // In units of the largest radius, so that no unit overflows.
-  const ClumpShape u = near_unit(s);
-  double u_max = 0;
-  for (const ClumpSphere& b : u.spheres) u_max = std::max(u_max, b.radius);
+  auto in_radii = [r_max](const Vec3& c) { return Vec3{c.x / r_max, c.y / r_max, c.z / r_max}; };
+  const Vec3 c0 = in_radii(s.spheres[0].centre);
   for (std::size_t k = 1; k < s.spheres.size(); ++k) {
-    const double d = (u.spheres[k].centre - u.spheres[0].centre).norm() / u_max;
+    const double d = (in_radii(s.spheres[k].centre) - c0).norm();
     if (!(d <= 100)) {
       std::ostringstream m;
       m << key << ": " << sphere_text(k) << " lies " << d * r_max << " from sphere 0, more than 100 times the largest radius ("

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <iomanip>
 #include <map>
 #include <set>
 #include <sstream>
@@ -145,6 +146,12 @@ class Section {
     }
     if (auto v = n->value<int64_t>(); v && n->is_integer()) return static_cast<long>(*v);
     r_.fail(key(k), n, "expected an integer, got " + type_name(*n));
+  }
+  // A random seed: an integer in [0, 2^32), 1 when absent.
+  std::uint32_t seed(const std::string& k) {
+    const long v = integer(k, 1);
+    if (v < 0 || v > 0xffffffffL) r_.fail(key(k), node(k), "must be in [0, 2^32)");
+    return static_cast<std::uint32_t>(v);
   }
   std::string string(const std::string& k, std::optional<std::string> fallback = std::nullopt,
                      const std::vector<std::string>& choices = {}) {
@@ -551,9 +558,7 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
     c.filling = s.number("filling");
     c.porosity = s.number("porosity", 0.4);
     c.number_fractions = s.string("fractions", std::string("mass"), {"mass", "number"}) == "number";
-    const long seed = s.integer("seed", 1);
-    if (seed < 0 || seed > 0xffffffffL) r.fail("charge.seed", s.node("seed"), "must be in [0, 2^32)");
-    c.seed = static_cast<std::uint32_t>(seed);
+    c.seed = s.seed("seed");
     // The case's own clump shapes: spheres [x, y, z, r] in any unit (the
     // shape is scaled to each size class's diameter).
     const auto shapes = s.tables("shape");
@@ -579,21 +584,21 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
           r.fail(z.key("ellipsoid"), n, "the three axes must be > 0");
         double a[3] = {ax.x, ax.y, ax.z};
         std::sort(a, a + 3, std::greater<double>());
-        if (!(a[2] / a[0] > 0.2))
-          r.fail(z.key("ellipsoid"), n,
-                 "the shortest axis must be more than 0.2 of the longest (got " + [&] { char b[32]; std::snprintf(b, sizeof b, "%.3g", a[2] / a[0]); return std::string(b); }() +
-                     "): a flatter rock needs more spheres than a clump should carry");
+        if (!(a[2] / a[0] > 0.2)) {
+          std::ostringstream m;
+          m << "the shortest axis must be more than 0.2 of the longest (got " << std::setprecision(3) << a[2] / a[0]
+            << "): a flatter rock needs more spheres than a clump should carry";
+          r.fail(z.key("ellipsoid"), n, m.str());
+        }
         const long count = z.integer("count", 12);
         if (count < 2 || count > 64) r.fail(z.key("count"), z.node("count"), "must be in [2, 64]");
-        const long seed = z.integer("seed", 1);
-        if (seed < 0 || seed > 0xffffffffL) r.fail(z.key("seed"), z.node("seed"), "must be in [0, 2^32)");
         const std::string name = sh.name;
-        sh = rock_shape(static_cast<int>(count), a[1] / a[0], a[2] / a[0], static_cast<unsigned>(seed));
+        sh = rock_shape(static_cast<int>(count), a[1] / a[0], a[2] / a[0], z.seed("seed"));
         sh.name = name;
       } else {
-        if (z.has("count") || z.has("seed"))
-          r.fail(z.key(z.has("count") ? "count" : "seed"), z.node(z.has("count") ? "count" : "seed"),
-                 "goes with ellipsoid = [a, b, c] (a rock filled with spheres), not with spheres");
+        for (const char* k : {"count", "seed"})
+          if (z.has(k))
+            r.fail(z.key(k), z.node(k), "goes with ellipsoid = [a, b, c] (a rock filled with spheres), not with spheres");
         const toml::node* n = z.node("spheres");
         if (!n)
           r.fail(z.key("spheres"), z.self_node(),
