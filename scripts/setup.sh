@@ -8,7 +8,7 @@ packages=(
   ocl-icd-opencl-dev opencl-clhpp-headers opencl-c-headers pocl-opencl-icd clinfo
   mesa-opencl-icd
   catch2 libtomlplusplus-dev nlohmann-json3-dev libcli11-dev libfmt-dev libstb-dev
-  fonts-dejavu-core  # the font of the PNG plots (src/io/png_plot.cpp)
+  fonts-dejavu-core  # the PNG plots' font, built into the program at build time (src/io/plot_font_data.cpp)
   libglfw3-dev libglew-dev libglm-dev libimgui-dev
   xvfb xauth libgl1-mesa-dri python3
   munge slurmctld slurmd slurm-client  # the sweep tier's one-machine Slurm cluster (scripts/slurm_local.sh)

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <set>
@@ -302,7 +303,8 @@ TEST_CASE("text: anti-aliased, the y label reads upwards", "[png]") {
   CHECK(std::abs((xl0 + xl1) / 2 - im.w / 2) < 40);
 }
 
-TEST_CASE("a missing font: the message names the file and the package", "[png]") {
+TEST_CASE("the plot font is built in: MILLCHARGE_FONT that cannot be read is a warning, never a lost picture",
+          "[png]") {
   TempDir dir;
   struct Restore {  // MILLCHARGE_FONT as it was
     std::string old;
@@ -315,26 +317,64 @@ TEST_CASE("a missing font: the message names the file and the package", "[png]")
       else unsetenv("MILLCHARGE_FONT");
     }
   } restore;
-  const std::string missing = (dir.path / "no-such-font.ttf").string();
-  setenv("MILLCHARGE_FONT", missing.c_str(), 1);
-  CHECK(plot_font_path() == fs::path(missing));
   LinePlot plot;
+  plot.title = "font";
+  plot.x_label = "x (s)";
   plot.series = {PlotSeries{"a", {0, 1}, {0, 1}}};
-  using Catch::Matchers::Contains;
-  CHECK_THROWS_WITH(write_line_plot_png(dir.path / "plot.png", plot), Contains(missing) && Contains(kPlotFontPackage));
-  CHECK_THROWS_WITH(check_plot_font(), Contains(missing) && Contains("MILLCHARGE_FONT"));
-  CHECK_FALSE(fs::exists(dir.path / "plot.png"));
+  auto bytes = [](const fs::path& f) {
+    std::ifstream in(f, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
 
-  // Not a TrueType file.
+  // Unset: the built-in font, no warning.
+  unsetenv("MILLCHARGE_FONT");
+  CHECK(plot_font_path().empty());
+  CHECK(plot_font_in_use() == "built in");
+  CHECK(plot_font_warning().empty());
+  write_line_plot_png(dir.path / "builtin.png", plot);
+  const std::string builtin = bytes(dir.path / "builtin.png");
+  REQUIRE(builtin.size() > 1000);
+
+  // A file that is not there, and one that is not a TrueType font: each is
+  // named in a warning, and the picture is drawn in the built-in font, the
+  // same bytes.
+  const std::string missing = (dir.path / "no-such-font.ttf").string();
   const fs::path junk = dir.path / "junk.ttf";
   { std::ofstream(junk) << "not a font"; }
+  using Catch::Matchers::Contains;
+  for (const std::string& bad : {missing, junk.string()}) {
+    INFO(bad);
+    setenv("MILLCHARGE_FONT", bad.c_str(), 1);
+    CHECK(plot_font_path() == fs::path(bad));
+    CHECK(plot_font_in_use() == "built in");
+    CHECK_THAT(plot_font_warning(), Contains(bad) && Contains("MILLCHARGE_FONT") && Contains("built-in font"));
+    write_line_plot_png(dir.path / "fallback.png", plot);
+    CHECK(bytes(dir.path / "fallback.png") == builtin);
+  }
   setenv("MILLCHARGE_FONT", junk.string().c_str(), 1);
-  CHECK_THROWS_WITH(check_plot_font(), Contains(junk.string()) && Contains("not a TrueType font"));
+  CHECK_THAT(plot_font_warning(), Contains("not a TrueType font"));
 
-  // Unset: the default, Debian's DejaVu Sans.
-  unsetenv("MILLCHARGE_FONT");
-  CHECK(plot_font_path() == fs::path(kPlotFont));
-  CHECK_NOTHROW(check_plot_font());
+  // Another font that can be read is drawn in: other pixels.
+  const char* other = "/usr/share/fonts/truetype/dejavu/DejaVuSerif.ttf";
+  if (fs::exists(other)) {
+    setenv("MILLCHARGE_FONT", other, 1);
+    CHECK(plot_font_in_use() == other);
+    CHECK(plot_font_warning().empty());
+    write_line_plot_png(dir.path / "serif.png", plot);
+    CHECK(bytes(dir.path / "serif.png") != builtin);
+  }
+}
+
+TEST_CASE("a picture that cannot be written is a warning naming the file, and the rest goes on", "[png]") {
+  TempDir dir;
+  LinePlot plot;
+  plot.series = {PlotSeries{"a", {0, 1}, {0, 1}}};
+  const fs::path blocked = dir.path / "not-a-folder";
+  { std::ofstream(blocked) << "a file where a folder should be"; }
+  const fs::path file = blocked / "plot.png";
+  CHECK_FALSE(draw_or_warn(file, [&] { write_line_plot_png(file, plot); }));
+  CHECK(draw_or_warn(dir.path / "plot.png", [&] { write_line_plot_png(dir.path / "plot.png", plot); }));
+  CHECK(fs::exists(dir.path / "plot.png"));
 }
 
 TEST_CASE("line plot: reference lines across the averaging window, in the legend", "[png]") {

@@ -538,10 +538,9 @@ int cmd_run(const RunOptions& o) {
   }
   const MillCase& c = p.c;
   const MillDerived& d = p.d;
-  // The pictures' font, the device and the kernels before any file is
-  // written: a run that could not draw its pictures would end without
-  // summary.json.
-  io::check_plot_font();
+  // The device and the kernels before any file is written. The pictures
+  // need nothing from the machine (their font is built in), and one that
+  // cannot be drawn is a warning at the end, never a lost run.
   compute::Context ctx(o.c.device);
   auto solver = make_solver(ctx, p.scene);
   if (resume) {
@@ -796,7 +795,7 @@ int cmd_run(const RunOptions& o) {
                      "mean torque power " + io::value_with_error(s.torque_power_W, err.power.sem, "W")},
                     {s.dissipation_power_W, s.window_from_s, s.window_to_s, 0x7a1014, true,
                      "mean dissipation " + io::value_with_error(s.dissipation_power_W, err.dissipation.sem, "W")}};
-  io::write_line_plot_png(out / "power.png", plot);
+  io::draw_or_warn(out / "power.png", [&] { io::write_line_plot_png(out / "power.png", plot); });
   io::EndView view;
   view.title = c.name + " at t = " + std::to_string(s.turning_s).substr(0, 5) + " s";
   view.shell_radius = 0.5 * c.diameter;
@@ -810,9 +809,9 @@ int cmd_run(const RunOptions& o) {
   const Observables now = solver->observe(false);
   view.com_x = now.com_x_m;
   view.com_y = now.com_y_m;
-  io::write_end_view_png(out / "charge.png", view);
-  io::write_liner_png(out / "liner.png", c.name, layout, liner);
-  io::write_spectra_png(out / "spectra.png", c.name, spectra);
+  io::draw_or_warn(out / "charge.png", [&] { io::write_end_view_png(out / "charge.png", view); });
+  io::draw_or_warn(out / "liner.png", [&] { io::write_liner_png(out / "liner.png", c.name, layout, liner); });
+  io::draw_or_warn(out / "spectra.png", [&] { io::write_spectra_png(out / "spectra.png", c.name, spectra); });
   io::write_spectra_csv(out / "spectra.csv", spectra);
   io::write_wear_csv(out / "wear.csv", layout, liner);
   // The liner in the mill frame, and beside each snapshot turned to the

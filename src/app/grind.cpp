@@ -411,7 +411,6 @@ std::string fmt_um(double m) { return std::isfinite(m) ? fmt::format("{:.1f}", m
 
 int cmd_grind(const GrindOptions& o) {
   Ore ore = read_ore(o.ore);
-  io::check_plot_font();  // before anything is written
   if (o.bond_p1_um > 0) {
     // Bond's test screens at P1: the series is moved up to put P1 on a
     // class top (it still covers the feed; the classes keep their count).
@@ -639,7 +638,7 @@ int cmd_grind(const GrindOptions& o) {
   rs.markers = true;
   for (int i = 0; i + 1 < n; ++i) rs.x.push_back(s.mid_m(i) * 1e6), rs.y.push_back(S[i]);
   rp.series.push_back(rs);
-  io::write_line_plots_png(out / "grind.png", {psd, rp});
+  io::draw_or_warn(out / "grind.png", [&] { io::write_line_plots_png(out / "grind.png", {psd, rp}); });
 
   if (!o.quiet) {
     std::printf("ore %s, %s rates; mill power %.1f W, hold-up %.3g kg, F80 %s um\n", ore.name.c_str(),

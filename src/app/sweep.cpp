@@ -450,7 +450,6 @@ int cmd_sweep_run(const SweepRunOptions& o) {
 int cmd_sweep_collect(const SweepCollectOptions& o) {
   const fs::path dir = fs::absolute(o.dir).lexically_normal();
   const SweepTable t = collect_table(dir);
-  io::check_plot_font();  // before anything is written
   io::write_file_atomic(dir / "sweep.csv", table_csv(t));
   io::write_file_atomic(dir / "sweep.json", table_json(t).dump(2) + "\n");
   const std::vector<fs::path> plots = write_sweep_plots(t, dir);

@@ -372,8 +372,8 @@ std::vector<fs::path> write_sweep_plots(const SweepTable& t, const fs::path& swe
 
   io::LinePlot power = figure_plot(t, l, "power_W.torque", "morrell.power_W", "power draw (DEM torque power; Morrell dashed)");
   power.y_label = "power (W)";
-  io::write_line_plot_png(sweep_dir / "sweep.png", power);
-  written.push_back(sweep_dir / "sweep.png");
+  if (io::draw_or_warn(sweep_dir / "sweep.png", [&] { io::write_line_plot_png(sweep_dir / "sweep.png", power); }))
+    written.push_back(sweep_dir / "sweep.png");
 
   struct Figure {
     std::string column, model, what;
@@ -395,8 +395,8 @@ std::vector<fs::path> write_sweep_plots(const SweepTable& t, const fs::path& swe
   for (const Figure& f : figures) {
     if (!any_finite(t, f.column)) continue;
     const fs::path file = sweep_dir / "plots" / (f.column + ".png");
-    io::write_line_plot_png(file, figure_plot(t, l, f.column, f.model, f.what));
-    written.push_back(file);
+    if (io::draw_or_warn(file, [&] { io::write_line_plot_png(file, figure_plot(t, l, f.column, f.model, f.what)); }))
+      written.push_back(file);
   }
   return written;
 }

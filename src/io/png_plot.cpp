@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "io/atomic_file.h"
+#include "io/plot_font_data.h"
 
 #define STB_IMAGE_WRITE_STATIC
 #define STB_IMAGE_WRITE_IMPLEMENTATION
@@ -28,33 +29,47 @@ namespace mc::io {
 
 std::filesystem::path plot_font_path() {
   const char* env = std::getenv("MILLCHARGE_FONT");
-  return env && *env ? std::filesystem::path(env) : std::filesystem::path(kPlotFont);
+  return env && *env ? std::filesystem::path(env) : std::filesystem::path();
 }
 
 namespace {
 
 // -------------------------------------------------------------------- font --
 
-// A TrueType font read whole into memory, with the metrics the layout uses
-// (font units; scale() turns them into pixels).
+// A TrueType font held whole in memory, with the metrics the layout uses
+// (font units; scale() turns them into pixels). `source` is the file it was
+// read from, or empty for the font built into the program.
 struct Font {
-  std::string path;
-  std::vector<unsigned char> data;
+  std::string source;
+  std::vector<unsigned char> file;  // a font read from a file; empty for the built-in one
+  const unsigned char* data = nullptr;
   stbtt_fontinfo info{};
   int ascent = 0, descent = 0, cap = 0;
 
-  explicit Font(std::string file) : path(std::move(file)) {
-    std::ifstream in(path, std::ios::binary);
+  // The built-in font.
+  Font() {
+    const auto [bytes, size] = builtin_plot_font();
+    init(bytes, size, "the built-in plot font");
+  }
+
+  // A font file (MILLCHARGE_FONT).
+  explicit Font(std::string path) : source(std::move(path)) {
+    std::ifstream in(source, std::ios::binary);
     if (!in) {
       const std::string why = std::strerror(errno);
-      throw std::runtime_error("cannot read the plot font " + path + ": " + why + "; fix: install Debian's " +
-                               kPlotFontPackage + " package, or set MILLCHARGE_FONT to a TrueType font file");
+      throw std::runtime_error("cannot read the plot font " + source + " (MILLCHARGE_FONT): " + why);
     }
-    data.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    const int offset = data.empty() ? -1 : stbtt_GetFontOffsetForIndex(data.data(), 0);
-    if (offset < 0 || !stbtt_InitFont(&info, data.data(), offset))
-      throw std::runtime_error("the plot font " + path + " is not a TrueType font; fix: install Debian's " +
-                               kPlotFontPackage + " package, or set MILLCHARGE_FONT to a TrueType font file");
+    file.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    init(file.data(), file.size(), "the plot font " + source + " (MILLCHARGE_FONT)");
+  }
+  Font(const Font&) = delete;
+  Font& operator=(const Font&) = delete;
+
+  void init(const unsigned char* bytes, std::size_t size, const std::string& what) {
+    data = bytes;
+    const int offset = size == 0 ? -1 : stbtt_GetFontOffsetForIndex(data, 0);
+    if (offset < 0 || !stbtt_InitFont(&info, data, offset))
+      throw std::runtime_error(what + " is not a TrueType font");
     int gap = 0;
     stbtt_GetFontVMetrics(&info, &ascent, &descent, &gap);
     int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
@@ -77,16 +92,40 @@ struct Font {
   }
 };
 
-// The font, read on first use and kept; read again only when
-// MILLCHARGE_FONT names another file.
-std::shared_ptr<const Font> plot_font() {
+// The font: MILLCHARGE_FONT's file when it is set and can be read, else the
+// built-in one (a file that cannot be read is said once, on stderr, and the
+// built-in font drawn instead). Kept; looked at again only when
+// MILLCHARGE_FONT changes.
+struct FontChoice {
+  std::shared_ptr<const Font> font;
+  std::string warning;  // why MILLCHARGE_FONT's file is not the one in use
+};
+
+FontChoice& font_choice() {
   static std::mutex mutex;
-  static std::shared_ptr<const Font> font;
+  static FontChoice choice;
+  static std::string chosen_for = "\x01";  // the MILLCHARGE_FONT value `choice` was made for
   const std::string path = plot_font_path().string();
   std::lock_guard<std::mutex> lock(mutex);
-  if (!font || font->path != path) font = std::make_shared<const Font>(path);
-  return font;
+  if (!choice.font || chosen_for != path) {
+    chosen_for = path;
+    choice.warning.clear();
+    if (!path.empty()) {
+      try {
+        choice.font = std::make_shared<const Font>(path);
+        return choice;
+      } catch (const std::exception& e) {
+        choice.warning = std::string(e.what()) + "; the built-in font is used instead";
+        std::fprintf(stderr, "warning: %s\n", choice.warning.c_str());
+      }
+    }
+    static const std::shared_ptr<const Font> builtin = std::make_shared<const Font>();
+    choice.font = builtin;
+  }
+  return choice;
 }
+
+std::shared_ptr<const Font> plot_font() { return font_choice().font; }
 
 // Sizes of text (em, pixels).
 constexpr double kTickPx = 13, kLabelPx = 14, kTitlePx = 17, kLegendPx = 13, kNotePx = 12.5;
@@ -354,7 +393,25 @@ class Canvas {
 
 }  // namespace
 
-void check_plot_font() { plot_font(); }
+std::string plot_font_in_use() {
+  const auto font = plot_font();
+  return font->source.empty() ? "built in" : font->source;
+}
+
+bool draw_or_warn(const std::filesystem::path& file, const std::function<void()>& draw) {
+  try {
+    draw();
+    return true;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "warning: %s not drawn: %s\n", file.string().c_str(), e.what());
+    return false;
+  }
+}
+
+std::string plot_font_warning() {
+  font_choice();
+  return font_choice().warning;
+}
 
 namespace {
 

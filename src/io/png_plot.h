@@ -1,12 +1,13 @@
 // PNG pictures of a run, drawn in software (no GL needed): a line plot of
 // series against time, and an end view of the charge with toe and shoulder.
-// Shapes and text are anti-aliased; text is DejaVu Sans (Debian's
-// fonts-dejavu-core) rendered with stb_truetype, and files are written with
+// Shapes and text are anti-aliased; text is DejaVu Sans (built in) rendered
+// with stb_truetype, and files are written with
 // stb_image_write through io/atomic_file.h.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -14,16 +15,18 @@
 
 namespace mc::io {
 
-// The font every picture's text is drawn in, and the Debian package that
-// installs it. MILLCHARGE_FONT, when set, names another TrueType file.
-inline constexpr const char* kPlotFont = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
-inline constexpr const char* kPlotFontPackage = "fonts-dejavu-core";
-std::filesystem::path plot_font_path();  // MILLCHARGE_FONT or kPlotFont
+// The font every picture's text is drawn in: DejaVu Sans, built into the
+// program (plot_font_data.cpp), so that no run needs a font file.
+// MILLCHARGE_FONT, when set, names a TrueType file to draw in instead; one
+// that cannot be read is a warning on stderr, and the built-in font is used.
+std::filesystem::path plot_font_path();  // MILLCHARGE_FONT, or empty
+std::string plot_font_in_use();          // "built in", or MILLCHARGE_FONT's file
+std::string plot_font_warning();         // why MILLCHARGE_FONT's file is not in use; empty if it is or is unset
 
-// Reads the font once (again only when MILLCHARGE_FONT changes). Throws
-// std::runtime_error naming the file and the package when it cannot be read:
-// every write_*_png below does, before it draws.
-void check_plot_font();
+// Draws a picture with `draw`; a picture that cannot be drawn (a write
+// error, a bad MILLCHARGE_FONT is not one) is a warning on stderr that
+// names the file, never an end to the command. Returns whether it was drawn.
+bool draw_or_warn(const std::filesystem::path& file, const std::function<void()>& draw);
 
 struct PlotSeries {
   std::string label;
