@@ -182,8 +182,29 @@ TEST_CASE("a truncated, damaged or foreign checkpoint is refused with a message"
   refused("[mill]\ndiameter = 1\n", "not a millcharge checkpoint");
   refused("", "not a millcharge checkpoint");
   refused(good + "xx", "stray bytes");
-  // The good file still resumes (here: only writes the summary again).
+  // The time series the checkpoint counts is read back strictly: a damaged
+  // row is refused by its line, and the file is left as it was.
   write(good);
+  const fs::path ts = dir / "timeseries.csv";
+  const std::string rows = slurp(ts);
+  {
+    std::string bad = rows;
+    const std::size_t row1 = bad.find('\n') + 1;  // line 2
+    bad.replace(row1, bad.find(',', row1) - row1, "abc");
+    std::ofstream(ts, std::ios::binary | std::ios::trunc) << bad;
+    std::string err;
+    CHECK(run_cmd("run --quiet --resume '" + dir.string() + "'", &err) == 2);
+    INFO(err);
+    CHECK(err.find("timeseries.csv:2: \"abc\" is not a number") != std::string::npos);
+    CHECK(slurp(ts) == bad);
+    // Cut inside the rows the checkpoint counts.
+    const std::string cut = rows.substr(0, rows.size() - 3);
+    std::ofstream(ts, std::ios::binary | std::ios::trunc) << cut;
+    CHECK(run_cmd("run --quiet --resume '" + dir.string() + "'", &err) == 2);
+    CHECK(err.find("whole rows, the checkpoint") != std::string::npos);
+    std::ofstream(ts, std::ios::binary | std::ios::trunc) << rows;
+  }
+  // The good files still resume (here: only writes the summary again).
   CHECK(run_cmd("run --quiet --resume '" + dir.string() + "'") == 0);
   fs::remove_all(dir);
 }

@@ -431,3 +431,146 @@ TEST_CASE("grind --bond: a locked-cycle test that settles at 250 % and Bond's fo
   CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains("--bond 3000"));
   CHECK(!fs::exists(o.out));
 }
+
+TEST_CASE("grind reads a run's spectra.csv strictly: a cut or damaged or foreign file is refused by its line",
+          "[grind][failures]") {
+  const fs::path run = short_run();
+  const fs::path bad = fs::temp_directory_path() / ("millcharge_test_grind_cut_" + std::to_string(::getpid()));
+  const fs::path out = bad / "grind";
+  const std::string text = text_of(run / "spectra.csv");
+  std::vector<std::string> lines;
+  for (std::size_t from = 0; from < text.size();) {
+    const std::size_t nl = text.find('\n', from);
+    lines.push_back(text.substr(from, nl - from));
+    from = nl + 1;
+  }
+  REQUIRE(lines.size() > 200);
+  auto refuses = [&](const std::string& spectra, const std::string& says) {
+    fs::remove_all(bad);
+    fs::create_directories(bad);
+    for (const char* f : {"summary.json", "case.toml"}) fs::copy_file(run / f, bad / f);
+    std::ofstream(bad / "spectra.csv", std::ios::binary) << spectra;
+    mc::app::GrindOptions o;
+    o.run_dir = bad.string();
+    o.ore = ore_file("example_spectrum.toml").string();
+    o.out = out.string();
+    o.quiet = true;
+    INFO("expected: " << says);
+    CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains(says));
+    CHECK(!fs::exists(out));
+  };
+  auto first = [&](std::size_t n) {
+    std::string s;
+    for (std::size_t k = 0; k < n; ++k) s += lines[k] + "\n";
+    return s;
+  };
+  const std::size_t third = lines.size() / 3;
+  const std::string path = (bad / "spectra.csv").string();
+  // The issue's file: a third of the rows, then "0.1,abc".
+  refuses(first(third) + "0.1,abc", path + ":" + std::to_string(third + 1) + ": the last line ends without a newline");
+  refuses(first(third) + "0.1,abc\n", path + ":" + std::to_string(third + 1) + ": 2 fields, the header has 13");
+  // Cut inside a line.
+  refuses(text.substr(0, text.size() / 3), "the file was cut short");
+  // A number that is not one, by its line and column.
+  {
+    std::string t = first(lines.size());
+    const std::size_t row = t.find("\nsteel-steel,5,");
+    REQUIRE(row != std::string::npos);
+    const std::size_t field = t.find(',', t.find(',', t.find(',', t.find(',', row + 1) + 1) + 1) + 1);
+    t.replace(field + 1, t.find(',', field + 1) - field - 1, "abc");
+    refuses(t, path + ":7: collisions_per_s: \"abc\" is not a number");
+  }
+  // Cut at a line's end: inside a pair, and between two pairs.
+  refuses(first(1 + 122 + 50), "has 50 bins, the first pair 122: the file was cut short");
+  refuses(first(1 + 2 * 122), "holds the pairs steel-steel, steel-shell, summary.json steel-steel, steel-shell, "
+                              "steel-lifter, steel-end plate");
+  // Another run's spectra (the rates scaled): not summary.json's.
+  {
+    std::string t = lines[0] + "\n";
+    for (std::size_t k = 1; k < lines.size(); ++k) {
+      std::vector<std::string> f;
+      std::stringstream ss(lines[k]);
+      for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+      f[4] = std::to_string(1.1 * std::stod(f[4]));
+      for (std::size_t c = 0; c < f.size(); ++c) t += (c ? "," : "") + f[c];
+      t += "\n";
+    }
+    refuses(t, "collisions/s, summary.json gives");
+  }
+  // The whole file, unchanged, is read.
+  fs::remove_all(bad);
+  fs::create_directories(bad);
+  for (const char* f : {"summary.json", "case.toml", "spectra.csv"}) fs::copy_file(run / f, bad / f);
+  mc::app::GrindOptions o;
+  o.run_dir = bad.string();
+  o.ore = ore_file("example_spectrum.toml").string();
+  o.out = out.string();
+  o.quiet = true;
+  CHECK(mc::app::cmd_grind(o) == 0);
+  fs::remove_all(bad);
+}
+
+TEST_CASE("grind --target-p80 a mill cannot reach is refused by name and range messages say what is wanted",
+          "[grind][failures][cli]") {
+  const fs::path run = short_run();
+  const fs::path out = fs::temp_directory_path() / ("millcharge_test_grind_opts_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  auto binary = [&](const std::string& args) {
+    const fs::path log = out.string() + ".log";
+    const std::string cmd = std::string(MC_BINARY) + " grind " + run.string() + " --ore " +
+                            ore_file("example_spectrum.toml").string() + " --out " + out.string() + " " + args +
+                            " > " + log.string() + " 2>&1";
+    const int status = std::system(cmd.c_str());
+    const std::string said = text_of(log);
+    fs::remove(log);
+    return std::make_pair(WEXITSTATUS(status), said);
+  };
+  // Finer than the finest class: refused, nothing written (it was answered
+  // with the finest product, under the target's heading).
+  {
+    const auto [status, said] = binary("--target-p80 0.0001");
+    INFO(said);
+    CHECK(status == 2);
+    CHECK_THAT(said, Catch::Contains("--target-p80 0.0001: finer than the ore's finest size class"));
+    CHECK(!fs::exists(out));
+  }
+  // Every numeric option's range: one short line that says what is wanted.
+  const std::vector<std::pair<std::string, std::string>> wrong = {
+      {"--feed-rate 0", "--feed-rate: must be > 0 t/h, got 0"},
+      {"--feed-rate -5", "--feed-rate: must be > 0 t/h, got -5"},
+      {"--feed-rate abc", "--feed-rate: must be a number > 0 t/h, got \"abc\""},
+      {"--target-p80 0", "--target-p80: must be > 0 um, got 0"},
+      {"--classifier 0", "--classifier: must be > 0 um, got 0"},
+      {"--sharpness -1", "--sharpness: must be > 0, got -1"},
+      {"--bond -106", "--bond: must be > 0 um, got -106"},
+      {"--tanks 0", "--tanks: must be a whole number from 1 to 1000, got 0"},
+      {"--tanks 2.5", "--tanks: must be a whole number from 1 to 1000, got \"2.5\""},
+      {"--bypass 1", "--bypass: must be from 0 to 0.95, got 1"},
+  };
+  for (const auto& [args, says] : wrong) {
+    const auto [status, said] = binary(args);
+    INFO(args << ": " << said);
+    CHECK(status == 2);
+    CHECK_THAT(said, Catch::StartsWith(says));
+    CHECK(said.find('\n') < 80);  // no numeric limit printed in full
+    CHECK(!fs::exists(out));
+  }
+  // The other commands' numeric options, the same way.
+  for (const auto& [args, says] : std::vector<std::pair<std::string, std::string>>{
+           {"bench --steps 0", "--steps: must be a whole number >= 1, got 0"},
+           {"bench --warmup -1", "--warmup: must be >= 0 s, got -1"},
+           {"bench --tile 0", "--tile: must be a whole number from 1 to 10000, got 0"},
+           {"view --frames 0", "--frames: must be a whole number from 1 to 100000000, got 0"},
+           {"sweep check x.toml --throughput 0", "--throughput: must be > 0 particle-updates/s, got 0"},
+           {"sweep run x.toml --print --cpus-per-task 99999", "--cpus-per-task: must be a whole number from 0 to 4096, got 99999"},
+       }) {
+    const fs::path log = out.string() + ".log";
+    const int status = std::system((std::string(MC_BINARY) + " " + args + " > " + log.string() + " 2>&1").c_str());
+    const std::string said = text_of(log);
+    fs::remove(log);
+    INFO(args << ": " << said);
+    CHECK(WEXITSTATUS(status) == 2);
+    CHECK_THAT(said, Catch::StartsWith(says));
+    CHECK(said.find('\n') < 80);
+  }
+}

@@ -458,3 +458,27 @@ lifters.profile.0.face_angle = [20, 30]
   CHECK_THAT(again.out, Catch::Contains("3 finished, 0 queued or running, 1 failed (not run again: --retry-failed); 0 to run"));
   fs::remove_all(work);
 }
+
+TEST_CASE("sweep run: a damaged record of submitted jobs is refused, not read as none", "[sweep][failures]") {
+  // Read as empty, the cases Slurm still holds would be submitted again.
+  const fs::path work = temp_dir("jobs");
+  write_text(work / "s.toml", "name = \"t\"\ncase = \"" + (fs::path(MC_ASSET_DIR) / "cases" / "lab.toml").string() +
+                                  "\"\n[axes]\nmill.speed_fraction = [0.7, 0.8]\n");
+  for (const char* damaged : {"{broken", "{\"job\": \"12\"}"}) {
+    INFO(damaged);
+    fs::create_directories(work / "out");
+    write_text(work / "out" / "jobs.json", damaged);
+    const fs::path log = work / "log.txt";
+    const int st = std::system((std::string(MC_BINARY) + " sweep run '" + (work / "s.toml").string() +
+                                "' --print --out '" + (work / "out").string() + "' > '" + log.string() + "' 2>&1")
+                                   .c_str());
+    const std::string said = read_text(log);
+    INFO(said);
+    CHECK(WEXITSTATUS(st) == 2);
+    CHECK_THAT(said, Catch::Contains("jobs.json: not ") && Catch::Contains("record of submitted jobs is damaged"));
+    CHECK_FALSE(fs::exists(work / "out" / "sweep.sh"));
+    CHECK_FALSE(fs::exists(work / "out" / "cases.json"));
+    fs::remove_all(work / "out");
+  }
+  fs::remove_all(work);
+}

@@ -448,10 +448,36 @@ std::vector<std::string> keep_rows(const fs::path& csv, long rows, bool clear_av
   if (!in) throw std::invalid_argument(csv.string() + ": missing; the run folder is incomplete");
   std::vector<std::string> lines;
   std::string line;
-  while (static_cast<long>(lines.size()) < rows + 1 && std::getline(in, line)) lines.push_back(line);
+  while (static_cast<long>(lines.size()) < rows + 1 && std::getline(in, line)) {
+    if (in.eof()) break;  // a last line without its newline was cut short
+    lines.push_back(line);
+  }
   if (static_cast<long>(lines.size()) < rows + 1)
     throw std::invalid_argument(csv.string() + ": holds " + std::to_string(lines.size() ? lines.size() - 1 : 0) +
-                                " rows, the checkpoint " + std::to_string(rows));
+                                " whole rows, the checkpoint " + std::to_string(rows));
+  // The rows the checkpoint counts are read back strictly: the header's
+  // width, numbers throughout (rows past them, written after the
+  // checkpoint, are dropped whatever they hold).
+  const std::size_t width = std::count(lines[0].begin(), lines[0].end(), ',') + 1;
+  for (std::size_t k = 1; k < lines.size(); ++k) {
+    const std::string where = csv.string() + ":" + std::to_string(k + 1) + ": ";
+    std::size_t fields = 0, from = 0;
+    for (;;) {
+      const std::size_t comma = lines[k].find(',', from);
+      const std::string f = lines[k].substr(from, comma == std::string::npos ? std::string::npos : comma - from);
+      char* end = nullptr;
+      const double x = f.empty() ? 0.0 : std::strtod(f.c_str(), &end);
+      if (f.empty() || *end != '\0' || !std::isfinite(x))
+        throw std::invalid_argument(where + "\"" + f + "\" is not a number; the run's time series is damaged, so "
+                                    "it cannot be resumed (run it again)");
+      ++fields;
+      if (comma == std::string::npos) break;
+      from = comma + 1;
+    }
+    if (fields != width)
+      throw std::invalid_argument(where + std::to_string(fields) + " fields, the header has " + std::to_string(width) +
+                                  "; the run's time series is damaged, so it cannot be resumed (run it again)");
+  }
   if (clear_averaged)  // the last column, `averaged`
     for (std::size_t k = 1; k < lines.size(); ++k)
       if (lines[k].size() >= 2 && lines[k].compare(lines[k].size() - 2, 2, ",1") == 0) lines[k].back() = '0';

@@ -18,6 +18,7 @@
 #include "grind/pbm.h"
 #include "io/atomic_file.h"
 #include "io/case_file.h"
+#include "io/csv_read.h"
 #include "io/png_plot.h"
 #include "io/toml_names.h"
 
@@ -233,14 +234,6 @@ struct Run {
   std::string title;
 };
 
-std::vector<std::string> split_csv(const std::string& line) {
-  std::vector<std::string> f;
-  std::stringstream ss(line);
-  std::string x;
-  while (std::getline(ss, x, ',')) f.push_back(x);
-  return f;
-}
-
 Run read_run(const fs::path& dir, bool need_spectrum) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw std::invalid_argument(dir.string() + ": not a run folder");
@@ -276,33 +269,75 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
   r.ball_radius_m = n > 0 ? sum_r / n : 0;
   if (!need_spectrum) return r;
   const fs::path sc = dir / "spectra.csv";
-  std::ifstream in(sc);
-  if (!in) throw std::invalid_argument(sc.string() + ": missing; the spectrum model needs the run's collision spectra");
-  std::string line;
-  std::getline(in, line);
-  const std::vector<std::string> head = split_csv(line);
-  auto col = [&](const std::string& name) {
-    const auto it = std::find(head.begin(), head.end(), name);
-    return it == head.end() ? -1 : static_cast<int>(it - head.begin());
-  };
-  const int c_pair = col("pair"), c_n = col("normal_spectrum_collisions_per_s"), c_w = col("normal_spectrum_W");
-  if (c_pair < 0 || c_n < 0 || c_w < 0)
+  const io::CsvTable t = io::read_csv_strict(sc, "the spectrum model needs the run's collision spectra");
+  const std::string older = "the run is from an older millcharge; run it again";
+  if (!t.has("normal_spectrum_collisions_per_s") || !t.has("normal_spectrum_W") || !t.has("pair"))
     throw std::invalid_argument(sc.string() +
                                 ": has no normal energy spectrum (columns normal_spectrum_collisions_per_s, "
-                                "normal_spectrum_W): the run is from an older millcharge; run it again");
-  const int c_all = col("collisions_per_s");
+                                "normal_spectrum_W): " + older);
+  const int c_pair = t.column("pair"), c_bin = t.column("bin"), c_n = t.column("normal_spectrum_collisions_per_s"),
+            c_w = t.column("normal_spectrum_W");
+  const int c_all = t.has("collisions_per_s") ? t.column("collisions_per_s") : -1;
+  // Each pair's bins 0, 1, ... in order, every pair with as many: a file
+  // cut at a line's end, or with rows lost, is refused by its line.
+  std::vector<std::string> pairs;
+  std::vector<double> pair_collisions;
+  long bins = -1, bin = 0;
+  for (std::size_t k = 0; k < t.rows.size(); ++k) {
+    const std::string& pair = t.rows[k][c_pair];
+    if (pairs.empty() || pair != pairs.back()) {
+      if (!pairs.empty() && bins < 0) bins = bin;
+      if (!pairs.empty() && bin != bins)
+        throw std::invalid_argument(fmt::format("{}: pair {} has {} bins, the first pair {}; the file is damaged",
+                                                t.where(k - 1), pairs.back(), bin, bins));
+      if (std::find(pairs.begin(), pairs.end(), pair) != pairs.end())
+        throw std::invalid_argument(t.where(k) + ": pair " + pair + " again after other pairs; the file is damaged");
+      pairs.push_back(pair);
+      pair_collisions.push_back(0);
+      bin = 0;
+    }
+    if (t.number(k, c_bin) != bin)
+      throw std::invalid_argument(fmt::format("{}: bin {} of pair {} where bin {} was due; the file is damaged",
+                                              t.where(k), t.rows[k][c_bin], pair, bin));
+    ++bin;
+    if (c_all >= 0) pair_collisions.back() += t.number(k, c_all);
+  }
+  if (pairs.empty()) throw std::invalid_argument(sc.string() + ": no rows; the file is damaged");
+  if (bins >= 0 && bin != bins)
+    throw std::invalid_argument(fmt::format("{}: pair {} has {} bins, the first pair {}: the file was cut short",
+                                            t.where(t.rows.size() - 1), pairs.back(), bin, bins));
+  // The pairs and their collision rates are those summary.json gives.
+  if (j.contains("spectra") && j["spectra"].is_object() && j["spectra"].contains("by_pair") && c_all >= 0) {
+    const auto& by_pair = j["spectra"]["by_pair"];
+    std::vector<std::string> want;
+    for (const auto& q : by_pair)
+      if (q.is_object() && q.contains("pair") && q["pair"].is_string()) want.push_back(q["pair"].get<std::string>());
+    if (want != pairs) {
+      std::string a, b;
+      for (const std::string& x : want) a += (a.empty() ? "" : ", ") + x;
+      for (const std::string& x : pairs) b += (b.empty() ? "" : ", ") + x;
+      throw std::invalid_argument(sc.string() + ": holds the pairs " + b + ", summary.json " + a +
+                                  "; the file is damaged or from another run");
+    }
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      const double rate = by_pair[k].value("collisions_per_s", std::nan(""));
+      if (std::isfinite(rate) && std::fabs(pair_collisions[k] - rate) > 1e-5 * std::max(rate, 1.0))
+        throw std::invalid_argument(fmt::format(
+            "{}: pair {} sums to {:.6g} collisions/s, summary.json gives {:.6g}; the file is damaged or from "
+            "another run",
+            sc.string(), pairs[k], pair_collisions[k], rate));
+    }
+  }
   double all_collisions = 0, normal_collisions = 0;
-  while (std::getline(in, line)) {
-    const std::vector<std::string> f = split_csv(line);
-    if (static_cast<int>(f.size()) <= std::max({c_pair, c_n, c_w, c_all})) continue;
-    if (c_all >= 0) all_collisions += std::stod(f[c_all]);
-    normal_collisions += std::stod(f[c_n]);
+  for (std::size_t k = 0; k < t.rows.size(); ++k) {
+    if (c_all >= 0) all_collisions += t.number(k, c_all);
     SpectrumBin b;
-    b.collisions_per_s = std::stod(f[c_n]);
-    const double w = std::stod(f[c_w]);
+    b.collisions_per_s = t.number(k, c_n);
+    normal_collisions += b.collisions_per_s;
+    const double w = t.number(k, c_w);
     if (b.collisions_per_s <= 0 || w <= 0) continue;
     b.energy_J = w / b.collisions_per_s;
-    const std::string& pair = f[c_pair];
+    const std::string& pair = t.rows[k][c_pair];
     auto ends = [&](const std::string& tail) {
       return pair.size() > tail.size() && pair.compare(pair.size() - tail.size(), tail.size(), tail) == 0;
     };
@@ -524,22 +559,47 @@ int cmd_grind(const GrindOptions& o) {
     if (!(target < ore.f80_m))
       throw std::invalid_argument(fmt::format("--target-p80 {:g}: not below the feed's F80 of {} um", o.target_p80_um,
                                               fmt_um(ore.f80_m)));
-    // P80 rises with the feed rate: bisect its logarithm.
-    double lo = 1e-9, hi = 1e6;
+    // The finest class's top is the finest P80 the series resolves.
+    const double finest = s.top_m.back();
+    if (!(target > finest))
+      throw std::invalid_argument(fmt::format(
+          "--target-p80 {:g}: finer than the ore's finest size class (top {} um), so no product can be shown to "
+          "meet it; give a target above {} um, or an ore file whose size series reaches finer",
+          o.target_p80_um, fmt_um(finest), fmt_um(finest)));
+    // P80 rises with the feed rate: bisect its logarithm between the rates
+    // the solver brackets.
+    constexpr double kSlowest = 1e-9, kFastest = 1e6;  // t/h
+    double lo = kSlowest, hi = kFastest;
     auto p80 = [&](double f) {
       const double x = continuous(f).p80_m;
       return std::isfinite(x) ? x : 0.0;
     };
-    if (p80(hi) > target && p80(lo) < target) {
-      for (int k = 0; k < 200 && hi / lo > 1 + 1e-10; ++k) {
-        const double mid = std::sqrt(lo * hi);
-        (p80(mid) < target ? lo : hi) = mid;
-      }
-      target_rate = std::sqrt(lo * hi);
-      Product p = continuous(target_rate);
-      p.label = fmt::format("{} at P80 {:g} um", closed ? "closed circuit" : "continuous", o.target_p80_um);
-      products.push_back(p);
+    const double p80_slowest = p80(lo), p80_fastest = p80(hi);
+    if (!(p80_slowest < target))
+      throw std::invalid_argument(fmt::format(
+          "--target-p80 {:g}: not reached: even fed at {:g} t/h the mill's product has P80 {} um", o.target_p80_um,
+          kSlowest, fmt_um(p80_slowest)));
+    if (!(p80_fastest > target))
+      throw std::invalid_argument(fmt::format(
+          "--target-p80 {:g}: not reached: even fed at {:g} t/h the mill's product has P80 {} um, finer than the "
+          "target",
+          o.target_p80_um, kFastest, fmt_um(p80_fastest)));
+    for (int k = 0; k < 200 && hi / lo > 1 + 1e-10; ++k) {
+      const double mid = std::sqrt(lo * hi);
+      (p80(mid) < target ? lo : hi) = mid;
     }
+    target_rate = std::sqrt(lo * hi);
+    Product p = continuous(target_rate);
+    // The bisection assumes P80 rises with the rate; a circuit where it
+    // does not (or a step in P80) leaves a product off the target: said,
+    // never shown as the answer.
+    if (!(std::fabs(p.p80_m - target) <= 0.01 * target))
+      throw std::invalid_argument(fmt::format(
+          "--target-p80 {:g}: not reached: the closest product found, fed at {:.4g} t/h, has P80 {} um (P80 does "
+          "not rise smoothly with the feed rate here)",
+          o.target_p80_um, target_rate, fmt_um(p.p80_m)));
+    p.label = fmt::format("{} at P80 {:g} um", closed ? "closed circuit" : "continuous", o.target_p80_um);
+    products.push_back(p);
   }
 
   BondResult bond;
@@ -657,8 +717,6 @@ int cmd_grind(const GrindOptions& o) {
                   "kWh/t\n",
                   bond.p1_um, bond.cycles, bond.steady ? "" : " (not steady)", bond.gbp_g_rev,
                   100 * bond.circulating_load, bond.f80_um, bond.p80_um, bond.wi_kWh_t);
-    if (o.target_p80_um > 0 && !std::isfinite(target_rate))
-      std::printf("  no feed rate from 1e-9 to 1e6 t/h gives P80 %g um\n", o.target_p80_um);
     std::printf("wrote %s/{grind.csv, rates.csv, grind.json, grind.png}\n", out.string().c_str());
   }
   return 0;

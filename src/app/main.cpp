@@ -25,6 +25,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "app/cli_checks.h"
 #include "app/commands.h"
 #include "app/grind.h"
 #include "app/sweep.h"
@@ -91,7 +92,7 @@ int main(int argc, char** argv) {
   view->add_option("--precision", vo.c.precision, "float or double (overrides run.precision)")
       ->check(CLI::IsMember({"float", "double"}));
   view->add_option("--frames", vo.frames, "draw N frames, then exit (scripted: fixed steps per frame)")
-      ->check(CLI::PositiveNumber);
+      ->check(mc::app::cli::count(1, 100000000));
   view->add_option("--screenshot", vo.screenshot, "write the last frame to FILE.png (with --frames)")
       ->type_name("FILE.png");
   std::string steps_per_frame;
@@ -124,16 +125,17 @@ int main(int argc, char** argv) {
   mc::app::BenchOptions bo;
   auto* bench = app.add_subcommand("bench", "time the solver on a turning charge; prints one JSON line");
   add_case_options(bench, bo.c, true, "bench_100k.toml");
-  bench->add_option("--steps", bo.steps, "timed steps (default: about 10 s worth)")->check(CLI::PositiveNumber);
+  bench->add_option("--steps", bo.steps, "timed steps (default: about 10 s worth)")
+      ->check(mc::app::cli::count_from(1));
   bench->add_option("--warmup", bo.warmup,
                     "simulated seconds of the turning mill before the timing (default 0.25; 0 with --from)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(mc::app::cli::non_negative("s"));
   bench->add_option("--from", bo.from, "start from the checkpoint of a run in DIR (a settled, turning charge)")
       ->type_name("DIR");
   bench->add_option("--tile", bo.tile,
                     "with --from: the checkpoint's balls laid anew (fresh contact springs) N times end to end "
                     "along the axis, in a mill N times as long (a settled charge of N times the balls, no warm-up)")
-      ->check(CLI::Range(1, 10000))
+      ->check(mc::app::cli::count(1, 10000))
       ->type_name("N");
   bench->add_option("--books", bo.books,
                     "time with the energy books (spectra, liner sums) on, off, or both in turn (default both)")
@@ -151,25 +153,25 @@ int main(int argc, char** argv) {
   grind->add_option("--time", grind_times, "batch grinding times in minutes, comma-separated (default 1,2,4,8,16)")
       ->type_name("MIN,...");
   grind->add_option("--feed-rate", go.feed_rate_t_h, "a continuous mill fed at this rate (t/h)")
-      ->check(CLI::PositiveNumber);
+      ->check(mc::app::cli::positive("t/h"));
   grind->add_option("--target-p80", go.target_p80_um, "the continuous feed rate whose product has this P80 (um)")
-      ->check(CLI::PositiveNumber);
+      ->check(mc::app::cli::positive("um"));
   grind->add_option("--tanks", go.tanks, "tanks in series for the continuous mill (default: the ore file's, or 1)")
-      ->check(CLI::Range(1, 1000));
+      ->check(mc::app::cli::count(1, 1000));
   grind->add_option("--bond", go.bond_p1_um,
                     "Bond's locked-cycle ball mill test closed at this sieve (um): Gbp and the work index")
-      ->check(CLI::PositiveNumber)
+      ->check(mc::app::cli::positive("um"))
       ->type_name("P1_UM");
   grind->add_option("--classifier", go.classifier_d50c_um,
                     "close the continuous mill with a classifier of this corrected cut size d50c (um): its "
                     "underflow returns to the mill (Whiten's curve)")
-      ->check(CLI::PositiveNumber)
+      ->check(mc::app::cli::positive("um"))
       ->type_name("D50C_UM");
   grind->add_option("--sharpness", go.classifier_alpha, "the classifier's sharpness alpha (default 3)")
-      ->check(CLI::PositiveNumber);
+      ->check(mc::app::cli::positive());
   grind->add_option("--bypass", go.classifier_bypass,
                     "the share of the fines that bypasses the classifier to the underflow (default 0)")
-      ->check(CLI::Range(0.0, 0.95));
+      ->check(mc::app::cli::between(0.0, 0.95));
   grind->add_option("--out", go.out, "folder for the results (default RUN/grind)");
   grind->add_flag("--quiet", go.quiet, "no summary lines");
 

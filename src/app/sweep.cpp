@@ -20,6 +20,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "app/cli_checks.h"
 #include "app/slurm.h"
 #include "app/sweep_runs.h"
 #include "app/sweep_table.h"
@@ -198,24 +199,32 @@ std::string now_utc() {
   return buf;
 }
 
-nlohmann::json read_json_or(const fs::path& p, nlohmann::json fallback) {
+// The sweep's record of submitted jobs; an empty list when there is none.
+// A damaged one is refused, not read as empty: the cases Slurm still holds
+// would be submitted again, and the record overwritten.
+nlohmann::json read_jobs(const fs::path& p) {
   std::ifstream in(p);
-  if (!in) return fallback;
+  if (!in) return nlohmann::json::array();
+  nlohmann::json j;
   try {
-    nlohmann::json j;
     in >> j;
-    return j;
-  } catch (const nlohmann::json::exception&) {
-    return fallback;
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument(p.string() + ": not valid JSON (" + e.what() +
+                                "): the sweep's record of submitted jobs is damaged; if none of its jobs is queued "
+                                "(squeue), move it aside and run again");
   }
+  if (!j.is_array())
+    throw std::invalid_argument(p.string() + ": not a list of jobs: the sweep's record of submitted jobs is damaged; "
+                                "if none of its jobs is queued (squeue), move it aside and run again");
+  return j;
 }
 
 // The folders of cases that Slurm still holds for this sweep (pending or
 // running), from the jobs `sweep run --slurm` recorded in jobs.json.
 std::set<std::string> queued_dirs(const fs::path& sweep_dir) {
   std::set<std::string> out;
-  const nlohmann::json jobs = read_json_or(sweep_dir / "jobs.json", nlohmann::json::array());
-  if (!jobs.is_array() || jobs.empty() || !on_path("squeue")) return out;
+  const nlohmann::json jobs = read_jobs(sweep_dir / "jobs.json");
+  if (jobs.empty() || !on_path("squeue")) return out;
   std::set<std::string> ids;
   for (const auto& j : jobs) ids.insert(j.value("job", ""));
   for (const auto& [job, tasks] : queued_tasks(ids))
@@ -436,8 +445,7 @@ int cmd_sweep_run(const SweepRunOptions& o) {
   if (o.local > 0) return run_local(script, sweep_dir, k.cases, to_run, o.local, s);
 
   const std::string job = submit(script);
-  nlohmann::json jobs = read_json_or(sweep_dir / "jobs.json", nlohmann::json::array());
-  if (!jobs.is_array()) jobs = nlohmann::json::array();
+  nlohmann::json jobs = read_jobs(sweep_dir / "jobs.json");
   nlohmann::json entry = {{"job", job}, {"submitted", now_utc()}, {"tasks", nlohmann::json::object()}};
   for (int i : to_run) entry["tasks"][std::to_string(i)] = k.cases[i].dir;
   jobs.push_back(entry);
@@ -494,7 +502,7 @@ void add_sweep_commands(CLI::App& app, SweepCli& cli) {
   cli.check->add_option("file", cli.check_options.file, "sweep file (TOML)")->required();
   cli.check->add_option("--throughput", cli.check_options.throughput,
                         "particle-updates per second for the wall-time estimate (measure: millcharge bench)")
-      ->check(CLI::PositiveNumber);
+      ->check(cli::positive("particle-updates/s"));
 
   SweepRunOptions& r = cli.run_options;
   cli.run = cli.sweep->add_subcommand("run", "run the unfinished cases: here (--local N), on Slurm (--slurm) or "
@@ -511,15 +519,15 @@ void add_sweep_commands(CLI::App& app, SweepCli& cli) {
   cli.run->add_option("--partition", r.partition, "Slurm partition")->group("Slurm");
   cli.run->add_option("--time", r.time, "time limit per task, e.g. 04:00:00")->group("Slurm");
   cli.run->add_option("--gpus-per-task", r.gpus_per_task, "GPUs per task (one device per run: 1)")
-      ->check(CLI::Range(0, 64))
+      ->check(cli::count(0, 64))
       ->group("Slurm");
-  cli.run->add_option("--cpus-per-task", r.cpus_per_task, "CPU cores per task")->check(CLI::Range(0, 4096))->group("Slurm");
+  cli.run->add_option("--cpus-per-task", r.cpus_per_task, "CPU cores per task")->check(cli::count(0, 4096))->group("Slurm");
   cli.run->add_option("--max-running", r.max_running, "at most N tasks at once (the array's %N)")
-      ->check(CLI::Range(0, 100000))
+      ->check(cli::count(0, 100000))
       ->group("Slurm");
   cli.run->add_option("--signal-grace", r.signal_grace,
                       "SIGTERM this many seconds before the time limit, so the run checkpoints (default 120)")
-      ->check(CLI::Range(0, 65535))
+      ->check(cli::count(0, 65535, "s"))
       ->group("Slurm");
   cli.run->add_option("--sbatch-arg", r.sbatch_args, "another sbatch option for the script, e.g. --sbatch-arg=--qos=long")
       ->group("Slurm")

@@ -172,7 +172,9 @@ SweepTable collect_table(const fs::path& sweep_dir) {
       try {
         std::ifstream g(folder / "grind" / "grind.json");
         if (g) g >> grind;
-      } catch (const nlohmann::json::exception&) {
+      } catch (const nlohmann::json::exception& e) {
+        // Said in the row, not read as no grind at all.
+        row["error"] = "grind/grind.json is not valid JSON (" + std::string(e.what()) + "); its columns are left empty";
         grind = nullptr;
       }
       auto put = [&](const std::string& column, const json& v) {

@@ -569,6 +569,18 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       sh.name = z.string("name");
       if (sh.name.empty() || sh.name == "sphere")
         r.fail(z.key("name"), z.node("name"), "a shape needs a name other than \"\" and \"sphere\"");
+      {
+        // A name of the library's would leave unsaid which of the two a
+        // size class gets.
+        const std::vector<std::string> library = library_shape_names();
+        if (std::find(library.begin(), library.end(), sh.name) != library.end()) {
+          std::string list;
+          for (const std::string& n : library) list += (list.empty() ? "" : ", ") + n;
+          r.fail(z.key("name"), z.node("name"),
+                 "\"" + sh.name + "\" is a library shape's name (" + list +
+                     "); give yours another name, e.g. \"" + sh.name + "_ore\"");
+        }
+      }
       for (const ClumpShape& o : c.shapes)
         if (o.name == sh.name) r.fail(z.key("name"), z.node("name"), "\"" + sh.name + "\" is defined twice");
       const bool listed = z.has("spheres"), filled = z.has("ellipsoid");
@@ -646,6 +658,10 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       sc.material = z.string("material");
       sc.fraction = z.number("fraction", sizes.size() == 1 ? std::optional<double>(1.0) : std::nullopt);
       sc.shape = z.string("shape", std::string());
+      if (z.has("shape") && sc.shape.empty())
+        r.fail(z.key("shape"), z.node("shape"),
+               "an empty name: give \"sphere\" (balls), a library shape or a [[charge.shape]]'s name, or leave the "
+               "key out for balls");
       if (sc.shape == "sphere") sc.shape.clear();
       if (!sc.shape.empty()) {
         try {
