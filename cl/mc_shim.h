@@ -21,6 +21,16 @@ typedef float3 real3;
 typedef float4 real4;
 #define MC_REAL_EPS FLT_EPSILON
 #endif
+/* No contraction of a*b+c into one fused multiply-add: OpenCL C allows it
+ * by default, and a compiler that contracts decides per call site (NVIDIA's
+ * did, and so does PoCL on a CPU with FMA), so the same law was rounded
+ * differently in the two force kernels and in the CPU reference. Each
+ * operation is rounded as written, on every device. -DMC_FP_CONTRACT (in
+ * MILLCHARGE_CL_OPTIONS) lets the compiler contract, to measure what this
+ * costs (docs/performance.md). */
+#ifndef MC_FP_CONTRACT
+#pragma OPENCL FP_CONTRACT OFF
+#endif
 /* Everything shared is inlined: PoCL otherwise keeps the contact law as a
  * call that passes its structs through memory. */
 #define MC_FN inline __attribute__((always_inline))
