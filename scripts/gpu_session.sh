@@ -1,6 +1,7 @@
 #!/bin/bash
 # One GPU session in one command that ends by itself within its budget
-# (default 480 s, the eight minutes of a lent machine), run from a copy of
+# (default 540 s: a lent machine's 15 minutes hold this call, its start, and
+# time to run it again), run from a copy of
 # the repository that holds gpu-kit/ (made here by scripts/gpu_kit.sh; with
 # the device tool, name gpu-kit in `carry`):
 #
@@ -10,26 +11,37 @@
 # figures under $OUT (else runs/gpu-DATE) as soon as it ends, so a session
 # cut short still returns what it measured:
 #   devices     clinfo, `millcharge devices`, nvidia-smi      -> devices.txt
-#   kernels     the kernels built once, the driver's build log kept
-#               (-cl-nv-verbose on NVIDIA: registers, spills)  -> kernels.log
-#   tests       kernel against CPU reference (balls and clumps),
-#               books, poison                                  -> tests.log
+#   kernels     the kernels built once (float and double), the driver's
+#               build log (-cl-nv-verbose on NVIDIA), each kernel's
+#               private and local memory, and, where ptxas is on the
+#               machine, each kernel's registers, stack and spills
+#               (scripts/ptx_report.sh)                        -> kernels.log
+#               the program binaries (PTX on NVIDIA: run
+#               scripts/ptx_report.sh on them where ptxas is)  -> program.tar.gz
+#   tests       kernel against CPU reference, books, poison;
+#               then the clumps against the CPU reference, a
+#               step of its own (its reference is slow)        -> tests.log
 #   validation  the analytic validation checks                 -> validation.jsonl
 #   bench       rows lab (and lab with the status word read every step),
 #               tile-10k, tile-1M (its stage split in its JSON), the lab
 #               mill's charge as rock clumps, mill D,
 #               few steps each; a row whose budget is gone is
 #               skipped, and the ledger says so                -> bench.jsonl
+#   whole run   seed mill D's slice run start to end (settle,
+#               turn, books, pictures): its summary.json as one
+#               more line of bench.jsonl ("row": "mill D slice,
+#               whole run"), its console in the ledger
 #   law probe   the contact law's cost per pair                -> law_probe.txt
 # session.log is the ledger: each step's budget, the seconds it took, its
-# exit status, or why it was skipped. Seven files in all.
+# exit status, or why it was skipped, and what the steps printed on
+# stderr. Eight files in all (the device tool returns eight).
 # --dry-run runs the same plan with this checkout's build/ on PoCL's CPU
 # device (no kit, no driver search), to see the plan, the budgets and the
 # files on a machine without a GPU.
 set -uo pipefail
 root=$(pwd)
 kit=$root/gpu-kit
-budget=480; device=gpu; dry=0
+budget=540; device=gpu; dry=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --budget) budget="${2:?--budget needs seconds}"; shift 2 ;;
@@ -111,22 +123,35 @@ mc=$bin/millcharge
 export clinfo_bin mc
 step devices 30 bash -c '"$clinfo_bin" -l; "$mc" devices; command -v nvidia-smi > /dev/null &&
   nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm --format=csv; true' > "$out/devices.txt" 2>&1
-platform=$("$mc" devices 2> /dev/null | grep -i -m1 nvidia || true)
+platform=$("$mc" devices 2>> "$ledger" | grep -i -m1 nvidia || true)
+scratch=$(mktemp -d)  # not under $OUT: only the eight files go back
 
-# The kernels, built once with the driver's log kept. NVIDIA's compiler
-# prints registers and spills per kernel under -cl-nv-verbose.
-export MILLCHARGE_BUILD_LOG=$out/kernels.log
+# The kernels, built once in each precision with the driver's log kept
+# (NVIDIA's compiler prints some kernels' registers and spills under
+# -cl-nv-verbose, not all), and the program binaries with each kernel's
+# figures (MILLCHARGE_PROGRAM_DUMP).
+export MILLCHARGE_BUILD_LOG=$out/kernels.log MILLCHARGE_PROGRAM_DUMP=$scratch/program
 [ -n "$platform" ] && export MILLCHARGE_CL_OPTIONS="${MILLCHARGE_CL_OPTIONS:+$MILLCHARGE_CL_OPTIONS }-cl-nv-verbose"
 step kernels 60 "$mc" bench assets/cases/lab.toml --device "$device" --steps 20 --warmup 0 --books on --quiet \
   > /dev/null 2>> "$out/kernels.log"
-unset MILLCHARGE_BUILD_LOG
+step "kernels, double" 60 "$mc" bench assets/cases/lab.toml --device "$device" --precision double --steps 20 \
+  --warmup 0 --books on --quiet > /dev/null 2>> "$out/kernels.log"
+unset MILLCHARGE_BUILD_LOG MILLCHARGE_PROGRAM_DUMP
+for f in "$scratch"/program/kernels-*.txt; do [ -f "$f" ] && cat "$f" >> "$out/kernels.log"; done
+for f in "$scratch"/program/program-*.ptx; do
+  [ -f "$f" ] && bash scripts/ptx_report.sh "$f" >> "$out/kernels.log" 2>> "$ledger"
+done
+[ -d "$scratch/program" ] && tar -czf "$out/program.tar.gz" -C "$scratch" program 2>> "$ledger"
 
 # Kernel against reference (forces, contacts, motion), the books, the
 # poison test; a test process stops at the first fault a GPU makes sticky.
-step tests 150 env MILLCHARGE_DEVICE="$device" "$tests_bin" "[forces],[contacts],[motion],[books],[poison],[bodies][reference]" \
+# The clumps' reference runs on one CPU core: a step of its own.
+step tests 150 env MILLCHARGE_DEVICE="$device" "$tests_bin" "[forces],[contacts],[motion],[books],[poison]" \
   --durations yes > "$out/tests.log" 2>&1
+step "tests, clumps' reference" 120 env MILLCHARGE_DEVICE="$device" "$tests_bin" "[bodies][reference]" \
+  --durations yes >> "$out/tests.log" 2>&1
 
-vlog=$(mktemp)
+vlog=$scratch/validation.err
 step validation 60 "$bin/millcharge_validate" --device "$device" > "$out/validation.jsonl" 2> "$vlog"
 tail -2 "$vlog" >> "$ledger"
 
@@ -136,9 +161,9 @@ bench_row() {  # NAME SECONDS ARGS... (ROW_ENV: VAR=VALUE for this row)
   step "bench $name" "$want" env ${ROW_ENV:-} bash -c '"$@" >> "'"$out"'/bench.jsonl"' _ "$mc" bench "$@" \
     --device "$device" --quiet
 }
-settled=$(mktemp -d)/settled-10k  # not under $OUT: only the six files go back
+settled=$scratch/settled-10k
 step "settle 10k" 60 "$mc" run assets/cases/bench_100k.toml --set mill.length=0.305 --set run.duration=0.05 \
-  --set run.warmup=0 --set run.snapshot_interval=0 --device "$device" --out "$settled" --quiet > /dev/null 2>&1
+  --set run.warmup=0 --set run.snapshot_interval=0 --device "$device" --out "$settled" --quiet > /dev/null 2>> "$ledger"
 bench_row lab 40 assets/cases/lab.toml --steps 2000 --warmup 0.05
 # The same with the status word read every step (a GPU reads it every 4).
 ROW_ENV=MILLCHARGE_STATUS_EVERY=1 bench_row "lab, status read every step" 40 assets/cases/lab.toml --steps 2000 \
@@ -151,9 +176,21 @@ else
 fi
 # Clumps: the lab mill's charge as 12-sphere rocks (32,568 spheres).
 bench_row "lab, rock clumps" 40 assets/cases/lab.toml --set charge.size.0.shape=rock --steps 500 --warmup 0.05
+# A whole run, as a user runs it: seed mill D's slice (60,498 balls) from
+# packing to pictures. Its summary goes into bench.jsonl as one line.
+whole=$scratch/mill-d-slice
+step "whole run, mill D slice" 90 "$mc" run assets/cases/mill_d_slice.toml --device "$device" --out "$whole" \
+  > "$scratch/whole.log" 2>&1
+grep -E "^(power draw|per metre|charge angles|morrell|wrote|millcharge: )" "$scratch/whole.log" >> "$ledger"
+if [ -f "$whole/summary.json" ]; then
+  { printf '{"row":"mill D slice, whole run","summary":'; tr -d '\n' < "$whole/summary.json"; echo '}'; } >> "$out/bench.jsonl"
+else
+  tail -5 "$scratch/whole.log" >> "$ledger"
+fi
 bench_row D 120 assets/cases/mill_d.toml --steps 100 --warmup 0.05
 step "law probe" 30 "$bin/millcharge_law_probe" --device "$device" > "$out/law_probe.txt" 2>&1
-rm -rf "$(dirname "$settled")" "$vlog"
+
+rm -rf "$scratch"
 find "$out" -maxdepth 1 -type f -empty -delete  # what skipped steps left
 log "gpu_session.sh: $(($(date +%s) - start)) s of $budget s; files: $(cd "$out" && ls | tr '\n' ' ')"
 exit 0

@@ -151,6 +151,52 @@ void Program::keep_build_log(Context& ctx, const std::string& opts) {
   }
 }
 
+// MILLCHARGE_PROGRAM_DUMP=DIR: what the driver built, for a look at the
+// code a GPU runs: the program binary (PTX text on NVIDIA, which
+// `ptxas -v` turns into registers and spills per kernel, docs/gpu.md) as
+// DIR/program-float.ptx (or .bin), and each kernel's figures the driver
+// reports (private and local memory, the largest and the preferred
+// work-group size) as DIR/kernels-float.txt; -double for double precision.
+void Program::dump_program(Context& ctx, const std::string& opts) {
+  const char* dir = std::getenv("MILLCHARGE_PROGRAM_DUMP");
+  if (!dir || !*dir) return;
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  const std::string tag = double_ ? "double" : "float";
+  try {
+    const std::vector<std::vector<unsigned char>> binaries = program_.getInfo<CL_PROGRAM_BINARIES>();
+    if (!binaries.empty() && !binaries[0].empty()) {
+      const std::vector<unsigned char>& b = binaries[0];
+      const std::string head(b.begin(), b.begin() + std::min<std::size_t>(b.size(), 4096));
+      const bool ptx = head.find(".version") != std::string::npos && head.find(".target") != std::string::npos;
+      std::ofstream(std::string(dir) + "/program-" + tag + (ptx ? ".ptx" : ".bin"), std::ios::binary)
+          .write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+    }
+  } catch (const cl::Error&) {
+  }
+  std::ofstream t(std::string(dir) + "/kernels-" + tag + ".txt");
+  t << "# " << ctx.info().label() << " (" << tag << "); options: " << opts << "\n";
+  t << "# kernel private_bytes local_bytes max_work_group preferred_multiple\n";
+  try {
+    std::vector<cl::Kernel> kernels;
+    program_.createKernels(&kernels);
+    std::vector<std::string> lines;
+    for (cl::Kernel& k : kernels) {
+      std::ostringstream l;
+      l << k.getInfo<CL_KERNEL_FUNCTION_NAME>() << ' '
+        << k.getWorkGroupInfo<CL_KERNEL_PRIVATE_MEM_SIZE>(ctx.device()) << ' '
+        << k.getWorkGroupInfo<CL_KERNEL_LOCAL_MEM_SIZE>(ctx.device()) << ' '
+        << k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(ctx.device()) << ' '
+        << k.getWorkGroupInfo<CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE>(ctx.device());
+      lines.push_back(l.str());
+    }
+    std::sort(lines.begin(), lines.end());
+    for (const std::string& l : lines) t << l << '\n';
+  } catch (const cl::Error& e) {
+    t << "# the driver did not say: " << error_name(e.err()) << '\n';
+  }
+}
+
 // A hash (FNV-1a) of every file in the kernel folder, names and contents.
 // A driver's compiler cache may key on the source string alone, which names
 // the headers but does not hold them: an edited header would then reuse the
@@ -201,6 +247,7 @@ Program::Program(Context& ctx, const std::vector<std::string>& files,
     const std::string printed = driver_output.release();
     if (!printed.empty()) std::fputs(printed.c_str(), stderr);
     keep_build_log(ctx, opts);
+    dump_program(ctx, opts);
   } catch (const cl::Error& e) {
     const std::string printed = driver_output.release();  // the build log has it too
     std::string log;

@@ -46,6 +46,7 @@ class Program {
 
  private:
   void keep_build_log(Context& ctx, const std::string& opts);
+  void dump_program(Context& ctx, const std::string& opts);
   Context& ctx_;
   cl::Program program_;
   bool double_;
