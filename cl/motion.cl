@@ -9,6 +9,11 @@
 #include "motion.h"
 #include "rigid.h"
 #include "body.h"
+#include "contact_law.h"
+#include "walls.h"
+#include "books.h"
+#include "mesh.h"
+#include "ball_forces.h"
 
 /* The free balls; a body's components move with their body (body_move). */
 __kernel void motion(__global const SimParams* sp, __global real4* pos,
@@ -19,6 +24,22 @@ __kernel void motion(__global const SimParams* sp, __global real4* pos,
   const int i = get_global_id(0);
   if (i >= sp->n_balls) return;
   if (sp->first_component < sp->n_balls && MC_IS_COMPONENT(sp, info[i].x)) return;
+  const int flags = integrate_ball(i, sp, pos, vel, omega, force, torque, pos_at_build);
+  if (flags) MC_ATOMIC_OR(status, flags);
+}
+
+/* The partners' sides of the last force evaluation added (ball_reactions,
+ * as the reactions kernel adds them), then the step: one launch instead of
+ * two, the same sums in the same order, so the same bits. For charges of
+ * balls only: a body needs its components' whole forces summed first. */
+__kernel void react_motion(__global const SimParams* sp, __global real4* pos,
+                           __global real4* vel, __global real4* omega,
+                           __global real4* force, __global real4* torque, __global real4* accum,
+                           __global const int* in_start, __global const real* pair_out,
+                           __global const real4* pos_at_build, __global int* status) {
+  const int i = get_global_id(0);
+  if (i >= sp->n_balls) return;
+  ball_reactions(i, in_start, pair_out, force, torque, accum);
   const int flags = integrate_ball(i, sp, pos, vel, omega, force, torque, pos_at_build);
   if (flags) MC_ATOMIC_OR(status, flags);
 }

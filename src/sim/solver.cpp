@@ -107,7 +107,8 @@ class SolverImpl final : public Solver {
   void setup_params(const Scene& scene);
   void setup_meshes(const SceneTables& t);
   void rebuild();
-  void forces();
+  void forces(bool defer_reactions = false);
+  void reactions();
   void index_incoming();
   void pack_records(bool in_rebuild);
   void restore_springs(const SolverState& state);
@@ -223,9 +224,14 @@ class SolverImpl final : public Solver {
   Kernel k_bin_clear_, k_bin_count_, k_bin_scatter_, k_bin_sort_, k_gather4_, k_gather2_,
       k_gather_wall_, k_put_wall_, k_contacts_count_, k_contacts_fill_, k_forces_, k_motion_, k_reduce_,
       k_layout_, k_profile_, k_count_contacts_, k_clear_flag_, k_carry_count_, k_carry_fill_, k_in_count_,
-      k_in_scatter_, k_in_sort_, k_reactions_, k_forces_grouped_, k_records_count_, k_records_pack_, k_mesh_bin_,
+      k_in_scatter_, k_in_sort_, k_reactions_, k_react_motion_, k_forces_grouped_, k_records_count_, k_records_pack_, k_mesh_bin_,
       k_mesh_copy_, k_mesh_sort_, k_body_slots_, k_body_sums_, k_body_motion_;
   bool grouped_forces_ = false;
+  // The reactions of a step's forces added by the next step's motion kernel
+  // (react_motion: one launch fewer a step) where the charge has no bodies;
+  // MILLCHARGE_FUSED_MOTION=0 keeps them a kernel of their own.
+  bool fuse_reactions_ = true;
+  bool reactions_deferred_ = false;  // the last forces' reactions are not yet added
   // The viewer's kernel, built on first use so that headless runs skip it.
   std::unique_ptr<compute::Program> view_program_;
   std::unique_ptr<Kernel> k_instances_;
@@ -326,6 +332,7 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_in_scatter_(program_, "in_scatter"),
       k_in_sort_(program_, "in_sort"),
       k_reactions_(program_, "reactions"),
+      k_react_motion_(program_, "react_motion"),
       k_forces_grouped_(program_, "forces_grouped"),
       k_records_count_(program_, "records_count"),
       k_records_pack_(program_, "records_pack"),
@@ -340,6 +347,12 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
     if (v != "ball" && v != "grouped")
       throw std::invalid_argument("MILLCHARGE_FORCES=" + v + ": expected ball (the default) or grouped");
     grouped_forces_ = v == "grouped";
+  }
+  if (const char* e = std::getenv("MILLCHARGE_FUSED_MOTION"); e && *e) {
+    const std::string v = e;
+    if (v != "0" && v != "1")
+      throw std::invalid_argument("MILLCHARGE_FUSED_MOTION=" + v + ": expected 1 (the default) or 0");
+    fuse_reactions_ = v == "1";
   }
   status_every_ = ctx.info().type == "gpu" ? kGpuStatusEvery : 1;
   if (const char* e = std::getenv("MILLCHARGE_STATUS_EVERY"); e && *e) {
@@ -755,7 +768,7 @@ void SolverImpl<Real>::setup_meshes(const SceneTables& t) {
 }
 
 template <class Real>
-void SolverImpl<Real>::forces() {
+void SolverImpl<Real>::forces(bool defer_reactions) {
   (grouped_forces_ ? k_forces_grouped_ : k_forces_)
       .args(params_, pairs_, lifters_, std::cos(mill_angle_), std::sin(mill_angle_), mill_omega_, pos_, vel_,
             omega_, info_,
@@ -764,8 +777,10 @@ void SolverImpl<Real>::forces() {
             impact_profile_, book_params_, mesh_grid_, mesh_tris_, mesh_feature_, mesh_cell_start_, mesh_cell_tris_,
             mesh_pairs_)
       .launch(n_, grouped_forces_ ? kForcesGroupWG : 0);
-  k_reactions_.args(n_, in_start_, pair_out_, force_, torque_, accum_)
-      .launch(n_);
+  if (defer_reactions && n_bodies_ == 0)
+    reactions_deferred_ = true;  // the next motion() adds them
+  else
+    reactions();
   if (n_bodies_ > 0)
     k_body_sums_.args(params_, pos_, force_, torque_, slot_of_, body_comp_, body_pos_, body_force_, body_torque_)
         .launch(n_bodies_);
@@ -850,9 +865,23 @@ void SolverImpl<Real>::index_incoming() {
   k_bin_clear_.args(pair_out_, words).launch(words);
 }
 
+// The partners' sides added to each ball's force, torque and books.
+template <class Real>
+void SolverImpl<Real>::reactions() {
+  k_reactions_.args(n_, in_start_, pair_out_, force_, torque_, accum_).launch(n_);
+  reactions_deferred_ = false;
+}
+
 template <class Real>
 void SolverImpl<Real>::motion() {
-  k_motion_.args(params_, pos_, vel_, omega_, force_, torque_, pos_at_build_, status_, info_).launch(n_);
+  if (reactions_deferred_) {
+    k_react_motion_
+        .args(params_, pos_, vel_, omega_, force_, torque_, accum_, in_start_, pair_out_, pos_at_build_, status_)
+        .launch(n_);
+    reactions_deferred_ = false;
+  } else {
+    k_motion_.args(params_, pos_, vel_, omega_, force_, torque_, pos_at_build_, status_, info_).launch(n_);
+  }
   if (n_bodies_ > 0)
     k_body_motion_
         .args(params_, pos_, vel_, omega_, pos_at_build_, slot_of_, body_comp_, comp_offset_, body_pos_, body_vel_,
@@ -956,7 +985,13 @@ void SolverImpl<Real>::advance(long steps) {
     ++steps_;
     time_ += dt_;
     mill_angle_ = std::fmod(mill_angle_ + mill_omega_ * dt_, 2.0 * M_PI);
-    forces();
+    forces(fuse_reactions_);
+  }
+  // Between calls the forces are whole: what is read, saved or edited now
+  // sees them as an unfused step leaves them.
+  if (reactions_deferred_) {
+    reactions();
+    lap(&StageTimes::forces_s);
   }
   wait_status();  // report a blow-up from the last read now, not later
   if (status_every_ > 1) check_status_now();
