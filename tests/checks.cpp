@@ -9,7 +9,7 @@
 #include "core/drum.h"
 #include "helpers.h"
 #include "io/case_file.h"
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 
 namespace mc::checks {
 

@@ -12,7 +12,7 @@
 #include "core/liner.h"
 #include "helpers.h"
 #include "sim/energy_report.h"
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 
 using namespace mc;
 using namespace mc::test;

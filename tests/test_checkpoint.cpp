@@ -25,7 +25,7 @@
 #include "io/case_file.h"
 #include "io/checkpoint.h"
 #include "sim/mill_run.h"
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 
 namespace fs = std::filesystem;
 using namespace mc;

@@ -21,7 +21,7 @@
 #include "io/case_file.h"
 #include "io/stl.h"
 #include "sim/energy_report.h"
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 #include "sim/reference.h"
 #include "sim/tables.h"
 #include "text_file.h"

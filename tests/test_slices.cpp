@@ -19,7 +19,7 @@
 #include "helpers.h"
 #include "io/case_file.h"
 #include "io/energy_out.h"
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 #include "sim/reference.h"
 
 using namespace mc;

@@ -2,7 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include "core/lifters.h"
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 
 
 namespace {

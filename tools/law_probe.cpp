@@ -18,7 +18,7 @@
 #include "compute/context.h"
 #include "compute/program.h"
 #include "core/scene.h"
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 #include "sim/tables.h"
 
 namespace {

@@ -9,7 +9,7 @@
 #include <string>
 #include <tuple>
 
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 
 namespace mc {
 namespace {

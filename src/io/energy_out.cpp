@@ -8,7 +8,7 @@
 
 #include "io/atomic_file.h"
 #include "io/png_plot.h"
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 
 namespace mc::io {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 
 namespace mc {
 

@@ -8,7 +8,7 @@
 
 #include "sim/batch_means.h"
 #include "sim/energy_report.h"
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 
 namespace mc {
 

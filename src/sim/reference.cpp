@@ -6,7 +6,7 @@
 #include <map>
 #include <stdexcept>
 
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 #include "sim/tables.h"
 
 namespace mc {

@@ -10,7 +10,7 @@
 #include "core/wall_mesh.h"
 
 #include "core/scene.h"
-#include "sim/layout.hpp"
+#include "core/layout.hpp"
 #include "sim/solver.h"
 
 namespace mc {
