@@ -1,0 +1,72 @@
+#include "app/prepare.h"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+namespace mc::app {
+
+namespace fs = std::filesystem;
+
+// --set, --duration and --precision as overrides of the case's keys.
+std::vector<std::string> case_overrides(const CaseOptions& o) {
+  std::vector<std::string> overrides = o.overrides;
+  if (o.duration_auto) {
+    overrides.push_back("run.duration=\"auto\"");
+  } else if (o.duration > 0) {
+    std::ostringstream s;
+    s.precision(17);
+    s << "run.duration=" << o.duration;
+    overrides.push_back(s.str());
+  }
+  if (!o.precision.empty()) overrides.push_back("run.precision=\"" + o.precision + "\"");
+  return overrides;
+}
+
+Prepared prepare(const CaseOptions& o, const fs::path& default_path) {
+  Prepared p;
+  p.path = o.case_path.empty() ? default_path : fs::path(o.case_path);
+  p.c = io::read_case(p.path, case_overrides(o));
+  p.d = derive(p.c);
+  try {
+    p.scene = build_scene(p.c, p.d);
+  } catch (const std::invalid_argument& e) {
+    throw io::CaseError(p.path.string() + ": " + e.what());
+  }
+  return p;
+}
+
+Prepared prepare_from_checkpoint(const fs::path& dir, io::Checkpoint& cp, const std::string& consequence) {
+  try {
+    cp = io::read_checkpoint(dir / io::kCheckpointFile);
+  } catch (const io::CheckpointError& e) {
+    throw std::invalid_argument(e.what() + consequence);
+  }
+  Prepared p;
+  p.path = dir / "case.toml";
+  p.c = io::parse_case(cp.case_toml, (dir / io::kCheckpointFile).string() + " (case)");
+  p.c.name = cp.case_name;
+  p.d = derive(p.c);
+  p.scene = build_scene(p.c, p.d);
+  return p;
+}
+
+std::string thousands(long v) {
+  std::string s = std::to_string(v);
+  for (int i = static_cast<int>(s.size()) - 3; i > (v < 0 ? 1 : 0); i -= 3) s.insert(i, ",");
+  return s;
+}
+
+std::string duration_text(double s) {
+  if (!(s >= 0) || s > 1e7) return "?";
+  char buf[32];
+  if (s < 60) std::snprintf(buf, sizeof buf, "%.0fs", s);
+  else if (s < 3600) std::snprintf(buf, sizeof buf, "%dm%02ds", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
+  else std::snprintf(buf, sizeof buf, "%dh%02dm", static_cast<int>(s) / 3600, static_cast<int>(s) / 60 % 60);
+  return buf;
+}
+
+nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+}  // namespace mc::app

@@ -1,0 +1,334 @@
+#include "app/run_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "app/prepare.h"
+#include "core/lifters.h"
+#include "io/atomic_file.h"
+#include "io/energy_out.h"
+#include "io/png_plot.h"
+
+namespace mc::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Lifter polygons turned from the mill frame into the lab frame.
+std::vector<std::vector<Vec2>> lab_lifters(const Scene& scene, double mill_angle) {
+  std::vector<std::vector<Vec2>> out = scene.walls.lifters;
+  const double c = std::cos(mill_angle), s = std::sin(mill_angle);
+  for (auto& poly : out)
+    for (Vec2& v : poly) v = {c * v.x - s * v.y, s * v.x + c * v.y};
+  return out;
+}
+
+double finite_or_nan(bool ok, double v) { return ok ? v : std::nan(""); }
+
+// "873.9 ± 4.1 W": the value to the standard error's second digit; the
+// value alone (as %.4g) where there is no error.
+std::string plus_minus(double v, double sem, const char* unit) {
+  char b[128];
+  if (!std::isfinite(v)) {
+    std::snprintf(b, sizeof b, "?%s", unit);
+  } else if (!(std::isfinite(sem) && sem > 0)) {
+    std::snprintf(b, sizeof b, "%.4g%s", v, unit);
+  } else {
+    const int decimals = std::clamp(1 - static_cast<int>(std::floor(std::log10(sem))), 0, 6);
+    std::snprintf(b, sizeof b, "%.*f \u00b1 %.*f%s", decimals, v, decimals, sem, unit);
+  }
+  return b;
+}
+
+
+// A batch of `length` base batches, per_rev of them to a revolution, in
+// words: "1/8 revolution", "1/4 revolution", "1 revolution", "2 revolutions".
+std::string batch_words(int length, int per_rev) {
+  if (length % per_rev == 0) {
+    const int r = length / per_rev;
+    return std::to_string(r) + (r == 1 ? " revolution" : " revolutions");
+  }
+  const int g = std::gcd(length, per_rev);
+  return std::to_string(length / g) + "/" + std::to_string(per_rev / g) + " revolution";
+}
+
+Errors errors_of(const std::vector<WindowBatch>& revs) {
+  auto of = [&](double WindowBatch::*field) {
+    std::vector<double> v;
+    for (const WindowBatch& m : revs) v.push_back(m.*field);
+    return batch_means(v);
+  };
+  Errors e;
+  e.power = of(&WindowBatch::torque_power_W);
+  e.dissipation = of(&WindowBatch::dissipation_power_W);
+  e.torque = of(&WindowBatch::torque_Nm);
+  e.arm = of(&WindowBatch::torque_arm_power_W);
+  e.toe = of(&WindowBatch::toe_deg);
+  e.shoulder = of(&WindowBatch::shoulder_deg);
+  e.com = of(&WindowBatch::com_angle_deg);
+  e.collisions = of(&WindowBatch::collisions_per_s);
+  e.collision_power = of(&WindowBatch::collision_power_W);
+  e.impacts = of(&WindowBatch::liner_impacts_per_s);
+  e.impact = of(&WindowBatch::liner_impact_W);
+  e.shear = of(&WindowBatch::liner_shear_W);
+  e.wear = of(&WindowBatch::wear_kg_per_h);
+  return e;
+}
+
+}  // namespace
+
+RunReport report_of(const FinishedRun& r) {
+  const MillCase& c = r.c;
+  const MillDerived& d = r.d;
+  const RunSummary& s = r.s;
+  RunReport rep;
+  rep.mi = morrell_input(c, d);
+  rep.m = morrell_c_model(rep.mi);
+  rep.toe = finite_or_nan(s.angles.found, s.angles.toe_deg);
+  rep.shoulder = finite_or_nan(s.angles.found, s.angles.shoulder_deg);
+  rep.m_with_dem = s.angles.found
+                       ? kMorrellK * morrell_net_power(rep.mi, rep.toe * kPi / 180, rep.shoulder * kPi / 180)
+                       : std::nan("");
+  rep.err = errors_of(s.window_batches);
+  rep.per_rev = std::max(1, s.batches_per_revolution);
+  rep.window_revs = static_cast<int>(s.window_batches.size()) / rep.per_rev;
+  rep.rel_err = rep.err.power.sem / std::fabs(rep.err.power.mean);
+  // Where the energy went over the window: collision spectra and the liner.
+  rep.layout = liner_layout(r.scene);
+  rep.spectra = spectra_report(r.scene, s.books, s.window_s, s.open_loss_start_J, s.open_loss_end_J, s.dissipated_J);
+  rep.liner = liner_report(r.scene, rep.layout, s.books, s.window_s, s.profile, s.angles);
+  return rep;
+}
+
+void write_run_results(const FinishedRun& r, const RunReport& rep) {
+  const MillCase& c = r.c;
+  const MillDerived& d = r.d;
+  const RunSummary& s = r.s;
+  const fs::path& out = r.out;
+  const MorrellInput& mi = rep.mi;
+  const MorrellResult& m = rep.m;
+  const Errors& err = rep.err;
+  const LinerLayout& layout = rep.layout;
+  const SpectraReport& spectra = rep.spectra;
+  const LinerReport& liner = rep.liner;
+  const double toe = rep.toe, shoulder = rep.shoulder, m_with_dem = rep.m_with_dem;
+  const int per_rev = rep.per_rev, window_revs = rep.window_revs;
+  const double rel_err = rep.rel_err;
+  nlohmann::ordered_json j;
+  j["case"] = c.name;
+  j["title"] = c.title;
+  j["n_particles"] = d.n_balls;
+  j["speed_rpm"] = d.speed_rpm;
+  j["critical_speed_rpm"] = d.critical_rpm;
+  j["speed_fraction"] = d.speed_fraction;
+  j["filling"] = d.filling_from_counts;
+  j["filling_requested"] = c.filling;
+  j["filling_settled"] = s.settled_filling;
+  j["charge_mass_kg"] = d.charge_mass;
+  j["law"] = c.law == ContactLaw::linear ? "linear" : "hertz";
+  j["dt_s"] = d.dt;
+  j["steps"] = s.steps;
+  j["simulated_s"] = s.simulated_s;
+  j["settle_s"] = s.settle_s;
+  j["settle_wall_s"] = s.settle_wall_s;
+  j["settled"] = s.settled;
+  j["turning_s"] = s.turning_s;
+  j["revolutions"] = s.revolutions;
+  j["average"] = {{"from_s", s.window_from_s},
+                  {"to_s", s.window_to_s},
+                  {"revolutions", s.window_revolutions},
+                  {"whole_revolutions", s.whole_revolutions}};
+  j["power_W"] = {{"torque", s.torque_power_W},
+                  {"dissipation", s.dissipation_power_W},
+                  {"imbalance", s.imbalance},
+                  {"energy_change", s.energy_change_W},
+                  {"torque_arm", s.torque_arm_power_W},
+                  {"torque_sem", number_or_null(err.power.sem)},
+                  {"dissipation_sem", number_or_null(err.dissipation.sem)},
+                  {"torque_arm_sem", number_or_null(err.arm.sem)}};
+  j["torque_Nm"] = s.torque_Nm;
+  j["torque_Nm_sem"] = number_or_null(err.torque.sem);
+  // Per metre of mill, which a slice stands for (sweep collect reads it).
+  j["ends"] = c.periodic ? "periodic" : "plates";
+  j["length_m"] = c.length;
+  j["power_per_metre_W"] = {{"torque", s.torque_power_W / c.length},
+                            {"dissipation", s.dissipation_power_W / c.length}};
+  j["torque_per_metre_Nm"] = s.torque_Nm / c.length;
+  j["power_per_metre_W"]["torque_sem"] = number_or_null(err.power.sem / c.length);
+  j["power_per_metre_W"]["dissipation_sem"] = number_or_null(err.dissipation.sem / c.length);
+  j["toe_deg"] = number_or_null(toe);
+  j["toe_deg_sem"] = number_or_null(err.toe.sem);
+  j["shoulder_deg"] = number_or_null(shoulder);
+  j["shoulder_deg_sem"] = number_or_null(err.shoulder.sem);
+  j["com_angle_deg"] = s.com_angle_deg;
+  j["com_angle_deg_sem"] = number_or_null(err.com.sem);
+  // How the standard errors were taken, and how the turning ended.
+  j["convergence"] = {{"duration", c.duration_auto ? "auto" : "fixed"},
+                      {"tolerance", c.tolerance},
+                      {"max_duration_s", c.duration_auto ? nlohmann::json(d.turn_limit_s) : nlohmann::json()},
+                      {"converged", c.duration_auto ? nlohmann::json(s.converged) : nlohmann::json()},
+                      {"stopped_at_cap", s.capped},
+                      {"revolutions", window_revs},
+                      {"batches", err.power.batches},
+                      {"batches_per_revolution", per_rev},
+                      {"revolutions_per_batch", static_cast<double>(err.power.batch_length) / per_rev},
+                      {"lag1_autocorrelation", number_or_null(err.power.lag1)},
+                      {"batches_correlated", err.power.correlated},
+                      {"power_relative_sem", number_or_null(rel_err)}};
+  j["neighbours_per_ball"] = s.neighbours_per_ball;
+  j["morrell"] = {{"power_W", m.charge_power_W},
+                  {"k", kMorrellK},
+                  {"net_power_W", m.net_power_W},
+                  {"toe_deg", m.toe_deg},
+                  {"shoulder_deg", m.shoulder_deg},
+                  {"power_with_dem_angles_W", number_or_null(m_with_dem)},
+                  {"charge_density_kg_m3", mi.charge_density}};
+  j["spectra"] = io::spectra_json(spectra);
+  j["spectra"]["total"]["collisions_per_s_sem"] = number_or_null(err.collisions.sem);
+  j["spectra"]["total"]["power_W_sem"] = number_or_null(err.collision_power.sem);
+  j["liner"] = io::liner_json(layout, liner, r.scene.wall_material.wear_coefficient);
+  j["liner"]["impacts_per_s_sem"] = number_or_null(err.impacts.sem);
+  j["liner"]["impact_power_W_sem"] = number_or_null(err.impact.sem);
+  j["liner"]["shear_power_W_sem"] = number_or_null(err.shear.sem);
+  j["liner"]["wear_kg_per_h_sem"] = number_or_null(err.wear.sem);
+  j["per_metre"] = io::per_metre_json(c.length, s.torque_power_W, s.dissipation_power_W, s.torque_Nm, spectra, liner);
+  j["contact_records_refused"] = r.solver.records_refused();
+  j["wall_s"] = s.wall_s;
+  j["particle_updates_per_s"] = s.updates_per_s;
+  j["device"] = r.device;
+  j["device_bytes"] = r.solver.device_bytes();
+  j["precision"] = c.precision == Precision::double_ ? "double" : "float";
+
+  // Pictures: power against time, and the end view with toe and shoulder.
+  io::LinePlot plot;
+  plot.title = c.name + ": power draw, " + std::to_string(static_cast<int>(std::lround(100 * d.speed_fraction))) +
+               "% of critical";
+  plot.x_label = "time since the mill started (s)";
+  plot.y_label = "power (W)";
+  plot.series = {{"torque power", r.t_series, r.p_torque, 0x1f77b4}, {"dissipation", r.t_series, r.p_diss, 0xd62728}};
+  plot.span_from = s.window_from_s;
+  plot.span_to = s.window_to_s;
+  plot.span_label = "averaged";
+  plot.ref_lines = {{s.torque_power_W, s.window_from_s, s.window_to_s, 0x0d3a5c, false,
+                     "mean torque power " + io::value_with_error(s.torque_power_W, err.power.sem, "W")},
+                    {s.dissipation_power_W, s.window_from_s, s.window_to_s, 0x7a1014, true,
+                     "mean dissipation " + io::value_with_error(s.dissipation_power_W, err.dissipation.sem, "W")}};
+  io::draw_or_warn(out / "power.png", [&] { io::write_line_plot_png(out / "power.png", plot); });
+  io::EndView view;
+  view.title = c.name + " at t = " + std::to_string(s.turning_s).substr(0, 5) + " s";
+  view.shell_radius = 0.5 * c.diameter;
+  view.lifters = lab_lifters(r.scene, r.solver.mill_angle());
+  for (const BallState& b : r.solver.balls())
+    view.balls.push_back({b.position.x, b.position.y, b.position.z, b.radius, b.velocity.norm()});
+  view.toe_deg = s.angles.found ? s.angles.toe_deg : -1;
+  view.shoulder_deg = s.angles.found ? s.angles.shoulder_deg : -1;
+  view.impact_deg = std::isfinite(liner.impact_point_deg) ? liner.impact_point_deg : -1;
+  view.has_com = true;
+  const Observables now = r.solver.observe(false);
+  view.com_x = now.com_x_m;
+  view.com_y = now.com_y_m;
+  io::draw_or_warn(out / "charge.png", [&] { io::write_end_view_png(out / "charge.png", view); });
+  io::draw_or_warn(out / "liner.png", [&] { io::write_liner_png(out / "liner.png", c.name, layout, liner); });
+  io::draw_or_warn(out / "spectra.png", [&] { io::write_spectra_png(out / "spectra.png", c.name, spectra); });
+  io::write_spectra_csv(out / "spectra.csv", spectra);
+  io::write_wear_csv(out / "wear.csv", layout, liner);
+  // The liner in the mill frame, and beside each snapshot turned to the
+  // mill's angle then (part 1 of the same times in charge.pvd).
+  io::write_mesh_vtp(out / "liner.vtp", io::liner_mesh(layout, &liner, 0.0, s.turning_s));
+  {
+    const std::vector<double> times = r.pvd.times();
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      char name[64];
+      std::snprintf(name, sizeof name, "snapshots/liner_%06zu.vtp", k);
+      io::write_mesh_vtp(out / name, io::liner_mesh(layout, &liner, r.scene.mill_angle + d.omega * times[k], times[k]));
+      r.pvd.add(times[k], name, 1);
+    }
+  }
+  io::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+}
+
+void print_run_results(const FinishedRun& r, const RunReport& rep) {
+  const MillCase& c = r.c;
+  const MillDerived& d = r.d;
+  const RunSummary& s = r.s;
+  const fs::path& out = r.out;
+  const MorrellResult& m = rep.m;
+  const Errors& err = rep.err;
+  const LinerLayout& layout = rep.layout;
+  const SpectraReport& spectra = rep.spectra;
+  const LinerReport& liner = rep.liner;
+  const int per_rev = rep.per_rev, window_revs = rep.window_revs;
+  const double rel_err = rep.rel_err;
+  std::printf("power draw      torque %s, dissipation %s (imbalance %+.2f %%), torque arm %s\n",
+              plus_minus(s.torque_power_W, err.power.sem, " W").c_str(),
+              plus_minus(s.dissipation_power_W, err.dissipation.sem, " W").c_str(), 100 * s.imbalance,
+              plus_minus(s.torque_arm_power_W, err.arm.sem, " W").c_str());
+  std::printf("                averaged over %.2f revolutions from t = %.3f s to %.3f s\n", s.window_revolutions,
+              s.window_from_s, s.window_to_s);
+  // An imbalance from a charge whose energy still changes (a window that
+  // starts before the charge has settled into its motion) is not an error
+  // of the books: say so, and what the books give with the change counted.
+  if (s.torque_power_W != 0 && std::fabs(s.energy_change_W) > 0.01 * std::fabs(s.torque_power_W))
+    std::printf("                the charge's energy %s by %.4g W over the window (not yet in a steady motion: "
+                "a longer warm-up helps); torque - dissipation - that change: %+.2f %% of torque\n",
+                s.energy_change_W < 0 ? "fell" : "rose", std::fabs(s.energy_change_W),
+                100 * (s.torque_power_W - s.dissipation_power_W - s.energy_change_W) / s.torque_power_W);
+  std::printf("per metre       torque %s, dissipation %s, torque %.4g N m/m over %.4g m%s\n",
+              plus_minus(s.torque_power_W / c.length, err.power.sem / c.length, " W/m").c_str(),
+              plus_minus(s.dissipation_power_W / c.length, err.dissipation.sem / c.length, " W/m").c_str(),
+              s.torque_Nm / c.length, c.length, c.periodic ? " of periodic slice" : " between the end plates");
+  const std::string batch = batch_words(err.power.batch_length, per_rev);
+  if (err.power.batches >= 2 && std::isfinite(err.power.lag1))
+    std::printf("                \u00b1 one standard error, from %d batch means of %s (lag-1 "
+                "autocorrelation %.2f%s)\n",
+                err.power.batches, batch.c_str(), err.power.lag1,
+                err.power.correlated ? ", still correlated: the errors are too small" : "");
+  else if (err.power.batches >= 2)
+    std::printf("                \u00b1 one standard error, from %d batch means of %s (too few to "
+                "test their correlation: a rough error)\n",
+                err.power.batches, batch.c_str());
+  if (s.duration_auto && s.converged)
+    std::printf("convergence     converged after %d revolution%s: the power's standard error is %.2f %% of its mean "
+                "(run.tolerance %.3g %%)\n",
+                window_revs, window_revs == 1 ? "" : "s", 100 * rel_err, 100 * c.tolerance);
+  else if (s.duration_auto)
+    std::printf("convergence     NOT converged: stopped at the cap (run.max_duration %.4g s) after %d revolutions; "
+                "the power's standard error is %.2f %% of its mean, run.tolerance %.3g %%\n",
+                d.turn_limit_s, window_revs, 100 * rel_err, 100 * c.tolerance);
+  if (s.angles.found)
+    std::printf("charge angles   toe %s, shoulder %s, centre of mass %s\n",
+                plus_minus(s.angles.toe_deg, err.toe.sem, " deg").c_str(),
+                plus_minus(s.angles.shoulder_deg, err.shoulder.sem, " deg").c_str(),
+                plus_minus(s.com_angle_deg, err.com.sem, " deg").c_str());
+  std::printf("collisions      %s per s, %s (normal %.4g, tangential %.4g, rolling %.4g W); spectra %.4g W "
+              "against dissipation %.4g W\n",
+              plus_minus(spectra.all.collisions_per_s, err.collisions.sem, "").c_str(),
+              plus_minus(spectra.all.power_W, err.collision_power.sem, " W").c_str(), spectra.all.normal_W,
+              spectra.all.tangential_W, spectra.all.rolling_W, spectra.books_W, spectra.dissipation_W);
+  std::printf("liner           impact %s, shear %s, wear %s, worst %.3g mm per 1000 h (%s)\n",
+              plus_minus(liner.impact_W, err.impact.sem, " W").c_str(),
+              plus_minus(liner.shear_W, err.shear.sem, " W").c_str(),
+              plus_minus(liner.wear_kg_per_h, err.wear.sem, " kg/h").c_str(), liner.worst_wear_mm_per_1000h,
+              liner.worst_element >= 0 ? io::element_name(layout, liner.worst_element).c_str() : "none");
+  if (std::isfinite(liner.impact_point_deg))
+    std::printf("impact point    %.0f deg, on the %s; %.3g W (%.0f %%) of the liner's impact power on bare liner\n",
+                liner.impact_point_deg, liner.impact_point_on_liner ? "bare liner above the toe" : "toe",
+                liner.bare_liner_impact_W, 100 * liner.bare_liner_impact_share);
+  std::printf("morrell         power %.4g W (k %.2f x net %.4g W), toe %.1f deg, shoulder %.1f deg; DEM/model %.3f\n",
+              m.charge_power_W, kMorrellK, m.net_power_W, m.toe_deg, m.shoulder_deg, s.torque_power_W / m.charge_power_W);
+  std::printf("speed           %s steps in %.1f s wall (settling %.3g s simulated in %.1f s wall, %.0f %%), %.3g "
+              "particle-updates/s\n",
+              thousands(s.steps).c_str(), s.wall_s, s.settle_s, s.settle_wall_s,
+              s.wall_s > 0 ? 100 * s.settle_wall_s / s.wall_s : 0.0, s.updates_per_s);
+  std::printf("wrote           %s/{summary.json, timeseries.csv, charge.pvd, power.png, charge.png, spectra.csv, "
+              "spectra.png, wear.csv, liner.vtp, liner.png}\n",
+              out.string().c_str());
+}
+
+}  // namespace mc::app

@@ -1,0 +1,66 @@
+// What `millcharge run` reports once the mill has turned: summary.json, the
+// pictures, spectra.csv, wear.csv and the liner's ParaView files, and the
+// result lines on stdout (docs/outputs.md).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/liner.h"
+#include "core/mill_case.h"
+#include "core/morrell.h"
+#include "core/scene.h"
+#include "io/vtk.h"
+#include "sim/batch_means.h"
+#include "sim/energy_report.h"
+#include "sim/mill_run.h"
+#include "sim/solver.h"
+
+namespace mc::app {
+
+// A run that has turned to its end, as the report reads it.
+struct FinishedRun {
+  const MillCase& c;
+  const MillDerived& d;
+  const Scene& scene;
+  const RunSummary& s;
+  Solver& solver;
+  std::string device;                 // the device's label
+  std::filesystem::path out;          // the run folder
+  io::PvdIndex& pvd;                  // charge.pvd, which gains the liner's snapshots
+  const std::vector<double>& t_series;  // the power plot's points
+  const std::vector<double>& p_torque;
+  const std::vector<double>& p_diss;
+};
+
+// The standard errors of a run's means, each from its revolutions' means
+// (batch means, sim/batch_means.h).
+struct Errors {
+  BatchMeans power, dissipation, torque, arm, toe, shoulder, com;
+  BatchMeans collisions, collision_power, impacts, impact, shear, wear;
+};
+
+// What the files and the console share: the model beside the DEM, the
+// errors, the spectra and the liner over the window.
+struct RunReport {
+  MorrellInput mi;
+  MorrellResult m;
+  double toe = 0, shoulder = 0, m_with_dem = 0;
+  Errors err;
+  int per_rev = 1, window_revs = 0;
+  double rel_err = 0;
+  LinerLayout layout;
+  SpectraReport spectra;
+  LinerReport liner;
+};
+
+RunReport report_of(const FinishedRun& r);
+// summary.json (written last, atomically), the pictures, spectra.csv,
+// wear.csv, liner.vtp and the liner beside each snapshot.
+void write_run_results(const FinishedRun& r, const RunReport& rep);
+// The result lines: power, per metre, convergence, angles, collisions,
+// liner, impact point, Morrell, speed, the files.
+void print_run_results(const FinishedRun& r, const RunReport& rep);
+
+}  // namespace mc::app
