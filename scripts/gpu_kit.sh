@@ -40,4 +40,5 @@ done
 # The build's source root, which its compiled-in paths name.
 pwd > "$kit/build-root"
 git rev-parse --short HEAD > "$kit/commit" 2> /dev/null || true
+build/millcharge --version > "$kit/version"  # the commit the programs were built from (dirty if edited)
 echo "gpu_kit.sh: $kit/ holds millcharge, millcharge_law_probe, millcharge_validate, millcharge_tests, clinfo and $n libraries ($(du -sh "$kit" | cut -f1)), built in $(cat "$kit/build-root") at $(cat "$kit/commit" 2> /dev/null || echo '?')"

@@ -117,6 +117,7 @@ else
   tests_bin=$kit/bin/millcharge_tests
   clinfo_bin=$kit/bin/clinfo
   log "gpu_session.sh: OpenCL library $lib; kit built at $(cat "$kit/commit" 2> /dev/null || echo '?'); budget $budget s"
+  log "gpu_session.sh: $("$kit/bin/millcharge" --version 2>&1)"
 fi
 mc=$bin/millcharge
 

@@ -12,6 +12,7 @@
 
 #include "app/commands.h"
 #include "core/mill_case.h"
+#include "core/version.h"
 #include "io/case_file.h"
 #include "io/vtk.h"
 
@@ -55,6 +56,10 @@ TEST_CASE("run writes summary.json, timeseries.csv, snapshots with charge.pvd an
   CHECK(j["speed_fraction"].get<double>() == Approx(0.75));
   CHECK(j["dt_s"].get<double>() == Approx(d.dt));
   CHECK(j["precision"] == "float");
+  // The code that made it: this build's version and commit.
+  CHECK(j["build"]["version"] == mc::version());
+  CHECK(j["build"]["commit"] == mc::build_commit());
+  CHECK(std::string(mc::build_commit()).size() >= 7);
   CHECK(j["revolutions"].get<double>() == Approx(0.3 / d.revolution_s).epsilon(0.01));
   CHECK(j["simulated_s"].get<double>() == Approx(0.35).epsilon(0.01));
   CHECK(j["steps"].get<long>() == std::lround(0.05 / d.dt) + std::lround(0.3 / d.dt));

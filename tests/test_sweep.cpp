@@ -336,7 +336,7 @@ TEST_CASE("sweep collect: a row per case, status and cause, open spectra and lin
                            "spectra.total.future_figure", "liner.wear_kg_per_h", "liner.worst_wear_mm_per_1000h",
                            "liner.impact_power_W", "liner.shear_power_W", "liner.bare_liner_impact_power_W",
                            "liner.bare_liner_impact_share", "liner.impact_point_deg", "morrell.power_W",
-                           "power_per_metre_W.torque", "exit_status", "error"})
+                           "power_per_metre_W.torque", "build", "exit_status", "error"})
     CHECK(has(name));
   CHECK_FALSE(has("liner.surfaces"));     // not a number
   CHECK_FALSE(has("liner.material"));

@@ -1,6 +1,7 @@
 // millcharge bench: the solver timed on a turning charge, one JSON line.
 #include "app/commands.h"
 #include "app/prepare.h"
+#include "core/version.h"
 #include "core/clump.h"
 
 #include <unistd.h>
@@ -269,6 +270,7 @@ int cmd_bench(const BenchOptions& o) {
                  {"forces", st.forces_s / total},
                  {"motion", st.motion_s / total},
                  {"reductions", st.reductions_s / total}};
+  j["build"] = {{"version", version()}, {"commit", build_commit()}};
   std::printf("%s\n", j.dump().c_str());
   return 0;
 }

@@ -25,6 +25,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/version.h"
 #include "app/cli_checks.h"
 #include "app/commands.h"
 #include "app/grind.h"
@@ -69,6 +70,7 @@ void add_case_options(CLI::App* cmd, mc::app::CaseOptions& o, bool with_run_opti
 
 int main(int argc, char** argv) {
   CLI::App app{"millcharge: 3D DEM of tumbling mill charges on OpenCL"};
+  app.set_version_flag("--version", mc::version_line(), "print the version and the commit it was built from");
   app.require_subcommand(1);
   auto* devices = app.add_subcommand("devices", "list OpenCL platforms and devices");
 

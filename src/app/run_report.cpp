@@ -8,6 +8,7 @@
 
 #include "app/prepare.h"
 #include "core/lifters.h"
+#include "core/version.h"
 #include "io/atomic_file.h"
 #include "io/energy_out.h"
 #include "io/png_plot.h"
@@ -204,6 +205,7 @@ void write_run_results(const FinishedRun& r, const RunReport& rep) {
   j["device"] = r.device;
   j["device_bytes"] = r.solver.device_bytes();
   j["precision"] = c.precision == Precision::double_ ? "double" : "float";
+  j["build"] = {{"version", version()}, {"commit", build_commit()}};  // the code that made it
 
   // Pictures: power against time, and the end view with toe and shoulder.
   io::LinePlot plot;

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "app/sweep_runs.h"
+#include "core/version.h"
 #include "io/png_plot.h"
 
 namespace mc::app {
@@ -194,6 +195,10 @@ SweepTable collect_table(const fs::path& sweep_dir) {
       }
     }
     row["wall_s"] = have ? number_at(summary, "/wall_s") : json();
+    // The code each case's run was made by (summaries before the stamp: empty).
+    const bool stamped = have && summary.contains("build") && summary["build"].is_object() &&
+                         summary["build"].contains("commit") && summary["build"]["commit"].is_string();
+    row["build"] = stamped ? json(summary["build"]["commit"].get<std::string>()) : json();
     row["exit_status"] = st.exit_status >= 0 ? json(st.exit_status) : json();
     if (!row.contains("error")) {
       const bool explain = st.status == CaseStatus::failed || st.status == CaseStatus::stopped ||
@@ -210,7 +215,7 @@ SweepTable collect_table(const fs::path& sweep_dir) {
                         "morrell.power_per_metre_W"})
     t.columns.push_back(c);
   t.columns.insert(t.columns.end(), open_columns.begin(), open_columns.end());
-  for (const char* c : {"wall_s", "exit_status", "error", "case"}) t.columns.push_back(c);
+  for (const char* c : {"wall_s", "build", "exit_status", "error", "case"}) t.columns.push_back(c);
   for (json& row : t.rows)  // every row has every column, in order
     for (const std::string& c : t.columns)
       if (!row.contains(c)) row[c] = nullptr;
@@ -235,6 +240,7 @@ json table_json(const SweepTable& t) {
   j["columns"] = t.columns;
   j["cases_total"] = t.rows.size();
   j["cases_finished"] = t.finished;
+  j["collected_by"] = {{"version", version()}, {"commit", build_commit()}};
   j["cases"] = json::array();
   for (const json& row : t.rows) {
     json r;
