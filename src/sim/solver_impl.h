@@ -112,6 +112,11 @@ class SolverImpl final : public Solver {
  private:
   static compute::BuildOptions options(const Scene& scene);
   void setup_params(const Scene& scene);
+  void choose_from_environment(compute::Context& ctx);
+  void check_layouts(compute::Context& ctx);
+  void upload_charge(const Scene& scene);
+  void clear_contacts();
+  void start_leapfrog();
   void setup_meshes(const SceneTables& t);
   void rebuild();
   void forces(bool defer_reactions = false);

@@ -109,6 +109,22 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       k_body_slots_(program_, "body_slots"),
       k_body_sums_(program_, "body_sums"),
       k_body_motion_(program_, "body_motion") {
+  choose_from_environment(ctx);
+  if (n_ == 0) throw std::invalid_argument("scene: no balls");
+  check_layouts(ctx);
+  setup_params(scene);
+  upload_charge(scene);
+  clear_contacts();
+  rebuild();
+  forces();
+  start_leapfrog();
+  observe(true);  // start the first interval here
+}
+
+// MILLCHARGE_FORCES, MILLCHARGE_FUSED_MOTION and MILLCHARGE_STATUS_EVERY:
+// the kernel variants and how often the host reads the status word.
+template <class Real>
+void SolverImpl<Real>::choose_from_environment(compute::Context& ctx) {
   if (const char* e = std::getenv("MILLCHARGE_FORCES"); e && *e) {
     const std::string v = e;
     if (v != "ball" && v != "grouped")
@@ -129,9 +145,11 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       throw std::invalid_argument(std::string("MILLCHARGE_STATUS_EVERY=") + e + ": expected a whole number from 1 to 64");
     status_every_ = static_cast<int>(k);
   }
-  if (n_ == 0) throw std::invalid_argument("scene: no balls");
+}
 
-  // The device's struct sizes must equal the host mirrors'.
+// The device's struct sizes must equal the host mirrors'.
+template <class Real>
+void SolverImpl<Real>::check_layouts(compute::Context& ctx) {
   Buffer<int> sizes(ctx, 7, "layout sizes");
   k_layout_.args(sizes).launch(1);
   sizes.read_from_device();
@@ -144,8 +162,11 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       sizes.host[6] != static_cast<int>(sizeof(typename L::MeshGrid)))
     throw compute::Error("struct layouts differ between host and device (cl/layout.h)");
 
-  setup_params(scene);
+}
 
+// The balls and the bodies (clumps) of the scene, onto the device.
+template <class Real>
+void SolverImpl<Real>::upload_charge(const Scene& scene) {
   // A slice keeps its balls and bodies in [0, period) (cl/periodic.h).
   auto wrap = [&](double z) {
     return scene.walls.periodic ? z - scene.walls.length * std::floor(z / scene.walls.length) : z;
@@ -190,6 +211,12 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
     }
     for (const Body& b : scene.bodies) total_mass_ += b.mass;
   }
+}
+
+// No wall contact, no record, empty lists and a clear status word: the
+// first rebuild takes these as the previous state.
+template <class Real>
+void SolverImpl<Real>::clear_contacts() {
   std::fill(wall_key_.host.begin(), wall_key_.host.end(), MC_WALL_NONE);
   std::fill(wall_rec_.host.begin(), wall_rec_.host.end(), MC_NO_RECORD);
   for (auto* b : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_}) b->write_to_device();
@@ -202,9 +229,12 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
   status_.write_to_device();
   profile_.write_to_device();
 
-  rebuild();
-  forces();
-  // Leapfrog keeps v half a step behind x: v(−½) = v(0) − ½·dt·F(0)/m.
+}
+
+// Leapfrog keeps v half a step behind x: v(−½) = v(0) − ½·dt·F(0)/m, and
+// likewise each body's v and L from F(0), T(0).
+template <class Real>
+void SolverImpl<Real>::start_leapfrog() {
   for (auto* b : {&vel_, &omega_, &force_, &torque_}) b->read_from_device();
   for (int i = 0; i < n_; ++i) {
     auto& v = vel_.host[i];
@@ -242,7 +272,6 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
     body_vel_.write_to_device();
     body_angmom_.write_to_device();
   }
-  observe(true);  // start the first interval here
 }
 
 // A table of pair parameters in the solver's precision, on the device.
@@ -489,6 +518,16 @@ std::size_t SolverImpl<Real>::device_bytes() const {
 }
 
 // This file's members, for both precisions.
+template void SolverImpl<float>::choose_from_environment(compute::Context& ctx);
+template void SolverImpl<double>::choose_from_environment(compute::Context& ctx);
+template void SolverImpl<float>::check_layouts(compute::Context& ctx);
+template void SolverImpl<double>::check_layouts(compute::Context& ctx);
+template void SolverImpl<float>::upload_charge(const Scene& scene);
+template void SolverImpl<double>::upload_charge(const Scene& scene);
+template void SolverImpl<float>::clear_contacts();
+template void SolverImpl<double>::clear_contacts();
+template void SolverImpl<float>::start_leapfrog();
+template void SolverImpl<double>::start_leapfrog();
 template compute::BuildOptions SolverImpl<float>::options(const Scene& scene);
 template compute::BuildOptions SolverImpl<double>::options(const Scene& scene);
 template SolverImpl<float>::SolverImpl(compute::Context& ctx, const Scene& scene);
