@@ -1,0 +1,203 @@
+// Reads ore files (ore_file.h).
+#include "io/ore_file.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <toml++/toml.h>
+#include <utility>
+#include <vector>
+
+#include "grind/pbm.h"
+#include "io/toml_names.h"
+
+namespace mc::io {
+
+namespace fs = std::filesystem;
+using namespace mc::grind;
+
+namespace {
+
+// The ore file's tables and keys, with file:line in every message.
+class OreReader {
+ public:
+  OreReader(const toml::table& t, std::string file) : top_(t), file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const std::string& key, const toml::node* n, const std::string& what) const {
+    std::string where = file_;
+    if (n && n->source().begin.line > 0) where += ":" + std::to_string(n->source().begin.line);
+    throw std::invalid_argument(where + ": " + key + ": " + what);
+  }
+  const toml::table* table(const std::string& name, bool required) const {
+    const toml::node* n = top_.get(name);
+    if (!n) {
+      if (required) fail(name, nullptr, "missing table [" + name + "]");
+      return nullptr;
+    }
+    if (!n->is_table()) fail(name, n, "must be a table, not " + type_name(*n));
+    return n->as_table();
+  }
+  void knows(const toml::table& t, const std::string& prefix, const std::set<std::string>& keys) const {
+    for (const auto& [k, v] : t)
+      if (!keys.count(std::string(k.str()))) {
+        std::string list;
+        for (const auto& x : keys) list += (list.empty() ? "" : ", ") + x;
+        fail(prefix + std::string(k.str()), &v, "unknown key (known here: " + list + ")");
+      }
+  }
+  // A number in [lo, hi] (open ends where `open`), or the default when the
+  // key is absent and a default is given.
+  double number(const toml::table& t, const std::string& prefix, const std::string& key, double lo, double hi,
+                const std::string& range, std::optional<double> dflt = std::nullopt) const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (dflt) return *dflt;
+      fail(prefix + key, nullptr, "missing (" + range + ")");
+    }
+    if (!n->is_number()) fail(prefix + key, n, "must be a number, not " + type_name(*n));
+    const double v = n->value<double>().value();
+    if (!std::isfinite(v) || v < lo || v > hi) fail(prefix + key, n, fmt::format("{:g} is out of range: {}", v, range));
+    return v;
+  }
+  std::vector<double> numbers(const toml::table& t, const std::string& prefix, const std::string& key) const {
+    const toml::node* n = t.get(key);
+    if (!n) fail(prefix + key, nullptr, "missing (an array of numbers)");
+    if (!n->is_array()) fail(prefix + key, n, "must be an array of numbers, not " + type_name(*n));
+    std::vector<double> v;
+    for (const toml::node& e : *n->as_array()) {
+      if (!e.is_number()) fail(prefix + key, &e, "must hold numbers only, not " + type_name(e));
+      v.push_back(e.value<double>().value());
+    }
+    if (v.size() < 2) fail(prefix + key, n, "needs at least two values");
+    return v;
+  }
+  const toml::node* node(const toml::table& t, const std::string& key) const { return t.get(key); }
+
+ private:
+  const toml::table& top_;
+  std::string file_;
+};
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+}  // namespace
+
+grind::Ore read_ore(const fs::path& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw std::invalid_argument("--ore " + path.string() + ": is a directory, not a file");
+  if (!fs::exists(path, ec)) throw std::invalid_argument("--ore " + path.string() + ": no such file");
+  toml::table top;
+  try {
+    top = toml::parse_file(path.string());
+  } catch (const toml::parse_error& e) {
+    throw std::invalid_argument(fmt::format("{}:{}:{}: not valid TOML: {}", path.string(), e.source().begin.line,
+                                            e.source().begin.column, e.description()));
+  }
+  const std::string file = path.string();
+  OreReader r(top, file);
+  Ore o;
+  r.knows(top, "", {"name", "density", "holdup_kg", "powder_filling", "bed_porosity", "bulk_density", "tanks",
+                    "sizes", "feed", "breakage", "rates"});
+  if (const toml::node* n = top.get("name")) o.name = n->value<std::string>().value_or("");
+  o.density = r.number(top, "", "density", 500, 25000, "kg/m^3 of the ore's solid, 500 to 25000");
+  const bool has_holdup = top.get("holdup_kg"), has_u = top.get("powder_filling");
+  if (has_holdup == has_u)
+    r.fail(has_holdup ? "powder_filling" : "holdup_kg", has_u ? top.get("powder_filling") : nullptr,
+           "give exactly one of holdup_kg (kg of ore in the mill) and powder_filling (U, the share of the ball "
+           "bed's voids the ore fills)");
+  if (has_holdup) o.holdup_kg = r.number(top, "", "holdup_kg", 0, kInf, "kg > 0");
+  if (o.holdup_kg == 0 && has_holdup) r.fail("holdup_kg", top.get("holdup_kg"), "must be > 0 kg");
+  if (has_u) o.powder_filling = r.number(top, "", "powder_filling", 0.01, 3, "0.01 to 3 (1: the voids just full)");
+  o.bed_porosity = r.number(top, "", "bed_porosity", 0.2, 0.7, "0.2 to 0.7", 0.4);
+  o.bulk_density = r.number(top, "", "bulk_density", 300, 15000, "kg/m^3 of the packed feed, 300 to 15000",
+                            o.density * (1 - o.bed_porosity));
+  if (o.bulk_density >= o.density)
+    r.fail("bulk_density", top.get("bulk_density"), "must be below the solid's density");
+  o.tanks = static_cast<int>(r.number(top, "", "tanks", 1, 1000, "1 to 1000 tanks in series", 1));
+
+  const toml::table& sz = *r.table("sizes", true);
+  r.knows(sz, "sizes.", {"top_mm", "ratio", "classes"});
+  const double top_mm = r.number(sz, "sizes.", "top_mm", 1e-3, 1e3, "mm, 0.001 to 1000");
+  const double ratio = r.number(sz, "sizes.", "ratio", 1.05, 4, "1.05 to 4 (sqrt 2 or 2^0.25 are the usual series)",
+                                std::sqrt(2.0));
+  const double classes = r.number(sz, "sizes.", "classes", 4, 200, "4 to 200");
+  if (classes != std::floor(classes)) r.fail("sizes.classes", sz.get("classes"), "must be a whole number");
+  o.sizes = geometric_series(top_mm * 1e-3, ratio, static_cast<int>(classes));
+
+  const toml::table& fd = *r.table("feed", true);
+  r.knows(fd, "feed.", {"sieve_mm", "passing"});
+  const std::vector<double> sieve = r.numbers(fd, "feed.", "sieve_mm");
+  const std::vector<double> pass = r.numbers(fd, "feed.", "passing");
+  if (sieve.size() != pass.size())
+    r.fail("feed.passing", fd.get("passing"),
+           fmt::format("holds {} values for {} sieves in feed.sieve_mm", pass.size(), sieve.size()));
+  for (std::size_t k = 0; k < sieve.size(); ++k) {
+    if (!(sieve[k] > 0)) r.fail("feed.sieve_mm", fd.get("sieve_mm"), "sizes must be > 0 mm");
+    if (k > 0 && !(sieve[k] < sieve[k - 1]))
+      r.fail("feed.sieve_mm", fd.get("sieve_mm"), "sizes must descend, coarsest first");
+    if (!(pass[k] >= 0 && pass[k] <= 1)) r.fail("feed.passing", fd.get("passing"), "each passing must be in 0..1");
+    if (k > 0 && pass[k] > pass[k - 1])
+      r.fail("feed.passing", fd.get("passing"), "passing must not rise as the sieves get finer");
+  }
+  if (std::fabs(pass.front() - 1) > 1e-9)
+    r.fail("feed.passing", fd.get("passing"),
+           fmt::format("the coarsest sieve ({:g} mm) must pass all the feed (1), not {:g}: the feed must sum to 1",
+                       sieve.front(), pass.front()));
+  if (sieve.front() > top_mm * (1 + 1e-9))
+    r.fail("sizes.top_mm", sz.get("top_mm"),
+           fmt::format("{:g} mm is below the feed's top size {:g} mm: the size series does not cover the feed", top_mm,
+                       sieve.front()));
+  std::vector<double> sieve_m;
+  for (double s : sieve) sieve_m.push_back(s * 1e-3);
+  o.feed = feed_masses(o.sizes, sieve_m, pass);
+  o.sieve_m = sieve_m;
+  o.sieve_passing = pass;
+  o.ratio = ratio;
+  o.f80_m = passing_size(o.sizes, o.feed, 0.8);
+
+  const toml::table& bk = *r.table("breakage", true);
+  r.knows(bk, "breakage.", {"phi", "gamma", "beta"});
+  o.breakage.phi = r.number(bk, "breakage.", "phi", 0, 1, "0 to 1");
+  o.breakage.gamma = r.number(bk, "breakage.", "gamma", 0.2, 3, "0.2 to 3");
+  o.breakage.beta = r.number(bk, "breakage.", "beta", 1, 10, "1 to 10");
+
+  const toml::table& rt = *r.table("rates", true);
+  const toml::node* mn = rt.get("model");
+  const std::string model = mn ? mn->value<std::string>().value_or("?") : "";
+  if (model == "austin") {
+    o.model = RateModel::austin;
+    r.knows(rt, "rates.", {"model", "a_per_min", "alpha", "mu_mm", "lambda"});
+    o.austin.a_per_min = r.number(rt, "rates.", "a_per_min", 1e-6, 100, "per minute at 1 mm, 1e-6 to 100");
+    o.austin.alpha = r.number(rt, "rates.", "alpha", 0.1, 3, "0.1 to 3");
+    o.austin.mu_m = r.number(rt, "rates.", "mu_mm", 1e-3, 1e3, "mm, 0.001 to 1000") * 1e-3;
+    o.austin.lambda = r.number(rt, "rates.", "lambda", 0.5, 10, "0.5 to 10");
+  } else if (model == "energy") {
+    o.model = RateModel::energy;
+    r.knows(rt, "rates.", {"model", "s1e_t_per_kWh", "x1_mm", "zeta1", "zeta2"});
+    o.energy.s1e_t_per_kWh = r.number(rt, "rates.", "s1e_t_per_kWh", 1e-6, 100, "t/kWh, 1e-6 to 100");
+    o.energy.x1_m = r.number(rt, "rates.", "x1_mm", 1e-3, 1e3, "mm, 0.001 to 1000") * 1e-3;
+    o.energy.zeta1 = r.number(rt, "rates.", "zeta1", -5, 5, "-5 to 5");
+    o.energy.zeta2 = r.number(rt, "rates.", "zeta2", -5, 5, "-5 to 5", 0.0);
+  } else if (model == "spectrum") {
+    o.model = RateModel::spectrum;
+    r.knows(rt, "rates.", {"model", "e_inf_J_kg", "d0_mm", "phi", "sigma", "emax_ratio", "packing", "efficiency"});
+    o.fracture.e_inf_J_kg = r.number(rt, "rates.", "e_inf_J_kg", 1e-3, 1e5, "J/kg, 0.001 to 1e5");
+    o.fracture.d0_m = r.number(rt, "rates.", "d0_mm", 1e-4, 1e3, "mm, 1e-4 to 1000") * 1e-3;
+    o.fracture.phi = r.number(rt, "rates.", "phi", 0, 5, "0 to 5");
+    o.fracture.sigma = r.number(rt, "rates.", "sigma", 0.05, 3, "0.05 to 3");
+    o.fracture.emax_ratio = r.number(rt, "rates.", "emax_ratio", 1.01, 1e3, "1.01 to 1000", 10.0);
+    o.packing = r.number(rt, "rates.", "packing", 0.05, 0.91, "0.05 to 0.91 (areal packing of the monolayer)", 0.6);
+    o.efficiency = r.number(rt, "rates.", "efficiency", 1e-4, 1, "1e-4 to 1", 1.0);
+  } else {
+    r.fail("rates.model", mn, "must be \"austin\", \"energy\" or \"spectrum\"" +
+                                  (mn ? std::string(", not \"") + model + "\"" : std::string(" (missing)")));
+  }
+  return o;
+}
+
+}  // namespace mc::io

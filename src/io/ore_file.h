@@ -1,0 +1,16 @@
+// Ore files for `millcharge grind` (TOML, assets/ores/*.toml documents the
+// keys): read and validated to a grind::Ore. Every error names the file,
+// the line and the dotted key, e.g.
+//   ore.toml:12: rates.zeta1: 60 is out of range: -5 to 5
+// and unknown keys are errors.
+#pragma once
+
+#include <filesystem>
+
+#include "grind/ore.h"
+
+namespace mc::io {
+
+grind::Ore read_ore(const std::filesystem::path& path);
+
+}  // namespace mc::io

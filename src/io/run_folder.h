@@ -1,0 +1,26 @@
+// A finished run's folder as `millcharge grind` reads it: the mill's power,
+// speed and filling from summary.json, the mill and its balls from
+// case.toml and, for the spectrum rates, the normal energy spectrum from
+// spectra.csv, checked against summary.json. A missing, damaged or older
+// run is refused naming the file (and the line).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "grind/pbm.h"
+
+namespace mc::io {
+
+struct Run {
+  double speed_rpm = 0;
+  double power_W = 0, filling = 0, mill_volume = 0, porosity = 0.4, ball_radius_m = 0;
+  std::vector<grind::SpectrumBin> normal;  // the normal energy spectrum
+  std::string title;
+};
+
+// `need_spectrum`: read spectra.csv too (the spectrum rate model).
+Run read_run(const std::filesystem::path& dir, bool need_spectrum);
+
+}  // namespace mc::io
