@@ -199,6 +199,7 @@ TEST_CASE("the breakage probability: half at E50, Tavares' size effect, certain 
 
 #include "app/commands.h"
 #include "app/grind.h"
+#include "core/version.h"
 #include "io/case_file.h"
 
 namespace {
@@ -274,6 +275,7 @@ TEST_CASE("grind: a run's product size in batch and continuous, both rate models
     // The throughput that gives the target P80.
     CHECK(p[4]["P80_um"].get<double>() == Approx(200).epsilon(1e-6));
     CHECK(j["throughput_at_target_t_h"].get<double>() == Approx(p[4]["feed_rate_t_h"].get<double>()));
+    CHECK(j["build"]["commit"] == mc::build_commit());
     for (const char* f : {"grind.csv", "rates.csv", "grind.png"}) CHECK(fs::file_size(fs::path(o.out) / f) > 100);
   }
 }

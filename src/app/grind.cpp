@@ -19,6 +19,7 @@
 #include "grind/circuit.h"
 #include "grind/ore.h"
 #include "grind/pbm.h"
+#include "core/version.h"
 #include "io/atomic_file.h"
 #include "io/ore_file.h"
 #include "io/png_plot.h"
@@ -177,6 +178,7 @@ nlohmann::ordered_json summary(const GrindOptions& o, const Ore& ore, const io::
     q["Gbp_by_cycle"] = bond.gbp_by_cycle;
     j["bond"] = q;
   }
+  j["build"] = {{"version", version()}, {"commit", build_commit()}};  // the code that made it
   return j;
 }
 
