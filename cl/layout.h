@@ -1,5 +1,5 @@
 /* layout.h — every struct that crosses the host/kernel boundary. Included by
- * the kernels and, through src/sim/layout.hpp, by C++ once per precision.
+ * the kernels and, through src/core/layout.hpp, by C++ once per precision.
  * Only `real`, `real2`, `real4` and `int` appear here, so the host mirrors
  * have the device's sizes and alignment; a kernel (layout_sizes in
  * motion.cl) reports the device's sizeof for a check at start-up. */
