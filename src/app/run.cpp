@@ -28,6 +28,7 @@
 #include "io/atomic_file.h"
 #include "io/case_file.h"
 #include "io/checkpoint.h"
+#include "io/csv_read.h"
 #include "io/vtk.h"
 #include "sim/mill_run.h"
 #include "sim/solver.h"
@@ -173,24 +174,17 @@ std::vector<std::string> keep_rows(const fs::path& csv, long rows, bool clear_av
   // The rows the checkpoint counts are read back strictly: the header's
   // width, numbers throughout (rows past them, written after the
   // checkpoint, are dropped whatever they hold).
-  const std::size_t width = std::count(lines[0].begin(), lines[0].end(), ',') + 1;
+  const std::size_t width = io::split_csv_line(lines[0]).size();
   for (std::size_t k = 1; k < lines.size(); ++k) {
     const std::string where = csv.string() + ":" + std::to_string(k + 1) + ": ";
-    std::size_t fields = 0, from = 0;
-    for (;;) {
-      const std::size_t comma = lines[k].find(',', from);
-      const std::string f = lines[k].substr(from, comma == std::string::npos ? std::string::npos : comma - from);
-      char* end = nullptr;
-      const double x = f.empty() ? 0.0 : std::strtod(f.c_str(), &end);
-      if (f.empty() || *end != '\0' || !std::isfinite(x))
+    const std::vector<std::string> fields = io::split_csv_line(lines[k]);
+    for (const std::string& f : fields)
+      if (double x = 0; !io::csv_number(f, x))
         throw std::invalid_argument(where + "\"" + f + "\" is not a number; the run's time series is damaged, so "
                                     "it cannot be resumed (run it again)");
-      ++fields;
-      if (comma == std::string::npos) break;
-      from = comma + 1;
-    }
-    if (fields != width)
-      throw std::invalid_argument(where + std::to_string(fields) + " fields, the header has " + std::to_string(width) +
+    if (fields.size() != width)
+      throw std::invalid_argument(where + std::to_string(fields.size()) + " fields, the header has " +
+                                  std::to_string(width) +
                                   "; the run's time series is damaged, so it cannot be resumed (run it again)");
   }
   if (clear_averaged)  // the last column, `averaged`

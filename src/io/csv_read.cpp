@@ -1,6 +1,5 @@
 #include "io/csv_read.h"
 
-#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -10,9 +9,7 @@
 
 namespace mc::io {
 
-namespace {
-
-std::vector<std::string> split(const std::string& line) {
+std::vector<std::string> split_csv_line(const std::string& line) {
   std::vector<std::string> f;
   std::size_t from = 0;
   for (;;) {
@@ -24,7 +21,12 @@ std::vector<std::string> split(const std::string& line) {
   return f;
 }
 
-}  // namespace
+bool csv_number(const std::string& field, double& x) {
+  if (field.empty()) return false;
+  char* end = nullptr;
+  x = std::strtod(field.c_str(), &end);
+  return *end == '\0' && std::isfinite(x);
+}
 
 int CsvTable::column(const std::string& name, const std::string& why) const {
   for (std::size_t k = 0; k < header.size(); ++k)
@@ -42,10 +44,8 @@ std::string CsvTable::where(std::size_t r) const { return path.string() + ":" + 
 
 double CsvTable::number(std::size_t r, int c) const {
   const std::string& text = rows.at(r).at(static_cast<std::size_t>(c));
-  char* end = nullptr;
-  errno = 0;
-  const double x = text.empty() ? 0.0 : std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(x))
+  double x = 0;
+  if (!csv_number(text, x))
     throw std::invalid_argument(where(r) + ": " + header[static_cast<std::size_t>(c)] + ": \"" + text +
                                 "\" is not a number; the file is damaged (run again, or resume the run)");
   return x;
@@ -70,10 +70,10 @@ CsvTable read_csv_strict(const std::filesystem::path& path, const std::string& m
     from = nl + 1;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (number == 1) {
-      t.header = split(line);
+      t.header = split_csv_line(line);
       continue;
     }
-    std::vector<std::string> f = split(line);
+    std::vector<std::string> f = split_csv_line(line);
     if (f.size() != t.header.size())
       throw std::invalid_argument(path.string() + ":" + std::to_string(number) + ": " + std::to_string(f.size()) +
                                   " fields, the header has " + std::to_string(t.header.size()) +

@@ -29,6 +29,11 @@ struct CsvTable {
   std::string where(std::size_t r) const;
 };
 
+// A line's fields, split at every comma (no quoting).
+std::vector<std::string> split_csv_line(const std::string& line);
+// Whether `field` is a finite number written whole; its value in `x`.
+bool csv_number(const std::string& field, double& x);
+
 // Throws std::invalid_argument: a file that is missing (`missing_hint` is
 // added), empty, cut (its last line has no newline), or holds a row whose
 // width is not the header's.

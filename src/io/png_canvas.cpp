@@ -97,10 +97,10 @@ struct FontChoice {
   std::string warning;  // why MILLCHARGE_FONT's file is not the one in use
 };
 
-FontChoice& font_choice() {
+FontChoice font_choice() {
   static std::mutex mutex;
   static FontChoice choice;
-  static std::string chosen_for = "\x01";  // the MILLCHARGE_FONT value `choice` was made for
+  static std::string chosen_for;  // the MILLCHARGE_FONT value `choice` was made for
   const std::string path = plot_font_path().string();
   std::lock_guard<std::mutex> lock(mutex);
   if (!choice.font || chosen_for != path) {
@@ -310,7 +310,6 @@ bool draw_or_warn(const std::filesystem::path& file, const std::function<void()>
 }
 
 std::string plot_font_warning() {
-  draw::font_choice();
   return draw::font_choice().warning;
 }
 

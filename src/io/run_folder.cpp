@@ -115,8 +115,8 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
     }
   }
   double all_collisions = 0, normal_collisions = 0;
+  for (double c : pair_collisions) all_collisions += c;  // empty without the column
   for (std::size_t k = 0; k < t.rows.size(); ++k) {
-    if (c_all >= 0) all_collisions += t.number(k, c_all);
     SpectrumBin b;
     b.collisions_per_s = t.number(k, c_n);
     normal_collisions += b.collisions_per_s;
