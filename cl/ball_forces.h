@@ -156,6 +156,12 @@ MC_FN void wall_contact(WallRef wr, real3 n, real overlap, real3 p, real4 vel, r
   int element = wr.element;
   if (element < 0) element = liner_element(books->bp, sp, lifters, wr.key, rotate_z(rc, mill.cos_angle, -mill.sin_angle), out);
   liner_step(books, element, fresh, c, wr.wear_k, wr.type != MC_WALL_TYPE_PLATE, atan2_fast(rc.y, rc.x));
+  if (wr.element < 0 && wr.key >= MC_WALL_LIFTER0 && wr.key < MC_WALL_MESH0) { /* where on the bar: its wear station */
+    const int k = wr.key - MC_WALL_LIFTER0;
+    const real3 rm = rotate_z(rc, mill.cos_angle, -mill.sin_angle);
+    liner_step(books, lifter_station(books->bp, &lifters[k], k, make_real2(rm.x, rm.y)), fresh, c, wr.wear_k, 0,
+               R(0.0));
+  }
 #endif
   if (ws->n_new < MC_MAX_WALL_CONTACTS) {
     ws->new_key[ws->n_new] = wr.key;

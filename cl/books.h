@@ -206,6 +206,33 @@ MC_FN int liner_element(MC_GLOBAL const BookParams* bp, MC_GLOBAL const SimParam
   return bp->first_plate_element + (plate * bp->plate_rings + ring) * bp->plate_sectors + sector;
 }
 
+/* The wear station of a contact point `p` (mill frame) on lifter row k:
+ * the closest point of the bar's outline, as a length along its wear path
+ * (layout.h LifterPolygon.wear), in MC_WEAR_STATIONS equal parts of the
+ * exposed outline; row k's stations follow bp->first_station. */
+MC_FN int lifter_station(MC_GLOBAL const BookParams* bp, MC_GLOBAL const LifterPolygon* poly, int k, real2 p) {
+  const int nv = poly->n_vertices;
+  const int start = (int)poly->wear.z;
+  real along = R(0.0), best_d2 = R(1e30), best_s = R(0.0);
+  for (int j = 0; j < nv; ++j) {
+    const int v = (start + j) % nv;
+    const real2 a = poly->vertices[v];
+    const real2 e = poly->vertices[(v + 1) % nv] - a;
+    const real len2 = dot(e, e);
+    real t = len2 > R(0.0) ? dot(p - a, e) / len2 : R(0.0);
+    t = fmin(fmax(t, R(0.0)), R(1.0));
+    const real2 d = p - (a + t * e);
+    const real d2 = dot(d, d);
+    const real len = sqrt(len2);
+    if (d2 < best_d2) { best_d2 = d2; best_s = along + t * len; }
+    along += len;
+  }
+  const real span = poly->wear.y - poly->wear.x;
+  int j = span > R(0.0) ? (int)floor((best_s - poly->wear.x) / span * (real)MC_WEAR_STATIONS) : 0;
+  j = j < 0 ? 0 : j >= MC_WEAR_STATIONS ? MC_WEAR_STATIONS - 1 : j;
+  return bp->first_station + k * MC_WEAR_STATIONS + j;
+}
+
 /* A wall contact's step on its element: an impact when it began, its normal
  * loss, its tangential loss and Archard's wear volume (coefficient wear_k);
  * on the shell and the lifters (`profile`) also the normal loss at its

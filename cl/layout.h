@@ -9,8 +9,13 @@
 /* Contact-history slots for walls kept per ball: shell, one end plate and two
  * lifters at once. A ball needing more is flagged (MC_FLAG_WALL_OVERFLOW). */
 #define MC_MAX_WALL_CONTACTS 4
-/* Vertices of one lifter cross-section (convex polygon, counter-clockwise). */
-#define MC_POLY_MAX_VERTS 8
+/* Vertices of one lifter cross-section (convex polygon, counter-clockwise):
+ * four for a new h × w × θ bar, more for a measured or worn profile. */
+#define MC_POLY_MAX_VERTS 16
+/* Wear stations along a lifter bar's exposed outline, from where its leading
+ * face leaves the shell, over its top, to where its trailing face enters it,
+ * in equal lengths: where on the bar the wear falls (the life study). */
+#define MC_WEAR_STATIONS 32
 
 /* Keys of wall contacts in the history slots. */
 #define MC_WALL_NONE (-1)
@@ -135,6 +140,9 @@ typedef struct {
   real4 bound; /* a circle holding the polygon: centre xy, radius z; w the
                   half-angle (rad) the bar covers on the shell, where the
                   bare shell between two rows begins */
+  real4 wear;  /* the wear stations' path: it starts at vertex z and runs
+                  along the edges in order; the exposed outline is from
+                  x to y (m along that path) */
 } LifterPolygon;
 
 /* Parameters fixed for a run (changed only at a step boundary by the host). */
@@ -194,6 +202,10 @@ typedef struct {
   int plate_rings, plate_sectors;
   int first_lifter_element; /* the shell's elements come first */
   int first_plate_element;
+  int first_station;    /* after the elements: each lifter row's
+                           MC_WEAR_STATIONS stations, with the elements'
+                           fields */
+  int pad0;
 } BookParams;
 
 /* Mesh walls (cl/mesh.h, src/core/wall_mesh.h): triangles in the frame of

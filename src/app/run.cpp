@@ -104,7 +104,7 @@ void make_run_dir(const fs::path& out, bool force) {
                                   "); choose another folder or add --force to replace it");
   if (force) {
     for (const char* f : {"summary.json", "timeseries.csv", "charge.pvd", "power.png", "charge.png", "spectra.csv",
-                          "spectra.png", "wear.csv", "liner.vtp", "liner.png"})
+                          "spectra.png", "wear.csv", "lifter_wear.csv", "liner.vtp", "liner.png"})
       fs::remove(out / f, ec);
     fs::remove_all(out / "snapshots", ec);
   }

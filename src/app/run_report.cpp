@@ -240,6 +240,12 @@ void write_run_results(const FinishedRun& r, const RunReport& rep) {
   io::draw_or_warn(out / "spectra.png", [&] { io::write_spectra_png(out / "spectra.png", c.name, spectra); });
   io::write_spectra_csv(out / "spectra.csv", spectra);
   io::write_wear_csv(out / "wear.csv", layout, liner);
+  if (c.lifter_rows > 0) {
+    std::vector<std::vector<Vec2>> outlines;
+    for (const LifterProfile& p : c.lifter_pattern) outlines.push_back(profile_outline(p));
+    io::write_lifter_wear_csv(out / "lifter_wear.csv",
+                              lifter_stations(r.s.books, s.window_s, outlines, 0.5 * c.diameter, c.length));
+  }
   // The liner in the mill frame, and beside each snapshot turned to the
   // mill's angle then (part 1 of the same times in charge.pvd).
   io::write_mesh_vtp(out / "liner.vtp", io::liner_mesh(layout, &liner, 0.0, s.turning_s));
@@ -329,7 +335,7 @@ void print_run_results(const FinishedRun& r, const RunReport& rep) {
               thousands(s.steps).c_str(), s.wall_s, s.settle_s, s.settle_wall_s,
               s.wall_s > 0 ? 100 * s.settle_wall_s / s.wall_s : 0.0, s.updates_per_s);
   std::printf("wrote           %s/{summary.json, timeseries.csv, charge.pvd, power.png, charge.png, spectra.csv, "
-              "spectra.png, wear.csv, liner.vtp, liner.png}\n",
+              "spectra.png, wear.csv, lifter_wear.csv, liner.vtp, liner.png}\n",
               out.string().c_str());
 }
 

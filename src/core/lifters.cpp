@@ -2,11 +2,176 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace mc {
 
+namespace {
+
+double cross(Vec2 a, Vec2 b, Vec2 c) { return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x); }
+
+// A foot of an outline carried down its edge (from `inner`, the next point
+// in) to height y_base behind the shell; straight down where the edge lies
+// flat on the shell.
+Vec2 foot_behind_shell(Vec2 foot, Vec2 inner, double y_base) {
+  const double rise = inner.y - foot.y;
+  if (!(rise > 1e-12 * (std::fabs(inner.x - foot.x) + rise))) return {foot.x, y_base};
+  return {inner.x + (foot.x - inner.x) * (inner.y - y_base) / rise, y_base};
+}
+
+// The x of an outline's side (points from a foot up to the top) at height y.
+double side_x_at(const std::vector<Vec2>& side, double y) {
+  for (std::size_t k = 0; k + 1 < side.size(); ++k) {
+    const Vec2 a = side[k], b = side[k + 1];
+    if ((a.y - y) * (b.y - y) <= 0 && a.y != b.y) return a.x + (b.x - a.x) * (y - a.y) / (b.y - a.y);
+  }
+  return side.empty() ? 0.0 : side.back().x;
+}
+
+}  // namespace
+
+std::vector<Vec2> profile_outline(const LifterProfile& p) {
+  if (p.polygon()) {
+    std::vector<Vec2> o = p.points;
+    if (o.front().x < o.back().x) std::reverse(o.begin(), o.end());  // from the leading foot
+    return o;
+  }
+  const double half_top = 0.5 * p.top_width;
+  const double half_base = half_top + p.height * std::tan(p.face_angle_deg * M_PI / 180.0);
+  return {{half_base, 0}, {half_top, p.height}, {-half_top, p.height}, {-half_base, 0}};
+}
+
+std::string profile_outline_fault(const std::vector<Vec2>& o, double R, double room) {
+  auto mm = [](double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.4g", v * 1000);
+    return std::string(b);
+  };
+  auto at = [&](std::size_t k) { return "point " + std::to_string(k) + " (" + mm(o[k].x) + ", " + mm(o[k].y) + " mm)"; };
+  const std::size_t n = o.size();
+  if (n < 3) return std::to_string(n) + " points: a profile needs at least 3 (two feet on the shell and a top)";
+  double h = 0;
+  for (const Vec2& v : o) h = std::max(h, v.y);
+  const double tol = 1e-9 + 1e-9 * h;
+  if (std::fabs(o.front().y) > tol || std::fabs(o.back().y) > tol)
+    return "the first and last points are the feet and lie on the shell (y = 0); " +
+           at(std::fabs(o.front().y) > tol ? 0 : n - 1) + " does not";
+  for (std::size_t k = 1; k + 1 < n; ++k) {
+    if (o[k].y < 0) return at(k) + " reaches outside the shell (y < 0)";
+    if (!(o[k].y > tol)) return at(k) + " lies on the shell: only the feet may";
+  }
+  if (!(h < R - room)) {
+    std::string msg = "the profile is " + mm(h) + " mm high and reaches the axis or leaves no room for a ball (shell radius " +
+                      mm(R) + " mm)";
+    if (h / 1000 < R - room) msg += "; are the points in millimetres? give units = \"mm\"";
+    return msg;
+  }
+  for (std::size_t k = 0; k < n; ++k)
+    if (std::hypot(o[k].x, o[k].y) > R) return at(k) + " lies farther from the bar's centre than the shell's radius";
+  for (std::size_t k = 0; k + 1 < n; ++k)
+    if (std::hypot(o[k + 1].x - o[k].x, o[k + 1].y - o[k].y) <= tol) return at(k) + " and the next coincide";
+  if (!(o.front().x > o.back().x)) return "the feet coincide";
+  // Closed by the shell from the trailing foot to the leading one, the outline
+  // must turn left at every point, once round: convex and not crossing itself.
+  double turned = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec2 prev = o[(k + n - 1) % n], cur = o[k], next = o[(k + 1) % n];
+    const double c = cross(prev, cur, next);
+    const double scale = std::hypot(cur.x - prev.x, cur.y - prev.y) * std::hypot(next.x - cur.x, next.y - cur.y);
+    if (c < -1e-9 * scale)
+      return at(k) + " makes the outline non-convex (or crossing itself): the contact needs a convex bar; give its "
+                     "convex hull, or split it into convex bars";
+    turned += std::atan2(c, (cur.x - prev.x) * (next.x - cur.x) + (cur.y - prev.y) * (next.y - cur.y));
+  }
+  if (std::fabs(turned - 2 * M_PI) > 1e-6) return "the outline crosses itself (it winds more than once)";
+  return "";
+}
+
+ProfileMeasures measure_profile(const std::vector<Vec2>& o) {
+  ProfileMeasures m;
+  if (o.size() < 2) return m;
+  std::size_t top = 0;
+  for (std::size_t k = 0; k < o.size(); ++k) {
+    if (o[k].y > o[top].y) top = k;
+    const Vec2 a = o[k], b = o[(k + 1) % o.size()];
+    m.area += 0.5 * (a.x * b.y - b.x * a.y);
+  }
+  m.height = o[top].y;
+  const std::vector<Vec2> lead(o.begin(), o.begin() + top + 1);           // foot up to the top
+  const std::vector<Vec2> trail(o.rbegin(), o.rend() - top);               // foot up to the top
+  const double y0 = 0.1 * m.height, y1 = 0.9 * m.height;
+  m.leading_angle_deg = std::atan2(side_x_at(lead, y0) - side_x_at(lead, y1), y1 - y0) * 180 / M_PI;
+  m.trailing_angle_deg = std::atan2(side_x_at(trail, y1) - side_x_at(trail, y0), y1 - y0) * 180 / M_PI;
+  for (std::size_t k = 0; k + 1 < o.size(); ++k) {
+    const Vec2 a = o[k], b = o[k + 1];
+    if (std::min(a.y, b.y) >= 0.5 * m.height && std::fabs(b.y - a.y) <= std::fabs(b.x - a.x))
+      m.top_width += std::fabs(b.x - a.x);
+  }
+  return m;
+}
+
+WearPath lifter_wear_path(const std::vector<Vec2>& poly, double R) {
+  WearPath w;
+  const std::size_t n = poly.size();
+  if (n < 2) return w;
+  auto out = [&](std::size_t k) { return std::hypot(poly[k % n].x, poly[k % n].y) > R; };
+  auto crossing = [&](Vec2 a, Vec2 b) {  // t in [0, 1] of |a + t(b − a)| = R
+    const double ex = b.x - a.x, ey = b.y - a.y;
+    const double qa = ex * ex + ey * ey, qb = 2 * (a.x * ex + a.y * ey), qc = a.x * a.x + a.y * a.y - R * R;
+    const double disc = std::max(0.0, qb * qb - 4 * qa * qc);
+    double t = (-qb + std::sqrt(disc)) / (2 * qa);
+    if (t < 0 || t > 1) t = (-qb - std::sqrt(disc)) / (2 * qa);
+    return std::clamp(t, 0.0, 1.0);
+  };
+  std::size_t start = n;
+  for (std::size_t k = 0; k < n && start == n; ++k)
+    if (out(k) && !out(k + 1)) start = k;
+  double along = 0;
+  if (start == n) {  // wholly inside the shell: the whole perimeter
+    for (std::size_t k = 0; k < n; ++k) along += std::hypot(poly[(k + 1) % n].x - poly[k].x, poly[(k + 1) % n].y - poly[k].y);
+    w.to = along;
+    return w;
+  }
+  w.start = static_cast<int>(start);
+  for (std::size_t j = 0; j < n; ++j) {
+    const Vec2 a = poly[(start + j) % n], b = poly[(start + j + 1) % n];
+    const double len = std::hypot(b.x - a.x, b.y - a.y);
+    if (j == 0) w.from = crossing(a, b) * len;
+    if (j > 0 && !out(start + j) && out(start + j + 1)) {
+      w.to = along + crossing(a, b) * len;
+      break;
+    }
+    along += len;
+  }
+  return w;
+}
+
 std::vector<Vec2> lifter_polygon(double shell_radius, const LifterProfile& p, double angle) {
+  if (p.polygon()) {
+    // The outline E from the leading foot to the trailing foot, its feet
+    // carried down their edges a quarter of its height behind the shell,
+    // in the trapezoid's vertex order: E[m−2], trailing base, leading base,
+    // E[1] .. E[m−3].
+    const std::vector<Vec2> e = profile_outline(p);
+    const std::size_t m = e.size();
+    if (m < 3) throw std::invalid_argument("a lifter profile needs at least 3 points");
+    double h = 0;
+    for (const Vec2& v : e) h = std::max(h, v.y);
+    const double y_base = -0.25 * h;
+    std::vector<Vec2> local{e[m - 2], foot_behind_shell(e[m - 1], e[m - 2], y_base),
+                            foot_behind_shell(e[0], e[1], y_base)};
+    for (std::size_t k = 1; k + 2 < m; ++k) local.push_back(e[k]);
+    if (local.size() > static_cast<std::size_t>(kLifterMaxPoints))
+      throw std::invalid_argument("a lifter profile has at most " + std::to_string(kLifterMaxPoints) + " points");
+    const double c = std::cos(angle), s = std::sin(angle);
+    std::vector<Vec2> out;
+    for (const Vec2& v : local) {
+      const double u = shell_radius - v.y, t = v.x;
+      out.push_back({u * c - t * s, u * s + t * c});
+    }
+    return out;
+  }
   if (!(p.height > 0 && p.height < shell_radius))
     throw std::invalid_argument("lifter height must be in (0, shell radius)");
   if (!(p.top_width > 0)) throw std::invalid_argument("lifter top_width must be > 0");

@@ -137,6 +137,18 @@ MillDerived derive(const MillCase& c) {
     for (std::size_t k = 0; k < c.lifter_pattern.size(); ++k) {
       const LifterProfile& p = c.lifter_pattern[k];
       const std::string key = "lifters.profile[" + std::to_string(k) + "]";
+      if (p.polygon()) {
+        const std::vector<Vec2> o = profile_outline(p);
+        if (static_cast<int>(o.size()) > kLifterMaxPoints)
+          fail(key + ".points", std::to_string(o.size()) + " points: a profile has at most " +
+                                    std::to_string(kLifterMaxPoints));
+        const std::string fault = profile_outline_fault(o, R, dmax);
+        if (!fault.empty()) fail(key + ".points", fault);
+        const double base_half = std::max(std::fabs(o.front().x), std::fabs(o.back().x));
+        if (base_half >= R) fail(key + ".points", "the lifter is wider than the mill");
+        half_angle.push_back(std::asin(std::min(1.0, base_half / R)));
+        continue;
+      }
       if (!(p.height > 0)) fail(key + ".height", "must be > 0 m (got " + num(p.height) + ")");
       if (!(p.height < R - dmax))
         fail(key + ".height", num(p.height) + " m leaves no room for a ball between the lifter and the axis "
@@ -154,7 +166,8 @@ MillDerived derive(const MillCase& c) {
         fail("lifters.rows", std::to_string(c.lifter_rows) + " rows of these profiles overlap at the shell: use fewer "
                              "rows or narrower lifters");
       const LifterProfile& p = c.lifter_pattern[a];
-      lifter_area += p.height * (p.top_width + p.height * std::tan(p.face_angle_deg * kPi / 180.0));
+      lifter_area += p.polygon() ? measure_profile(profile_outline(p)).area
+                                 : p.height * (p.top_width + p.height * std::tan(p.face_angle_deg * kPi / 180.0));
     }
   }
   d.lifter_volume = lifter_area * c.length;

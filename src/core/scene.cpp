@@ -1,5 +1,7 @@
 #include "core/scene.h"
 
+#include "core/lifters.h"
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -140,7 +142,8 @@ void validate(const Scene& scene) {
   validate_bodies(scene);
   if (scene.walls.periodic && !(scene.walls.length > 0)) fail("walls.length: a periodic slice needs a length > 0");
   for (const auto& poly : scene.walls.lifters) {
-    if (poly.size() < 3 || poly.size() > 8) fail("lifter polygon needs 3 to 8 vertices");
+    if (poly.size() < 3 || poly.size() > static_cast<std::size_t>(kLifterMaxPoints))
+      fail("lifter polygon needs 3 to " + std::to_string(kLifterMaxPoints) + " vertices");
   }
   const LinerGrid& g = scene.liner;
   if (g.shell_bins < 1 || g.shell_bins > 64) fail("liner.shell_bins must be in [1, 64]");

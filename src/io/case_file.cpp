@@ -490,11 +490,36 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
     const auto profiles = s.tables("profile");
     for (std::size_t k = 0; k < profiles.size(); ++k) {
       Section p(r, *profiles[k], "lifters.profile[" + std::to_string(k) + "]");
-      p.knows({"height", "top_width", "face_angle"});
+      p.knows({"height", "top_width", "face_angle", "points", "units"});
       LifterProfile lp;
-      lp.height = p.number("height");
-      lp.top_width = p.number("top_width");
-      lp.face_angle_deg = p.number("face_angle");
+      if (p.has("points")) {
+        // A profile of any convex shape: its outline [x, y] from foot to foot
+        // (core/lifters.h), in metres or millimetres.
+        for (const char* k : {"height", "top_width", "face_angle"})
+          if (p.has(k)) r.fail(p.key(k), p.node(k), "goes with h x w x theta profiles, not with points");
+        const double unit = p.string("units", std::string("m"), {"m", "mm"}) == "mm" ? 1e-3 : 1.0;
+        const toml::node* n = p.node("points");
+        const toml::array* a = n->as_array();
+        if (!a || a->empty()) r.fail(p.key("points"), n, "expected an array of points [x, y]");
+        for (std::size_t q = 0; q < a->size(); ++q) {
+          const toml::array* e = (*a)[q].as_array();
+          const std::string at = p.key("points") + "[" + std::to_string(q) + "]";
+          if (!e || e->size() != 2) r.fail(at, &(*a)[q], "expected two numbers [x, y]");
+          double v[2];
+          for (int i = 0; i < 2; ++i) {
+            const auto x = (*e)[i].value<double>();
+            if (!x || !((*e)[i].is_floating_point() || (*e)[i].is_integer()) || !std::isfinite(*x))
+              r.fail(at, &(*a)[q], "expected two finite numbers [x, y]");
+            v[i] = *x * unit;
+          }
+          lp.points.push_back({v[0], v[1]});
+        }
+      } else {
+        if (p.has("units")) r.fail(p.key("units"), p.node("units"), "goes with points, not with h x w x theta profiles");
+        lp.height = p.number("height");
+        lp.top_width = p.number("top_width");
+        lp.face_angle_deg = p.number("face_angle");
+      }
       c.lifter_pattern.push_back(lp);
     }
   }
@@ -790,8 +815,15 @@ std::string case_to_toml(const MillCase& c) {
   else mill.insert("speed_fraction", c.speed_fraction);
   root.insert("mill", mill);
   toml::array profiles;
-  for (const LifterProfile& p : c.lifter_pattern)
-    profiles.push_back(toml::table{{"height", p.height}, {"top_width", p.top_width}, {"face_angle", p.face_angle_deg}});
+  for (const LifterProfile& p : c.lifter_pattern) {
+    if (p.polygon()) {
+      toml::array points;
+      for (const Vec2& v : p.points) points.push_back(toml::array{v.x, v.y});
+      profiles.push_back(toml::table{{"points", points}});
+    } else {
+      profiles.push_back(toml::table{{"height", p.height}, {"top_width", p.top_width}, {"face_angle", p.face_angle_deg}});
+    }
+  }
   root.insert("lifters", toml::table{{"rows", c.lifter_rows}, {"first_angle", c.lifter_first_angle_deg}, {"profile", profiles}});
   if (c.ends.lifter_rows > 0)
     root.insert("end_lifters", toml::table{{"rows", c.ends.lifter_rows},

@@ -93,6 +93,19 @@ void write_wear_csv(const std::filesystem::path& path, const LinerLayout& layout
   write_file_atomic(path, t);
 }
 
+void write_lifter_wear_csv(const std::filesystem::path& path, const std::vector<LifterStation>& stations) {
+  std::string t =
+      "profile,station,x_mm,y_mm,length_mm,impacts_per_s,impact_W,shear_W,wear_m3_per_s,wear_mm_per_1000h\n";
+  char line[512];
+  for (const LifterStation& s : stations) {
+    std::snprintf(line, sizeof line, "%d,%d,%.4f,%.4f,%.4f,%.6g,%.6g,%.6g,%.9g,%.6g\n", s.profile, s.station,
+                  s.x_m * 1000, s.y_m * 1000, s.length_m * 1000, s.impacts_per_s, s.impact_W, s.shear_W,
+                  s.wear_m3_per_s, s.wear_mm_per_1000h);
+    t += line;
+  }
+  write_file_atomic(path, t);
+}
+
 nlohmann::ordered_json spectra_json(const SpectraReport& r) {
   nlohmann::ordered_json j;
   j["window_s"] = num(r.window_s);

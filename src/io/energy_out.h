@@ -16,6 +16,8 @@ namespace mc::io {
 // Throw std::runtime_error when the file cannot be written.
 void write_spectra_csv(const std::filesystem::path& path, const SpectraReport& r);
 void write_wear_csv(const std::filesystem::path& path, const LinerLayout& layout, const LinerReport& r);
+// lifter_wear.csv: each lifter profile's wear stations, foot to foot.
+void write_lifter_wear_csv(const std::filesystem::path& path, const std::vector<LifterStation>& stations);
 
 nlohmann::ordered_json spectra_json(const SpectraReport& r);
 nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& r, double wear_coefficient);

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "core/layout.hpp"
+#include "core/liner_wear.h"
 
 namespace mc {
 
@@ -196,6 +197,43 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
   }
   r.impact_point_on_liner = r.coverage[at] < 0.5;
   return r;
+}
+
+std::vector<LifterStation> lifter_stations(const BookSums& books, double window_s,
+                                           const std::vector<std::vector<Vec2>>& outlines, double R, double length) {
+  std::vector<LifterStation> out;
+  const int kinds = static_cast<int>(outlines.size());
+  const int rows = books.n_stations / kWearStations;
+  if (kinds == 0 || rows == 0 || !(window_s > 0)) return out;
+  for (int k = 0; k < kinds; ++k) {
+    const std::vector<StationPlace> places = station_places(outlines[k], R);
+    int n_rows = 0;
+    for (int row = k; row < rows; row += kinds) ++n_rows;
+    for (int j = 0; j < kWearStations; ++j) {
+      LifterStation st;
+      st.profile = k;
+      st.station = j;
+      st.x_m = places[j].centre.x;
+      st.y_m = places[j].centre.y;
+      st.length_m = places[j].length;
+      for (int row = k; row < rows; row += kinds) {
+        const std::size_t at = (static_cast<std::size_t>(row) * kWearStations + j) * MC_LINER_FIELDS;
+        st.impacts_per_s += books.stations[at + MC_LINER_IMPACTS];
+        st.impact_W += books.stations[at + MC_LINER_NORMAL];
+        st.shear_W += books.stations[at + MC_LINER_SHEAR];
+        st.wear_m3_per_s += books.stations[at + MC_LINER_WEAR];
+      }
+      const double per = 1.0 / (n_rows * window_s);
+      st.impacts_per_s *= per;
+      st.impact_W *= per;
+      st.shear_W *= per;
+      st.wear_m3_per_s *= per;
+      const double area = st.length_m * length;
+      st.wear_mm_per_1000h = area > 0 ? st.wear_m3_per_s / area * 3.6e9 : 0.0;
+      out.push_back(st);
+    }
+  }
+  return out;
 }
 
 }  // namespace mc

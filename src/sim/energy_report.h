@@ -91,6 +91,22 @@ struct LinerReport {
   bool impact_point_on_liner = false;  // before the toe: on bare liner above it
 };
 
+// A lifter profile's wear stations (core/lifters.h kWearStations), from its
+// leading foot over the top to its trailing foot: the mean of its rows (rows
+// k, k + profiles, ...). Where it lies in the bar's frame (m) and the rates.
+struct LifterStation {
+  int profile = 0, station = 0;
+  double x_m = 0, y_m = 0, length_m = 0;
+  double impacts_per_s = 0, impact_W = 0, shear_W = 0;
+  double wear_m3_per_s = 0;        // of one row over the mill's (or slice's) length
+  double wear_mm_per_1000h = 0;    // depth, at this rate
+};
+// `outlines`: each profile's outline (core/lifters.h profile_outline);
+// `length` the mill's (or the slice's) length, m.
+std::vector<LifterStation> lifter_stations(const BookSums& books, double window_s,
+                                           const std::vector<std::vector<Vec2>>& outlines, double shell_radius,
+                                           double length);
+
 SpectraReport spectra_report(const Scene& scene, const BookSums& books, double window_s, double open_start_J,
                              double open_end_J, double dissipated_J);
 

@@ -139,7 +139,10 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
   if (s.mesh_cell_tris.empty()) s.mesh_cell_tris.push_back(0);
   s.book_params = tables.books;
   s.spectra.assign(2 * static_cast<std::size_t>(s.book_params.n_types + 1) * MC_SPECTRA_BINS * MC_SPECTRA_FIELDS, 0u);
-  s.liner.assign(2 * static_cast<std::size_t>(s.book_params.n_elements) * MC_LINER_FIELDS, 0u);
+  s.liner.assign(2 * (static_cast<std::size_t>(s.book_params.n_elements) +
+                      static_cast<std::size_t>(scene.walls.lifters.size()) * MC_WEAR_STATIONS) *
+                     MC_LINER_FIELDS,
+                 0u);
   s.impact_profile.assign(2 * MC_IMPACT_BINS, 0u);
   const SimParams& sp = s.sp;
 

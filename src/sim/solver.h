@@ -58,6 +58,11 @@ struct BookSums {
   // liner[element · MC_LINER_FIELDS + field]: impacts, impact energy (J),
   // shear energy (J), Archard wear volume (m³)
   std::vector<double> liner;
+  // stations[(row · MC_WEAR_STATIONS + station) · MC_LINER_FIELDS + field]:
+  // the same sums per lifter row over its wear stations, along its exposed
+  // outline from the leading foot to the trailing one (cl/layout.h)
+  int n_stations = 0;
+  std::vector<double> stations;
   std::vector<double> impact_profile;  // J on the shell and lifters per degree, lab frame
   double at(int row, int bin, int field) const;
   double liner_at(int element, int field) const { return liner[static_cast<std::size_t>(element) * 4 + field]; }

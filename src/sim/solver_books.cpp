@@ -74,12 +74,16 @@ BookSums SolverImpl<Real>::read_books() {
                                                                         : v * e_unit;
       }
     }
-  out.liner.resize(static_cast<std::size_t>(n_elements_) * MC_LINER_FIELDS);
-  for (std::size_t q = 0; q < out.liner.size(); ++q) {
+  auto liner_value = [&](std::size_t q) {
     const double v = static_cast<double>(u64_at(liner_.host, q));
     const int f = static_cast<int>(q % MC_LINER_FIELDS);
-    out.liner[q] = f == MC_LINER_IMPACTS ? v : f == MC_LINER_WEAR ? v * wear_unit_ : v * energy_unit_;
-  }
+    return f == MC_LINER_IMPACTS ? v : f == MC_LINER_WEAR ? v * wear_unit_ : v * energy_unit_;
+  };
+  out.liner.resize(static_cast<std::size_t>(n_elements_) * MC_LINER_FIELDS);
+  for (std::size_t q = 0; q < out.liner.size(); ++q) out.liner[q] = liner_value(q);
+  out.n_stations = n_stations_;
+  out.stations.resize(static_cast<std::size_t>(n_stations_) * MC_LINER_FIELDS);
+  for (std::size_t q = 0; q < out.stations.size(); ++q) out.stations[q] = liner_value(out.liner.size() + q);
   out.impact_profile.resize(MC_IMPACT_BINS);
   for (int b = 0; b < MC_IMPACT_BINS; ++b) out.impact_profile[b] = u64_at(impact_profile_.host, b) * energy_unit_;
   return out;

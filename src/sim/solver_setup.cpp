@@ -297,7 +297,9 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
     for (int v = 0; v < MC_POLY_MAX_VERTS; ++v)
       lifters_.host[k].vertices[v] = {Real(t.lifters[k].vertices[v].x), Real(t.lifters[k].vertices[v].y)};
     const auto& b = t.lifters[k].bound;
-    lifters_.host[k].bound = {Real(b.x), Real(b.y), Real(b.z), Real(0)};
+    lifters_.host[k].bound = {Real(b.x), Real(b.y), Real(b.z), Real(b.w)};
+    const auto& w = t.lifters[k].wear;
+    lifters_.host[k].wear = {Real(w.x), Real(w.y), Real(w.z), Real(0)};
   }
   lifters_.write_to_device();
   setup_meshes(t);
@@ -317,14 +319,17 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   bp.plate_sectors = tb.plate_sectors;
   bp.first_lifter_element = tb.first_lifter_element;
   bp.first_plate_element = tb.first_plate_element;
+  bp.first_station = tb.first_station;
   book_params_.write_to_device();
   energy_unit_ = tb.energy_unit;
   wear_unit_ = tb.wear_unit;
   n_types_ = tb.n_types;
   n_elements_ = tb.n_elements;
+  n_stations_ = scene.walls.lifters.empty() ? 0 : static_cast<int>(scene.walls.lifters.size()) * MC_WEAR_STATIONS;
   spectra_ = Buffer<std::uint32_t>(ctx_, 2 * static_cast<std::size_t>(n_types_ + 1) * MC_SPECTRA_BINS * MC_SPECTRA_FIELDS,
                                    "collision spectra");
-  liner_ = Buffer<std::uint32_t>(ctx_, 2 * static_cast<std::size_t>(n_elements_) * MC_LINER_FIELDS, "liner sums");
+  liner_ = Buffer<std::uint32_t>(ctx_, 2 * static_cast<std::size_t>(n_elements_ + n_stations_) * MC_LINER_FIELDS,
+                                 "liner sums");
   impact_profile_ = Buffer<std::uint32_t>(ctx_, 2 * MC_IMPACT_BINS, "impact profile");
   for (auto* b : {&spectra_, &liner_, &impact_profile_}) b->write_to_device();
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/lifters.h"
 #include "core/liner.h"
 
 namespace mc {
@@ -113,6 +114,7 @@ SceneTables scene_tables(const Scene& scene) {
   double r_max = 0;
   for (const Ball& b : scene.balls) r_max = std::max(r_max, b.radius);
   double reach = w.shell_radius;
+  static_assert(kLifterMaxPoints == MC_POLY_MAX_VERTS && kWearStations == MC_WEAR_STATIONS);
   for (const auto& poly : w.lifters) {
     f64::LifterPolygon p{};
     p.n_vertices = static_cast<int>(poly.size());
@@ -127,6 +129,8 @@ SceneTables scene_tables(const Scene& scene) {
     for (const auto& v : poly) radius = std::max(radius, std::hypot(v.x - cx, v.y - cy));
     // A little over, so that rounding in float never rejects a touching ball.
     p.bound = {cx, cy, radius * (1 + 1e-4) + 1e-6, w.shell_radius > 0 ? lifter_half_angle(poly, w.shell_radius) : 0.0};
+    const WearPath path = lifter_wear_path(poly, w.shell_radius > 0 ? w.shell_radius : 1e300);
+    p.wear = {path.from, path.to, static_cast<double>(path.start), 0.0};
     t.lifters.push_back(p);
   }
   if (t.lifters.empty()) t.lifters.push_back(f64::LifterPolygon{});
@@ -171,6 +175,7 @@ SceneTables scene_tables(const Scene& scene) {
   bp.plate_sectors = liner.plate_sectors;
   bp.first_lifter_element = liner.first_lifter;
   bp.first_plate_element = liner.first_plate;
+  bp.first_station = liner.size();
   mesh_tables(scene, liner, r_max, t);
   // A ball wholly past the mill's ends has gone through one: the end plates
   // bound the mill, or, closed by mesh ends (cone heads), the meshes' axial
