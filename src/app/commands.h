@@ -56,10 +56,24 @@ struct ViewOptions {
   std::vector<std::string> edits;  // --edit FRAME:KEY=VALUE
 };
 
+struct LifeOptions {
+  CaseOptions c;
+  std::string out;              // --out; empty: runs/<case>-life
+  int stages = 0;               // --stages N: worn stages after the new liner
+  double hours = 0;             // --hours H: operating hours the study covers
+  double until_height_mm = 0;   // --until-height MM: until the lifters are this high
+  double calibrate_loss_mm = 0; // --calibrate-loss MM with --calibrate-hours H: the
+  double calibrate_hours = 0;   //   lifters lost MM of height in H operating hours
+  double calibrate_rate_kg_h = 0;  // --calibrate-rate KG/H: the new shell liner's wear rate
+  bool force = false;           // --force: start again in an --out that holds another study
+  bool quiet = false;
+};
+
 int cmd_devices();
 int cmd_check(const CaseOptions& o);
 int cmd_run(const RunOptions& o);
 int cmd_bench(const BenchOptions& o);
 int cmd_view(const ViewOptions& o);
+int cmd_life(const LifeOptions& o);
 
 }  // namespace mc::app

@@ -116,6 +116,32 @@ int main(int argc, char** argv) {
                    "e.g. --edit 50:lifters.profile.0.height=0.04")
       ->type_name("FRAME:KEY=VALUE");
 
+  mc::app::LifeOptions lo;
+  auto* life = app.add_subcommand("life", "the liner over its life: run, wear the lifters and shell, run again");
+  add_case_options(life, lo.c, true);
+  life->add_option("--out", lo.out, "study folder (default runs/CASE-life); a study there resumes");
+  life->add_option("--stages", lo.stages, "worn stages after the new liner")
+      ->check(mc::app::cli::count(1, 100))
+      ->required();
+  life->add_option("--hours", lo.hours, "operating hours the study covers, in equal stages")
+      ->check(mc::app::cli::positive("h"));
+  life->add_option("--until-height", lo.until_height_mm, "or: until the tallest lifters are this high")
+      ->check(mc::app::cli::positive("mm"))
+      ->type_name("MM");
+  life->add_option("--calibrate-loss", lo.calibrate_loss_mm,
+                   "measured: the lifters lost MM of height in --calibrate-hours H (sets the hours)")
+      ->check(mc::app::cli::positive("mm"))
+      ->type_name("MM");
+  life->add_option("--calibrate-hours", lo.calibrate_hours, "the hours of --calibrate-loss")
+      ->check(mc::app::cli::positive("h"))
+      ->type_name("H");
+  life->add_option("--calibrate-rate", lo.calibrate_rate_kg_h,
+                   "measured: the new shell liner (shell and lifters) wears KG/H (sets the hours)")
+      ->check(mc::app::cli::positive("kg/h"))
+      ->type_name("KG/H");
+  life->add_flag("--force", lo.force, "start the study again in an --out that holds one");
+  life->add_flag("--quiet", lo.quiet, "no progress lines from the stages' runs");
+
   mc::app::CaseOptions co;
   auto* check = app.add_subcommand("check", "validate a case and print its derived values");
   add_case_options(check, co, false);
@@ -190,6 +216,7 @@ int main(int argc, char** argv) {
     if (int status = 0; mc::app::run_sweep(sweep, status)) return status;
     if (*check) return mc::app::cmd_check(co);
     if (*run) return mc::app::cmd_run(ro);
+    if (*life) return mc::app::cmd_life(lo);
     if (*bench) return mc::app::cmd_bench(bo);
     if (*grind) {
       std::size_t start = 0;

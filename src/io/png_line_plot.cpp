@@ -105,6 +105,19 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
     }
   if (!(x0 <= x1)) x0 = 0, x1 = 1;
   if (!(y0 <= y1)) y0 = 0, y1 = 1;
+  if (plot.equal_aspect && x1 > x0 && y1 > y0) {
+    // Widen the narrower range about its middle to the plot area's shape
+    // (the area's size before the labels are placed, near enough).
+    const double want = (width - 110.0) / std::max(1.0, height - 110.0);
+    const double have = (x1 - x0) / (y1 - y0);
+    if (have < want) {
+      const double m = 0.5 * (x0 + x1), h = 0.5 * (y1 - y0) * want;
+      x0 = m - h, x1 = m + h;
+    } else {
+      const double m = 0.5 * (y0 + y1), h = 0.5 * (x1 - x0) / want;
+      y0 = m - h, y1 = m + h;
+    }
+  }
   const Axis ax = nice_axis(x0, x1, plot.pad_x ? 0.04 : 0), ay = nice_axis(y0, y1, 0.05);
   auto x_tick_label = [&](int i) {
     return plot.log_x ? log_tick_label(ax.tick(i), ax.step) : tick_label(ax.tick(i), ax.step);

@@ -56,6 +56,7 @@ struct LinePlot {
   std::string span_label;
   bool pad_x = false;  // leave room beside the first and last x (for markers)
   bool log_x = false;  // a log x axis (x <= 0 left out)
+  bool equal_aspect = false;  // a unit as long on both axes (a shape drawn true)
 };
 
 // "874.4 ± 2.8 W": a value and its standard error to the error's second

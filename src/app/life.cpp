@@ -1,0 +1,588 @@
+// millcharge life: the liner over its life (docs/liner-life.md). A study
+// above runs, like a sweep: run a stage on the liner as it is, take each
+// lifter wear station's and the shell's wear rate, move the lifters' faces
+// and the shell by the stage's wear, and run the next stage on the worn
+// liner. life.json holds the study's state (written after each step, so a
+// killed study resumes where it stopped); life.csv, life.png and life.pvd
+// are the whole life.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "app/commands.h"
+#include "app/prepare.h"
+#include "core/lifters.h"
+#include "core/liner_wear.h"
+#include "io/atomic_file.h"
+#include "io/case_file.h"
+#include "io/csv_read.h"
+#include "io/png_plot.h"
+
+namespace mc::app {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kFormat = "millcharge life 1";
+
+// What a stage's run reported (its summary.json and lifter_wear.csv).
+struct StageResult {
+  double power_W = 0, power_sem_W = 0, toe_deg = NAN, shoulder_deg = NAN, impact_deg = NAN, bare_share = NAN;
+  double liner_kg_h = 0;          // shell and lifters, at the case's wear coefficient
+  double shell_mm_per_1000h = 0;  // the shell's mean depth rate, likewise
+  std::vector<std::vector<double>> station_m3_s;  // per profile, per station: one row's volume rate
+};
+
+struct Stage {
+  int index = 0;
+  double case_hours = 0;  // at its start, at the case's wear coefficient
+  double diameter = 0, filling = 0, shell_wear_m = 0;  // shell_wear_m: since the new liner
+  std::vector<std::vector<Vec2>> outlines;              // per profile, the bar's frame
+  bool ran = false;
+  StageResult r;
+  // The wear carried to the next stage (none for the last).
+  double span_case_hours = 0, shell_depth_m = 0;
+  std::vector<double> booked_mm2, removed_mm2, scale;
+  std::vector<int> spread;
+};
+
+json points_json(const std::vector<Vec2>& o) {
+  json a = json::array();
+  for (const Vec2& v : o) a.push_back({v.x, v.y});
+  return a;
+}
+
+std::vector<Vec2> points_of(const json& a) {
+  std::vector<Vec2> o;
+  for (const json& v : a) o.push_back({v.at(0).get<double>(), v.at(1).get<double>()});
+  return o;
+}
+
+json stage_json(const Stage& s) {
+  json j;
+  j["index"] = s.index;
+  j["case_hours"] = s.case_hours;
+  j["diameter_m"] = s.diameter;
+  j["filling"] = s.filling;
+  j["shell_wear_m"] = s.shell_wear_m;
+  j["profiles"] = json::array();
+  for (const auto& o : s.outlines) j["profiles"].push_back(points_json(o));
+  j["ran"] = s.ran;
+  if (s.ran) {
+    const StageResult& r = s.r;
+    j["result"] = {{"power_W", r.power_W},       {"power_sem_W", r.power_sem_W},
+                   {"toe_deg", number_or_null(r.toe_deg)}, {"shoulder_deg", number_or_null(r.shoulder_deg)},
+                   {"impact_point_deg", number_or_null(r.impact_deg)},
+                   {"bare_liner_impact_share", number_or_null(r.bare_share)},
+                   {"liner_wear_kg_per_h", r.liner_kg_h}, {"shell_wear_mm_per_1000h", r.shell_mm_per_1000h},
+                   {"station_wear_m3_per_s", r.station_m3_s}};
+  }
+  if (s.span_case_hours > 0)
+    j["wear"] = {{"span_case_hours", s.span_case_hours}, {"shell_depth_m", s.shell_depth_m},
+                 {"booked_mm2", s.booked_mm2}, {"removed_mm2", s.removed_mm2}, {"scale", s.scale},
+                 {"spread", s.spread}};
+  return j;
+}
+
+double num_or_nan(const json& j) { return j.is_number() ? j.get<double>() : NAN; }
+
+Stage stage_of(const json& j) {
+  Stage s;
+  s.index = j.at("index").get<int>();
+  s.case_hours = j.at("case_hours").get<double>();
+  s.diameter = j.at("diameter_m").get<double>();
+  s.filling = j.at("filling").get<double>();
+  s.shell_wear_m = j.at("shell_wear_m").get<double>();
+  for (const json& o : j.at("profiles")) s.outlines.push_back(points_of(o));
+  s.ran = j.at("ran").get<bool>();
+  if (s.ran) {
+    const json& r = j.at("result");
+    s.r.power_W = r.at("power_W").get<double>();
+    s.r.power_sem_W = r.at("power_sem_W").get<double>();
+    s.r.toe_deg = num_or_nan(r.at("toe_deg"));
+    s.r.shoulder_deg = num_or_nan(r.at("shoulder_deg"));
+    s.r.impact_deg = num_or_nan(r.at("impact_point_deg"));
+    s.r.bare_share = num_or_nan(r.at("bare_liner_impact_share"));
+    s.r.liner_kg_h = r.at("liner_wear_kg_per_h").get<double>();
+    s.r.shell_mm_per_1000h = r.at("shell_wear_mm_per_1000h").get<double>();
+    s.r.station_m3_s = r.at("station_wear_m3_per_s").get<std::vector<std::vector<double>>>();
+  }
+  if (j.contains("wear")) {
+    const json& w = j.at("wear");
+    s.span_case_hours = w.at("span_case_hours").get<double>();
+    s.shell_depth_m = w.at("shell_depth_m").get<double>();
+    s.booked_mm2 = w.at("booked_mm2").get<std::vector<double>>();
+    s.removed_mm2 = w.at("removed_mm2").get<std::vector<double>>();
+    s.scale = w.at("scale").get<std::vector<double>>();
+    s.spread = w.at("spread").get<std::vector<int>>();
+  }
+  return s;
+}
+
+// The request a study was started with: a study resumes only with the same.
+json request_of(const LifeOptions& o, const Prepared& p) {
+  return {{"case", fs::absolute(p.path).lexically_normal().string()},
+          {"overrides", case_overrides(o.c)},
+          {"stages", o.stages},
+          {"hours", o.hours},
+          {"until_height_mm", o.until_height_mm},
+          {"calibrate_loss_mm", o.calibrate_loss_mm},
+          {"calibrate_hours", o.calibrate_hours},
+          {"calibrate_rate_kg_h", o.calibrate_rate_kg_h}};
+}
+
+StageResult read_stage(const fs::path& dir, int profiles) {
+  StageResult r;
+  const fs::path sj = dir / "summary.json";
+  json j;
+  try {
+    std::ifstream in(sj);
+    j = json::parse(in);
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(sj.string() + ": not valid JSON: " + e.what());
+  }
+  try {
+    r.power_W = j.at("power_W").at("torque").get<double>();
+    r.power_sem_W = num_or_nan(j.at("power_W").at("torque_sem"));
+    r.toe_deg = num_or_nan(j.at("toe_deg"));
+    r.shoulder_deg = num_or_nan(j.at("shoulder_deg"));
+    const json& l = j.at("liner");
+    r.impact_deg = num_or_nan(l.at("impact_point_deg"));
+    r.bare_share = num_or_nan(l.at("bare_liner_impact_share"));
+    for (const json& part : l.at("parts")) {
+      const std::string name = part.at("part").get<std::string>();
+      if (name == "shell") r.shell_mm_per_1000h = part.at("mean_wear_mm_per_1000h").get<double>();
+      if (name == "shell" || name.rfind("lifter", 0) == 0) r.liner_kg_h += part.at("wear_kg_per_h").get<double>();
+    }
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(sj.string() + ": not a millcharge run's summary (" + e.what() + ")");
+  }
+  const io::CsvTable t = io::read_csv_strict(dir / "lifter_wear.csv", "the stage's run wrote no lifter wear");
+  const int c_p = t.column("profile"), c_s = t.column("station"), c_w = t.column("wear_m3_per_s");
+  r.station_m3_s.assign(profiles, std::vector<double>(kWearStations, 0.0));
+  for (std::size_t k = 0; k < t.rows.size(); ++k) {
+    const int p = static_cast<int>(t.number(k, c_p)), s = static_cast<int>(t.number(k, c_s));
+    if (p < 0 || p >= profiles || s < 0 || s >= kWearStations)
+      throw std::invalid_argument(t.where(k) + ": profile " + std::to_string(p) + ", station " + std::to_string(s) +
+                                  " is not one of this case's");
+    r.station_m3_s[p][s] = t.number(k, c_w);
+  }
+  return r;
+}
+
+// The rate (mm per hour at the case's coefficient) at which a profile's
+// top wears: its stations there (centre above 90 % of the height).
+double top_rate_mm_h(const std::vector<Vec2>& outline, double R, double length, const std::vector<double>& m3_s) {
+  const std::vector<StationPlace> places = station_places(outline, R);
+  const double h = measure_profile(outline).height;
+  double sum = 0, best_y = -1, at_best = 0;
+  int n = 0;
+  for (int j = 0; j < kWearStations; ++j) {
+    const double rate = places[j].length > 0 ? m3_s[j] / (places[j].length * length) * 3.6e6 : 0.0;  // mm/h
+    if (places[j].centre.y >= 0.9 * h) sum += rate, ++n;
+    if (places[j].centre.y > best_y) best_y = places[j].centre.y, at_best = rate;
+  }
+  return n > 0 ? sum / n : at_best;
+}
+
+// The rate at which its height above the shell falls: the top's wear less
+// the shell's (mm per hour at the case's coefficient).
+double height_rate_mm_h(const Stage& s, int k, double length) {
+  return top_rate_mm_h(s.outlines[k], 0.5 * s.diameter, length, s.r.station_m3_s[k]) - s.r.shell_mm_per_1000h / 1000;
+}
+
+struct Study {
+  std::vector<Stage> stages;
+  double factor = 1;           // calibrated hours = case hours / factor
+  std::string calibration;     // how the factor was found
+  int tallest = 0;             // the profile the height figures follow
+};
+
+double height_of(const Stage& s, int k) { return measure_profile(s.outlines[k]).height; }
+
+// The calibration factor from the stages so far.
+void calibrate(Study& st, const LifeOptions& o, double length) {
+  const Stage& s0 = st.stages.front();
+  if (o.calibrate_rate_kg_h > 0) {
+    st.factor = o.calibrate_rate_kg_h / s0.r.liner_kg_h;
+    st.calibration = fmt::format("the new shell liner's wear rate, {:.4g} kg/h measured against {:.4g} kg/h at the "
+                                 "case's wear coefficient",
+                                 o.calibrate_rate_kg_h, s0.r.liner_kg_h);
+    return;
+  }
+  if (!(o.calibrate_loss_mm > 0)) {
+    st.factor = 1;
+    st.calibration = "none: the case's wear coefficient";
+    return;
+  }
+  // Height lost against case hours; where it reaches the measured loss.
+  const int k = st.tallest;
+  const double h0 = height_of(s0, k) * 1000;
+  double at = -1;
+  for (std::size_t i = 1; i < st.stages.size() && at < 0; ++i) {
+    const double l0 = h0 - height_of(st.stages[i - 1], k) * 1000, l1 = h0 - height_of(st.stages[i], k) * 1000;
+    if (l1 >= o.calibrate_loss_mm && l1 > l0)
+      at = st.stages[i - 1].case_hours +
+           (o.calibrate_loss_mm - l0) / (l1 - l0) * (st.stages[i].case_hours - st.stages[i - 1].case_hours);
+  }
+  std::string how = "interpolated between stages";
+  if (at < 0) {  // not reached yet: on at the last stage's rate
+    const Stage& last = st.stages.back();
+    for (auto it = st.stages.rbegin(); it != st.stages.rend(); ++it)
+      if (it->ran) {
+        const double rate = height_rate_mm_h(*it, k, length);
+        const double lost = h0 - height_of(last, k) * 1000;
+        at = last.case_hours + (o.calibrate_loss_mm - lost) / std::max(rate, 1e-300);
+        break;
+      }
+    how = "extrapolated at the last stage's rate (the study has not reached it yet)";
+  }
+  st.factor = at / o.calibrate_hours;
+  st.calibration = fmt::format("the lifters lost {:g} mm of height in {:g} h ({})", o.calibrate_loss_mm,
+                               o.calibrate_hours, how);
+}
+
+fs::path stage_dir(const fs::path& out, int i) { return out / fmt::format("stage-{:02d}", i); }
+
+// The stage's case: the study's case with the stage's liner. A worn mill
+// turns at the new one's rpm (a fixed-speed drive) and holds the same charge
+// (the filling of its larger free volume).
+MillCase stage_case(const Prepared& base, const Stage& s) {
+  MillCase c = base.c;
+  if (s.index == 0) return c;
+  c.diameter = s.diameter;
+  for (std::size_t k = 0; k < c.lifter_pattern.size(); ++k) {
+    LifterProfile p;
+    p.points = s.outlines[k];
+    c.lifter_pattern[k] = p;
+  }
+  c.speed_rpm = base.d.speed_rpm;
+  c.speed_fraction = 0;
+  c.filling = s.filling;
+  return c;
+}
+
+void save(const fs::path& out, const json& request, const Study& st, const std::string& stopped) {
+  json j;
+  j["format"] = kFormat;
+  j["request"] = request;
+  j["calibration"] = {{"factor", st.factor}, {"how", st.calibration}};
+  j["stages"] = json::array();
+  for (const Stage& s : st.stages) j["stages"].push_back(stage_json(s));
+  if (!stopped.empty()) j["stopped"] = stopped;
+  io::write_file_atomic(out / "life.json", j.dump(1) + "\n");
+}
+
+void write_table(const fs::path& out, const Study& st, double length) {
+  std::string t =
+      "stage,hours,case_hours,profile,height_mm,top_width_mm,leading_angle_deg,trailing_angle_deg,area_mm2,"
+      "worn_area_mm2,shell_wear_mm,diameter_m,power_W,power_sem_W,toe_deg,shoulder_deg,impact_point_deg,"
+      "bare_liner_impact_share,liner_wear_kg_per_h,top_wear_mm_per_1000h,stage_hours,booked_mm2,removed_mm2\n";
+  std::vector<double> worn(st.stages.front().outlines.size(), 0.0);
+  for (const Stage& s : st.stages) {
+    if (!s.ran) break;
+    for (std::size_t k = 0; k < s.outlines.size(); ++k) {
+      const ProfileMeasures m = measure_profile(s.outlines[k]);
+      const double top = top_rate_mm_h(s.outlines[k], 0.5 * s.diameter, length, s.r.station_m3_s[k]);
+      const bool carried = s.span_case_hours > 0;
+      t += fmt::format(
+          "{},{:.6g},{:.6g},{},{:.4f},{:.4f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f},{:.6f},{:.6g},{:.4g},{:.3f},{:.3f},{:.3f},"
+          "{:.4f},{:.6g},{:.6g},{},{},{}\n",
+          s.index, s.case_hours / st.factor, s.case_hours, k, m.height * 1000, m.top_width * 1000, m.leading_angle_deg,
+          m.trailing_angle_deg, m.area * 1e6, worn[k], s.shell_wear_m * 1000, s.diameter, s.r.power_W, s.r.power_sem_W,
+          s.r.toe_deg, s.r.shoulder_deg, s.r.impact_deg, s.r.bare_share, s.r.liner_kg_h * st.factor,
+          top * 1000 * 1000 * st.factor, carried ? fmt::format("{:.6g}", s.span_case_hours / st.factor) : "",
+          carried ? fmt::format("{:.6g}", s.booked_mm2[k]) : "", carried ? fmt::format("{:.6g}", s.removed_mm2[k]) : "");
+      if (carried) worn[k] += s.removed_mm2[k];
+    }
+  }
+  io::write_file_atomic(out / "life.csv", t);
+  // The worn liner of each stage in ParaView, on the study's hours.
+  std::string pvd = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+  for (const Stage& s : st.stages)
+    if (s.ran)
+      pvd += fmt::format("    <DataSet timestep=\"{:.6g}\" part=\"0\" file=\"stage-{:02d}/liner.vtp\"/>\n",
+                         s.case_hours / st.factor, s.index);
+  pvd += "  </Collection>\n</VTKFile>\n";
+  io::write_file_atomic(out / "life.pvd", pvd);
+}
+
+std::uint32_t ramp(double t) {  // blue (new) to red (worn)
+  const auto mix = [&](int a, int b) { return static_cast<std::uint32_t>(std::lround(a + (b - a) * t)); };
+  return (mix(0x1f, 0xd6) << 16) | (mix(0x77, 0x27) << 8) | mix(0xb4, 0x28);
+}
+
+void write_picture(const fs::path& out, const std::string& name, const Study& st) {
+  std::vector<io::LinePlot> plots;
+  std::vector<const Stage*> ran;
+  for (const Stage& s : st.stages)
+    if (s.ran) ran.push_back(&s);
+  const int kinds = static_cast<int>(st.stages.front().outlines.size());
+  io::LinePlot prof;
+  prof.title = name + ": lifter profiles from new (blue) to worn (red), on the new shell's line";
+  prof.x_label = "along the shell (mm), leading face to the right";
+  prof.y_label = "height (mm)";
+  prof.equal_aspect = true;
+  double x_shift = 0;
+  for (int k = 0; k < kinds; ++k) {
+    double widest = 0;
+    for (const Stage* s : ran) {
+      io::PlotSeries ser;
+      const double t = ran.size() > 1 ? static_cast<double>(s - ran.front()) / (ran.back() - ran.front()) : 0.0;
+      ser.rgb = ramp(t);
+      for (const Vec2& v : s->outlines[k]) {
+        ser.x.push_back(v.x * 1000 + x_shift);
+        ser.y.push_back((v.y - s->shell_wear_m) * 1000);
+        widest = std::max(widest, std::fabs(v.x) * 1000);
+      }
+      if (k == 0 && (s == ran.front() || s == ran.back()))
+        ser.label = fmt::format("{:.0f} h: {:.1f} mm, face {:.1f} deg", s->case_hours / st.factor,
+                                measure_profile(s->outlines[k]).height * 1000,
+                                measure_profile(s->outlines[k]).leading_angle_deg);
+      prof.series.push_back(ser);
+    }
+    x_shift += 2.4 * widest;
+  }
+  plots.push_back(prof);
+  auto over_hours = [&](const std::string& title, const std::string& y_label) {
+    io::LinePlot p;
+    p.title = title;
+    p.x_label = "operating hours";
+    p.y_label = y_label;
+    p.pad_x = true;
+    return p;
+  };
+  auto series = [&](const std::string& label, std::uint32_t rgb, auto value) {
+    io::PlotSeries s;
+    s.label = label;
+    s.rgb = rgb;
+    s.markers = true;
+    for (const Stage* x : ran) {
+      s.x.push_back(x->case_hours / st.factor);
+      s.y.push_back(value(*x));
+    }
+    return s;
+  };
+  io::LinePlot power = over_hours(name + ": power draw", "power (W)");
+  power.series.push_back(series("torque power", 0x1f77b4, [](const Stage& s) { return s.r.power_W; }));
+  power.series.push_back(series("- 2 SE", 0x9ecae1, [](const Stage& s) { return s.r.power_W - 2 * s.r.power_sem_W; }));
+  power.series.back().dashed = true;
+  power.series.push_back(series("+ 2 SE", 0x9ecae1, [](const Stage& s) { return s.r.power_W + 2 * s.r.power_sem_W; }));
+  power.series.back().dashed = true;
+  plots.push_back(power);
+  io::LinePlot angles = over_hours(name + ": where the charge is", "angle (deg, from 3 o'clock)");
+  angles.series.push_back(series("shoulder", 0x2ca02c, [](const Stage& s) { return s.r.shoulder_deg; }));
+  angles.series.push_back(series("toe", 0x9467bd, [](const Stage& s) { return s.r.toe_deg; }));
+  angles.series.push_back(series("impact point", 0xd62728, [](const Stage& s) { return s.r.impact_deg; }));
+  plots.push_back(angles);
+  io::LinePlot lifter = over_hours(name + ": the lifters (profile 0)", "mm or deg");
+  lifter.series.push_back(series("height (mm)", 0x1f77b4, [](const Stage& s) { return measure_profile(s.outlines[0]).height * 1000; }));
+  lifter.series.push_back(series("leading face angle (deg)", 0xd62728, [](const Stage& s) { return measure_profile(s.outlines[0]).leading_angle_deg; }));
+  lifter.series.push_back(series("trailing face angle (deg)", 0xff7f0e, [](const Stage& s) { return measure_profile(s.outlines[0]).trailing_angle_deg; }));
+  plots.push_back(lifter);
+  io::write_line_plots_png(out / "life.png", plots, 960, 400);
+}
+
+// The options' ranges are checked as they are parsed (main.cpp); here, how
+// they go together.
+void check_options(const LifeOptions& o) {
+  if (o.stages < 1) throw std::invalid_argument("--stages N: how many worn stages follow the new liner (1 to 100)");
+  const bool by_hours = o.hours > 0, by_height = o.until_height_mm > 0;
+  if (by_hours == by_height)
+    throw std::invalid_argument("give one of --hours H (operating hours the study covers) and --until-height MM");
+  const bool loss = o.calibrate_loss_mm > 0 || o.calibrate_hours > 0, rate = o.calibrate_rate_kg_h > 0;
+  if (loss && rate) throw std::invalid_argument("--calibrate-rate and --calibrate-loss: give one measured figure");
+  if (loss && !(o.calibrate_loss_mm > 0 && o.calibrate_hours > 0))
+    throw std::invalid_argument("--calibrate-loss MM goes with --calibrate-hours H (the lifters lost MM in H hours)");
+}
+
+}  // namespace
+
+int cmd_life(const LifeOptions& o) {
+  check_options(o);
+  const Prepared base = prepare(o.c);
+  const MillCase& c = base.c;
+  if (c.lifter_rows == 0)
+    throw std::invalid_argument("lifters.rows = 0: a life study wears lifter bars; this mill has none");
+  for (std::size_t m = 0; m < c.meshes.size(); ++m)
+    if (c.meshes[m].part != MeshPart::ends)
+      throw std::invalid_argument(fmt::format("walls.mesh[{}]: a life study wears the shell and the lifter bars of "
+                                              "[lifters]; a mesh liner is not worn (leave it out, or give its bars as "
+                                              "[[lifters.profile]] points)",
+                                              m));
+  if (!(base.scene.wall_material.wear_coefficient > 0))
+    throw std::invalid_argument("materials." + c.liner + ".wear_coefficient is 0: a life study needs the liner's "
+                                "wear coefficient > 0 (its size sets only the hours; --calibrate-loss or "
+                                "--calibrate-rate fix those)");
+  const double h_new = [&] {
+    double h = 0;
+    for (const LifterProfile& p : c.lifter_pattern) h = std::max(h, measure_profile(profile_outline(p)).height);
+    return h;
+  }();
+  if (o.until_height_mm > 0 && !(o.until_height_mm < h_new * 1000))
+    throw std::invalid_argument(fmt::format("--until-height {:g}: the new lifters are {:.4g} mm high; give less",
+                                            o.until_height_mm, h_new * 1000));
+  if (o.calibrate_loss_mm > 0 && !(o.calibrate_loss_mm < h_new * 1000))
+    throw std::invalid_argument(fmt::format("--calibrate-loss {:g}: more than the new lifters' height, {:.4g} mm",
+                                            o.calibrate_loss_mm, h_new * 1000));
+
+  const fs::path out = o.out.empty() ? fs::path("runs") / (c.name + "-life") : fs::path(o.out);
+  const json request = request_of(o, base);
+  Study st;
+  for (std::size_t k = 0; k < c.lifter_pattern.size(); ++k)
+    if (measure_profile(profile_outline(c.lifter_pattern[k])).height >
+        measure_profile(profile_outline(c.lifter_pattern[st.tallest])).height)
+      st.tallest = static_cast<int>(k);
+  std::error_code ec;
+  if (fs::exists(out / "life.json", ec) && !o.force) {
+    json j;
+    try {
+      std::ifstream in(out / "life.json");
+      j = json::parse(in);
+      if (j.at("format") != kFormat) throw std::runtime_error("format " + j.at("format").dump());
+      for (const json& s : j.at("stages")) st.stages.push_back(stage_of(s));
+    } catch (const std::exception& e) {
+      throw std::invalid_argument((out / "life.json").string() + ": damaged or of another version (" + e.what() +
+                                  "); add --force to start the study again");
+    }
+    if (j.at("request") != request)
+      throw std::invalid_argument("--out " + out.string() + " holds a life study of another case or options (" +
+                                  j.at("request").dump() + "); give the same to resume it, or --force to start again");
+    if (st.stages.empty()) throw std::invalid_argument((out / "life.json").string() + ": holds no stages; add --force");
+    std::printf("life            resuming %s at stage %d\n", out.string().c_str(), st.stages.back().index);
+  } else {
+    if (fs::exists(out, ec) && !fs::is_empty(out, ec) && !fs::exists(out / "life.json", ec))
+      throw std::invalid_argument("--out " + out.string() + ": exists and holds no life study; choose another folder");
+    if (o.force) {
+      for (int i = 0; fs::exists(stage_dir(out, i), ec); ++i) fs::remove_all(stage_dir(out, i), ec);
+      for (const char* f : {"life.json", "life.csv", "life.png", "life.pvd"}) fs::remove(out / f, ec);
+      fs::remove_all(out / "cases", ec);
+    }
+    Stage s0;
+    s0.diameter = c.diameter;
+    s0.filling = c.filling;
+    for (const LifterProfile& p : c.lifter_pattern) s0.outlines.push_back(profile_outline(p));
+    st.stages.push_back(s0);
+  }
+  fs::create_directories(out / "cases", ec);
+  if (ec) throw std::runtime_error("cannot create " + (out / "cases").string() + ": " + ec.message());
+  const double length = c.length;
+  const double V0 = base.d.mill_volume;
+
+  for (;;) {
+    Stage& s = st.stages.back();
+    const fs::path dir = stage_dir(out, s.index);
+    if (!s.ran) {
+      // The stage's case file and its run (resumed from its checkpoint
+      // after a kill).
+      const fs::path case_file = out / "cases" / fmt::format("stage-{:02d}.toml", s.index);
+      io::write_file_atomic(case_file, io::case_to_toml(stage_case(base, s)));
+      if (!fs::exists(dir / "summary.json", ec)) {
+        RunOptions ro;
+        ro.c.device = o.c.device;
+        ro.quiet = o.quiet;
+        if (fs::exists(dir / "checkpoint.bin", ec) && fs::exists(dir / "case.toml", ec)) {
+          ro.resume = dir.string();
+        } else {
+          ro.c.case_path = case_file.string();
+          ro.out = dir.string();
+          ro.force = true;
+        }
+        std::printf("life            stage %d: %s\n", s.index, dir.string().c_str());
+        std::fflush(stdout);
+        if (const int rc = cmd_run(ro); rc != 0) return rc;
+      }
+      s.r = read_stage(dir, static_cast<int>(c.lifter_pattern.size()));
+      s.ran = true;
+    }
+    calibrate(st, o, length);
+    save(out, request, st, "");
+    write_table(out, st, length);
+    io::draw_or_warn(out / "life.png", [&] { write_picture(out, c.name, st); });
+
+    // Stop, or plan the next stage's wear (in hours at the case's wear
+    // coefficient: the shapes depend on those alone).
+    const int i = s.index;
+    const double hours_now = s.case_hours / st.factor;
+    const double h_now = height_of(s, st.tallest) * 1000;
+    std::string stopped;
+    double span = 0;
+    if (o.hours > 0) {
+      const double left = o.hours - hours_now;
+      if (i >= o.stages || left <= 1e-9 * o.hours) stopped = fmt::format("{:g} operating hours reached", o.hours);
+      else span = std::min(o.hours / o.stages, left) * st.factor;
+    } else {
+      const double rate = height_rate_mm_h(s, st.tallest, length);
+      if (h_now <= o.until_height_mm + 0.05) stopped = fmt::format("the lifters are down to {:.1f} mm", h_now);
+      else if (i >= 3 * o.stages) stopped = fmt::format("{} stages run; the lifters are still {:.1f} mm high", i, h_now);
+      else if (!(rate > 0))
+        throw std::invalid_argument(dir.string() + ": the lifters' height above the shell did not fall in this "
+                                                   "stage (their tops wear no faster than the shell); give --hours");
+      else span = (h_now - o.until_height_mm) / std::max(1, o.stages - i) / rate;
+    }
+    if (!stopped.empty()) {
+      save(out, request, st, stopped);
+      std::printf("life            done: %s; %s/{life.csv, life.png, life.pvd}\n", stopped.c_str(), out.string().c_str());
+      return 0;
+    }
+
+    // The wear of the stage's hours: the shell back by its mean depth, each
+    // profile by its stations'.
+    Stage next;
+    next.index = i + 1;
+    next.case_hours = s.case_hours + span;
+    s.span_case_hours = span;
+    s.shell_depth_m = s.r.shell_mm_per_1000h * 1e-3 * span * 1e-3;
+    const double R = 0.5 * s.diameter;
+    s.booked_mm2.clear(), s.removed_mm2.clear(), s.scale.clear(), s.spread.clear();
+    for (std::size_t k = 0; k < s.outlines.size(); ++k) {
+      std::vector<double> area(kWearStations);
+      for (int j = 0; j < kWearStations; ++j) area[j] = s.r.station_m3_s[k][j] * span * 3600 / length;
+      const WornLifter w = wear_lifter(s.outlines[k], R, area, s.shell_depth_m);
+      if (w.worn_away) {
+        const std::string why = fmt::format(
+            "lifters.profile[{}]: stage {} wears the lifter away within its {:.4g} h (it is {:.1f} mm high now); the "
+            "study stops at stage {} (life.csv holds stages 0 to {}); ask for less (--hours or --until-height)",
+            k, i + 1, span / st.factor, measure_profile(s.outlines[k]).height * 1000, i, i);
+        s.span_case_hours = 0;
+        save(out, request, st, why);
+        throw std::invalid_argument(why);
+      }
+      s.booked_mm2.push_back(w.booked_area * 1e6);
+      s.removed_mm2.push_back(w.removed_area * 1e6);
+      s.scale.push_back(w.scale);
+      s.spread.push_back(w.spread);
+      next.outlines.push_back(w.outline);
+    }
+    next.diameter = s.diameter + 2 * s.shell_depth_m;
+    next.shell_wear_m = s.shell_wear_m + s.shell_depth_m;
+    // The same charge in the larger free volume.
+    Stage probe = next;
+    probe.filling = c.filling;
+    MillCase nc = stage_case(base, probe);
+    try {
+      const MillDerived nd = derive(nc);
+      next.filling = c.filling * V0 / nd.mill_volume;
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(fmt::format("stage {}: the worn liner is not a valid case: {}", i + 1, e.what()));
+    }
+    for (std::size_t k = 0; k < s.outlines.size(); ++k)
+      std::printf("life            stage %d -> %d: profile %zu worn %.4g mm2 (booked %.4g mm2, depth scale %.3f, "
+                  "smoothed %dx), shell %.3f mm\n",
+                  i, i + 1, k, s.removed_mm2[k], s.booked_mm2[k], s.scale[k], s.spread[k], s.shell_depth_m * 1000);
+    st.stages.push_back(next);
+    save(out, request, st, "");
+  }
+}
+
+}  // namespace mc::app

@@ -1,0 +1,302 @@
+#include "core/liner_wear.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mc {
+
+namespace {
+
+// A piece of the exposed outline: its middle, outward normal and tangent
+// (along the path), its length and where it lies on the path.
+struct Sample {
+  Vec2 p, n, t;  // mill frame of the bar at angle 0
+  double len = 0, s = 0;
+};
+
+double cross(Vec2 o, Vec2 a, Vec2 b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
+
+double polygon_area(const std::vector<Vec2>& p) {
+  double a = 0;
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    const Vec2 u = p[k], v = p[(k + 1) % p.size()];
+    a += 0.5 * (u.x * v.y - v.x * u.y);
+  }
+  return a;
+}
+
+// The bar at angle 0 (its frame's x along the mill's y, its height along −x
+// from the shell), and the path of its wear stations.
+struct Bar {
+  std::vector<Vec2> poly;
+  WearPath path;
+  std::vector<double> edge_from;  // s at the start of each edge of the path
+};
+
+Bar bar_of(const std::vector<Vec2>& outline, double R) {
+  LifterProfile p;
+  p.points = outline;
+  Bar b;
+  b.poly = lifter_polygon(R, p, 0.0);
+  b.path = lifter_wear_path(b.poly, R);
+  double s = 0;
+  const std::size_t n = b.poly.size();
+  for (std::size_t j = 0; j < n; ++j) {
+    b.edge_from.push_back(s);
+    const Vec2 a = b.poly[(b.path.start + j) % n], c = b.poly[(b.path.start + j + 1) % n];
+    s += std::hypot(c.x - a.x, c.y - a.y);
+  }
+  b.edge_from.push_back(s);
+  return b;
+}
+
+Vec2 edge_normal(Vec2 a, Vec2 b) {
+  const double l = std::hypot(b.x - a.x, b.y - a.y);
+  return l > 0 ? Vec2{(b.y - a.y) / l, -(b.x - a.x) / l} : Vec2{0, 0};
+}
+
+// The point of the path at length s (its middle for a piece there).
+Vec2 at_length(const Bar& b, double s) {
+  const std::size_t n = b.poly.size();
+  std::size_t j = 0;
+  while (j + 1 < n && b.edge_from[j + 1] <= s) ++j;
+  const Vec2 a = b.poly[(b.path.start + j) % n], c = b.poly[(b.path.start + j + 1) % n];
+  const double len = b.edge_from[j + 1] - b.edge_from[j];
+  const double t = len > 0 ? std::clamp((s - b.edge_from[j]) / len, 0.0, 1.0) : 0.0;
+  return {a.x + t * (c.x - a.x), a.y + t * (c.y - a.y)};
+}
+
+// The exposed outline cut into pieces of about `piece` (m), edge by edge.
+std::vector<Sample> samples_of(const Bar& b, double piece) {
+  std::vector<Sample> out;
+  const std::size_t n = b.poly.size();
+  for (std::size_t j = 0; j < n; ++j) {
+    const double e0 = std::max(b.edge_from[j], b.path.from), e1 = std::min(b.edge_from[j + 1], b.path.to);
+    if (!(e1 > e0)) continue;
+    const Vec2 a = b.poly[(b.path.start + j) % n], c = b.poly[(b.path.start + j + 1) % n];
+    const double l = std::hypot(c.x - a.x, c.y - a.y);
+    const Vec2 t{(c.x - a.x) / l, (c.y - a.y) / l};
+    const int k_max = std::max(1, static_cast<int>(std::ceil((e1 - e0) / piece)));
+    for (int k = 0; k < k_max; ++k) {
+      const double s = e0 + (e1 - e0) * (k + 0.5) / k_max;
+      const double f = (s - b.edge_from[j]) / l;
+      out.push_back({{a.x + f * (c.x - a.x), a.y + f * (c.y - a.y)}, {t.y, -t.x}, t, (e1 - e0) / k_max, s});
+    }
+  }
+  return out;
+}
+
+// Convex hull, counter-clockwise, without collinear points (Andrew's chain).
+std::vector<Vec2> hull_of(std::vector<Vec2> p) {
+  std::sort(p.begin(), p.end(), [](Vec2 a, Vec2 b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
+  if (p.size() < 3) return p;
+  std::vector<Vec2> h(2 * p.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (std::size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
+    while (k >= t && cross(h[k - 2], h[k - 1], p[i - 1]) <= 0) --k;
+    h[k++] = p[i - 1];
+  }
+  h.resize(k - 1);
+  return h;
+}
+
+// The outline's area above the line y = level (its polygon closed along
+// y = 0, clipped there).
+double area_above(const std::vector<Vec2>& outline, double level) {
+  std::vector<Vec2> clipped;
+  const std::size_t n = outline.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec2 a = outline[k], b = outline[(k + 1) % n];
+    const bool ina = a.y >= level, inb = b.y >= level;
+    if (ina) clipped.push_back(a);
+    if (ina != inb) {
+      const double t = (level - a.y) / (b.y - a.y);
+      clipped.push_back({a.x + t * (b.x - a.x), level});
+    }
+  }
+  return clipped.size() < 3 ? 0.0 : polygon_area(clipped);
+}
+
+struct Moved {
+  std::vector<Vec2> outline;
+  bool worn_away = false;
+};
+
+// The bar after each piece of its outline wore back by scale × its depth,
+// in the frame of the worn shell (radius R + shell_depth): what is left is
+// the bar less a strip under each piece (strips that overlap at a corner
+// leave a notch); its convex hull is the worn bar, feet on the shell, thinned.
+Moved move(const Bar& bar, const std::vector<Sample>& samples, const std::vector<double>& depth, double R,
+           double shell_depth, double scale) {
+  std::vector<Vec2> keep;
+  auto in_a_strip = [&](Vec2 c) {
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const Sample& s = samples[i];
+      const double d = scale * depth[i];
+      if (!(d > 0)) continue;
+      const double along = (c.x - s.p.x) * s.t.x + (c.y - s.p.y) * s.t.y;
+      const double in = (s.p.x - c.x) * s.n.x + (s.p.y - c.y) * s.n.y;
+      const double tol = 1e-9 * (s.len + d);
+      if (std::fabs(along) < 0.5 * s.len - tol && in > -tol && in < d - tol) return true;
+    }
+    return false;
+  };
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Sample& s = samples[i];
+    const double d = scale * depth[i];
+    for (double side : {-0.5, 0.5}) {
+      const Vec2 c{s.p.x - d * s.n.x + side * s.len * s.t.x, s.p.y - d * s.n.y + side * s.len * s.t.y};
+      if (polygon_signed_distance(bar.poly, c.x, c.y) <= 1e-9 * R && !in_a_strip(c)) keep.push_back(c);
+    }
+  }
+  // The feet: the end pieces' worn lines carried on behind the shell.
+  if (!samples.empty()) {
+    double u_min = R;
+    for (const Vec2& v : bar.poly) u_min = std::min(u_min, v.x);
+    const double reach = 0.5 * (R - u_min) + 2 * shell_depth;
+    const Sample& f = samples.front();
+    const Sample& l = samples.back();
+    const double df = scale * depth.front() + reach, dl = scale * depth.back() + reach;
+    keep.push_back({f.p.x - scale * depth.front() * f.n.x - df * f.t.x, f.p.y - scale * depth.front() * f.n.y - df * f.t.y});
+    keep.push_back({l.p.x - scale * depth.back() * l.n.x + dl * l.t.x, l.p.y - scale * depth.back() * l.n.y + dl * l.t.y});
+  }
+  Moved m;
+  const std::vector<Vec2> hull = hull_of(keep);
+  // Into the worn shell's frame, cut at its line (y = 0).
+  const double R1 = R + shell_depth;
+  std::vector<Vec2> h;
+  for (const Vec2& v : hull) h.push_back({v.y, R1 - v.x});
+  std::vector<Vec2> cut;
+  for (std::size_t k = 0; k < h.size(); ++k) {
+    const Vec2 a = h[k], b = h[(k + 1) % h.size()];
+    if (a.y >= 0) cut.push_back(a);
+    if ((a.y >= 0) != (b.y >= 0)) cut.push_back({a.x + (0 - a.y) / (b.y - a.y) * (b.x - a.x), 0.0});
+  }
+  if (cut.size() < 3) {
+    m.worn_away = true;
+    return m;
+  }
+  // From the leading foot (on the shell, the farthest ahead) round to the trailing one.
+  std::size_t a = cut.size(), b = cut.size();
+  for (std::size_t k = 0; k < cut.size(); ++k)
+    if (cut[k].y == 0) {
+      if (a == cut.size() || cut[k].x > cut[a].x) a = k;
+      if (b == cut.size() || cut[k].x < cut[b].x) b = k;
+    }
+  if (a == cut.size() || a == b) {
+    m.worn_away = true;
+    return m;
+  }
+  std::vector<Vec2> o;
+  for (std::size_t k = a;; k = (k + 1) % cut.size()) {
+    o.push_back(cut[k]);
+    if (k == b || o.size() > cut.size()) break;
+  }
+  // Thin: drop the corner that carries the least area while there are too
+  // many or it carries almost none (a convex outline stays convex).
+  const double total = std::max(polygon_area(o), 1e-300);
+  while (o.size() > 3) {
+    std::size_t best = 0;
+    double least = 1e300;
+    for (std::size_t k = 1; k + 1 < o.size(); ++k) {
+      const double t = std::fabs(cross(o[k - 1], o[k], o[k + 1]));
+      if (t < least) least = t, best = k;
+    }
+    if (static_cast<int>(o.size()) <= kLifterMaxPoints && 0.5 * least > 2e-4 * total) break;
+    o.erase(o.begin() + static_cast<std::ptrdiff_t>(best));
+  }
+  double h_max = 0;
+  for (const Vec2& v : o) h_max = std::max(h_max, v.y);
+  m.worn_away = o.size() < 3 || h_max < kWornAwayHeight || !(o.front().x > o.back().x);
+  m.outline = o;
+  return m;
+}
+
+}  // namespace
+
+WornLifter wear_lifter(const std::vector<Vec2>& outline, double R, const std::vector<double>& station_area,
+                       double shell_depth) {
+  const Bar bar = bar_of(outline, R);
+  const double span = bar.path.to - bar.path.from, ds = span / kWearStations;
+  const std::vector<Sample> samples = samples_of(bar, ds / 6);
+  // Depth per station, smoothed over its neighbours (1 2 1, mirrored at the
+  // ends: the volume stays), then at each sample between station centres.
+  std::vector<double> d(kWearStations, 0.0);
+  WornLifter w;
+  for (int j = 0; j < kWearStations && j < static_cast<int>(station_area.size()); ++j) {
+    d[j] = station_area[j] / ds;
+    w.booked_area += station_area[j];
+  }
+  const double before = measure_profile(outline).area;
+  auto removed = [&](const Moved& m) { return m.worn_away ? before : before - area_above(m.outline, shell_depth); };
+  const double target = w.booked_area;
+  Moved m;
+  // A convex bar cannot take a deep notch: where wear gathers on a corner
+  // the booked area comes off as a chamfer that reaches past the worn
+  // stations. So: the depths smoothed (1 2 1, mirrored at the ends: the
+  // volume stays) once, and then ever wider until a scale of at most
+  // kMaxScale on them removes the booked area.
+  constexpr double kMaxScale = 2;
+  std::vector<double> sm = d;
+  for (int passes = 1, done = 0; passes <= 256; passes *= 2) {
+    for (; done < passes; ++done) {
+      std::vector<double> next(kWearStations);
+      for (int j = 0; j < kWearStations; ++j)
+        next[j] = 0.25 * sm[std::max(j - 1, 0)] + 0.5 * sm[j] + 0.25 * sm[std::min(j + 1, kWearStations - 1)];
+      sm = next;
+    }
+    std::vector<double> depth;
+    for (const Sample& s : samples) {
+      const double u = (s.s - bar.path.from) / ds - 0.5;  // in station centres
+      const int j0 = std::clamp(static_cast<int>(std::floor(u)), 0, kWearStations - 1);
+      const int j1 = std::min(j0 + 1, kWearStations - 1);
+      const double f = std::clamp(u - j0, 0.0, 1.0);
+      depth.push_back(u <= 0 ? sm[0] : (1 - f) * sm[j0] + f * sm[j1]);
+    }
+    w.spread = passes;
+    m = move(bar, samples, depth, R, shell_depth, target > 0 ? 1.0 : 0.0);
+    w.scale = target > 0 ? 1.0 : 0.0;
+    if (!(target > 0)) break;
+    // The scale that removes the booked area: bracket it, then bisect.
+    auto short_of = [&](const Moved& t) { return !t.worn_away && removed(t) < target; };
+    double lo = 0, hi = 1;
+    while (short_of(m) && hi < kMaxScale) {
+      lo = hi;
+      hi *= 2;
+      m = move(bar, samples, depth, R, shell_depth, hi);
+    }
+    if (short_of(m) && passes < 256) continue;  // spread wider
+    for (int it = 0; it < 60 && hi - lo > 1e-7 * hi; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (short_of(move(bar, samples, depth, R, shell_depth, mid)) ? lo : hi) = mid;
+    }
+    const Moved at_lo = move(bar, samples, depth, R, shell_depth, lo),
+                at_hi = move(bar, samples, depth, R, shell_depth, hi);
+    const bool take_hi = !at_hi.worn_away && std::fabs(removed(at_hi) - target) <= std::fabs(removed(at_lo) - target);
+    w.scale = take_hi || at_lo.outline.empty() ? hi : lo;
+    m = take_hi || at_lo.outline.empty() ? at_hi : at_lo;
+    if (at_hi.worn_away && removed(at_lo) < 0.99 * target) m.worn_away = true;  // the stage wears it away
+    break;
+  }
+  w.outline = m.outline;
+  w.worn_away = m.worn_away;
+  w.removed_area = removed(m);
+  return w;
+}
+
+std::vector<StationPlace> station_places(const std::vector<Vec2>& outline, double R) {
+  const Bar bar = bar_of(outline, R);
+  const double ds = (bar.path.to - bar.path.from) / kWearStations;
+  std::vector<StationPlace> out;
+  for (int j = 0; j < kWearStations; ++j) {
+    const Vec2 p = at_length(bar, bar.path.from + (j + 0.5) * ds);
+    out.push_back({{p.y, R - p.x}, ds});
+  }
+  return out;
+}
+
+}  // namespace mc

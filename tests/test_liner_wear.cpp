@@ -1,0 +1,122 @@
+// Lifter profiles of any shape and the liner moved by its wear
+// (core/lifters.h, core/liner_wear.h).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "core/lifters.h"
+#include "core/liner_wear.h"
+
+using Catch::Detail::Approx;
+using mc::Vec2;
+
+namespace {
+
+const double kR = 0.45;
+
+std::vector<Vec2> rectangle(double w, double h) { return {{w / 2, 0}, {w / 2, h}, {-w / 2, h}, {-w / 2, 0}}; }
+
+}  // namespace
+
+TEST_CASE("a polygon profile equal to an h x w x 0 bar gives its vertices bit for bit", "[lifters]") {
+  mc::LifterProfile bar;
+  bar.height = 0.025;
+  bar.top_width = 0.03;
+  bar.face_angle_deg = 0;
+  mc::LifterProfile poly;
+  poly.points = {{-0.015, 0}, {-0.015, 0.025}, {0.015, 0.025}, {0.015, 0}};  // either direction
+  for (double angle : {0.0, 0.7, 2.5}) {
+    const auto a = mc::lifter_polygon(kR, bar, angle), b = mc::lifter_polygon(kR, poly, angle);
+    REQUIRE(a.size() == b.size());
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      CHECK(a[k].x == b[k].x);
+      CHECK(a[k].y == b[k].y);
+    }
+  }
+}
+
+TEST_CASE("a trapezoid's outline measures as its height, top width and face angles", "[lifters]") {
+  mc::LifterProfile p;
+  p.height = 0.025;
+  p.top_width = 0.03;
+  p.face_angle_deg = 20;
+  const mc::ProfileMeasures m = mc::measure_profile(mc::profile_outline(p));
+  CHECK(m.height == Approx(0.025).epsilon(1e-12));
+  CHECK(m.top_width == Approx(0.03).epsilon(1e-12));
+  CHECK(m.leading_angle_deg == Approx(20).epsilon(1e-9));
+  CHECK(m.trailing_angle_deg == Approx(20).epsilon(1e-9));
+  CHECK(m.area == Approx(0.025 * (0.03 + 0.025 * std::tan(20 * M_PI / 180))).epsilon(1e-12));
+  // The stations' path: from where the leading face leaves the shell, over
+  // the top, to where the trailing face enters it; as long as the outline
+  // inside the shell.
+  const auto poly = mc::lifter_polygon(kR, p, 0.0);
+  const mc::WearPath w = mc::lifter_wear_path(poly, kR);
+  // The circle lies a little above the tangent line at the feet: where the
+  // face meets it, (R − y)² + x(y)² = R².
+  const double tan20 = std::tan(20 * M_PI / 180);
+  double y = 0;
+  for (int it = 0; it < 50; ++it) {
+    const double x = 0.015 + (0.025 - y) * tan20;
+    y = kR - std::sqrt(kR * kR - x * x);
+  }
+  const double face = (0.025 - y) / std::cos(20 * M_PI / 180);
+  CHECK(w.to - w.from == Approx(0.03 + 2 * face).epsilon(1e-9));
+}
+
+TEST_CASE("bad lifter outlines are refused with their cause", "[lifters]") {
+  auto fault = [](std::vector<Vec2> o) { return mc::profile_outline_fault(o, kR, 0.0254); };
+  CHECK(fault(rectangle(0.03, 0.025)).empty());
+  CHECK(fault({{0.01, 0}, {-0.01, 0}}).find("at least 3") != std::string::npos);
+  CHECK(fault({{0.015, 0.002}, {0, 0.02}, {-0.015, 0}}).find("feet") != std::string::npos);
+  CHECK(fault({{0.015, 0}, {0.01, -0.01}, {0, 0.02}, {-0.015, 0}}).find("outside the shell") != std::string::npos);
+  CHECK(fault({{15, 0}, {15, 25}, {-15, 25}, {-15, 0}}).find("millimetres") != std::string::npos);
+  CHECK(fault({{0.015, 0}, {0.015, 0.025}, {0, 0.01}, {-0.015, 0.025}, {-0.015, 0}}).find("non-convex") !=
+        std::string::npos);
+  CHECK(fault({{0.015, 0}, {-0.015, 0.025}, {0.015, 0.025}, {-0.015, 0}}).find("non-convex") != std::string::npos);
+}
+
+TEST_CASE("a lifter worn by a uniform depth loses the booked area and its height by that depth", "[lifters]") {
+  const std::vector<Vec2> o = rectangle(0.03, 0.025);
+  const mc::WearPath path = mc::lifter_wear_path(mc::lifter_polygon(kR, mc::LifterProfile{0, 0, 0, o}, 0.0), kR);
+  const double span = path.to - path.from, d = 0.001;
+  std::vector<double> area(mc::kWearStations, d * span / mc::kWearStations);
+  const mc::WornLifter w = mc::wear_lifter(o, kR, area, 0.0);
+  REQUIRE_FALSE(w.worn_away);
+  CHECK(w.removed_area == Approx(w.booked_area).epsilon(1e-4));
+  CHECK(w.scale == Approx(1.0).margin(0.1));
+  const mc::ProfileMeasures m = mc::measure_profile(w.outline);
+  CHECK(m.height == Approx(0.025 - d).margin(2e-4));
+  CHECK(m.top_width == Approx(0.03 - 2 * d).margin(5e-4));
+}
+
+TEST_CASE("no wear leaves the outline, and shell wear alone raises the lifter", "[lifters]") {
+  const std::vector<Vec2> o = rectangle(0.03, 0.025);
+  const std::vector<double> none(mc::kWearStations, 0.0);
+  const mc::WornLifter w = mc::wear_lifter(o, kR, none, 0.0);
+  CHECK(mc::measure_profile(w.outline).area == Approx(mc::measure_profile(o).area).epsilon(1e-9));
+  const mc::WornLifter s = mc::wear_lifter(o, kR, none, 0.002);
+  CHECK(mc::measure_profile(s.outline).height == Approx(0.027).epsilon(1e-9));
+  CHECK(s.removed_area == Approx(0.0).margin(1e-12));
+}
+
+TEST_CASE("wear on the leading top corner rounds it and lays the face back", "[lifters]") {
+  const std::vector<Vec2> o = rectangle(0.03, 0.025);
+  std::vector<double> area(mc::kWearStations, 0.0);
+  // Stations run from the leading foot over the top: the leading corner is
+  // about a third of the way.
+  for (int j = 8; j <= 11; ++j) area[j] = 2e-5;
+  const mc::WornLifter w = mc::wear_lifter(o, kR, area, 0.0);
+  REQUIRE_FALSE(w.worn_away);
+  CHECK(w.removed_area == Approx(8e-5).epsilon(1e-4));
+  const mc::ProfileMeasures m = mc::measure_profile(w.outline);
+  CHECK(m.leading_angle_deg > 5);
+  CHECK(std::fabs(m.trailing_angle_deg) < 0.5);
+  CHECK(w.outline.size() > 4);
+}
+
+TEST_CASE("a stage that wears a lifter through says so", "[lifters]") {
+  const std::vector<Vec2> o = rectangle(0.03, 0.025);
+  std::vector<double> area(mc::kWearStations, 1e-4);  // far more than the bar holds
+  CHECK(mc::wear_lifter(o, kR, area, 0.0).worn_away);
+}
