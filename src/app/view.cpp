@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -85,13 +86,13 @@ void require_same_case(const ViewOptions& o, const io::Checkpoint& cp, const Pre
   const auto a = flat_keys(io::case_to_toml(r)), b = flat_keys(io::case_to_toml(given));
   const std::map<std::string, std::string> run_keys(a.begin(), a.end()), given_keys(b.begin(), b.end());
   std::vector<std::string> diffs;
+  std::set<std::string> seen;
   auto note = [&](const std::string& key) {
     const auto ra = run_keys.find(key), gb = given_keys.find(key);
     if (ra != run_keys.end() && gb != given_keys.end() && ra->second == gb->second) return;
-    for (const std::string& d : diffs)
-      if (d.rfind(key + ":", 0) == 0) return;
-    diffs.push_back(key + ": " + (gb == given_keys.end() ? std::string("absent") : readable(gb->second)) +
-                    " there, " + (ra == run_keys.end() ? std::string("absent") : readable(ra->second)) + " in the run");
+    if (!seen.insert(key).second) return;
+    diffs.push_back(key + " " + (gb == given_keys.end() ? std::string("not given") : readable(gb->second) + " given") +
+                    ", " + (ra == run_keys.end() ? std::string("none") : readable(ra->second)) + " in the run");
   };
   for (const auto& [key, value] : b) note(key);
   for (const auto& [key, value] : a) note(key);
