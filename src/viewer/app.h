@@ -109,6 +109,7 @@ class App {
   bool settling_ = true;
   double settle_from_ = 0;   // viewer time when settling began
   double time_offset_ = 0;   // simulated time of earlier solvers
+  long step_offset_ = 0;     // and their steps
   double turning_from_ = 0;  // viewer time when the mill started
   bool paused_ = false;
   bool step_once_ = false;

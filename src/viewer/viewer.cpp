@@ -52,6 +52,40 @@ glm::vec3 heat_colour(double t) {
   return glm::mix(stops[k], stops[k + 1], static_cast<float>(u - k));
 }
 
+// The case `c` with the charge.filling at which it packs `n` balls: after
+// an edit that kept the balls in a mill of another volume (taller or more
+// lifters), the filling those balls fill. False when no filling gives n (a
+// count that rounding per size class skips, or one past half full).
+bool fill_for_count(MillCase& c, long n) {
+  MillCase t = c;
+  auto count = [&](double filling) {
+    t.filling = filling;
+    try {
+      return derive(t).n_balls;
+    } catch (const std::invalid_argument&) {
+      return -1L;  // past what the case allows
+    }
+  };
+  // The count grows with the filling (each class rounded): bisect between
+  // fillings that pack fewer and more.
+  const long now = count(c.filling);
+  if (now <= 0) return false;
+  double lo = c.filling, hi = c.filling;
+  if (now < n) hi = std::min(0.5, c.filling * 1.5 * n / now);
+  else lo = c.filling * 0.5 * n / now;
+  for (int k = 0; k < 60; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    const long m = count(mid);
+    if (m == n) {
+      c.filling = mid;
+      return true;
+    }
+    if (m < 0 || m > n) hi = mid;
+    else lo = mid;
+  }
+  return false;
+}
+
 }  // namespace
 
 // ------------------------------------------------------------------ window
@@ -195,6 +229,7 @@ int App::scene_width() const { return std::max(1, opt_.width - static_cast<int>(
 void App::open_checkpoint(const io::Checkpoint& cp) {
   solver_->restore_state(cp.solver);  // a state that does not fit the case throws
   time_offset_ = 0;
+  step_offset_ = 0;
   const RunState& r = cp.run;
   settling_ = r.phase < 2;
   if (settling_) {
@@ -216,10 +251,12 @@ void App::open_checkpoint(const io::Checkpoint& cp) {
 // mill stands still until the charge is at rest (as `run` settles it).
 void App::install_solver(Scene scene, bool settle) {
   const double t = sim_time();
+  const long steps = step_offset_ + (solver_ ? solver_->steps() : 0);
   if (settle) scene.mill_omega = 0;
   auto next = make_solver(*ctx_, scene);  // the old solver stays if this throws
   solver_ = std::move(next);
   time_offset_ = t;
+  step_offset_ = steps;
   scene_ = std::move(scene);
   n_balls_ = static_cast<int>(scene_.balls.size());
   scene_.balls.clear();  // the solver holds them now
@@ -385,6 +422,7 @@ void App::reset() {
     Scene s = build_scene(case_, derived_);
     install_solver(std::move(s), true);
     time_offset_ = settle_from_ = 0;  // the clock starts again
+    step_offset_ = 0;
     message_ = "reset: a fresh charge settles";
     source_.clear();
   } catch (const std::exception& e) {
@@ -528,22 +566,32 @@ void App::save_state(const std::string& dir_in) {
     s.id.push_back(b.id);
   }
   io::write_vtp(dir / "charge.vtp", s);
-  const std::string case_text = io::case_to_toml(case_);
+  // A run rebuilds the case's charge and restores the state into it, so the
+  // case must pack as many balls as the window holds. An edit of the lifters
+  // keeps the balls in a mill of another volume: the case is saved with the
+  // filling they fill there.
+  MillCase saved = case_;
+  char filled[128] = "";
+  const bool fits = !scene_.bodies.empty() || n_balls_ == derived_.n_balls || fill_for_count(saved, n_balls_);
+  if (fits && saved.filling != case_.filling)
+    std::snprintf(filled, sizeof filled, " (charge.filling %.4g: what its %d balls fill)", saved.filling, n_balls_);
+  const std::string case_text = io::case_to_toml(saved);
   io::write_file_atomic(dir / "case.toml", case_text);
-  // A run rebuilds the case's charge and restores the state into it: a
-  // charge that an edit left with fewer balls than the case packs (a bar
-  // grown where no free space was left) cannot be restored there.
-  if (scene_.bodies.empty() && n_balls_ != derived_.n_balls) {
-    message_ = "saved " + dir.string() + ": charge.vtp and case.toml; no checkpoint: the window holds " +
-               std::to_string(n_balls_) + " balls, the case packs " + std::to_string(derived_.n_balls) +
-               " (Reset, or change the filling, to run it headless)";
+  if (!fits) {
+    message_ = "saved " + dir.string() + ": charge.vtp and case.toml; no checkpoint: no filling of this mill packs the " +
+               std::to_string(n_balls_) + " balls in the window (Reset, or change the filling, to run it headless)";
     return;
   }
-  const RunState run = run_state_from(solver_->time_s(), !settling_, settle_from_ - time_offset_, case_);
-  io::write_checkpoint(dir / io::kCheckpointFile, io::Checkpoint{case_.name, case_text, run, solver_->save_state()});
+  // On the window's clock (a solver made by an edit counts from zero).
+  SolverState state = solver_->save_state();
+  state.time_s += time_offset_;
+  state.observed_since += time_offset_;
+  state.steps += step_offset_;
+  const RunState run = run_state_from(sim_time(), !settling_, settle_from_, saved);
+  io::write_checkpoint(dir / io::kCheckpointFile, io::Checkpoint{saved.name, case_text, run, std::move(state)});
   char when[48];
   std::snprintf(when, sizeof when, " at t = %.3f s", sim_time());
-  message_ = "saved " + dir.string() + when + ": run it on headless with millcharge run --resume " + dir.string();
+  message_ = "saved " + dir.string() + when + filled + ": run it on headless with millcharge run --resume " + dir.string();
 }
 
 int App::run() {
