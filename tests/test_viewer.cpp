@@ -308,8 +308,13 @@ TEST_CASE("view --from RUN opens on the run's turning charge, and its saved stat
   const double turned = cp.solver.time_s - cp.run.turn_start_s;
   REQUIRE(turned == Approx(0.4).margin(1e-3));
 
-  // 10 frames of 100 steps on from there, the state saved after them.
-  const Shot s = shoot(dir, "from", 10, "--from '" + run.string() + "' --save-state '" + saved.string() + "'", 100);
+  // 10 frames of 100 steps on from there, the lifters 40 mm tall from the
+  // first (the balls in their way moved, none lost), the state saved after
+  // them.
+  const Shot s = shoot(dir, "from", 10,
+                       "--from '" + run.string() + "' --edit 0:lifters.profile.0.height=0.04 --save-state '" +
+                           saved.string() + "'",
+                       100);
   INFO(s.out << s.err);
   // Where the state came from, and the window went on turning from it (no
   // settling): the turning time is the run's and the window's steps.
@@ -327,14 +332,21 @@ TEST_CASE("view --from RUN opens on the run's turning charge, and its saved stat
   CHECK(c.angle_deg > 290);
   CHECK(c.angle_deg < 358);
 
+  CHECK(s.out.find("applied: 2714 balls (0 added, 0 removed") != std::string::npos);
+
   // The saved state: a checkpoint 1000 steps on, the mill ready to turn on,
-  // which `run --resume` continues and `bench --from` times.
+  // which `run --resume` continues and `bench --from` times. Its case has
+  // the taller lifters, and the filling that its 2714 balls fill in the
+  // smaller volume they leave (the case's 0.3 packs 2672 there).
   const mc::io::Checkpoint sv = mc::io::read_checkpoint(saved / mc::io::kCheckpointFile);
   CHECK(sv.solver.time_s == Approx(cp.solver.time_s + 1000 * dt).margin(1e-6));
   CHECK(sv.solver.steps == cp.solver.steps + 1000);
   CHECK(sv.solver.n_balls == 2714);
   CHECK(sv.run.settled);
-  CHECK(sv.case_toml == cp.case_toml);
+  const mc::MillCase sc = mc::io::parse_case(sv.case_toml, "saved");
+  CHECK(sv.case_toml.find("height = 0.04") != std::string::npos);
+  CHECK(sc.filling > 0.3);
+  CHECK(mc::derive(sc).n_balls == 2714);
   CHECK(s.out.find("run it on headless with millcharge run --resume " + saved.string()) != std::string::npos);
   const std::string resumed =
       capture(std::string(MC_BINARY) + " run --resume '" + saved.string() + "' --duration 0.02 2>&1", status);
