@@ -361,6 +361,25 @@ TEST_CASE("view --from RUN opens on the run's turning charge, and its saved stat
   CHECK(status == 0);
   CHECK(number_after(bench, "\"n_particles\":") == 2714);
   CHECK(number_after(bench, "\"contacts_per_ball\":") > 0.2);  // a packed charge, not a fresh packing
+
+  // A checkpoint whose state does not fit its own case (written whole, so
+  // only restoring it tells): refused naming the file, status 2, no picture.
+  mc::io::Checkpoint odd = cp;
+  const auto at = odd.case_toml.find("filling = ");
+  REQUIRE(at != std::string::npos);
+  odd.case_toml.replace(at, odd.case_toml.find('\n', at) - at, "filling = 0.25");
+  const fs::path odd_dir = dir / "odd", odd_png = dir / "odd.png";
+  fs::create_directories(odd_dir);
+  mc::io::write_checkpoint(odd_dir / mc::io::kCheckpointFile, odd);
+  const std::string refused =
+      capture("xvfb-run -a -s '-screen 0 1280x800x24' " + std::string(MC_BINARY) + " view --from '" + odd_dir.string() +
+                  "' --frames 2 --screenshot '" + odd_png.string() + "' 2>&1",
+              status);
+  INFO(refused);
+  CHECK(status == 2);
+  CHECK(refused.find(odd_dir.string() + "/checkpoint.bin: the state holds 2714 balls") != std::string::npos);
+  CHECK(refused.find("the window cannot open on it") != std::string::npos);
+  CHECK(!fs::exists(odd_png));
   fs::remove_all(dir);
 }
 

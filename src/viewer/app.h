@@ -61,7 +61,7 @@ class App {
   void handle_input();
   void open_checkpoint(const io::Checkpoint& cp);  // view --from
   void take_screenshot(const std::string& path, bool announce);
-  void save_state(const std::string& dir_in);  // "" : runs/view-CASE-TIME
+  bool save_state(const std::string& dir_in);  // "" : runs/view-CASE-TIME; false: no checkpoint
   double sim_time() const;
   int scene_width() const;  // pixels right of the panel
   glm::vec2 to_pixels(const glm::vec3& p) const;  // lab frame → window pixels from the top left

@@ -227,7 +227,12 @@ int App::scene_width() const { return std::max(1, opt_.width - static_cast<int>(
 // checkpoint's state, and the window goes on as the run was: settling, or
 // turning at the case's speed.
 void App::open_checkpoint(const io::Checkpoint& cp) {
-  solver_->restore_state(cp.solver);  // a state that does not fit the case throws
+  try {
+    solver_->restore_state(cp.solver);
+  } catch (const std::invalid_argument& e) {  // a state that does not fit its own case
+    throw std::invalid_argument(opt_.from_dir + "/" + io::kCheckpointFile + ": " + e.what() +
+                                "; the window cannot open on it");
+  }
   time_offset_ = 0;
   step_offset_ = 0;
   const RunState& r = cp.run;
@@ -551,8 +556,9 @@ void App::take_screenshot(const std::string& path_in, bool announce) {
 // The state as a run folder: checkpoint.bin, which `millcharge run --resume
 // DIR` turns on from (for the case's run.duration, its warm-up first) and
 // `bench --from DIR` times, the case as edited, and the balls for ParaView.
-// Throws what fails; the panel shows it.
-void App::save_state(const std::string& dir_in) {
+// False when only the case and the balls could be written (message_ says
+// why); throws what fails, which the panel shows.
+bool App::save_state(const std::string& dir_in) {
   const fs::path dir = dir_in.empty() ? fs::path("runs") / ("view-" + case_.name + "-" + stamp()) : fs::path(dir_in);
   fs::create_directories(dir / "snapshots");
   const std::vector<BallState> balls = solver_->balls();
@@ -580,7 +586,7 @@ void App::save_state(const std::string& dir_in) {
   if (!fits) {
     message_ = "saved " + dir.string() + ": charge.vtp and case.toml; no checkpoint: no filling of this mill packs the " +
                std::to_string(n_balls_) + " balls in the window (Reset, or change the filling, to run it headless)";
-    return;
+    return false;
   }
   // On the window's clock (a solver made by an edit counts from zero).
   SolverState state = solver_->save_state();
@@ -592,6 +598,7 @@ void App::save_state(const std::string& dir_in) {
   char when[48];
   std::snprintf(when, sizeof when, " at t = %.3f s", sim_time());
   message_ = "saved " + dir.string() + when + filled + ": run it on headless with millcharge run --resume " + dir.string();
+  return true;
 }
 
 int App::run() {
@@ -655,7 +662,7 @@ int App::run() {
     if (last_frame) break;
   }
   if (!opt_.save_state_dir.empty()) {
-    save_state(opt_.save_state_dir);
+    if (!save_state(opt_.save_state_dir)) throw std::runtime_error(message_);
     std::printf("millcharge view: %s\n", message_.c_str());
   }
   const double wall = std::chrono::duration<double>(Clock::now() - start_).count();
