@@ -3,9 +3,12 @@
 // the end view. The picture must show the charge where a charge should be —
 // in the lower half of the shell, displaced toward the rising side (the mill
 // turns counter-clockwise, so the right side rises) — and a very different
-// speed given with --set must change its shape.
+// speed given with --set must change its shape. `view --from RUN` opens on a
+// run's checkpoint, finished or still being written, and saves a state that
+// `run --resume` and `bench --from` take.
 #include <catch2/catch.hpp>
 
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -25,6 +28,7 @@
 
 #include "core/mill_case.h"
 #include "io/case_file.h"
+#include "io/checkpoint.h"
 
 namespace fs = std::filesystem;
 
@@ -263,5 +267,162 @@ TEST_CASE("view: speed, filling and lifters change in the running window without
   CHECK(c.covered > 0.15);
   CHECK(c.angle_deg > 270);
   CHECK(c.angle_deg < 360);
+  fs::remove_all(dir);
+}
+
+namespace {
+
+std::string capture(const std::string& cmd, int& status) {
+  std::string out;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) return out;
+  char buf[4096];
+  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
+  const int st = ::pclose(p);
+  status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return out;
+}
+
+// A number after `tag` in `text` (NaN when absent).
+double number_after(const std::string& text, const std::string& tag) {
+  const auto at = text.find(tag);
+  return at == std::string::npos ? std::nan("") : std::strtod(text.c_str() + at + tag.size(), nullptr);
+}
+
+}  // namespace
+
+TEST_CASE("view --from RUN opens on the run's turning charge, and its saved state runs on headless", "[viewer]") {
+  REQUIRE(std::system("command -v xvfb-run > /dev/null 2>&1") == 0);
+  const fs::path dir = fs::temp_directory_path() / ("millcharge_view_from_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path run = dir / "run", saved = dir / "saved";
+  // The lab mill settled (auto, about 0.22 s) and turned 0.4 s.
+  int status = -1;
+  capture(std::string(MC_BINARY) + " run --quiet --set run.duration=0.4 --set run.warmup=0 --out '" + run.string() +
+              "' > /dev/null 2>&1",
+          status);
+  REQUIRE(status == 0);
+  const mc::io::Checkpoint cp = mc::io::read_checkpoint(run / mc::io::kCheckpointFile);
+  REQUIRE(cp.run.phase == 3);
+  const double turned = cp.solver.time_s - cp.run.turn_start_s;
+  REQUIRE(turned == Approx(0.4).margin(1e-3));
+
+  // 10 frames of 100 steps on from there, the lifters 40 mm tall from the
+  // first (the balls in their way moved, none lost), the state saved after
+  // them.
+  const Shot s = shoot(dir, "from", 10,
+                       "--from '" + run.string() + "' --edit 0:lifters.profile.0.height=0.04 --save-state '" +
+                           saved.string() + "'",
+                       100);
+  INFO(s.out << s.err);
+  // Where the state came from, and the window went on turning from it (no
+  // settling): the turning time is the run's and the window's steps.
+  CHECK(number_after(s.out, "state from " + run.string() + " at t = ") == Approx(cp.solver.time_s).margin(1e-4));
+  const double dt = 0.4 / cp.run.turn_step;
+  CHECK(number_after(s.out, "; turning ") == Approx(turned + 1000 * dt).margin(2e-3));
+  CHECK(s.err.find("the turning mill first drawn") != std::string::npos);
+  // The picture is the run's turning charge, lifted toward the rising side
+  // (a fresh packing 1000 steps in would still be falling into place).
+  const ChargeShape c = measure(s);
+  std::printf("from a checkpoint: covered %.3f, centroid %.3f R at %.1f deg, upper %.3f\n", c.covered, c.centroid_r,
+              c.angle_deg, c.upper);
+  CHECK(c.covered > 0.25);
+  CHECK(c.covered < 0.75);
+  CHECK(c.angle_deg > 290);
+  CHECK(c.angle_deg < 358);
+
+  CHECK(s.out.find("applied: 2714 balls (0 added, 0 removed") != std::string::npos);
+
+  // The saved state: a checkpoint 1000 steps on, the mill ready to turn on,
+  // which `run --resume` continues and `bench --from` times. Its case has
+  // the taller lifters, and the filling that its 2714 balls fill in the
+  // smaller volume they leave (the case's 0.3 packs 2672 there).
+  const mc::io::Checkpoint sv = mc::io::read_checkpoint(saved / mc::io::kCheckpointFile);
+  CHECK(sv.solver.time_s == Approx(cp.solver.time_s + 1000 * dt).margin(1e-6));
+  CHECK(sv.solver.steps == cp.solver.steps + 1000);
+  CHECK(sv.solver.n_balls == 2714);
+  CHECK(sv.run.settled);
+  const mc::MillCase sc = mc::io::parse_case(sv.case_toml, "saved");
+  CHECK(sv.case_toml.find("height = 0.04") != std::string::npos);
+  CHECK(sc.filling > 0.3);
+  CHECK(mc::derive(sc).n_balls == 2714);
+  CHECK(s.out.find("run it on headless with millcharge run --resume " + saved.string()) != std::string::npos);
+  const std::string resumed =
+      capture(std::string(MC_BINARY) + " run --resume '" + saved.string() + "' --duration 0.02 2>&1", status);
+  INFO(resumed);
+  CHECK(status == 0);
+  CHECK(number_after(resumed, "resuming at t = ") == Approx(sv.solver.time_s).margin(1e-4));
+  CHECK(fs::exists(saved / "summary.json"));
+  CHECK(fs::exists(saved / "timeseries.csv"));
+  const std::string bench =
+      capture(std::string(MC_BINARY) + " bench --from '" + saved.string() + "' --steps 50 --books on --quiet", status);
+  INFO(bench);
+  CHECK(status == 0);
+  CHECK(number_after(bench, "\"n_particles\":") == 2714);
+  CHECK(number_after(bench, "\"contacts_per_ball\":") > 0.2);  // a packed charge, not a fresh packing
+
+  // A checkpoint whose state does not fit its own case (written whole, so
+  // only restoring it tells): refused naming the file, status 2, no picture.
+  mc::io::Checkpoint odd = cp;
+  const auto at = odd.case_toml.find("filling = ");
+  REQUIRE(at != std::string::npos);
+  odd.case_toml.replace(at, odd.case_toml.find('\n', at) - at, "filling = 0.25");
+  const fs::path odd_dir = dir / "odd", odd_png = dir / "odd.png";
+  fs::create_directories(odd_dir);
+  mc::io::write_checkpoint(odd_dir / mc::io::kCheckpointFile, odd);
+  const std::string refused =
+      capture("xvfb-run -a -s '-screen 0 1280x800x24' " + std::string(MC_BINARY) + " view --from '" + odd_dir.string() +
+                  "' --frames 2 --screenshot '" + odd_png.string() + "' 2>&1",
+              status);
+  INFO(refused);
+  CHECK(status == 2);
+  CHECK(refused.find(odd_dir.string() + "/checkpoint.bin: the state holds 2714 balls") != std::string::npos);
+  CHECK(refused.find("the window cannot open on it") != std::string::npos);
+  CHECK(!fs::exists(odd_png));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("view --from a run still being written opens on its last whole checkpoint", "[viewer]") {
+  REQUIRE(std::system("command -v xvfb-run > /dev/null 2>&1") == 0);
+  const fs::path dir = fs::temp_directory_path() / ("millcharge_view_live_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path run = dir / "run";
+  // A long run writing a checkpoint every 0.02 s of simulated time.
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd = "exec " + std::string(MC_BINARY) + " run --quiet --set run.duration=20 --set run.warmup=0 "
+                            "--set run.settle=0.02 --set run.checkpoint_interval=0.02 --out '" + run.string() +
+                            "' >/dev/null 2>&1";
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  REQUIRE(pid > 0);
+  // Until it turns.
+  double written = -1;
+  for (int k = 0; k < 1200 && written < 0; ++k) {
+    try {
+      const mc::io::Checkpoint cp = mc::io::read_checkpoint(run / mc::io::kCheckpointFile);
+      if (cp.run.phase == 2) written = cp.solver.time_s;
+    } catch (const std::exception&) {
+    }
+    if (written < 0) ::usleep(100000);
+  }
+  REQUIRE(written > 0);
+  const Shot s = shoot(dir, "live", 3, "--from '" + run.string() + "'", 20);
+  INFO(s.out << s.err);
+  int st = 0;
+  const bool still_running = ::waitpid(pid, &st, WNOHANG) == 0;
+  ::kill(pid, SIGTERM);
+  ::waitpid(pid, &st, 0);
+  CHECK(still_running);
+  // The state of a checkpoint written while the window started: no earlier
+  // than the one seen above, on the run's 0.02 s grid of checkpoints.
+  const double from = number_after(s.out, "state from " + run.string() + " at t = ");
+  CHECK(from >= written - 1e-4);
+  CHECK(s.out.find("(turning)") != std::string::npos);
+  const ChargeShape c = measure(s);
+  CHECK(c.covered > 0.2);
   fs::remove_all(dir);
 }

@@ -54,6 +54,8 @@ struct ViewOptions {
   int width = 1280, height = 800;  // --size WxH
   bool no_panel = false;       // --no-panel
   std::vector<std::string> edits;  // --edit FRAME:KEY=VALUE
+  std::string from;                // --from RUN: open on the run's checkpoint
+  std::string save_state;          // --save-state DIR: the state after the last frame
 };
 
 struct LifeOptions {

@@ -4,7 +4,7 @@
 //   millcharge run   --resume DIR [--duration S|auto] [--set run.max_duration=S] [--device SPEC] [--quiet]
 //   millcharge view  [CASE] [same options] [--frames N --screenshot FILE.png]
 //                    [--steps-per-frame N] [--camera end|iso] [--colour MODE] [--liner MODE] [--size WxH]
-//                    [--no-panel] [--edit FRAME:KEY=VALUE]...
+//                    [--no-panel] [--edit FRAME:KEY=VALUE]... [--from RUN] [--save-state DIR]
 //   millcharge check CASE [--set KEY=VALUE]...
 //   millcharge bench [CASE] [--steps N] [--warmup N] [--device SPEC]
 //                    [--precision float|double] [--set KEY=VALUE]... [--quiet]
@@ -115,6 +115,14 @@ int main(int argc, char** argv) {
                    "before frame FRAME, change a case key as the panel does (repeatable), "
                    "e.g. --edit 50:lifters.profile.0.height=0.04")
       ->type_name("FRAME:KEY=VALUE");
+  view->add_option("--from", vo.from,
+                   "open on the state in RUN's checkpoint (a run folder, finished or still running) with its case, "
+                   "and turn on from there")
+      ->type_name("RUN");
+  view->add_option("--save-state", vo.save_state,
+                   "after the last of --frames, save the state into DIR as the panel's Save state does (for "
+                   "run --resume DIR and bench --from DIR)")
+      ->type_name("DIR");
 
   mc::app::LifeOptions lo;
   auto* life = app.add_subcommand("life", "the liner over its life: run, wear the lifters and shell, run again");

@@ -39,7 +39,7 @@ Prepared prepare(const CaseOptions& o, const fs::path& default_path) {
 
 Prepared prepare_from_checkpoint(const fs::path& dir, io::Checkpoint& cp, const std::string& consequence) {
   try {
-    cp = io::read_checkpoint(dir / io::kCheckpointFile);
+    cp = io::read_complete_checkpoint(dir / io::kCheckpointFile);
   } catch (const io::CheckpointError& e) {
     throw std::invalid_argument(e.what() + consequence);
   }

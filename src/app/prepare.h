@@ -31,8 +31,10 @@ std::vector<std::string> case_overrides(const CaseOptions& o);
 // --precision applied, derived and built; bad input throws naming the key.
 Prepared prepare(const CaseOptions& o, const std::filesystem::path& default_path = io::default_case());
 
-// The case of the run in `dir`, from its checkpoint (read into `cp`). A bad
-// checkpoint is bad input: its message, then `consequence`.
+// The case of the run in `dir`, from its checkpoint (read into `cp`; the
+// last one written whole, should the run be going on). A bad checkpoint is
+// bad input: its message, then `consequence`. What run --resume, bench
+// --from and view --from read.
 Prepared prepare_from_checkpoint(const std::filesystem::path& dir, io::Checkpoint& cp, const std::string& consequence);
 
 std::string thousands(long v);        // 1234567 -> "1,234,567"

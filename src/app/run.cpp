@@ -257,6 +257,9 @@ struct RunStart {
   fs::path out;
   std::string case_text;
   std::vector<std::string> kept_rows;  // timeseries.csv's rows before the checkpoint
+  // A checkpoint that counts no rows, in a folder without a time series (a
+  // state saved by the viewer): the series begins here.
+  bool new_series = false;
 };
 
 // What the run writes as it goes: the time series, the snapshots' index,
@@ -308,7 +311,11 @@ RunStart prepare_run(const RunOptions& o) {
   r.out = r.resume ? fs::path(o.resume) : o.out.empty() ? default_out(r.p.c) : fs::path(o.out);
   r.case_text = r.resume ? r.cp.case_toml : io::case_to_toml(r.p.c);
   if (r.resume) {
-    r.kept_rows = keep_rows(r.out / "timeseries.csv", r.cp.run.rows, r.window_restarted);
+    std::error_code ec;
+    r.new_series = r.cp.run.rows == 0 && !fs::exists(r.out / "timeseries.csv", ec);
+    if (!r.new_series) r.kept_rows = keep_rows(r.out / "timeseries.csv", r.cp.run.rows, r.window_restarted);
+    fs::create_directories(r.out / "snapshots", ec);
+    if (ec) throw std::runtime_error("cannot create " + (r.out / "snapshots").string() + ": " + ec.message());
     if (r.extend) io::write_file_atomic(r.out / "case.toml", r.case_text);
   } else {
     make_run_dir(r.out, o.force);
@@ -344,7 +351,7 @@ void announce(const RunStart& r) {
 RunFiles open_run_files(const RunStart& r) {
   RunFiles f;
   const fs::path& out = r.out;
-  if (r.resume) {
+  if (r.resume && !r.new_series) {
     f.csv.open(out / "timeseries.csv", std::ios::app);
   } else {
     f.csv.open(out / "timeseries.csv");

@@ -1,5 +1,8 @@
 #include "io/checkpoint.h"
 
+#include <sys/stat.h>
+
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -7,6 +10,7 @@
 #include <iterator>
 #include <map>
 #include <sstream>
+#include <thread>
 
 #include "io/atomic_file.h"
 
@@ -314,6 +318,50 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
     if (name.rfind("array.", 0) == 0)
       s.arrays.emplace_back(name.substr(6), std::vector<unsigned char>(bytes.begin(), bytes.end()));
   return cp;
+}
+
+namespace {
+
+// What changes when a file is written: its inode (a rename), size and
+// modification time.
+struct FileStamp {
+  bool exists = false;
+  ino_t inode = 0;
+  off_t size = 0;
+  long mtime_ns = 0;
+  bool operator==(const FileStamp& o) const {
+    return exists == o.exists && inode == o.inode && size == o.size && mtime_ns == o.mtime_ns;
+  }
+};
+
+FileStamp stamp_of(const std::filesystem::path& path) {
+  struct stat st {};
+  FileStamp s;
+  if (::stat(path.c_str(), &st) != 0) return s;
+  s.exists = true;
+  s.inode = st.st_ino;
+  s.size = st.st_size;
+  s.mtime_ns = static_cast<long>(st.st_mtim.tv_sec) * 1000000000L + st.st_mtim.tv_nsec;
+  return s;
+}
+
+}  // namespace
+
+Checkpoint read_complete_checkpoint(const std::filesystem::path& path, double wait_s) {
+  using clock = std::chrono::steady_clock;
+  const auto until = clock::now() + std::chrono::duration<double>(wait_s);
+  for (;;) {
+    const FileStamp before = stamp_of(path);
+    try {
+      return read_checkpoint(path);
+    } catch (const CheckpointError&) {
+      // Refused: final unless the file changed while it was read, or changes
+      // still (a writer in the middle of it).
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      const FileStamp after = stamp_of(path);
+      if (!before.exists || before == after || clock::now() >= until) throw;
+    }
+  }
 }
 
 }  // namespace mc::io

@@ -38,4 +38,13 @@ void write_checkpoint(const std::filesystem::path& path, const Checkpoint& cp);
 // Throws CheckpointError naming the path and what is wrong with the file.
 Checkpoint read_checkpoint(const std::filesystem::path& path);
 
+// The checkpoint at `path` as it was last written whole, for a run that
+// another process may still be writing. write_checkpoint replaces the file
+// by a rename, so a reader sees the old file or the new one, never a part;
+// a file that fails its checks while it changes under the reader (a copy
+// under way, a writer that writes in place) is read again once it holds
+// still, for up to `wait_s`. A file that fails them and holds still is
+// refused at once, as read_checkpoint refuses it.
+Checkpoint read_complete_checkpoint(const std::filesystem::path& path, double wait_s = 5.0);
+
 }  // namespace mc::io

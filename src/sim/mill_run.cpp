@@ -152,6 +152,22 @@ RunState extend_run(const RunState& st, const MillCase& old_c, const MillDerived
   return out;
 }
 
+double max_settle_s(const MillCase& c) { return c.settle < 0 ? 2.0 + 4.0 * std::sqrt(c.diameter / kG) : c.settle; }
+
+RunState run_state_from(double now_s, bool settled, double settle_start_s, const MillCase& c) {
+  RunState st;
+  st.phase = 1;
+  if (!settled) {
+    st.settle_start_s = settle_start_s;
+    return st;
+  }
+  // Settling has lasted its longest already, so run_mill starts the mill at
+  // once; the time before counts as settling (at least the longest).
+  st.settle_start_s = std::min(0.0, now_s - max_settle_s(c));
+  st.settled = true;
+  return st;
+}
+
 RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const MillDerived& d,
                     const RunHooks& hooks, RunState st) {
   RunSummary sum;
@@ -238,7 +254,7 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   const double omega = d.omega;
   const double rest_speed = 0.01 * std::sqrt(kG * c.diameter);
   const bool auto_settle = c.settle < 0;
-  const double max_settle = auto_settle ? 2.0 + 4.0 * std::sqrt(c.diameter / kG) : c.settle;
+  const double max_settle = max_settle_s(c);
   const long chunk = std::max(1L, std::lround(0.02 / dt));
   if (st.phase == 0) {
     solver.set_mill_omega(0.0);

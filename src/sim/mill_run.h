@@ -185,6 +185,16 @@ TurnPlan plan_turning(const MillCase& c, const MillDerived& d, double dt, long w
 RunState extend_run(const RunState& st, const MillCase& old_c, const MillDerived& old_d, const MillCase& new_c,
                     const MillDerived& new_d, double dt);
 
+// The longest the charge settles before the mill starts (run.settle, or
+// when it is "auto" the cap on waiting for the charge to come to rest).
+double max_settle_s(const MillCase& c);
+
+// Where a run stands that goes on from a state made elsewhere (the viewer's
+// "save state"), the solver at time `now_s`: still settling since
+// `settle_start_s`, or, `settled`, with the charge ready, so that run_mill
+// starts the mill at once and plans its warm-up and window from there.
+RunState run_state_from(double now_s, bool settled, double settle_start_s, const MillCase& c);
+
 struct RunHooks {
   std::function<void(const TimeRow&)> on_row;
   std::function<void(double turning_s)> on_snapshot;  // read the solver's balls there

@@ -59,8 +59,9 @@ class App {
   void set_speed_fraction(double fraction);
   void render();
   void handle_input();
+  void open_checkpoint(const io::Checkpoint& cp);  // view --from
   void take_screenshot(const std::string& path, bool announce);
-  void save_state();
+  bool save_state(const std::string& dir_in);  // "" : runs/view-CASE-TIME; false: no checkpoint
   double sim_time() const;
   int scene_width() const;  // pixels right of the panel
   glm::vec2 to_pixels(const glm::vec3& p) const;  // lab frame → window pixels from the top left
@@ -108,6 +109,7 @@ class App {
   bool settling_ = true;
   double settle_from_ = 0;   // viewer time when settling began
   double time_offset_ = 0;   // simulated time of earlier solvers
+  long step_offset_ = 0;     // and their steps
   double turning_from_ = 0;  // viewer time when the mill started
   bool paused_ = false;
   bool step_once_ = false;
@@ -130,6 +132,12 @@ class App {
   long window_frames_ = 0, window_steps_ = 0;
   double fps_ = 0, steps_per_s_ = 0;
   double last_frame_s_ = 0;
+
+  // where the state came from: the run folder of the checkpoint (view
+  // --from), empty for a fresh packing of the case
+  std::string source_;
+  double source_time_ = 0;   // simulated time of the checkpoint
+  double first_frame_s_ = -1, first_turning_frame_s_ = -1;  // wall s from the command
 
   // messages
   std::string message_;

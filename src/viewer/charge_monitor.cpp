@@ -16,6 +16,8 @@ void ChargeMonitor::clear() {
   shoulder_deg_.clear();
   angles_ = {};
   profile_sum_.clear();
+  profile_all_.assign(kProfileBins, 0);
+  all_span_s_ = 0;
 }
 
 void ChargeMonitor::push(std::vector<float>& v, float x) {
@@ -47,6 +49,8 @@ void ChargeMonitor::after_steps(Solver& solver, double time_s, bool turning) {
   if (time_s - profile_since_ >= kProfileEvery) {
     profiles_.push_back(solver.take_contact_profile());
     if (profiles_.size() > static_cast<std::size_t>(kProfileWindow)) profiles_.pop_front();
+    for (std::size_t k = 0; k < profile_all_.size() && k < profiles_.back().size(); ++k) profile_all_[k] += profiles_.back()[k];
+    all_span_s_ += time_s - profile_since_;
     profile_since_ = time_s;
     std::vector<long> sum(kProfileBins, 0);
     for (const auto& p : profiles_)

@@ -32,6 +32,10 @@ class ChargeMonitor {
   const std::vector<float>& toe() const { return toe_deg_; }
   const std::vector<float>& shoulder() const { return shoulder_deg_; }
   const ChargeAngles& angles() const { return angles_; }
+  // Toe and shoulder from every contact profile since the mill began
+  // turning in the window (or since clear()), and the time they span.
+  ChargeAngles all_angles() const { return toe_and_shoulder(profile_all_); }
+  double all_span_s() const { return all_span_s_; }
   // The contact profiles summed for the angles (kProfileBins counts).
   const std::vector<long>& profile() const { return profile_sum_; }
   double mean_torque_power() const;       // over the plotted history
@@ -48,6 +52,8 @@ class ChargeMonitor {
   std::vector<float> torque_w_, diss_w_, toe_deg_, shoulder_deg_;
   ChargeAngles angles_;
   std::vector<long> profile_sum_;
+  std::vector<long> profile_all_ = std::vector<long>(kProfileBins, 0);
+  double all_span_s_ = 0;
   double rms_speed_ = 0;
   Observables last_;
 };

@@ -8,6 +8,7 @@
 
 #include <imgui.h>
 
+#include "io/case_file.h"
 #include "viewer/app.h"
 
 namespace mc::viewer {
@@ -85,6 +86,11 @@ void App::panel_stats() {
   else
     ImGui::Text("turning %.3f s, %.2f rev (t %.3f s, dt %.3g s)", t - turning_from_,
                 (t - turning_from_) / derived_.revolution_s, t, solver_->dt());
+  if (source_.empty())
+    ImGui::TextWrapped("state: a fresh packing of %s", case_.name.c_str());
+  else
+    ImGui::TextWrapped("state: from %s at t %.3f s%s", source_.c_str(), source_time_,
+                       io::case_to_toml(case_) == io::case_to_toml(loaded_) ? "" : ", edited");
 }
 
 void App::panel_run() {
@@ -257,7 +263,13 @@ void App::panel_plots() {
 void App::panel_output() {
   if (ImGui::Button("Screenshot (p)")) screenshot_requested_ = true;
   ImGui::SameLine();
-  if (ImGui::Button("Save state")) save_state();
+  if (ImGui::Button("Save state")) {
+    try {
+      save_state("");
+    } catch (const std::exception& e) {
+      message_ = std::string("save failed: ") + e.what();
+    }
+  }
   if (!message_.empty()) ImGui::TextWrapped("%s", message_.c_str());
 }
 

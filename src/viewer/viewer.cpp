@@ -16,7 +16,9 @@
 #include "core/charge_edit.h"
 #include "io/atomic_file.h"
 #include "io/case_file.h"
+#include "io/checkpoint.h"
 #include "io/vtk.h"
+#include "sim/mill_run.h"
 #include "viewer/app.h"
 #include "viewer/gl_sharing.h"
 #include "viewer/screenshot.h"
@@ -48,6 +50,40 @@ glm::vec3 heat_colour(double t) {
   const double u = std::clamp(t, 0.0, 1.0) * 4;
   const int k = std::min(3, static_cast<int>(u));
   return glm::mix(stops[k], stops[k + 1], static_cast<float>(u - k));
+}
+
+// The case `c` with the charge.filling at which it packs `n` balls: after
+// an edit that kept the balls in a mill of another volume (taller or more
+// lifters), the filling those balls fill. False when no filling gives n (a
+// count that rounding per size class skips, or one past half full).
+bool fill_for_count(MillCase& c, long n) {
+  MillCase t = c;
+  auto count = [&](double filling) {
+    t.filling = filling;
+    try {
+      return derive(t).n_balls;
+    } catch (const std::invalid_argument&) {
+      return -1L;  // past what the case allows
+    }
+  };
+  // The count grows with the filling (each class rounded): bisect between
+  // fillings that pack fewer and more.
+  const long now = count(c.filling);
+  if (now <= 0) return false;
+  double lo = c.filling, hi = c.filling;
+  if (now < n) hi = std::min(0.5, c.filling * 1.5 * n / now);
+  else lo = c.filling * 0.5 * n / now;
+  for (int k = 0; k < 60; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    const long m = count(mid);
+    if (m == n) {
+      c.filling = mid;
+      return true;
+    }
+    if (m < 0 || m > n) hi = mid;
+    else lo = mid;
+  }
+  return false;
 }
 
 }  // namespace
@@ -131,7 +167,8 @@ App::App(const MillCase& c, const MillDerived& d, Scene scene, const ViewOptions
   colour_hi_[1] = static_cast<float>(rmax > rmin ? rmax : 1.2 * rmin);
   colour_lo_[3] = -3.0f;
   colour_hi_[3] = 1.5f;
-  install_solver(std::move(scene), true);
+  install_solver(std::move(scene), !opt_.from);
+  if (opt_.from) open_checkpoint(*opt_.from);
   slab_centre_ = static_cast<float>(0.5 * c.length);
   slab_width_ = static_cast<float>(std::min(c.length, 2.5 * derived_.largest_ball_diameter));
   camera_.frame_mill(0.5 * c.diameter, c.length);
@@ -186,14 +223,45 @@ double App::sim_time() const { return time_offset_ + (solver_ ? solver_->time_s(
 
 int App::scene_width() const { return std::max(1, opt_.width - static_cast<int>(panel_width_)); }
 
+// view --from: the solver (just made for the run's case) takes the
+// checkpoint's state, and the window goes on as the run was: settling, or
+// turning at the case's speed.
+void App::open_checkpoint(const io::Checkpoint& cp) {
+  try {
+    solver_->restore_state(cp.solver);
+  } catch (const std::invalid_argument& e) {  // a state that does not fit its own case
+    throw std::invalid_argument(opt_.from_dir + "/" + io::kCheckpointFile + ": " + e.what() +
+                                "; the window cannot open on it");
+  }
+  time_offset_ = 0;
+  step_offset_ = 0;
+  const RunState& r = cp.run;
+  settling_ = r.phase < 2;
+  if (settling_) {
+    settle_from_ = r.phase == 1 ? r.settle_start_s : solver_->time_s();
+    solver_->set_mill_omega(0);
+  } else {
+    turning_from_ = r.turn_start_s;
+    solver_->set_mill_omega(derived_.omega);
+  }
+  solver_->observe(true);  // the sums start here
+  solver_->take_contact_profile();
+  monitor_.clear();
+  source_ = opt_.from_dir;
+  source_time_ = solver_->time_s();
+  instances_stale_ = true;
+}
+
 // A new solver for `scene`; the old one's time carries on. With `settle` the
 // mill stands still until the charge is at rest (as `run` settles it).
 void App::install_solver(Scene scene, bool settle) {
   const double t = sim_time();
+  const long steps = step_offset_ + (solver_ ? solver_->steps() : 0);
   if (settle) scene.mill_omega = 0;
   auto next = make_solver(*ctx_, scene);  // the old solver stays if this throws
   solver_ = std::move(next);
   time_offset_ = t;
+  step_offset_ = steps;
   scene_ = std::move(scene);
   n_balls_ = static_cast<int>(scene_.balls.size());
   scene_.balls.clear();  // the solver holds them now
@@ -202,6 +270,7 @@ void App::install_solver(Scene scene, bool settle) {
     settling_ = true;
     settle_from_ = t;
     monitor_.clear();
+    source_.clear();
   }
   mill_->set_walls(scene_.walls);
   liner_.set_scene(scene_);
@@ -358,7 +427,9 @@ void App::reset() {
     Scene s = build_scene(case_, derived_);
     install_solver(std::move(s), true);
     time_offset_ = settle_from_ = 0;  // the clock starts again
+    step_offset_ = 0;
     message_ = "reset: a fresh charge settles";
+    source_.clear();
   } catch (const std::exception& e) {
     message_ = std::string("reset failed: ") + e.what();
   }
@@ -482,26 +553,52 @@ void App::take_screenshot(const std::string& path_in, bool announce) {
   }
 }
 
-void App::save_state() {
-  const fs::path dir = fs::path("runs") / ("view-" + case_.name + "-" + stamp());
-  try {
-    fs::create_directories(dir);
-    const std::vector<BallState> balls = solver_->balls();
-    io::Snapshot s;
-    s.time_s = sim_time();
-    for (const BallState& b : balls) {
-      s.position.push_back({float(b.position.x), float(b.position.y), float(b.position.z)});
-      s.velocity.push_back({float(b.velocity.x), float(b.velocity.y), float(b.velocity.z)});
-      s.radius.push_back(float(b.radius));
-      s.material.push_back(b.material);
-      s.id.push_back(b.id);
-    }
-    io::write_vtp(dir / "charge.vtp", s);
-    io::write_file_atomic(dir / "case.toml", io::case_to_toml(case_));
-    message_ = "saved " + (dir / "charge.vtp").string() + " and case.toml";
-  } catch (const std::exception& e) {
-    message_ = std::string("save failed: ") + e.what();
+// The state as a run folder: checkpoint.bin, which `millcharge run --resume
+// DIR` turns on from (for the case's run.duration, its warm-up first) and
+// `bench --from DIR` times, the case as edited, and the balls for ParaView.
+// False when only the case and the balls could be written (message_ says
+// why); throws what fails, which the panel shows.
+bool App::save_state(const std::string& dir_in) {
+  const fs::path dir = dir_in.empty() ? fs::path("runs") / ("view-" + case_.name + "-" + stamp()) : fs::path(dir_in);
+  fs::create_directories(dir / "snapshots");
+  const std::vector<BallState> balls = solver_->balls();
+  io::Snapshot s;
+  s.time_s = sim_time();
+  for (const BallState& b : balls) {
+    s.position.push_back({float(b.position.x), float(b.position.y), float(b.position.z)});
+    s.velocity.push_back({float(b.velocity.x), float(b.velocity.y), float(b.velocity.z)});
+    s.radius.push_back(float(b.radius));
+    s.material.push_back(b.material);
+    s.id.push_back(b.id);
   }
+  io::write_vtp(dir / "charge.vtp", s);
+  // A run rebuilds the case's charge and restores the state into it, so the
+  // case must pack as many balls as the window holds. An edit of the lifters
+  // keeps the balls in a mill of another volume: the case is saved with the
+  // filling they fill there.
+  MillCase saved = case_;
+  char filled[128] = "";
+  const bool fits = !scene_.bodies.empty() || n_balls_ == derived_.n_balls || fill_for_count(saved, n_balls_);
+  if (fits && saved.filling != case_.filling)
+    std::snprintf(filled, sizeof filled, " (charge.filling %.4g: what its %d balls fill)", saved.filling, n_balls_);
+  const std::string case_text = io::case_to_toml(saved);
+  io::write_file_atomic(dir / "case.toml", case_text);
+  if (!fits) {
+    message_ = "saved " + dir.string() + ": charge.vtp and case.toml; no checkpoint: no filling of this mill packs the " +
+               std::to_string(n_balls_) + " balls in the window (Reset, or change the filling, to run it headless)";
+    return false;
+  }
+  // On the window's clock (a solver made by an edit counts from zero).
+  SolverState state = solver_->save_state();
+  state.time_s += time_offset_;
+  state.observed_since += time_offset_;
+  state.steps += step_offset_;
+  const RunState run = run_state_from(sim_time(), !settling_, settle_from_, saved);
+  io::write_checkpoint(dir / io::kCheckpointFile, io::Checkpoint{saved.name, case_text, run, std::move(state)});
+  char when[48];
+  std::snprintf(when, sizeof when, " at t = %.3f s", sim_time());
+  message_ = "saved " + dir.string() + when + filled + ": run it on headless with millcharge run --resume " + dir.string();
+  return true;
 }
 
 int App::run() {
@@ -540,6 +637,11 @@ int App::run() {
       screenshot_requested_ = false;
     }
     glfwSwapBuffers(w);
+    {  // the time from the command to the first frame, and to the first of the turning mill
+      const double since = std::chrono::duration<double>(Clock::now() - opt_.started).count();
+      if (first_frame_s_ < 0) first_frame_s_ = since;
+      if (first_turning_frame_s_ < 0 && !settling_) first_turning_frame_s_ = since;
+    }
 
     const auto t2 = Clock::now();
     last_frame_s_ = std::chrono::duration<double>(t2 - last).count();
@@ -559,12 +661,20 @@ int App::run() {
     pending_ = Edit::none;
     if (last_frame) break;
   }
+  if (!opt_.save_state_dir.empty()) {
+    if (!save_state(opt_.save_state_dir)) throw std::runtime_error(message_);
+    std::printf("millcharge view: %s\n", message_.c_str());
+  }
   const double wall = std::chrono::duration<double>(Clock::now() - start_).count();
   std::fprintf(stderr,
                "millcharge view: %ld frames in %.1f s: %.2f drawn fps, %.0f steps/s, %.3g particle-updates/s "
                "(%d balls, %s steps per frame, %s)\n",
                frames_, wall, frames_ / wall, steps_ / wall, steps_ / wall * n_balls_, n_balls_,
                adaptive_ ? "adaptive" : std::to_string(fixed_steps_).c_str(), feed_->path().c_str());
+  char turning[64] = "in no frame (still settling)";
+  if (first_turning_frame_s_ >= 0) std::snprintf(turning, sizeof turning, "first drawn %.2f s after it", first_turning_frame_s_);
+  std::fprintf(stderr, "millcharge view: first frame drawn %.2f s after the command; the turning mill %s\n",
+               first_frame_s_, turning);
   if (scripted_ && !opt_.screenshot.empty()) {
     const glm::vec2 axis = to_pixels({0, 0, static_cast<float>(case_.length)});
     const glm::vec2 rim = to_pixels({static_cast<float>(0.5 * case_.diameter), 0, static_cast<float>(case_.length)});
@@ -581,6 +691,14 @@ int App::run() {
                   r.window_s, r.impact_W, r.shear_W, r.wear_kg_per_h, r.impact_point_deg,
                   100 * r.bare_liner_impact_share);
     }
+    if (opt_.from)
+      std::printf("millcharge view: state from %s at t = %.4f s (%s)\n", opt_.from_dir.c_str(), source_time_,
+                  opt_.from->run.phase >= 2 ? "turning" : "settling");
+    const ChargeAngles all = monitor_.all_angles();
+    if (all.found)
+      std::printf("millcharge view: toe %.2f deg, shoulder %.2f deg from the contact profile of the %.3f s turned in the "
+                  "window\n",
+                  all.toe_deg, all.shoulder_deg, monitor_.all_span_s());
   }
   return 0;
 }
