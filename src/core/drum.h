@@ -17,7 +17,7 @@ struct DrumSpec {
   double radius_max = 0.008;     // m
   double speed_fraction = 0.75;  // of critical
   int lifter_rows = 8;
-  LifterProfile lifter{0.012, 0.012, 15.0};
+  LifterProfile lifter{0.012, 0.012, 15.0, {}};
   ContactLaw law = ContactLaw::linear;
   Precision precision = Precision::single;
   double restitution = 0.5;

@@ -50,11 +50,6 @@ Bar bar_of(const std::vector<Vec2>& outline, double R) {
   return b;
 }
 
-Vec2 edge_normal(Vec2 a, Vec2 b) {
-  const double l = std::hypot(b.x - a.x, b.y - a.y);
-  return l > 0 ? Vec2{(b.y - a.y) / l, -(b.x - a.x) / l} : Vec2{0, 0};
-}
-
 // The point of the path at length s (its middle for a piece there).
 Vec2 at_length(const Bar& b, double s) {
   const std::size_t n = b.poly.size();

@@ -140,6 +140,7 @@ void App::panel_mill() {
     if (high_low) {
       LifterProfile low = edit_.lifter_pattern[0];
       low.height *= 0.6;
+      for (Vec2& v : low.points) v.y *= 0.6;
       edit_.lifter_pattern.resize(1);
       edit_.lifter_pattern.push_back(low);
     } else {
@@ -151,6 +152,22 @@ void App::panel_mill() {
     LifterProfile& p = edit_.lifter_pattern[k];
     ImGui::PushID(static_cast<int>(k));
     if (edit_.lifter_pattern.size() > 1) ImGui::TextUnformatted(k == 0 ? "high rows" : "low rows");
+    if (p.polygon()) {
+      // A measured or worn outline: its measures, and a way back to h x w x theta.
+      const ProfileMeasures m = measure_profile(profile_outline(p));
+      ImGui::Text("outline of %zu points: %.1f mm high, top %.1f mm", p.points.size(), 1000 * m.height,
+                  1000 * m.top_width);
+      ImGui::Text("faces %.1f deg leading, %.1f deg trailing", m.leading_angle_deg, m.trailing_angle_deg);
+      if (ImGui::Button("edit as h x w x face angle")) {
+        p.height = m.height;
+        p.top_width = std::max(m.top_width, 0.002);
+        p.face_angle_deg = std::clamp(0.5 * (m.leading_angle_deg + m.trailing_angle_deg), 0.0, 59.0);
+        p.points.clear();
+        pending_ = Edit::apply;
+      }
+      ImGui::PopID();
+      continue;
+    }
     float h = static_cast<float>(1000 * p.height), w = static_cast<float>(1000 * p.top_width),
           a = static_cast<float>(p.face_angle_deg);
     if (ImGui::SliderFloat("height, mm", &h, 2.0f, static_cast<float>(250 * case_.diameter), "%.1f")) p.height = h / 1000;
