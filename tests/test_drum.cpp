@@ -58,7 +58,7 @@ TEST_CASE("Hertz books close on a mill of few large balls, both force kernels", 
   spec.n_balls = 170;
   spec.radius_min = spec.radius_max = 0.025;
   spec.speed_fraction = 0.48;
-  spec.lifter = LifterProfile{0.04, 0.04, 0.0};
+  spec.lifter = LifterProfile{0.04, 0.04, 0.0, {}};
   spec.law = ContactLaw::hertz;
   spec.restitution = 0.5;
   spec.mu_slide = 0.3;
@@ -87,7 +87,7 @@ TEST_CASE("a ball meeting a lifter's flat top keeps its energy wherever it strik
   spec.n_balls = 1;
   spec.radius_min = spec.radius_max = 0.025;
   spec.speed_fraction = 0.0;
-  spec.lifter = LifterProfile{0.04, 0.04, 0.0};  // row 0 on the +x axis: its top at x = 0.41 m
+  spec.lifter = LifterProfile{0.04, 0.04, 0.0, {}};  // row 0 on the +x axis: its top at x = 0.41 m
   spec.law = ContactLaw::hertz;
   spec.restitution = 1.0;
   spec.mu_slide = 0.0;
