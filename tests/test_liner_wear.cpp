@@ -71,6 +71,10 @@ TEST_CASE("bad lifter outlines are refused with their cause", "[lifters]") {
   CHECK(fault({{0.015, 0.002}, {0, 0.02}, {-0.015, 0}}).find("feet") != std::string::npos);
   CHECK(fault({{0.015, 0}, {0.01, -0.01}, {0, 0.02}, {-0.015, 0}}).find("outside the shell") != std::string::npos);
   CHECK(fault({{15, 0}, {15, 25}, {-15, 25}, {-15, 0}}).find("millimetres") != std::string::npos);
+  // Too high in metres, but not a unit slip: no hint.
+  const std::string axis = fault({{0.015, 0}, {0, 0.44}, {-0.015, 0}});
+  CHECK(axis.find("0.44 m high and reaches the axis") != std::string::npos);
+  CHECK(axis.find("millimetres") == std::string::npos);
   CHECK(fault({{0.015, 0}, {0.015, 0.025}, {0, 0.01}, {-0.015, 0.025}, {-0.015, 0}}).find("non-convex") !=
         std::string::npos);
   CHECK(fault({{0.015, 0}, {-0.015, 0.025}, {0.015, 0.025}, {-0.015, 0}}).find("non-convex") != std::string::npos);
@@ -113,6 +117,38 @@ TEST_CASE("wear on the leading top corner rounds it and lays the face back", "[l
   CHECK(m.leading_angle_deg > 5);
   CHECK(std::fabs(m.trailing_angle_deg) < 0.5);
   CHECK(w.outline.size() > 4);
+}
+
+TEST_CASE("uneven wear of any pattern removes the booked area within 1e-5 and leaves a valid outline", "[lifters]") {
+  // Patterns of station wear as a run books them: a worn leading corner,
+  // a worn top, both faces, with and without shell wear; a bar with a face
+  // angle and one already rounded.
+  const std::vector<std::vector<Vec2>> bars = {
+      rectangle(0.03, 0.025),
+      {{0.024, 0}, {0.015, 0.025}, {-0.015, 0.025}, {-0.024, 0}},
+      {{0.03, 0}, {0.022, 0.012}, {0.008, 0.02}, {-0.015, 0.022}, {-0.018, 0}}};
+  int cases = 0;
+  for (const auto& o : bars)
+    for (int pattern = 0; pattern < 4; ++pattern)
+      for (double shell : {0.0, 0.0015}) {
+        std::vector<double> area(mc::kWearStations, 0.0);
+        unsigned seed = 12345u + 97u * static_cast<unsigned>(pattern);
+        for (int j = 0; j < mc::kWearStations; ++j) {
+          seed = seed * 1103515245u + 12345u;
+          const double noise = 0.5 + (seed >> 16 & 0x7fff) / 32768.0;
+          const double centre = pattern == 0 ? 10 : pattern == 1 ? 16 : pattern == 2 ? 24 : 6;
+          area[j] = 4e-6 * noise * std::exp(-0.5 * std::pow((j - centre) / (pattern == 3 ? 12.0 : 3.0), 2));
+        }
+        const mc::WornLifter w = mc::wear_lifter(o, kR, area, shell);
+        INFO("bar " << &o - &bars[0] << ", pattern " << pattern << ", shell " << shell);
+        REQUIRE_FALSE(w.worn_away);
+        CHECK(w.removed_area == Approx(w.booked_area).epsilon(1e-5));
+        CHECK(mc::profile_outline_fault(w.outline, kR + shell, 0.0) == "");
+        CHECK(static_cast<int>(w.outline.size()) <= mc::kLifterMaxPoints);
+        CHECK(mc::measure_profile(w.outline).height < mc::measure_profile(o).height + shell);
+        ++cases;
+      }
+  CHECK(cases == 24);
 }
 
 TEST_CASE("a stage that wears a lifter through says so", "[lifters]") {

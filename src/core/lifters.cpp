@@ -62,9 +62,12 @@ std::string profile_outline_fault(const std::vector<Vec2>& o, double R, double r
     if (!(o[k].y > tol)) return at(k) + " lies on the shell: only the feet may";
   }
   if (!(h < R - room)) {
-    std::string msg = "the profile is " + mm(h) + " mm high and reaches the axis or leaves no room for a ball (shell radius " +
-                      mm(R) + " mm)";
-    if (h / 1000 < R - room) msg += "; are the points in millimetres? give units = \"mm\"";
+    char b[160];
+    std::snprintf(b, sizeof b, "the profile is %.4g m high and reaches the axis or leaves no room for a ball (shell "
+                  "radius %.4g m)", h, R);
+    std::string msg = b;
+    // Higher than the radius, yet a fit in millimetres: a unit slip.
+    if (h > R && h / 1000 < R - room) msg += "; are the points in millimetres? give units = \"mm\"";
     return msg;
   }
   for (std::size_t k = 0; k < n; ++k)

@@ -211,6 +211,42 @@ Moved move(const Bar& bar, const std::vector<Sample>& samples, const std::vector
   return m;
 }
 
+// The outline with its exposed faces moved into the bar by `delta` (m; <0:
+// out of it), feet kept on the shell line (y = 0). Empty where a face
+// would vanish or the result is not a valid outline.
+std::vector<Vec2> offset_faces(const std::vector<Vec2>& o, double delta) {
+  const std::size_t n = o.size();
+  if (n < 3) return {};
+  // Edge k runs from o[k] to o[k+1]; the outline runs counter-clockwise
+  // (leading foot over the top to the trailing one), so inward is its left.
+  struct Line {
+    Vec2 p, t;
+  };
+  std::vector<Line> lines;
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const double l = std::hypot(o[k + 1].x - o[k].x, o[k + 1].y - o[k].y);
+    if (!(l > 0)) return {};
+    const Vec2 t{(o[k + 1].x - o[k].x) / l, (o[k + 1].y - o[k].y) / l};
+    lines.push_back({{o[k].x - delta * t.y, o[k].y + delta * t.x}, t});
+  }
+  auto meet = [](const Line& a, const Line& b, Vec2& out) {
+    const double den = a.t.x * b.t.y - a.t.y * b.t.x;
+    if (std::fabs(den) < 1e-12) return false;
+    const double s = ((b.p.x - a.p.x) * b.t.y - (b.p.y - a.p.y) * b.t.x) / den;
+    out = {a.p.x + s * a.t.x, a.p.y + s * a.t.y};
+    return true;
+  };
+  std::vector<Vec2> r(n);
+  const Line shell{{0, 0}, {1, 0}};
+  if (!meet(shell, lines.front(), r.front()) || !meet(lines.back(), shell, r.back())) return {};
+  for (std::size_t k = 1; k + 1 < n; ++k)
+    if (!meet(lines[k - 1], lines[k], r[k])) return {};
+  // Each face keeps its direction (none turned over).
+  for (std::size_t k = 0; k + 1 < n; ++k)
+    if ((r[k + 1].x - r[k].x) * lines[k].t.x + (r[k + 1].y - r[k].y) * lines[k].t.y <= 0) return {};
+  return r;
+}
+
 }  // namespace
 
 WornLifter wear_lifter(const std::vector<Vec2>& outline, double R, const std::vector<double>& station_area,
@@ -276,6 +312,29 @@ WornLifter wear_lifter(const std::vector<Vec2>& outline, double R, const std::ve
     m = take_hi || at_lo.outline.empty() ? at_hi : at_lo;
     if (at_hi.worn_away && removed(at_lo) < 0.99 * target) m.worn_away = true;  // the stage wears it away
     break;
+  }
+  // The hull and the thinning make the removed area a step function of the
+  // scale: the last step's residue comes off (or goes back) as a uniform
+  // depth over the exposed faces, a fraction of a millimetre (secant).
+  if (!m.worn_away && target > 0 && std::fabs(removed(m) - target) > 1e-6 * target) {
+    double d0 = 0, r0 = removed(m) - target, d1 = -r0 / std::max(bar.path.to - bar.path.from, 1e-9), r1 = r0;
+    std::vector<Vec2> best;
+    for (int it = 0; it < 8; ++it) {
+      const std::vector<Vec2> o = offset_faces(m.outline, d1);
+      if (o.empty()) break;
+      Moved t;
+      t.outline = o;
+      r1 = removed(t) - target;
+      best = o;
+      if (std::fabs(r1) <= 1e-6 * target || r1 == r0) break;
+      const double d2 = d1 - r1 * (d1 - d0) / (r1 - r0);
+      d0 = d1, r0 = r1, d1 = d2;
+    }
+    double h_max = 0;
+    for (const Vec2& v : best) h_max = std::max(h_max, v.y);
+    if (!best.empty() && std::fabs(r1) < std::fabs(removed(m) - target) &&
+        profile_outline_fault(best, R + shell_depth, 0.0).empty() && h_max >= kWornAwayHeight)
+      m.outline = best;
   }
   w.outline = m.outline;
   w.worn_away = m.worn_away;
