@@ -80,7 +80,7 @@ json stage_json(const Stage& s) {
   j["ran"] = s.ran;
   if (s.ran) {
     const StageResult& r = s.r;
-    j["result"] = {{"power_W", r.power_W},       {"power_sem_W", r.power_sem_W},
+    j["result"] = {{"power_W", r.power_W},       {"power_sem_W", number_or_null(r.power_sem_W)},
                    {"toe_deg", number_or_null(r.toe_deg)}, {"shoulder_deg", number_or_null(r.shoulder_deg)},
                    {"impact_point_deg", number_or_null(r.impact_deg)},
                    {"bare_liner_impact_share", number_or_null(r.bare_share)},
@@ -108,7 +108,7 @@ Stage stage_of(const json& j) {
   if (s.ran) {
     const json& r = j.at("result");
     s.r.power_W = r.at("power_W").get<double>();
-    s.r.power_sem_W = r.at("power_sem_W").get<double>();
+    s.r.power_sem_W = num_or_nan(r.at("power_sem_W"));
     s.r.toe_deg = num_or_nan(r.at("toe_deg"));
     s.r.shoulder_deg = num_or_nan(r.at("shoulder_deg"));
     s.r.impact_deg = num_or_nan(r.at("impact_point_deg"));
@@ -351,6 +351,21 @@ void write_picture(const fs::path& out, const std::string& name, const Study& st
                                 measure_profile(s->outlines[k]).leading_angle_deg);
       prof.series.push_back(ser);
     }
+    // The new and the most worn shell under the bar (arcs, dashed).
+    for (const Stage* s : {ran.front(), ran.back()}) {
+      io::PlotSeries arc;
+      arc.rgb = s == ran.front() ? 0x1f77b4 : 0xd62728;
+      arc.dashed = true;
+      const double R = 0.5 * s->diameter * 1000, w = 1.2 * widest;
+      for (int q = 0; q <= 40; ++q) {
+        const double x = -w + 2 * w * q / 40;
+        arc.x.push_back(x + x_shift);
+        arc.y.push_back(-(R - std::sqrt(std::max(0.0, R * R - x * x))) - s->shell_wear_m * 1000);
+      }
+      if (k == 0) arc.label = s == ran.front() ? "new shell" : "worn shell";
+      prof.series.push_back(arc);
+      if (ran.size() == 1) break;
+    }
     x_shift += 2.4 * widest;
   }
   plots.push_back(prof);
@@ -380,11 +395,13 @@ void write_picture(const fs::path& out, const std::string& name, const Study& st
   power.series.push_back(series("+ 2 SE", 0x9ecae1, [](const Stage& s) { return s.r.power_W + 2 * s.r.power_sem_W; }));
   power.series.back().dashed = true;
   plots.push_back(power);
-  io::LinePlot angles = over_hours(name + ": where the charge is", "angle (deg, from 3 o'clock)");
-  angles.series.push_back(series("shoulder", 0x2ca02c, [](const Stage& s) { return s.r.shoulder_deg; }));
-  angles.series.push_back(series("toe", 0x9467bd, [](const Stage& s) { return s.r.toe_deg; }));
-  angles.series.push_back(series("impact point", 0xd62728, [](const Stage& s) { return s.r.impact_deg; }));
-  plots.push_back(angles);
+  io::LinePlot low = over_hours(name + ": where the charge lands", "angle (deg, from 3 o'clock)");
+  low.series.push_back(series("toe", 0x9467bd, [](const Stage& s) { return s.r.toe_deg; }));
+  low.series.push_back(series("impact point", 0xd62728, [](const Stage& s) { return s.r.impact_deg; }));
+  plots.push_back(low);
+  io::LinePlot high = over_hours(name + ": where the charge leaves the shell", "angle (deg, from 3 o'clock)");
+  high.series.push_back(series("shoulder", 0x2ca02c, [](const Stage& s) { return s.r.shoulder_deg; }));
+  plots.push_back(high);
   io::LinePlot lifter = over_hours(name + ": the lifters (profile 0)", "mm or deg");
   lifter.series.push_back(series("height (mm)", 0x1f77b4, [](const Stage& s) { return measure_profile(s.outlines[0]).height * 1000; }));
   lifter.series.push_back(series("leading face angle (deg)", 0xd62728, [](const Stage& s) { return measure_profile(s.outlines[0]).leading_angle_deg; }));
@@ -412,14 +429,14 @@ int cmd_life(const LifeOptions& o) {
   check_options(o);
   const Prepared base = prepare(o.c);
   const MillCase& c = base.c;
-  if (c.lifter_rows == 0)
-    throw std::invalid_argument("lifters.rows = 0: a life study wears lifter bars; this mill has none");
   for (std::size_t m = 0; m < c.meshes.size(); ++m)
     if (c.meshes[m].part != MeshPart::ends)
       throw std::invalid_argument(fmt::format("walls.mesh[{}]: a life study wears the shell and the lifter bars of "
                                               "[lifters]; a mesh liner is not worn (leave it out, or give its bars as "
                                               "[[lifters.profile]] points)",
                                               m));
+  if (c.lifter_rows == 0)
+    throw std::invalid_argument("lifters.rows = 0: a life study wears lifter bars; this mill has none");
   if (!(base.scene.wall_material.wear_coefficient > 0))
     throw std::invalid_argument("materials." + c.liner + ".wear_coefficient is 0: a life study needs the liner's "
                                 "wear coefficient > 0 (its size sets only the hours; --calibrate-loss or "

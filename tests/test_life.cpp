@@ -1,0 +1,234 @@
+// millcharge life end to end on a short lab mill: the volume each stage
+// removes against what its run booked, the stations against the liner
+// elements, a killed study resumed to the same table, and the refusals.
+#include <catch2/catch.hpp>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "io/case_file.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Stages of 0.3 s of turning after 0.05 s of settling (about 17,500 steps).
+const std::string kShort =
+    " --quiet --set run.duration=0.3 --set run.settle=0.05 --set run.warmup=0.1"
+    " --set run.checkpoint_interval=0.05 --set run.snapshot_interval=0";
+
+fs::path scratch(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("millcharge-life-" + std::to_string(::getpid()) + "-" + name);
+  fs::remove_all(p);
+  return p;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+int life(const std::string& args, std::string* err = nullptr) {
+  const fs::path log = scratch("stderr.txt");
+  const int st =
+      std::system((std::string(MC_BINARY) + " life " + args + " >/dev/null 2>'" + log.string() + "'").c_str());
+  if (err) *err = slurp(log);
+  fs::remove(log);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+// A CSV file as rows of named fields.
+std::vector<std::map<std::string, std::string>> read_csv(const fs::path& p) {
+  std::ifstream in(p);
+  std::string line;
+  std::vector<std::string> head;
+  std::vector<std::map<std::string, std::string>> rows;
+  auto split = [](const std::string& s) {
+    std::vector<std::string> f;
+    std::stringstream ss(s);
+    std::string x;
+    while (std::getline(ss, x, ',')) f.push_back(x);
+    if (!s.empty() && s.back() == ',') f.push_back("");
+    return f;
+  };
+  if (std::getline(in, line)) head = split(line);
+  while (std::getline(in, line)) {
+    const std::vector<std::string> f = split(line);
+    std::map<std::string, std::string> r;
+    for (std::size_t k = 0; k < head.size() && k < f.size(); ++k) r[head[k]] = f[k];
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+double num(const std::map<std::string, std::string>& r, const std::string& key) {
+  const auto it = r.find(key);
+  REQUIRE(it != r.end());
+  return std::stod(it->second);
+}
+
+}  // namespace
+
+TEST_CASE("a life study of the lab mill removes what its runs booked and resumes after a kill", "[life][cli]") {
+  const fs::path a = scratch("unbroken"), b = scratch("killed");
+  const std::string study = " --stages 2 --hours 200000" + kShort;
+  std::string err;
+  const int first = life(study + " --out '" + a.string() + "'", &err);
+  INFO(err);
+  REQUIRE(first == 0);
+
+  // The table: three stages of the one profile, the lifter's top lower and
+  // the mill wider each stage, the removed area the booked one within 1 %.
+  const auto rows = read_csv(a / "life.csv");
+  REQUIRE(rows.size() == 3);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    INFO("stage " << i);
+    CHECK(num(rows[i], "stage") == i);
+    CHECK(num(rows[i], "hours") == Approx(100000.0 * i));
+    if (i + 1 < rows.size()) {
+      CHECK(num(rows[i], "stage_hours") == Approx(100000.0));
+      CHECK(num(rows[i], "booked_mm2") > 1.0);
+      CHECK(num(rows[i], "removed_mm2") == Approx(num(rows[i], "booked_mm2")).epsilon(0.01));
+      // The top wears back (its height above the new shell's line falls);
+      // the shell wears too, so its height above the worn shell may not.
+      CHECK(num(rows[i + 1], "height_mm") - num(rows[i + 1], "shell_wear_mm") <
+            num(rows[i], "height_mm") - num(rows[i], "shell_wear_mm"));
+      CHECK(num(rows[i + 1], "diameter_m") > num(rows[i], "diameter_m"));
+      CHECK(num(rows[i + 1], "worn_area_mm2") ==
+            Approx(num(rows[i], "worn_area_mm2") + num(rows[i], "removed_mm2")).epsilon(1e-3));
+    }
+    CHECK(num(rows[i], "power_W") > 500);
+    CHECK(num(rows[i], "liner_wear_kg_per_h") > 0);
+  }
+  CHECK(num(rows[0], "height_mm") == Approx(25.0).epsilon(1e-6));
+  CHECK(num(rows[0], "diameter_m") == Approx(0.9).epsilon(1e-9));
+  CHECK(num(rows[2], "shell_wear_mm") ==
+        Approx(500 * (num(rows[2], "diameter_m") - num(rows[0], "diameter_m"))).epsilon(1e-3));
+
+  // The stations of the first stage's run hold what its lifter elements
+  // hold: each row's mean, times the rows.
+  {
+    double station_W = 0, station_m3_s = 0, element_W = 0, element_kg_h = 0;
+    for (const auto& r : read_csv(a / "stage-00" / "lifter_wear.csv"))
+      station_W += num(r, "impact_W"), station_m3_s += num(r, "wear_m3_per_s");
+    for (const auto& r : read_csv(a / "stage-00" / "wear.csv"))
+      if (r.at("part") == "lifter") element_W += num(r, "impact_W"), element_kg_h += num(r, "wear_kg_per_h");
+    REQUIRE(element_W > 0);
+    const mc::MillCase c = mc::io::read_case(a / "cases" / "stage-00.toml");
+    const int rows_of_bars = c.lifter_rows;
+    CHECK(station_W * rows_of_bars == Approx(element_W).epsilon(1e-3));
+    CHECK(station_m3_s * rows_of_bars * 7800.0 * 3600 == Approx(element_kg_h).epsilon(1e-3));
+  }
+
+  // The worn stages' cases hold the worn outline as points, and read back.
+  const mc::MillCase worn = mc::io::read_case(a / "cases" / "stage-02.toml");
+  REQUIRE(worn.lifter_pattern.size() == 1);
+  CHECK(worn.lifter_pattern[0].points.size() >= 4);
+  CHECK(worn.diameter == Approx(num(rows[2], "diameter_m")).epsilon(1e-5));
+  const nlohmann::json j = nlohmann::json::parse(slurp(a / "life.json"));
+  CHECK(j.at("stopped").get<std::string>().find("200000 operating hours reached") != std::string::npos);
+  CHECK(fs::exists(a / "life.png"));
+  CHECK(fs::exists(a / "stage-02" / "liner.vtp"));
+  const std::string pvd = slurp(a / "life.pvd");
+  CHECK(pvd.find("stage-02/liner.vtp") != std::string::npos);
+
+  // Killed in its second stage's run, then the same command: the same table.
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd =
+        "exec " + std::string(MC_BINARY) + " life" + study + " --out '" + b.string() + "' >/dev/null 2>&1";
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(300);
+  while (!fs::exists(b / "stage-01" / "checkpoint.bin") && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ::kill(pid, SIGKILL);
+  int st = 0;
+  ::waitpid(pid, &st, 0);
+  REQUIRE(WIFSIGNALED(st));
+  CHECK_FALSE(fs::exists(b / "stage-02"));
+  const int resumed = life(study + " --out '" + b.string() + "'", &err);
+  INFO(err);
+  REQUIRE(resumed == 0);
+  CHECK(slurp(b / "life.csv") == slurp(a / "life.csv"));
+
+  // The same folder with another request is refused, and left as it was.
+  const std::string table = slurp(a / "life.csv");
+  CHECK(life(" --stages 2 --hours 300000" + kShort + " --out '" + a.string() + "'", &err) == 2);
+  CHECK(err.find("holds a life study of another case or options") != std::string::npos);
+  CHECK(slurp(a / "life.csv") == table);
+  fs::remove_all(a);
+  fs::remove_all(b);
+}
+
+TEST_CASE("a stage that wears the lifters away stops the study by name and keeps what was written", "[life][cli]") {
+  const fs::path dir = scratch("worn-away");
+  std::string err;
+  CHECK(life(" --stages 1 --hours 1e10" + kShort + " --out '" + dir.string() + "'", &err) == 2);
+  CHECK(err.find("millcharge: lifters.profile[0]: stage 1 wears the lifter away") != std::string::npos);
+  CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+  const auto rows = read_csv(dir / "life.csv");
+  REQUIRE(rows.size() == 1);
+  CHECK(num(rows[0], "height_mm") == Approx(25.0).epsilon(1e-6));
+  CHECK(fs::exists(dir / "stage-00" / "summary.json"));
+  CHECK_FALSE(fs::exists(dir / "stage-01"));
+  const nlohmann::json j = nlohmann::json::parse(slurp(dir / "life.json"));
+  CHECK(j.at("stopped").get<std::string>().find("wears the lifter away") != std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("bad life study requests are refused by name, status 2 and nothing written", "[life][cli]") {
+  const fs::path out = scratch("bad");
+  const std::string o = " --out '" + out.string() + "'";
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"--stages 0 --hours 10", "--stages: must be a whole number from 1 to 100, got 0"},
+      {"--stages 101 --hours 10", "--stages: must be a whole number from 1 to 100, got 101"},
+      {"--stages 2", "give one of --hours H (operating hours the study covers) and --until-height MM"},
+      {"--stages 2 --hours 0", "--hours: must be > 0 h, got 0"},
+      {"--stages 2 --hours -5", "--hours: must be > 0 h, got -5"},
+      {"--stages 2 --hours 10 --until-height 5", "give one of --hours H"},
+      {"--stages 2 --until-height 0", "--until-height: must be > 0 mm, got 0"},
+      {"--stages 2 --until-height 30", "--until-height 30: the new lifters are 25 mm high"},
+      {"--stages 2 --hours 10 --set materials.liner.wear_coefficient=0",
+       "materials.liner.wear_coefficient is 0: a life study needs the liner's wear coefficient > 0"},
+      {"--stages 2 --hours 10 --calibrate-loss 10", "--calibrate-loss MM goes with --calibrate-hours H"},
+      {"--stages 2 --hours 10 --calibrate-loss 30 --calibrate-hours 100",
+       "--calibrate-loss 30: more than the new lifters' height"},
+      {"--stages 2 --hours 10 --calibrate-loss 10 --calibrate-hours 100 --calibrate-rate 1",
+       "--calibrate-rate and --calibrate-loss: give one measured figure"},
+      {"--stages 2 --hours 10 --set lifters.rows=0", "lifters.rows = 0: a life study wears lifter bars"},
+      {"--stages 2 --hours 10 --set lifters.profile.0.height=0.5", "lifters.profile[0].height"},
+      {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10",
+       "walls.mesh[0]: a life study wears the shell and the lifter bars of [lifters]; a mesh liner is not worn"},
+  };
+  for (const auto& [args, expect] : bad) {
+    std::string err;
+    INFO(args << " -> " << err);
+    CHECK(life(args + o, &err) == 2);
+    CHECK(err.find(expect) != std::string::npos);
+    CHECK_FALSE(fs::exists(out));
+  }
+  // A folder that holds something else is not taken over.
+  fs::create_directories(out);
+  std::ofstream(out / "notes.txt") << "mine\n";
+  std::string err;
+  CHECK(life("--stages 2 --hours 10" + o, &err) == 2);
+  CHECK(err.find("exists and holds no life study") != std::string::npos);
+  CHECK(slurp(out / "notes.txt") == "mine\n");
+  fs::remove_all(out);
+}
