@@ -535,9 +535,15 @@ int cmd_life(const LifeOptions& o) {
     std::string stopped;
     double span = 0;
     if (o.hours > 0) {
-      const double left = o.hours - hours_now;
-      if (i >= o.stages || left <= 1e-9 * o.hours) stopped = fmt::format("{:g} operating hours reached", o.hours);
-      else span = std::min(o.hours / o.stages, left) * st.factor;
+      // Equal stages of the calibrated hours. A calibration on a measured
+      // loss moves the hours axis as the study goes (it is extrapolated
+      // until the study has worn that far): then stages are added, up to
+      // three times those asked, until the hours are covered.
+      const double step = o.hours / o.stages, left = o.hours - hours_now;
+      if (left <= 0.05 * step) stopped = fmt::format("{:g} operating hours reached", o.hours);
+      else if (i >= 3 * o.stages)
+        stopped = fmt::format("{} stages run; they cover {:.0f} of the {:g} operating hours asked", i, hours_now, o.hours);
+      else span = std::min(step, left) * st.factor;
     } else {
       const double rate = height_rate_mm_h(s, st.tallest, length);
       if (h_now <= o.until_height_mm + 0.05) stopped = fmt::format("the lifters are down to {:.1f} mm", h_now);
