@@ -32,6 +32,11 @@
 #               more line of bench.jsonl ("row": "mill D slice,
 #               whole run"), its console in the ledger
 #   law probe   the contact law's cost per pair                -> law_probe.txt
+#   life        seed mill D's slice over its liner's life (`millcharge
+#               life`, 4 worn stages until the lifters are 50 mm high):
+#               life.csv and each stage's wall time in the ledger; last,
+#               on what the budget has left (--life: this step alone,
+#               after devices, on the whole budget)
 # session.log is the ledger: each step's budget, the seconds it took, its
 # exit status, or why it was skipped, and what the steps printed on
 # stderr. Eight files in all (the device tool returns eight).
@@ -41,13 +46,14 @@
 set -uo pipefail
 root=$(pwd)
 kit=$root/gpu-kit
-budget=540; device=gpu; dry=0
+budget=540; device=gpu; dry=0; life_only=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --budget) budget="${2:?--budget needs seconds}"; shift 2 ;;
     --device) device="${2:?--device needs a spec}"; shift 2 ;;
     --dry-run) dry=1; device=cpu; shift ;;
-    *) echo "gpu_session.sh: unknown argument '$1' (use --budget, --device, --dry-run)" >&2; exit 2 ;;
+    --life) life_only=1; shift ;;
+    *) echo "gpu_session.sh: unknown argument '$1' (use --budget, --device, --dry-run, --life)" >&2; exit 2 ;;
   esac
 done
 out=${OUT:-$root/runs/gpu-$(date +%Y%m%d-%H%M%S)}
@@ -127,6 +133,26 @@ step devices 30 bash -c '"$clinfo_bin" -l; "$mc" devices; command -v nvidia-smi 
 platform=$("$mc" devices 2>> "$ledger" | grep -i -m1 nvidia || true)
 scratch=$(mktemp -d)  # not under $OUT: only the eight files go back
 
+# Seed mill D's slice over its liner's life: the table and each stage's
+# cost go into the ledger (the device tool returns eight files).
+life_step() {
+  local study=$scratch/mill-d-life
+  step "life, mill D slice" "$1" "$mc" life assets/cases/mill_d_slice.toml --device "$device" --stages 4 \
+    --until-height 50 --quiet --out "$study" > "$scratch/life.log" 2>&1
+  grep -E "^(life|speed|millcharge: )" "$scratch/life.log" >> "$ledger"
+  [ -f "$study/life.csv" ] && { echo "life.csv:"; cat "$study/life.csv"; } >> "$ledger"
+}
+finish() {
+  rm -rf "$scratch"
+  find "$out" -maxdepth 1 -type f -empty -delete  # what skipped steps left
+  log "gpu_session.sh: $(($(date +%s) - start)) s of $budget s; files: $(cd "$out" && ls | tr '\n' ' ')"
+  exit 0
+}
+if [ "$life_only" = 1 ]; then
+  life_step $((budget - 20))
+  finish
+fi
+
 # The kernels, built once in each precision with the driver's log kept
 # (NVIDIA's compiler prints some kernels' registers and spills under
 # -cl-nv-verbose, not all), and the program binaries with each kernel's
@@ -190,8 +216,5 @@ else
 fi
 bench_row D 120 assets/cases/mill_d.toml --steps 100 --warmup 0.05
 step "law probe" 30 "$bin/millcharge_law_probe" --device "$device" > "$out/law_probe.txt" 2>&1
-
-rm -rf "$scratch"
-find "$out" -maxdepth 1 -type f -empty -delete  # what skipped steps left
-log "gpu_session.sh: $(($(date +%s) - start)) s of $budget s; files: $(cd "$out" && ls | tr '\n' ' ')"
-exit 0
+life_step 240
+finish
