@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -231,4 +232,41 @@ TEST_CASE("bad life study requests are refused by name, status 2 and nothing wri
   CHECK(err.find("exists and holds no life study") != std::string::npos);
   CHECK(slurp(out / "notes.txt") == "mine\n");
   fs::remove_all(out);
+}
+
+TEST_CASE("a lab run with its bars given as points is the h x w x theta run bit for bit", "[life][cli]") {
+  // The lab bar, 25 mm x 30 mm with 20 degree faces, written as its outline
+  // in the bar's frame, the base as profile_outline computes it.
+  std::string lab = slurp(mc::io::default_case());
+  const std::string bar = "height = 0.025";
+  const std::size_t at = lab.find(bar);
+  REQUIRE(at != std::string::npos);
+  const std::size_t end = lab.find("face_angle = 20.0", at);
+  REQUIRE(end != std::string::npos);
+  const double half_top = 0.5 * 0.03, half_base = half_top + 0.025 * std::tan(20.0 * M_PI / 180.0);
+  char points[256];
+  std::snprintf(points, sizeof points, "points = [[%.17g, 0.0], [%.17g, 0.025], [%.17g, 0.025], [%.17g, 0.0]]",
+                half_base, half_top, -half_top, -half_base);
+  const std::string polygon = lab.substr(0, at) + points + lab.substr(lab.find('\n', end));
+  const fs::path dir = scratch("polygon");
+  fs::create_directories(dir);
+  std::ofstream(dir / "polygon.toml") << polygon;
+  const std::string shortrun =
+      " --quiet --set run.duration=0.1 --set run.settle=0.05 --set run.warmup=0.05 --set run.snapshot_interval=0";
+  auto run = [&](const std::string& c, const std::string& out) {
+    const std::string cmd = std::string(MC_BINARY) + " run " + c + shortrun + " --out '" + (dir / out).string() +
+                            "' > /dev/null 2>&1";
+    return std::system(cmd.c_str());
+  };
+  REQUIRE(run("", "trapezoid") == 0);
+  REQUIRE(run("'" + (dir / "polygon.toml").string() + "'", "polygon") == 0);
+  const mc::MillCase c = mc::io::read_case(dir / "polygon" / "case.toml");
+  REQUIRE(c.lifter_pattern.size() == 1);
+  CHECK(c.lifter_pattern[0].points.size() == 4);
+  const std::string a = slurp(dir / "trapezoid" / "timeseries.csv"), b = slurp(dir / "polygon" / "timeseries.csv");
+  REQUIRE(a.size() > 1000);
+  CHECK(a == b);
+  CHECK(slurp(dir / "trapezoid" / "wear.csv") == slurp(dir / "polygon" / "wear.csv"));
+  CHECK(slurp(dir / "trapezoid" / "lifter_wear.csv") == slurp(dir / "polygon" / "lifter_wear.csv"));
+  fs::remove_all(dir);
 }
