@@ -17,6 +17,7 @@
 
 #include "grind/bond.h"
 #include "grind/circuit.h"
+#include "grind/fit.h"
 #include "grind/ore.h"
 #include "grind/pbm.h"
 #include "core/version.h"
@@ -239,12 +240,22 @@ void print(const GrindOptions& o, const Ore& ore, const io::Run& run, double hol
 }  // namespace
 
 int cmd_grind(const GrindOptions& o) {
+  if (!o.fit_test.empty() || o.fit_wi_kWh_t > 0) return cmd_grind_fit(o);
+  if (!o.fit_params.empty()) throw std::invalid_argument("--fit-params: names what --fit or --fit-wi fits; give one");
   // The inputs, checked before anything is computed.
   Ore ore = io::read_ore(o.ore);
   if (o.bond_p1_um > 0) put_sieve_on_class_top(ore, o.bond_p1_um * 1e-6);
   check_classifier(o, ore);
   const io::Run run = io::read_run(o.run_dir, ore.model == RateModel::spectrum);
   if (o.bond_p1_um > 0) check_bond(o, ore, run);
+  // An ore fitted through a run holds under that run's contact law and
+  // parameters only: a run with others gives another spectrum.
+  const std::string contact_changed = contact_mismatch(ore.fitted_under, run.contact);
+  if (!contact_changed.empty())
+    std::fprintf(stderr,
+                 "millcharge: warning: %s: the ore was fitted under other contact parameters than this run's (%s); "
+                 "its breakage parameters hold under the contact they were fitted under (docs/grinding.md)\n",
+                 o.ore.c_str(), contact_changed.c_str());
 
   // The mill: the ore in it, the rates, the circuit.
   const double holdup_kg = o.bond_p1_um > 0 ? bond_charge_kg(ore)
@@ -287,7 +298,8 @@ int cmd_grind(const GrindOptions& o) {
   fs::create_directories(out, ec);
   if (ec) throw std::runtime_error(out.string() + ": cannot create: " + ec.message());
   write_tables(out, c, products, rates.SE_t_per_kWh);
-  const nlohmann::ordered_json j = summary(o, ore, run, c, holdup_kg, products, target_rate, bond);
+  nlohmann::ordered_json j = summary(o, ore, run, c, holdup_kg, products, target_rate, bond);
+  if (!contact_changed.empty()) j["contact_differs_from_fit"] = contact_changed;
   io::write_file_atomic(out / "grind.json", j.dump(2) + "\n");
   draw(out, ore, run, c, products);
   if (!o.quiet) print(o, ore, run, holdup_kg, products, bond, out);

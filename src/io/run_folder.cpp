@@ -53,6 +53,14 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
     sum_r += d.class_counts[k] * 0.25 * (c.sizes[k].diameter_min + c.sizes[k].diameter_max);
   }
   r.ball_radius_m = n > 0 ? sum_r / n : 0;
+  r.contact.law = c.law == ContactLaw::hertz ? "hertz" : "linear";
+  r.contact.restitution = c.contact.restitution;
+  r.contact.friction = c.contact.mu_slide;
+  r.contact.rolling_friction = c.contact.mu_roll;
+  r.contact.stiffness_N_m = c.contact.kn;
+  for (const Material& m : c.materials)
+    if (!c.sizes.empty() && m.name == c.sizes.front().material) r.contact.youngs_modulus_Pa = m.youngs_modulus;
+  r.pair_overrides = static_cast<int>(c.pairs.size());
   if (!need_spectrum) return r;
   const fs::path sc = dir / "spectra.csv";
   const CsvTable t = read_csv_strict(sc, "the spectrum model needs the run's collision spectra");
