@@ -288,6 +288,7 @@ TEST_CASE("grind --fit through the command: the fitted ore, its record of the co
   fs::remove_all(other);
   fs::remove_all(out);
   fs::remove_all(g.out);
+  fs::remove(test_path);
 }
 
 TEST_CASE("grind --fit-wi: one rate scale set so that Bond's test gives a measured work index", "[grind][fit]") {
@@ -416,6 +417,8 @@ passing = [1.0, 0.9, 0.70, 0.50, 0.35]
     CHECK(text_of(out.string() + ".log").find("--fit-params phi: ambiguous") != std::string::npos);
     CHECK(!fs::exists(out));
     fs::remove(out.string() + ".log");
+    fs::remove(p);
   }
+  fs::remove(temp("bad.toml"));
   fs::remove_all(old);
 }

@@ -247,7 +247,7 @@ int fit_wi(const GrindOptions& o) {
                 w.value, w.start, w.bond.wi_kWh_t, w.bond.gbp_g_rev, w.bond.p80_um, w.bond.cycles);
     std::printf("  a work index 1 kWh/t higher would move %s by %.3g (%.2g %%); %d Bond tests, %.2f s\n", name.c_str(),
                 w.dvalue_dwi, 100 * w.dvalue_dwi / w.value, w.evaluations, seconds);
-    std::printf("  one number sets the level of the rates only: their size dependence and the appearance function "
+    std::printf("  one number fixes one parameter: the rest (how the rates fall with size, the appearance function) "
                 "stay the starting ore's\n");
     std::printf("wrote %s/{ore_fitted.toml, fit.json}\n", out.string().c_str());
   }
