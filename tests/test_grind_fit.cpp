@@ -422,3 +422,52 @@ passing = [1.0, 0.9, 0.70, 0.50, 0.35]
   fs::remove(temp("bad.toml"));
   fs::remove_all(old);
 }
+
+TEST_CASE("grind --scale-from: the energy-specific scale-up beside the spectrum model's products",
+          "[grind][fit][outputs]") {
+  const fs::path lab = bond_run();
+  auto grind = [&](const fs::path& run, const std::string& ore, const fs::path& out) {
+    mc::app::GrindOptions o;
+    o.run_dir = run.string();
+    o.ore = ore;
+    o.times_min = {1, 2, 4};
+    o.scale_from = lab.string();
+    o.out = out.string();
+    o.quiet = true;
+    REQUIRE(mc::app::cmd_grind(o) == 0);
+    return nlohmann::json::parse(text_of(out / "grind.json"));
+  };
+  const std::string ore = ore_file("example_spectrum.toml").string();
+  // The laboratory run itself: the two models are one.
+  const nlohmann::json self = grind(lab, ore, temp("scale_self"));
+  const auto& pairs = self["scale_up"]["P80_side_by_side"];
+  REQUIRE(pairs.size() == 3);
+  for (const auto& p : pairs) CHECK(p["ratio"].get<double>() == Approx(1.0).epsilon(1e-12));
+  // A "plant" with the lab's spectrum and twice its power: the spectrum
+  // rates stay, the energy-specific ones double, so their product after
+  // 1 min is the spectrum model's after 2 min.
+  const fs::path plant = temp("plant_run");
+  fs::remove_all(plant);
+  fs::create_directories(plant);
+  for (const char* f : {"case.toml", "spectra.csv"}) fs::copy_file(lab / f, plant / f);
+  nlohmann::json summary = nlohmann::json::parse(text_of(lab / "summary.json"));
+  summary["power_W"]["torque"] = 2 * summary["power_W"]["torque"].get<double>();
+  std::ofstream(plant / "summary.json") << summary.dump();
+  const nlohmann::json twice = grind(plant, ore, temp("scale_twice"));
+  const auto& p = twice["products"];
+  REQUIRE(p.size() == 6);
+  CHECK(p[3]["label"] == "batch 1 min [H&F from lab]");
+  CHECK(p[3]["P80_um"].get<double>() == Approx(p[1]["P80_um"].get<double>()).epsilon(1e-9));
+  CHECK(p[4]["P80_um"].get<double>() == Approx(p[2]["P80_um"].get<double>()).epsilon(1e-9));
+  CHECK(twice["scale_up"]["P80_side_by_side"][0]["ratio"].get<double>() > 1.01);
+  // Only the spectrum model has a spectrum to compare.
+  mc::app::GrindOptions o;
+  o.run_dir = plant.string();
+  o.ore = ore_file("example_energy.toml").string();
+  o.scale_from = lab.string();
+  o.out = temp("scale_bad").string();
+  o.quiet = true;
+  CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains("--scale-from") && Catch::Contains("rates.model"));
+  CHECK(!fs::exists(o.out));
+  for (const char* d : {"scale_self", "scale_twice", "plant_run"}) fs::remove_all(temp(d));
+}

@@ -27,6 +27,9 @@ struct GrindOptions {
   std::string fit_test;                 // --fit TEST.toml
   std::vector<std::string> fit_params;  // --fit-params NAME,... (default: the rate model's scale)
   double fit_wi_kWh_t = 0;              // --fit-wi: the measured work index to meet
+  // Scale-up: beside the spectrum model's products in this run, those of
+  // the energy-specific rates the ore has in a laboratory run.
+  std::string scale_from;               // --scale-from LAB_RUN
 };
 
 int cmd_grind(const GrindOptions& o);

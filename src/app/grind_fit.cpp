@@ -46,10 +46,11 @@ void check_fit_options(const GrindOptions& o) {
     throw std::invalid_argument("--fit-wi: give the test's closing sieve with --bond P1_UM");
   if (!o.fit_test.empty() && o.bond_p1_um > 0)
     throw std::invalid_argument("--fit with --bond: a batch test is fitted alone; fit a work index with --fit-wi");
-  if (!o.times_min.empty() || o.feed_rate_t_h > 0 || o.target_p80_um > 0 || o.classifier_d50c_um > 0)
+  if (!o.times_min.empty() || o.feed_rate_t_h > 0 || o.target_p80_um > 0 || o.classifier_d50c_um > 0 ||
+      !o.scale_from.empty())
     throw std::invalid_argument(what +
                                 ": fits the ore and writes it; grind the fitted ore in a second call (--time, "
-                                "--feed-rate, --target-p80 and --classifier belong there)");
+                                "--feed-rate, --target-p80, --classifier and --scale-from belong there)");
   if (o.fit_wi_kWh_t > 0 && o.fit_params.size() > 1)
     throw std::invalid_argument("--fit-params: a work index is one number and fits one parameter, not " +
                                 std::to_string(o.fit_params.size()));

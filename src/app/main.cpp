@@ -11,7 +11,7 @@
 //   millcharge devices
 //   millcharge grind RUN_DIR --ore ORE.toml [--time MIN,...] [--feed-rate T/H] [--target-p80 UM]
 //                    [--classifier D50C_UM [--sharpness A] [--bypass B]]
-//                    [--tanks N] [--bond P1_UM] [--out DIR] [--quiet]
+//                    [--tanks N] [--bond P1_UM] [--scale-from LAB_RUN] [--out DIR] [--quiet]
 //   millcharge grind RUN_DIR --ore START.toml --fit TEST.toml [--fit-params NAME,...] [--out DIR]
 //   millcharge grind RUN_DIR --ore START.toml --bond P1_UM --fit-wi WI [--fit-params NAME]
 //   millcharge sweep check FILE | run FILE --local [N]|--slurm|--print | collect DIR
@@ -223,6 +223,10 @@ int main(int argc, char** argv) {
                     "with --bond P1_UM: set one parameter so that Bond's test gives this measured work index (kWh/t)")
       ->check(mc::app::cli::positive("kWh/t"))
       ->type_name("WI");
+  grind->add_option("--scale-from", go.scale_from,
+                    "a laboratory run: beside the spectrum model's products, Herbst & Fuerstenau's scale-up (the "
+                    "ore's energy-specific rates in that run, at this mill's power and hold-up)")
+      ->type_name("LAB_RUN");
   grind->add_option("--out", go.out, "folder for the results (default RUN/grind, RUN/fit for a fit)");
   grind->add_flag("--quiet", go.quiet, "no summary lines");
 
