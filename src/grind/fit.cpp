@@ -502,11 +502,14 @@ WiFit fit_work_index(const Ore& ore_on_p1, const std::vector<SpectrumBin>& spect
   double lo = std::log(p->lo), hi = std::log(p->hi);
   const BondResult at_lo = bond_at(p->lo), at_hi = bond_at(p->hi);
   const double wlo = at_lo.wi_kWh_t, whi = at_hi.wi_kWh_t;
-  if (!((wlo - wi_kWh_t) * (whi - wi_kWh_t) < 0))
-    throw std::invalid_argument("--fit-wi " + std::to_string(wi_kWh_t) + ": not reachable with " + name +
-                                " in its range: " + p->name + " " + std::to_string(p->lo) + " gives Wi " +
-                                std::to_string(wlo) + " kWh/t, " + std::to_string(p->hi) + " gives " +
-                                std::to_string(whi));
+  char buf[400];
+  if (!((wlo - wi_kWh_t) * (whi - wi_kWh_t) < 0)) {
+    std::snprintf(buf, sizeof buf,
+                  "--fit-wi %g: not reachable with %s in its range: %s %g gives Wi %.4g kWh/t, %g gives %.4g; fit "
+                  "another parameter (--fit-params)",
+                  wi_kWh_t, p->name.c_str(), p->name.c_str(), p->lo, wlo, p->hi, whi);
+    throw std::invalid_argument(buf);
+  }
   const bool rising = whi > wlo;
   BondResult mid;
   for (int k = 0; k < 100 && hi - lo > 1e-12; ++k) {
@@ -516,10 +519,12 @@ WiFit fit_work_index(const Ore& ore_on_p1, const std::vector<SpectrumBin>& spect
   }
   w.value = std::exp(0.5 * (lo + hi));
   w.bond = bond_at(w.value);
-  if (!(std::fabs(w.bond.wi_kWh_t - wi_kWh_t) <= 1e-4 * wi_kWh_t) || !w.bond.steady)
-    throw std::invalid_argument("--fit-wi: not met: the closest " + name + " " + std::to_string(w.value) +
-                                " gives Wi " + std::to_string(w.bond.wi_kWh_t) +
-                                (w.bond.steady ? "" : " (Bond's cycles not steady)") + "; nothing written");
+  if (!(std::fabs(w.bond.wi_kWh_t - wi_kWh_t) <= 1e-4 * wi_kWh_t) || !w.bond.steady) {
+    std::snprintf(buf, sizeof buf, "--fit-wi %g: not met: the closest %s, %.6g, gives Wi %.6g kWh/t%s; nothing written",
+                  wi_kWh_t, p->name.c_str(), w.value, w.bond.wi_kWh_t,
+                  w.bond.steady ? "" : " (Bond's cycles not steady there)");
+    throw std::invalid_argument(buf);
+  }
   // The slope, from 1 % either side.
   const double up = bond_at(w.value * 1.01).wi_kWh_t, dn = bond_at(w.value / 1.01).wi_kWh_t;
   w.dvalue_dwi = (w.value * 1.01 - w.value / 1.01) / (up - dn);
