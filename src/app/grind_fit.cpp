@@ -165,6 +165,7 @@ int fit_batch(const GrindOptions& o) {
   j["parameters"] = nlohmann::json::array();
   for (const FittedParameter& p : fit.parameters) j["parameters"].push_back(parameter_json(p));
   j["rms_residual_pp"] = fit.rms_pp;
+  j["within_twice_noise"] = fit.rms_pp <= 2 * tf.test.noise_pp;
   j["iterations"] = fit.iterations;
   j["evaluations"] = fit.evaluations;
   j["refits"] = fit.refits;
@@ -180,6 +181,8 @@ int fit_batch(const GrindOptions& o) {
   draw_fit(out, t, fit,
            fmt::format("{}: fitted through the run ({:.1f} W), rms {:.3g} pp",
                        tf.title.empty() ? std::string("batch test") : tf.title, run.power_W, fit.rms_pp));
+  bool any_at_bound = false;
+  for (const FittedParameter& p : fit.parameters) any_at_bound = any_at_bound || p.at_bound;
   if (!o.quiet) {
     std::printf("batch test %s: %zu times x %zu sieves, %d data; run %.1f W, hold-up %.4g kg, %s contact\n",
                 o.fit_test.c_str(), t.times_min.size(), t.sieve_m.size(), fit.data, run.power_W, holdup_kg,
@@ -187,12 +190,16 @@ int fit_batch(const GrindOptions& o) {
     for (const FittedParameter& p : fit.parameters) {
       if (p.identified)
         std::printf("  %-16s %.6g +- %.2g (%.2g %%)%s   start %.6g\n", p.name.c_str(), p.value, p.se,
-                    100 * p.se / std::fabs(p.value), p.at_bound ? "  AT ITS BOUND" : "", p.start);
+                    100 * p.se / std::fabs(p.value), p.at_bound ? "  on its bound: the test wants it past the ore file's range" : "", p.start);
       else
         std::printf("  %-16s unidentified: %s (%.6g)\n", p.name.c_str(), p.why.c_str(), p.value);
     }
     std::printf("  rms residual %.4g pp; %d iterations, %d evaluations, %.2f s\n", fit.rms_pp, fit.iterations,
                 fit.evaluations, seconds);
+    if (fit.rms_pp > 2 * t.noise_pp)
+      std::printf("  note: the rms residual is above twice the test's noise_pp (%g pp): the model cannot reproduce "
+                  "the test with these parameters free%s\n",
+                  t.noise_pp, any_at_bound ? " (one is held on its bound)" : "");
     std::printf("wrote %s/{ore_fitted.toml, fit_residuals.csv, fit.json, fit.png}\n", out.string().c_str());
   }
   return 0;
