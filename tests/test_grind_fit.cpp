@@ -262,6 +262,10 @@ TEST_CASE("grind --fit through the command: the fitted ore, its record of the co
   CHECK(fitted.fitted_under.restitution == Approx(0.4));
   CHECK(fitted.fitted_under.stiffness_N_m == Approx(1e6));
   CHECK(contact_mismatch(fitted.fitted_under, run.contact).empty());
+  ContactRecord paired = run.contact;
+  paired.pairs = "steel-liner: e 0.4, friction 0.5, rolling 0.01, kn 1e+06";
+  CHECK(contact_mismatch(fitted.fitted_under, paired) ==
+        "pair overrides \"\" -> \"steel-liner: e 0.4, friction 0.5, rolling 0.01, kn 1e+06\"");
 
   // The same mill with another restitution: grind warns, and says so in grind.json.
   const fs::path other = temp("other_contact");

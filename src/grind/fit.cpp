@@ -547,6 +547,8 @@ std::string contact_mismatch(const ContactRecord& f, const ContactRecord& r) {
   cmp("rolling_friction", f.rolling_friction, r.rolling_friction);
   if (f.law == "linear") cmp("stiffness_N_m", f.stiffness_N_m, r.stiffness_N_m);
   if (f.law == "hertz") cmp("youngs_modulus_Pa", f.youngs_modulus_Pa, r.youngs_modulus_Pa);
+  if (f.pairs != r.pairs)
+    out += (out.empty() ? "" : ", ") + std::string("pair overrides \"") + f.pairs + "\" -> \"" + r.pairs + "\"";
   return out;
 }
 

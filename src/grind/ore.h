@@ -21,6 +21,7 @@ struct ContactRecord {
   double restitution = 0, friction = 0, rolling_friction = 0;
   double stiffness_N_m = 0;      // linear law
   double youngs_modulus_Pa = 0;  // hertz: the balls' material
+  std::string pairs;  // the case's [[contact.pair]] overrides, as text ("" : none)
   // What else the ore file's [fitted] table says (not compared).
   std::string test, run, parameters;
   double rms_residual_pp = 0;

@@ -88,7 +88,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // [fitted]: the contact the ore was fitted under (grind::ContactRecord).
 void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   r.knows(ft, "fitted.", {"contact_law", "restitution", "friction", "rolling_friction", "stiffness_N_m",
-                          "youngs_modulus_Pa", "test", "run", "parameters", "rms_residual_pp"});
+                          "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp"});
   auto text = [&](const std::string& key) {
     const toml::node* n = ft.get(key);
     if (!n) return std::string();
@@ -103,6 +103,7 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   c.rolling_friction = r.number(ft, "fitted.", "rolling_friction", 0, 10, "0 to 10", 0.0);
   if (c.law == "linear") c.stiffness_N_m = r.number(ft, "fitted.", "stiffness_N_m", 0, kInf, "N/m > 0");
   if (c.law == "hertz") c.youngs_modulus_Pa = r.number(ft, "fitted.", "youngs_modulus_Pa", 0, kInf, "Pa > 0");
+  c.pairs = text("pairs");
   c.test = text("test");
   c.run = text("run");
   c.parameters = text("parameters");
@@ -269,6 +270,7 @@ std::string ore_toml(const grind::Ore& o, const std::string& header) {
          g(f.rolling_friction) + "\n";
     if (f.law == "linear") s += "stiffness_N_m = " + g(f.stiffness_N_m) + "\n";
     if (f.law == "hertz") s += "youngs_modulus_Pa = " + g(f.youngs_modulus_Pa) + "\n";
+    if (!f.pairs.empty()) s += "pairs = " + quoted(f.pairs) + "\n";
     if (!f.test.empty()) s += "test = " + quoted(f.test) + "\n";
     if (!f.run.empty()) s += "run = " + quoted(f.run) + "\n";
     if (!f.parameters.empty()) s += "parameters = " + quoted(f.parameters) + "\n";

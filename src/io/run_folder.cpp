@@ -61,6 +61,10 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
   for (const Material& m : c.materials)
     if (!c.sizes.empty() && m.name == c.sizes.front().material) r.contact.youngs_modulus_Pa = m.youngs_modulus;
   r.pair_overrides = static_cast<int>(c.pairs.size());
+  for (const PairOverride& po : c.pairs)
+    r.contact.pairs += fmt::format("{}{}-{}: e {:g}, friction {:g}, rolling {:g}, kn {:g}",
+                                   r.contact.pairs.empty() ? "" : "; ", po.a, po.b, po.interaction.restitution,
+                                   po.interaction.mu_slide, po.interaction.mu_roll, po.interaction.kn);
   if (!need_spectrum) return r;
   const fs::path sc = dir / "spectra.csv";
   const CsvTable t = read_csv_strict(sc, "the spectrum model needs the run's collision spectra");
