@@ -240,6 +240,14 @@ TEST_CASE("grind --fit through the command: the fitted ore, its record of the co
   REQUIRE(back.test.passing.size() == 5);
   CHECK(back.test.passing[2][6] == Approx(tf.test.passing[2][6]).margin(1e-10));
   CHECK(back.test.sieve_m[4] == Approx(tf.test.sieve_m[4]).epsilon(1e-9));
+  // The shipped example reads: 5 times on 13 sieves, the feed passing 1 at 3.35 mm.
+  const mc::io::BatchTestFile shipped =
+      mc::io::read_batch_test(fs::path(MC_ASSET_DIR) / "batch_tests" / "synthetic_bond.toml");
+  CHECK(shipped.test.times_min == std::vector<double>{1, 2, 4, 8, 16});
+  CHECK(shipped.test.sieve_m.size() == 13);
+  CHECK(shipped.test.sieve_m[0] == Approx(3.35e-3));
+  CHECK(shipped.test.holdup_kg == Approx(1.134));
+  CHECK(shipped.title.find("synthetic") != std::string::npos);
 
   mc::app::GrindOptions o;
   o.run_dir = run_dir.string();
