@@ -43,10 +43,19 @@ fs::path temp(const std::string& name) {
   return fs::temp_directory_path() / ("millcharge_test_fit_" + std::to_string(::getpid()) + "_" + name);
 }
 
+// A folder removed when the test program ends.
+struct TempDir {
+  fs::path path;
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
 // A short run of the Bond test's mill (285 balls), made once: the
 // laboratory mill of these tests.
 const fs::path& bond_run() {
-  static const fs::path out = [] {
+  static const TempDir out{[] {
     const fs::path dir = temp("bond_run");
     fs::remove_all(dir);
     mc::app::RunOptions o;
@@ -58,8 +67,8 @@ const fs::path& bond_run() {
     o.quiet = true;
     REQUIRE(mc::app::cmd_run(o) == 0);
     return dir;
-  }();
-  return out;
+  }()};
+  return out.path;
 }
 
 fs::path ore_file(const std::string& name) { return fs::path(MC_ASSET_DIR) / "ores" / name; }
