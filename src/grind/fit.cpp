@@ -350,7 +350,7 @@ Identification identify(const Matrix& J, double ssr) {
     id.se[p] = std::sqrt(var * s2) * d[a];
     if (id.se[p] > 1) {
       id.identified[p] = false;
-      id.why[p] = "its standard error is too large to give a value";
+      id.why[p] = "its standard error is more than a factor of e";
     }
   }
   return id;
@@ -409,6 +409,7 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
   BatchFit fit;
   fit.data = static_cast<int>(n);
   std::vector<bool> held(params.size(), false);
+  std::vector<std::string> held_why(params.size());
   for (;;) {
     std::vector<std::size_t> free;
     for (std::size_t k = 0; k < params.size(); ++k)
@@ -433,10 +434,14 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
     if (!free.empty()) lm = levenberg_marquardt(prob);
     fit.iterations += lm.iterations;
     fit.evaluations += lm.evaluations;
-    if (!free.empty() && !lm.converged)
-      throw std::invalid_argument("--fit: the fit did not converge in " + std::to_string(lm.iterations) +
-                                  " iterations (rms residual " + std::to_string(std::sqrt(lm.ssr / n)) +
-                                  " pp); nothing written: start nearer, or fit fewer parameters");
+    if (!free.empty() && !lm.converged) {
+      char buf[240];
+      std::snprintf(buf, sizeof buf,
+                    "--fit: the fit did not converge in %d iterations (rms residual %.3g pp); nothing written: "
+                    "start nearer, or fit fewer parameters",
+                    lm.iterations, std::sqrt(lm.ssr / static_cast<double>(n)));
+      throw std::invalid_argument(buf);
+    }
     const Identification id = free.empty() ? Identification{} : identify(lm.J, lm.ssr);
     // Hold one parameter at a time, and fit the rest again: first one the
     // others can stand in for, else the one with the largest error.
@@ -447,6 +452,7 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
         hold = a;
     if (hold < free.size()) {
       held[free[hold]] = true;
+      held_why[free[hold]] = id.why[hold];
       ++fit.refits;
       continue;
     }
@@ -456,8 +462,6 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
     fit.rms_pp = std::sqrt(lm.ssr / static_cast<double>(n));
     fit.condition = id.condition;
     fit.predicted = batch_test_products(ore, spectrum, power_W, holdup_kg, test);
-    // Why each held parameter was held: the identification of the first fit
-    // that held it is not kept, so say it plainly.
     for (std::size_t k = 0; k < params.size(); ++k) {
       FittedParameter f;
       f.name = params[k]->name;
@@ -467,8 +471,7 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
       if (it == free.end()) {
         f.identified = false;
         f.se = kNaN;
-        f.why = "the data cannot fix it (its standard error was too large, or other parameters could take its "
-                "part); held at its start";
+        f.why = held_why[k] + "; held at its start";
       } else {
         const std::size_t a = static_cast<std::size_t>(it - free.begin());
         const double se_var = id.se[a];
