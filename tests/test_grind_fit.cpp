@@ -178,6 +178,10 @@ TEST_CASE("grind --fit round trip: five parameters of a known ore back to 1e-6 w
     CHECK(p.identified);
     CHECK(p.value == Approx(get(truth, p.name)).epsilon(1e-6));
   }
+  // The same fit cut at two iterations has not converged: said, no ore.
+  CHECK_THROWS_WITH(fit_batch_test(start, run.normal, run.power_W, H, t, names, 2),
+                    Catch::Contains("--fit: the fit did not converge in 2 iterations") &&
+                        Catch::Contains("nothing written"));
 }
 
 TEST_CASE("grind --fit round trip: with ±1 pp of scatter the parameters come back within their errors",

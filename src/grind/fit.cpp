@@ -287,6 +287,7 @@ LmResult levenberg_marquardt(const LmProblem& prob) {
     }
     if (!stepped) break;
   }
+  res.iterations = std::min(res.iterations, prob.max_iterations);
   jacobian(res.x, res.J);
   return res;
 }
@@ -383,7 +384,8 @@ void check_names(const Ore& start, const std::vector<std::string>& names, std::v
 }  // namespace
 
 BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectrum, double power_W,
-                        double holdup_kg, const BatchTest& test, const std::vector<std::string>& names) {
+                        double holdup_kg, const BatchTest& test, const std::vector<std::string>& names,
+                        int max_iterations) {
   std::vector<const OreParameter*> params;
   check_names(start, names, params);
   const std::size_t nt = test.times_min.size(), ns = test.sieve_m.size();
@@ -417,6 +419,7 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
     Ore ore = start;
     LmProblem prob;
     prob.n_data = static_cast<int>(n);
+    prob.max_iterations = max_iterations;
     for (std::size_t k : free) {
       prob.x0.push_back(to_var(*params[k], params[k]->get(start)));
       prob.lo.push_back(to_var(*params[k], params[k]->log ? std::max(params[k]->lo, 1e-300) : params[k]->lo));

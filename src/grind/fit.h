@@ -120,7 +120,8 @@ struct BatchFit {
 // model lacks, more parameters than data, sieves below the finest class,
 // and a fit that does not converge.
 BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectrum, double power_W,
-                        double holdup_kg, const BatchTest& test, const std::vector<std::string>& names);
+                        double holdup_kg, const BatchTest& test, const std::vector<std::string>& names,
+                        int max_iterations = 300);
 
 // One parameter set so that Bond's test (bond.h) in this mill gives the
 // work index `wi_kWh_t`: bisection on the parameter's logarithm over its
