@@ -474,7 +474,12 @@ TEST_CASE("grind --scale-from: the energy-specific scale-up beside the spectrum 
   const fs::path plant = temp("plant_run");
   fs::remove_all(plant);
   fs::create_directories(plant);
-  for (const char* f : {"case.toml", "spectra.csv"}) fs::copy_file(lab / f, plant / f);
+  fs::copy_file(lab / "spectra.csv", plant / "spectra.csv");
+  std::string c = text_of(lab / "case.toml");
+  const std::size_t at = c.find("restitution = 0.4");
+  REQUIRE(at != std::string::npos);
+  c.replace(at, 17, "restitution = 0.7");  // another contact: said in grind.json
+  std::ofstream(plant / "case.toml") << c;
   nlohmann::json summary = nlohmann::json::parse(text_of(lab / "summary.json"));
   summary["power_W"]["torque"] = 2 * summary["power_W"]["torque"].get<double>();
   std::ofstream(plant / "summary.json") << summary.dump();
@@ -485,6 +490,8 @@ TEST_CASE("grind --scale-from: the energy-specific scale-up beside the spectrum 
   CHECK(p[3]["P80_um"].get<double>() == Approx(p[1]["P80_um"].get<double>()).epsilon(1e-9));
   CHECK(p[4]["P80_um"].get<double>() == Approx(p[2]["P80_um"].get<double>()).epsilon(1e-9));
   CHECK(twice["scale_up"]["P80_side_by_side"][0]["ratio"].get<double>() > 1.01);
+  CHECK(twice["scale_up"]["contact_differs_from_lab"] == "restitution 0.4 -> 0.7");
+  CHECK(!self["scale_up"].contains("contact_differs_from_lab"));
   // Only the spectrum model has a spectrum to compare.
   mc::app::GrindOptions o;
   o.run_dir = plant.string();

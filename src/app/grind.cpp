@@ -240,16 +240,25 @@ struct ScaleUp {
   std::vector<double> SE_t_per_kWh;
   std::vector<Product> products;  // labelled " [H&F from lab]"
   double target_rate = std::numeric_limits<double>::quiet_NaN();
+  std::string contact_changed;  // lab -> this run; empty: the same
 };
 constexpr const char* kScaleTag = " [H&F from lab]";
 
-ScaleUp scale_up(const GrindOptions& o, const Ore& ore, const Circuit& c, const std::vector<double>& times) {
+ScaleUp scale_up(const GrindOptions& o, const Ore& ore, const io::Run& plant, const Circuit& c,
+                 const std::vector<double>& times) {
   if (ore.model != RateModel::spectrum)
     throw std::invalid_argument("--scale-from: sets the spectrum model's prediction beside the energy-specific "
                                 "scale-up; the ore's rates.model must be \"spectrum\"");
   if (o.bond_p1_um > 0) throw std::invalid_argument("--scale-from with --bond: give one");
   ScaleUp up;
   up.lab = io::read_run(o.scale_from, true);
+  // The two runs' spectra are comparable under one contact only.
+  up.contact_changed = contact_mismatch(up.lab.contact, plant.contact);
+  if (!up.contact_changed.empty())
+    std::fprintf(stderr,
+                 "millcharge: warning: --scale-from %s: the laboratory run's contact differs from this run's (%s); "
+                 "the two models then differ by the contact too\n",
+                 o.scale_from.c_str(), up.contact_changed.c_str());
   const double lab_holdup = mill_holdup_kg(ore, up.lab.porosity, up.lab.filling, up.lab.mill_volume);
   up.SE_t_per_kWh = mill_rates(ore, up.lab.normal, up.lab.power_W, lab_holdup).SE_t_per_kWh;
   Circuit he = c;
@@ -271,6 +280,7 @@ nlohmann::ordered_json scale_up_json(const GrindOptions& o, const ScaleUp& up, c
   j["lab_run"] = o.scale_from;
   j["lab_title"] = up.lab.title;
   j["lab_power_W"] = up.lab.power_W;
+  if (!up.contact_changed.empty()) j["contact_differs_from_lab"] = up.contact_changed;
   j["SE_t_per_kWh"] = up.SE_t_per_kWh;
   if (o.target_p80_um > 0)
     j["throughput_at_target_t_h"] = std::isfinite(up.target_rate) ? nlohmann::json(up.target_rate) : nlohmann::json();
@@ -367,7 +377,7 @@ int cmd_grind(const GrindOptions& o) {
   // energy-specific rates the ore has in the laboratory run held in this mill.
   ScaleUp up;
   if (!o.scale_from.empty()) {
-    up = scale_up(o, ore, c, times);
+    up = scale_up(o, ore, run, c, times);
     products.insert(products.end(), up.products.begin(), up.products.end());
   }
   BondResult bond;
