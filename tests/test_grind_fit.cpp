@@ -482,6 +482,8 @@ TEST_CASE("grind --scale-from: the energy-specific scale-up beside the spectrum 
   std::ofstream(plant / "case.toml") << c;
   nlohmann::json summary = nlohmann::json::parse(text_of(lab / "summary.json"));
   summary["power_W"]["torque"] = 2 * summary["power_W"]["torque"].get<double>();
+  summary["power_W"]["dissipation"] = summary["power_W"]["torque"];
+  summary["power_W"]["imbalance"] = 0.0;
   std::ofstream(plant / "summary.json") << summary.dump();
   const nlohmann::json twice = grind(plant, ore, temp("scale_twice"));
   const auto& p = twice["products"];
@@ -491,6 +493,14 @@ TEST_CASE("grind --scale-from: the energy-specific scale-up beside the spectrum 
   CHECK(p[4]["P80_um"].get<double>() == Approx(p[2]["P80_um"].get<double>()).epsilon(1e-9));
   CHECK(twice["scale_up"]["P80_side_by_side"][0]["ratio"].get<double>() > 1.01);
   CHECK(twice["scale_up"]["contact_differs_from_lab"] == "restitution 0.4 -> 0.7");
+  CHECK(!twice.contains("not_in_steady_motion"));
+  // The same "plant" still settling: torque and dissipation 40 % apart, said.
+  summary["power_W"]["imbalance"] = 0.4;
+  summary["power_W"]["energy_change"] = 0.4 * summary["power_W"]["torque"].get<double>();
+  std::ofstream(plant / "summary.json") << summary.dump();
+  const nlohmann::json settling = grind(plant, ore, temp("scale_settling"));
+  CHECK(settling["not_in_steady_motion"]["imbalance"].get<double>() == Approx(0.4));
+  fs::remove_all(temp("scale_settling"));
   CHECK(!self["scale_up"].contains("contact_differs_from_lab"));
   // Only the spectrum model has a spectrum to compare.
   mc::app::GrindOptions o;

@@ -33,6 +33,10 @@ using namespace mc::grind;
 
 namespace {
 
+// Torque and dissipation further apart than this share of the torque: the
+// run is not in steady motion (grind warns).
+constexpr double kImbalanceWarn = 0.10;
+
 std::string fmt_um(double m) { return std::isfinite(m) ? fmt::format("{:.1f}", m * 1e6) : "below the finest class"; }
 
 const char* model_name(RateModel m) {
@@ -340,6 +344,16 @@ int cmd_grind(const GrindOptions& o) {
   check_classifier(o, ore);
   const io::Run run = io::read_run(o.run_dir, ore.model == RateModel::spectrum);
   if (o.bond_p1_um > 0) check_bond(o, ore, run);
+  // A run still settling into its motion: its torque also lifts the charge
+  // (the energy-specific and Austin rates take the torque's power, the
+  // spectrum only the collisions).
+  const bool unbalanced = std::fabs(run.imbalance) > kImbalanceWarn;
+  if (unbalanced)
+    std::fprintf(stderr,
+                 "millcharge: warning: %s: not in steady motion: torque %.4g W, dissipation %.4g W (%+.0f %%), the "
+                 "charge's energy changed by %.4g W over the window; its products are those of the run's start: "
+                 "run it longer\n",
+                 o.run_dir.c_str(), run.power_W, run.dissipation_W, 100 * run.imbalance, run.energy_change_W);
   // An ore fitted through a run holds under that run's contact law and
   // parameters only: a run with others gives another spectrum.
   const std::string contact_changed = contact_mismatch(ore.fitted_under, run.contact);
@@ -392,6 +406,11 @@ int cmd_grind(const GrindOptions& o) {
   write_tables(out, c, products, rates.SE_t_per_kWh);
   nlohmann::ordered_json j = summary(o, ore, run, c, holdup_kg, products, target_rate, bond);
   if (!contact_changed.empty()) j["contact_differs_from_fit"] = contact_changed;
+  if (unbalanced)
+    j["not_in_steady_motion"] = {{"torque_W", run.power_W},
+                                 {"dissipation_W", run.dissipation_W},
+                                 {"imbalance", run.imbalance},
+                                 {"energy_change_W", run.energy_change_W}};
   if (!o.scale_from.empty()) j["scale_up"] = scale_up_json(o, up, products);
   io::write_file_atomic(out / "grind.json", j.dump(2) + "\n");
   draw(out, ore, run, c, products);

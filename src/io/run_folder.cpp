@@ -39,6 +39,11 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
     r.filling = j.at("filling").get<double>();
     r.title = j.value("title", std::string());
     r.speed_rpm = j.value("speed_rpm", 0.0);
+    const auto& pw = j.at("power_W");
+    if (pw.contains("dissipation") && pw["dissipation"].is_number()) r.dissipation_W = pw["dissipation"].get<double>();
+    if (pw.contains("imbalance") && pw["imbalance"].is_number()) r.imbalance = pw["imbalance"].get<double>();
+    if (pw.contains("energy_change") && pw["energy_change"].is_number())
+      r.energy_change_W = pw["energy_change"].get<double>();
   } catch (const std::exception&) {
     throw std::invalid_argument(sj.string() + ": power_W.torque or filling missing; not a millcharge run's summary");
   }
