@@ -17,6 +17,7 @@
 
 #include "grind/bond.h"
 #include "grind/circuit.h"
+#include "grind/fit.h"
 #include "grind/ore.h"
 #include "grind/pbm.h"
 #include "core/version.h"
@@ -31,6 +32,10 @@ namespace fs = std::filesystem;
 using namespace mc::grind;
 
 namespace {
+
+// Torque and dissipation further apart than this share of the torque: the
+// run is not in steady motion (grind warns).
+constexpr double kImbalanceWarn = 0.10;
 
 std::string fmt_um(double m) { return std::isfinite(m) ? fmt::format("{:.1f}", m * 1e6) : "below the finest class"; }
 
@@ -215,8 +220,101 @@ void draw(const fs::path& out, const Ore& ore, const io::Run& run, const Circuit
   io::draw_or_warn(out / "grind.png", [&] { io::write_line_plots_png(out / "grind.png", {psd, rp}); });
 }
 
+// The products asked for, in a mill.
+std::vector<Product> make_products(const GrindOptions& o, const Ore& ore, const Circuit& c,
+                                   const std::vector<double>& times, double& target_rate) {
+  std::vector<Product> products;
+  for (double t : times) {
+    Product p = batch_product(c, t);
+    p.label = fmt::format("batch {:g} min", t);
+    products.push_back(p);
+  }
+  if (o.feed_rate_t_h > 0) products.push_back(continuous(c, o.feed_rate_t_h));
+  if (o.target_p80_um > 0) products.push_back(at_target(o, ore, c, target_rate));
+  return products;
+}
+
+// Herbst & Fuerstenau's scale-up beside the spectrum model's: S_i^E =
+// S_i H / P of the ore in the laboratory run (from its spectrum there),
+// held in this mill, S_i = S_i^E P / H with this run's power and hold-up.
+// Where the two disagree, the DEM's spectrum says that this mill spends
+// its energy differently from the laboratory's.
+struct ScaleUp {
+  io::Run lab;
+  std::vector<double> SE_t_per_kWh;
+  std::vector<Product> products;  // labelled " [H&F from lab]"
+  double target_rate = std::numeric_limits<double>::quiet_NaN();
+  std::string contact_changed;  // lab -> this run; empty: the same
+};
+constexpr const char* kScaleTag = " [H&F from lab]";
+
+ScaleUp scale_up(const GrindOptions& o, const Ore& ore, const io::Run& plant, const Circuit& c,
+                 const std::vector<double>& times) {
+  if (ore.model != RateModel::spectrum)
+    throw std::invalid_argument("--scale-from: sets the spectrum model's prediction beside the energy-specific "
+                                "scale-up; the ore's rates.model must be \"spectrum\"");
+  if (o.bond_p1_um > 0) throw std::invalid_argument("--scale-from with --bond: give one");
+  ScaleUp up;
+  up.lab = io::read_run(o.scale_from, true);
+  // The two runs' spectra are comparable under one contact only.
+  up.contact_changed = contact_mismatch(up.lab.contact, plant.contact);
+  if (!up.contact_changed.empty())
+    std::fprintf(stderr,
+                 "millcharge: warning: --scale-from %s: the laboratory run's contact differs from this run's (%s); "
+                 "the two models then differ by the contact too\n",
+                 o.scale_from.c_str(), up.contact_changed.c_str());
+  const double lab_holdup = mill_holdup_kg(ore, up.lab.porosity, up.lab.filling, up.lab.mill_volume);
+  up.SE_t_per_kWh = mill_rates(ore, up.lab.normal, up.lab.power_W, lab_holdup).SE_t_per_kWh;
+  Circuit he = c;
+  for (std::size_t i = 0; i < he.S_per_min.size(); ++i)
+    he.S_per_min[i] = up.SE_t_per_kWh[i] * c.power_kW / c.holdup_t / 60;
+  try {
+    up.products = make_products(o, ore, he, times, up.target_rate);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (by the energy-specific rates of --scale-from " +
+                                o.scale_from + ")");
+  }
+  for (Product& p : up.products) p.label += kScaleTag;
+  return up;
+}
+
+nlohmann::ordered_json scale_up_json(const GrindOptions& o, const ScaleUp& up, const std::vector<Product>& all) {
+  nlohmann::ordered_json j;
+  j["model"] = "Herbst & Fuerstenau: the energy-specific rates of the ore in the laboratory run";
+  j["lab_run"] = o.scale_from;
+  j["lab_title"] = up.lab.title;
+  j["lab_power_W"] = up.lab.power_W;
+  if (!up.contact_changed.empty()) j["contact_differs_from_lab"] = up.contact_changed;
+  j["SE_t_per_kWh"] = up.SE_t_per_kWh;
+  if (o.target_p80_um > 0)
+    j["throughput_at_target_t_h"] = std::isfinite(up.target_rate) ? nlohmann::json(up.target_rate) : nlohmann::json();
+  nlohmann::json pairs = nlohmann::json::array();
+  const std::size_t n = all.size() - up.products.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const double a = all[k].p80_m, b = up.products[k].p80_m;
+    pairs.push_back({{"label", all[k].label},
+                     {"P80_um_spectrum", std::isfinite(a) ? nlohmann::json(a * 1e6) : nlohmann::json()},
+                     {"P80_um_energy_specific", std::isfinite(b) ? nlohmann::json(b * 1e6) : nlohmann::json()},
+                     {"ratio", std::isfinite(a) && std::isfinite(b) ? nlohmann::json(a / b) : nlohmann::json()}});
+  }
+  j["P80_side_by_side"] = pairs;
+  return j;
+}
+
+void print_scale_up(const GrindOptions& o, const ScaleUp& up, const std::vector<Product>& all) {
+  std::printf("scale-up from %s (%.1f W): P80 by the spectrum here / by the lab's energy-specific rates\n",
+              o.scale_from.c_str(), up.lab.power_W);
+  const std::size_t n = all.size() - up.products.size();
+  for (std::size_t k = 0; k < n; ++k)
+    std::printf("  %-28s %s / %s um  ratio %.3f\n", all[k].label.c_str(), fmt_um(all[k].p80_m).c_str(),
+                fmt_um(up.products[k].p80_m).c_str(), all[k].p80_m / up.products[k].p80_m);
+  if (o.target_p80_um > 0)
+    std::printf("  throughput at P80 %g um: %.4g t/h by the spectrum, %.4g t/h by the energy-specific rates\n",
+                o.target_p80_um, all[n - 1].feed_t_h, up.target_rate);
+}
+
 void print(const GrindOptions& o, const Ore& ore, const io::Run& run, double holdup_kg,
-           const std::vector<Product>& products, const BondResult& bond, const fs::path& out) {
+           const std::vector<Product>& products, const BondResult& bond) {
   std::printf("ore %s, %s rates; mill power %.1f W, hold-up %.3g kg, F80 %s um\n", ore.name.c_str(),
               model_name(ore.model), run.power_W, holdup_kg, fmt_um(ore.f80_m).c_str());
   for (const Product& p : products)
@@ -233,18 +331,37 @@ void print(const GrindOptions& o, const Ore& ore, const io::Run& run, double hol
                 "kWh/t\n",
                 bond.p1_um, bond.cycles, bond.steady ? "" : " (not steady)", bond.gbp_g_rev,
                 100 * bond.circulating_load, bond.f80_um, bond.p80_um, bond.wi_kWh_t);
-  std::printf("wrote %s/{grind.csv, rates.csv, grind.json, grind.png}\n", out.string().c_str());
 }
 
 }  // namespace
 
 int cmd_grind(const GrindOptions& o) {
+  if (!o.fit_test.empty() || o.fit_wi_kWh_t > 0) return cmd_grind_fit(o);
+  if (!o.fit_params.empty()) throw std::invalid_argument("--fit-params: names what --fit or --fit-wi fits; give one");
   // The inputs, checked before anything is computed.
   Ore ore = io::read_ore(o.ore);
   if (o.bond_p1_um > 0) put_sieve_on_class_top(ore, o.bond_p1_um * 1e-6);
   check_classifier(o, ore);
   const io::Run run = io::read_run(o.run_dir, ore.model == RateModel::spectrum);
   if (o.bond_p1_um > 0) check_bond(o, ore, run);
+  // A run still settling into its motion: its torque also lifts the charge
+  // (the energy-specific and Austin rates take the torque's power, the
+  // spectrum only the collisions).
+  const bool unbalanced = std::fabs(run.imbalance) > kImbalanceWarn;
+  if (unbalanced)
+    std::fprintf(stderr,
+                 "millcharge: warning: %s: not in steady motion: torque %.4g W, dissipation %.4g W (%+.0f %%), the "
+                 "charge's energy changed by %.4g W over the window; its products are those of the run's start: "
+                 "run it longer\n",
+                 o.run_dir.c_str(), run.power_W, run.dissipation_W, 100 * run.imbalance, run.energy_change_W);
+  // An ore fitted through a run holds under that run's contact law and
+  // parameters only: a run with others gives another spectrum.
+  const std::string contact_changed = contact_mismatch(ore.fitted_under, run.contact);
+  if (!contact_changed.empty())
+    std::fprintf(stderr,
+                 "millcharge: warning: %s: the ore was fitted under other contact parameters than this run's (%s); "
+                 "its breakage parameters hold under the contact they were fitted under (docs/grinding.md)\n",
+                 o.ore.c_str(), contact_changed.c_str());
 
   // The mill: the ore in it, the rates, the circuit.
   const double holdup_kg = o.bond_p1_um > 0 ? bond_charge_kg(ore)
@@ -268,15 +385,15 @@ int cmd_grind(const GrindOptions& o) {
                                             !(o.bond_p1_um > 0)
                                         ? std::vector<double>{1, 2, 4, 8, 16}
                                         : o.times_min;
-  std::vector<Product> products;
-  for (double t : times) {
-    Product p = batch_product(c, t);
-    p.label = fmt::format("batch {:g} min", t);
-    products.push_back(p);
-  }
-  if (o.feed_rate_t_h > 0) products.push_back(continuous(c, o.feed_rate_t_h));
   double target_rate = std::numeric_limits<double>::quiet_NaN();
-  if (o.target_p80_um > 0) products.push_back(at_target(o, ore, c, target_rate));
+  std::vector<Product> products = make_products(o, ore, c, times, target_rate);
+  // --scale-from: the same products by Herbst & Fuerstenau's scale-up, the
+  // energy-specific rates the ore has in the laboratory run held in this mill.
+  ScaleUp up;
+  if (!o.scale_from.empty()) {
+    up = scale_up(o, ore, run, c, times);
+    products.insert(products.end(), up.products.begin(), up.products.end());
+  }
   BondResult bond;
   if (o.bond_p1_um > 0)
     bond = bond_test(c.sizes, c.feed, c.S_per_min, c.b, run.speed_rpm, bond_charge_kg(ore), o.bond_p1_um * 1e-6);
@@ -287,10 +404,21 @@ int cmd_grind(const GrindOptions& o) {
   fs::create_directories(out, ec);
   if (ec) throw std::runtime_error(out.string() + ": cannot create: " + ec.message());
   write_tables(out, c, products, rates.SE_t_per_kWh);
-  const nlohmann::ordered_json j = summary(o, ore, run, c, holdup_kg, products, target_rate, bond);
+  nlohmann::ordered_json j = summary(o, ore, run, c, holdup_kg, products, target_rate, bond);
+  if (!contact_changed.empty()) j["contact_differs_from_fit"] = contact_changed;
+  if (unbalanced)
+    j["not_in_steady_motion"] = {{"torque_W", run.power_W},
+                                 {"dissipation_W", run.dissipation_W},
+                                 {"imbalance", run.imbalance},
+                                 {"energy_change_W", run.energy_change_W}};
+  if (!o.scale_from.empty()) j["scale_up"] = scale_up_json(o, up, products);
   io::write_file_atomic(out / "grind.json", j.dump(2) + "\n");
   draw(out, ore, run, c, products);
-  if (!o.quiet) print(o, ore, run, holdup_kg, products, bond, out);
+  if (!o.quiet) {
+    print(o, ore, run, holdup_kg, products, bond);
+    if (!o.scale_from.empty()) print_scale_up(o, up, products);
+    std::printf("wrote %s/{grind.csv, rates.csv, grind.json, grind.png}\n", out.string().c_str());
+  }
   return 0;
 }
 

@@ -19,10 +19,22 @@ struct GrindOptions {
   double classifier_d50c_um = 0;   // --classifier: the continuous mill closed by a classifier
   double classifier_alpha = 3;     // --sharpness
   double classifier_bypass = 0;    // --bypass
-  std::string out;                 // --out, default RUN_DIR/grind
+  std::string out;                 // --out, default RUN_DIR/grind (RUN_DIR/fit for a fit)
   bool quiet = false;
+  // Calibration (grind_fit.cpp): the ore fitted to a laboratory batch test
+  // through this run, or one of its rates' scales to a measured Bond work
+  // index (with --bond).
+  std::string fit_test;                 // --fit TEST.toml
+  std::vector<std::string> fit_params;  // --fit-params NAME,... (default: the rate model's scale)
+  double fit_wi_kWh_t = 0;              // --fit-wi: the measured work index to meet
+  // Scale-up: beside the spectrum model's products in this run, those of
+  // the energy-specific rates the ore has in a laboratory run.
+  std::string scale_from;               // --scale-from LAB_RUN
 };
 
 int cmd_grind(const GrindOptions& o);
+// --fit or --fit-wi: writes the fitted ore, fit.json, and for a batch test
+// fit_residuals.csv and fit.png.
+int cmd_grind_fit(const GrindOptions& o);
 
 }  // namespace mc::app

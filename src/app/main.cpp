@@ -11,7 +11,9 @@
 //   millcharge devices
 //   millcharge grind RUN_DIR --ore ORE.toml [--time MIN,...] [--feed-rate T/H] [--target-p80 UM]
 //                    [--classifier D50C_UM [--sharpness A] [--bypass B]]
-//                    [--tanks N] [--bond P1_UM] [--out DIR] [--quiet]
+//                    [--tanks N] [--bond P1_UM] [--scale-from LAB_RUN] [--out DIR] [--quiet]
+//   millcharge grind RUN_DIR --ore START.toml --fit TEST.toml [--fit-params NAME,...] [--out DIR]
+//   millcharge grind RUN_DIR --ore START.toml --bond P1_UM --fit-wi WI [--fit-params NAME]
 //   millcharge sweep check FILE | run FILE --local [N]|--slurm|--print | collect DIR
 // Exit status: 0 done; 2 bad input (a message names the key; nothing written);
 // 1 any other failure (device, blow-up, disk).
@@ -208,7 +210,24 @@ int main(int argc, char** argv) {
   grind->add_option("--bypass", go.classifier_bypass,
                     "the share of the fines that bypasses the classifier to the underflow (default 0)")
       ->check(mc::app::cli::between(0.0, 0.95));
-  grind->add_option("--out", go.out, "folder for the results (default RUN/grind)");
+  std::string fit_params;
+  grind->add_option("--fit", go.fit_test,
+                    "fit the ore to this laboratory batch test (TOML) through the run, the test's mill: writes the "
+                    "fitted ore, its residuals, fit.json and fit.png")
+      ->type_name("TEST");
+  grind->add_option("--fit-params", fit_params,
+                    "the ore parameters --fit or --fit-wi moves, comma-separated (default: the rate model's scale, "
+                    "efficiency for the spectrum model)")
+      ->type_name("NAME,...");
+  grind->add_option("--fit-wi", go.fit_wi_kWh_t,
+                    "with --bond P1_UM: set one parameter so that Bond's test gives this measured work index (kWh/t)")
+      ->check(mc::app::cli::positive("kWh/t"))
+      ->type_name("WI");
+  grind->add_option("--scale-from", go.scale_from,
+                    "a laboratory run: beside the spectrum model's products, Herbst & Fuerstenau's scale-up (the "
+                    "ore's energy-specific rates in that run, at this mill's power and hold-up)")
+      ->type_name("LAB_RUN");
+  grind->add_option("--out", go.out, "folder for the results (default RUN/grind, RUN/fit for a fit)");
   grind->add_flag("--quiet", go.quiet, "no summary lines");
 
   mc::app::SweepCli sweep;
@@ -237,6 +256,13 @@ int main(int argc, char** argv) {
           throw std::invalid_argument("--time " + grind_times + ": expected minutes > 0, comma-separated, got \"" +
                                       item + "\"");
         go.times_min.push_back(t);
+        start = end + 1;
+      }
+      for (std::size_t start = 0; start < fit_params.size();) {
+        const std::size_t end = std::min(fit_params.find(',', start), fit_params.size());
+        const std::string item = fit_params.substr(start, end - start);
+        if (item.empty()) throw std::invalid_argument("--fit-params " + fit_params + ": an empty name");
+        go.fit_params.push_back(item);
         start = end + 1;
       }
       return mc::app::cmd_grind(go);

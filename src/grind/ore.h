@@ -13,6 +13,20 @@ namespace mc::grind {
 
 enum class RateModel { austin, energy, spectrum };
 
+// The contact law and parameters of the DEM run an ore was fitted through
+// (the [fitted] table of an ore file): the normal energy spectrum, and so
+// the fitted parameters, hold only under these (docs/grinding.md).
+struct ContactRecord {
+  std::string law;  // "linear" or "hertz"; empty: the ore was not fitted
+  double restitution = 0, friction = 0, rolling_friction = 0;
+  double stiffness_N_m = 0;      // linear law
+  double youngs_modulus_Pa = 0;  // hertz: the balls' material
+  std::string pairs;  // the case's [[contact.pair]] overrides, as text ("" : none)
+  // What else the ore file's [fitted] table says (not compared).
+  std::string test, run, parameters;
+  double rms_residual_pp = 0;
+};
+
 struct Ore {
   std::string name;
   double density = 0;        // kg/m³
@@ -32,6 +46,7 @@ struct Ore {
   Fracture fracture;
   double packing = 0.6, efficiency = 1.0;
   int tanks = 1;
+  ContactRecord fitted_under;
 };
 
 }  // namespace mc::grind

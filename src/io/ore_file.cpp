@@ -85,6 +85,31 @@ class OreReader {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// [fitted]: the contact the ore was fitted under (grind::ContactRecord).
+void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
+  r.knows(ft, "fitted.", {"contact_law", "restitution", "friction", "rolling_friction", "stiffness_N_m",
+                          "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp"});
+  auto text = [&](const std::string& key) {
+    const toml::node* n = ft.get(key);
+    if (!n) return std::string();
+    if (!n->is_string()) r.fail("fitted." + key, n, "must be a string, not " + type_name(*n));
+    return n->value<std::string>().value();
+  };
+  c.law = text("contact_law");
+  if (c.law != "linear" && c.law != "hertz")
+    r.fail("fitted.contact_law", ft.get("contact_law"), "must be \"linear\" or \"hertz\"");
+  c.restitution = r.number(ft, "fitted.", "restitution", 0, 1, "0 to 1");
+  c.friction = r.number(ft, "fitted.", "friction", 0, 10, "0 to 10");
+  c.rolling_friction = r.number(ft, "fitted.", "rolling_friction", 0, 10, "0 to 10", 0.0);
+  if (c.law == "linear") c.stiffness_N_m = r.number(ft, "fitted.", "stiffness_N_m", 0, kInf, "N/m > 0");
+  if (c.law == "hertz") c.youngs_modulus_Pa = r.number(ft, "fitted.", "youngs_modulus_Pa", 0, kInf, "Pa > 0");
+  c.pairs = text("pairs");
+  c.test = text("test");
+  c.run = text("run");
+  c.parameters = text("parameters");
+  c.rms_residual_pp = r.number(ft, "fitted.", "rms_residual_pp", 0, kInf, ">= 0", 0.0);
+}
+
 }  // namespace
 
 grind::Ore read_ore(const fs::path& path) {
@@ -102,7 +127,7 @@ grind::Ore read_ore(const fs::path& path) {
   OreReader r(top, file);
   Ore o;
   r.knows(top, "", {"name", "density", "holdup_kg", "powder_filling", "bed_porosity", "bulk_density", "tanks",
-                    "sizes", "feed", "breakage", "rates"});
+                    "sizes", "feed", "breakage", "rates", "fitted"});
   if (const toml::node* n = top.get("name")) o.name = n->value<std::string>().value_or("");
   o.density = r.number(top, "", "density", 500, 25000, "kg/m^3 of the ore's solid, 500 to 25000");
   const bool has_holdup = top.get("holdup_kg"), has_u = top.get("powder_filling");
@@ -197,7 +222,61 @@ grind::Ore read_ore(const fs::path& path) {
     r.fail("rates.model", mn, "must be \"austin\", \"energy\" or \"spectrum\"" +
                                   (mn ? std::string(", not \"") + model + "\"" : std::string(" (missing)")));
   }
+  if (const toml::table* ft = r.table("fitted", false)) read_fitted(r, *ft, o.fitted_under);
   return o;
+}
+
+std::string ore_toml(const grind::Ore& o, const std::string& header) {
+  auto g = [](double v) { return fmt::format("{:.10g}", v); };
+  auto list = [&](const std::vector<double>& v, double scale) {
+    std::string s = "[";
+    for (std::size_t k = 0; k < v.size(); ++k) s += (k ? ", " : "") + g(v[k] * scale);
+    return s + "]";
+  };
+  auto quoted = [](const std::string& s) {
+    std::string q = "\"";
+    for (char c : s) q += c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c);
+    return q + "\"";
+  };
+  std::string s = header;
+  s += "name = " + quoted(o.name) + "\n";
+  s += "density = " + g(o.density) + "\n";
+  s += o.holdup_kg > 0 && o.powder_filling == 0 ? "holdup_kg = " + g(o.holdup_kg) + "\n"
+                                                : "powder_filling = " + g(o.powder_filling) + "\n";
+  s += "bed_porosity = " + g(o.bed_porosity) + "\n";
+  if (o.bulk_density > 0) s += "bulk_density = " + g(o.bulk_density) + "\n";
+  s += "tanks = " + std::to_string(o.tanks) + "\n";
+  s += "\n[sizes]\ntop_mm = " + g(o.sizes.top_m.front() * 1e3) + "\nratio = " + g(o.ratio) +
+       "\nclasses = " + std::to_string(o.sizes.size()) + "\n";
+  s += "\n[feed]\nsieve_mm = " + list(o.sieve_m, 1e3) + "\npassing = " + list(o.sieve_passing, 1) + "\n";
+  s += "\n[breakage]\nphi = " + g(o.breakage.phi) + "\ngamma = " + g(o.breakage.gamma) + "\nbeta = " +
+       g(o.breakage.beta) + "\n";
+  s += "\n[rates]\n";
+  if (o.model == RateModel::austin)
+    s += "model = \"austin\"\na_per_min = " + g(o.austin.a_per_min) + "\nalpha = " + g(o.austin.alpha) +
+         "\nmu_mm = " + g(o.austin.mu_m * 1e3) + "\nlambda = " + g(o.austin.lambda) + "\n";
+  if (o.model == RateModel::energy)
+    s += "model = \"energy\"\ns1e_t_per_kWh = " + g(o.energy.s1e_t_per_kWh) + "\nx1_mm = " + g(o.energy.x1_m * 1e3) +
+         "\nzeta1 = " + g(o.energy.zeta1) + "\nzeta2 = " + g(o.energy.zeta2) + "\n";
+  if (o.model == RateModel::spectrum)
+    s += "model = \"spectrum\"\ne_inf_J_kg = " + g(o.fracture.e_inf_J_kg) + "\nd0_mm = " + g(o.fracture.d0_m * 1e3) +
+         "\nphi = " + g(o.fracture.phi) + "\nsigma = " + g(o.fracture.sigma) + "\nemax_ratio = " +
+         g(o.fracture.emax_ratio) + "\npacking = " + g(o.packing) + "\nefficiency = " + g(o.efficiency) + "\n";
+  const ContactRecord& f = o.fitted_under;
+  if (!f.law.empty()) {
+    s += "\n[fitted]                # the run the ore was fitted through: its parameters hold under this contact\n";
+    s += "contact_law = " + quoted(f.law) + "\n";
+    s += "restitution = " + g(f.restitution) + "\nfriction = " + g(f.friction) + "\nrolling_friction = " +
+         g(f.rolling_friction) + "\n";
+    if (f.law == "linear") s += "stiffness_N_m = " + g(f.stiffness_N_m) + "\n";
+    if (f.law == "hertz") s += "youngs_modulus_Pa = " + g(f.youngs_modulus_Pa) + "\n";
+    if (!f.pairs.empty()) s += "pairs = " + quoted(f.pairs) + "\n";
+    if (!f.test.empty()) s += "test = " + quoted(f.test) + "\n";
+    if (!f.run.empty()) s += "run = " + quoted(f.run) + "\n";
+    if (!f.parameters.empty()) s += "parameters = " + quoted(f.parameters) + "\n";
+    s += "rms_residual_pp = " + g(f.rms_residual_pp) + "\n";
+  }
+  return s;
 }
 
 }  // namespace mc::io

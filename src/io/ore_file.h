@@ -6,11 +6,17 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 
 #include "grind/ore.h"
 
 namespace mc::io {
 
 grind::Ore read_ore(const std::filesystem::path& path);
+
+// The ore as an ore file that read_ore takes back: every key of its rate
+// model to 10 significant digits, and the [fitted] table when the ore was
+// fitted (the contact it holds under). `header`: comment lines put first.
+std::string ore_toml(const grind::Ore& ore, const std::string& header);
 
 }  // namespace mc::io

@@ -39,6 +39,11 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
     r.filling = j.at("filling").get<double>();
     r.title = j.value("title", std::string());
     r.speed_rpm = j.value("speed_rpm", 0.0);
+    const auto& pw = j.at("power_W");
+    if (pw.contains("dissipation") && pw["dissipation"].is_number()) r.dissipation_W = pw["dissipation"].get<double>();
+    if (pw.contains("imbalance") && pw["imbalance"].is_number()) r.imbalance = pw["imbalance"].get<double>();
+    if (pw.contains("energy_change") && pw["energy_change"].is_number())
+      r.energy_change_W = pw["energy_change"].get<double>();
   } catch (const std::exception&) {
     throw std::invalid_argument(sj.string() + ": power_W.torque or filling missing; not a millcharge run's summary");
   }
@@ -53,6 +58,18 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
     sum_r += d.class_counts[k] * 0.25 * (c.sizes[k].diameter_min + c.sizes[k].diameter_max);
   }
   r.ball_radius_m = n > 0 ? sum_r / n : 0;
+  r.contact.law = c.law == ContactLaw::hertz ? "hertz" : "linear";
+  r.contact.restitution = c.contact.restitution;
+  r.contact.friction = c.contact.mu_slide;
+  r.contact.rolling_friction = c.contact.mu_roll;
+  r.contact.stiffness_N_m = c.contact.kn;
+  for (const Material& m : c.materials)
+    if (!c.sizes.empty() && m.name == c.sizes.front().material) r.contact.youngs_modulus_Pa = m.youngs_modulus;
+  r.pair_overrides = static_cast<int>(c.pairs.size());
+  for (const PairOverride& po : c.pairs)
+    r.contact.pairs += fmt::format("{}{}-{}: e {:g}, friction {:g}, rolling {:g}, kn {:g}",
+                                   r.contact.pairs.empty() ? "" : "; ", po.a, po.b, po.interaction.restitution,
+                                   po.interaction.mu_slide, po.interaction.mu_roll, po.interaction.kn);
   if (!need_spectrum) return r;
   const fs::path sc = dir / "spectra.csv";
   const CsvTable t = read_csv_strict(sc, "the spectrum model needs the run's collision spectra");

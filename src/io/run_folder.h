@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "grind/ore.h"
 #include "grind/pbm.h"
 
 namespace mc::io {
@@ -18,6 +19,14 @@ struct Run {
   double power_W = 0, filling = 0, mill_volume = 0, porosity = 0.4, ball_radius_m = 0;
   std::vector<grind::SpectrumBin> normal;  // the normal energy spectrum
   std::string title;
+  // The power's books over the averaging window (summary.json): a run whose
+  // torque and dissipation differ is not yet in steady motion.
+  double dissipation_W = 0, imbalance = 0, energy_change_W = 0;
+  // The case's contact law and default parameters (the balls' material's
+  // Young's modulus for Hertz): what a fitted ore records and is checked
+  // against. `pair_overrides`: the case sets some pairs apart.
+  grind::ContactRecord contact;
+  int pair_overrides = 0;
 };
 
 // `need_spectrum`: read spectra.csv too (the spectrum rate model).

@@ -1,0 +1,272 @@
+// `millcharge grind RUN --ore START --fit TEST` and `--bond P1 --fit-wi WI`:
+// the ore calibrated through the laboratory mill's run (src/grind/fit.h).
+// Everything is computed before the first file is written: a refused input
+// or a fit that does not converge leaves nothing behind.
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "app/grind.h"
+#include "core/version.h"
+#include "grind/bond.h"
+#include "grind/circuit.h"
+#include "grind/fit.h"
+#include "grind/ore.h"
+#include "io/atomic_file.h"
+#include "io/batch_test_file.h"
+#include "io/ore_file.h"
+#include "io/png_plot.h"
+#include "io/run_folder.h"
+
+namespace mc::app {
+
+namespace fs = std::filesystem;
+using namespace mc::grind;
+
+namespace {
+
+// The scale of each rate model's rates: what a fit moves unless told.
+std::string default_parameter(RateModel m) {
+  return m == RateModel::spectrum ? "efficiency" : m == RateModel::energy ? "s1e_t_per_kWh" : "a_per_min";
+}
+
+void check_fit_options(const GrindOptions& o) {
+  const std::string what = o.fit_test.empty() ? "--fit-wi" : "--fit";
+  if (!o.fit_test.empty() && o.fit_wi_kWh_t > 0)
+    throw std::invalid_argument("--fit and --fit-wi: give one (a batch test, or a Bond work index)");
+  if (o.fit_wi_kWh_t > 0 && !(o.bond_p1_um > 0))
+    throw std::invalid_argument("--fit-wi: give the test's closing sieve with --bond P1_UM");
+  if (!o.fit_test.empty() && o.bond_p1_um > 0)
+    throw std::invalid_argument("--fit with --bond: a batch test is fitted alone; fit a work index with --fit-wi");
+  if (!o.times_min.empty() || o.feed_rate_t_h > 0 || o.target_p80_um > 0 || o.classifier_d50c_um > 0 ||
+      !o.scale_from.empty())
+    throw std::invalid_argument(what +
+                                ": fits the ore and writes it; grind the fitted ore in a second call (--time, "
+                                "--feed-rate, --target-p80, --classifier and --scale-from belong there)");
+  if (o.fit_wi_kWh_t > 0 && o.fit_params.size() > 1)
+    throw std::invalid_argument("--fit-params: a work index is one number and fits one parameter, not " +
+                                std::to_string(o.fit_params.size()));
+}
+
+ContactRecord record(const io::Run& run, const std::string& test, const std::string& run_dir,
+                     const std::vector<std::string>& names, double rms_pp) {
+  ContactRecord c = run.contact;
+  c.test = test;
+  c.run = run_dir;
+  for (const std::string& n : names) c.parameters += (c.parameters.empty() ? "" : ",") + n;
+  c.rms_residual_pp = rms_pp;
+  return c;
+}
+
+std::string header(const std::string& what) {
+  return std::string("# Fitted by millcharge ") + version() + " (" + build_commit() + "): " + what +
+         "\n# The parameters hold under the contact law of [fitted] (docs/grinding.md).\n";
+}
+
+// fit.png: measured points and fitted curves of cumulative passing; below,
+// the residuals in percentage points.
+void draw_fit(const fs::path& out, const BatchTest& t, const BatchFit& f, const std::string& title) {
+  static const std::uint32_t colours[] = {0x1f77b4, 0xd62728, 0x2ca02c, 0xff7f0e, 0x9467bd, 0x8c564b, 0xe377c2, 0x17becf};
+  io::LinePlot psd, res;
+  psd.title = title;
+  psd.x_label = "sieve (um)";
+  psd.y_label = "cumulative passing";
+  psd.log_x = res.log_x = true;
+  res.title = "residual: fitted - measured";
+  res.x_label = "sieve (um)";
+  res.y_label = "percentage points";
+  const std::size_t ns = t.sieve_m.size();
+  io::PlotSeries feed{"feed", {}, {}, 0x222222};
+  feed.dashed = true;
+  for (std::size_t k = 0; k < ns; ++k) feed.x.push_back(t.sieve_m[k] * 1e6), feed.y.push_back(t.feed_passing[k]);
+  psd.series.push_back(feed);
+  for (std::size_t i = 0; i < t.times_min.size(); ++i) {
+    const std::uint32_t c = colours[i % 8];
+    io::PlotSeries meas{fmt::format("{:g} min measured", t.times_min[i]), {}, {}, c};
+    io::PlotSeries fitted{fmt::format("{:g} min fitted", t.times_min[i]), {}, {}, c};
+    io::PlotSeries r{fmt::format("{:g} min", t.times_min[i]), {}, {}, c};
+    meas.markers = r.markers = true;
+    for (std::size_t k = 0; k < ns; ++k) {
+      const double x = t.sieve_m[k] * 1e6;
+      meas.x.insert(meas.x.end(), {x, std::nan("")});  // points only: NaN breaks the line
+      meas.y.insert(meas.y.end(), {t.passing[i][k], std::nan("")});
+      fitted.x.push_back(x), fitted.y.push_back(f.predicted[i][k]);
+      r.x.push_back(x), r.y.push_back(100 * (f.predicted[i][k] - t.passing[i][k]));
+    }
+    psd.series.push_back(meas);
+    psd.series.push_back(fitted);
+    res.series.push_back(r);
+  }
+  res.ref_lines.push_back({0.0, 0, 0, 0x222222, true, ""});
+  io::draw_or_warn(out / "fit.png", [&] { io::write_line_plots_png(out / "fit.png", {psd, res}); });
+}
+
+nlohmann::ordered_json parameter_json(const FittedParameter& p) {
+  nlohmann::ordered_json q;
+  q["name"] = p.name;
+  q["start"] = p.start;
+  q["identified"] = p.identified;
+  if (p.identified) {
+    q["value"] = p.value;
+    q["standard_error"] = p.se;
+    q["relative_standard_error"] = p.value != 0 ? nlohmann::json(p.se / std::fabs(p.value)) : nlohmann::json();
+    q["at_bound"] = p.at_bound;
+  } else {
+    q["held_at"] = p.value;
+    q["why"] = p.why;
+  }
+  return q;
+}
+
+int fit_batch(const GrindOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Ore start = io::read_ore(o.ore);
+  const io::BatchTestFile tf = io::read_batch_test(o.fit_test);
+  const io::Run run = io::read_run(o.run_dir, start.model == RateModel::spectrum);
+  const double holdup_kg = tf.test.holdup_kg > 0 ? tf.test.holdup_kg
+                                                 : mill_holdup_kg(start, run.porosity, run.filling, run.mill_volume);
+  const std::vector<std::string> names =
+      o.fit_params.empty() ? std::vector<std::string>{default_parameter(start.model)} : o.fit_params;
+  BatchFit fit = fit_batch_test(start, run.normal, run.power_W, holdup_kg, tf.test, names);
+  fit.ore.fitted_under = record(run, o.fit_test, o.run_dir, names, fit.rms_pp);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // Everything computed; now the files.
+  const fs::path out = o.out.empty() ? fs::path(o.run_dir) / "fit" : fs::path(o.out);
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw std::runtime_error(out.string() + ": cannot create: " + ec.message());
+  io::write_file_atomic(out / "ore_fitted.toml",
+                        io::ore_toml(fit.ore, header("fitted to the batch test " + o.fit_test + " through the run " +
+                                                     o.run_dir)));
+  std::string csv = "time_min,sieve_um,measured_passing,fitted_passing,residual_pp\n";
+  const BatchTest& t = tf.test;
+  for (std::size_t i = 0; i < t.times_min.size(); ++i)
+    for (std::size_t k = 0; k < t.sieve_m.size(); ++k)
+      csv += fmt::format("{:g},{:.6g},{:.8f},{:.8f},{:.6f}\n", t.times_min[i], t.sieve_m[k] * 1e6, t.passing[i][k],
+                         fit.predicted[i][k], 100 * (fit.predicted[i][k] - t.passing[i][k]));
+  io::write_file_atomic(out / "fit_residuals.csv", csv);
+  nlohmann::ordered_json j;
+  j["test"] = o.fit_test;
+  j["run"] = run.title;
+  j["ore"] = start.name;
+  j["model"] = start.model == RateModel::spectrum ? "spectrum" : start.model == RateModel::energy ? "energy" : "austin";
+  j["power_W"] = run.power_W;
+  j["holdup_kg"] = holdup_kg;
+  j["data"] = fit.data;
+  j["parameters"] = nlohmann::json::array();
+  for (const FittedParameter& p : fit.parameters) j["parameters"].push_back(parameter_json(p));
+  j["rms_residual_pp"] = fit.rms_pp;
+  j["within_twice_noise"] = fit.rms_pp <= 2 * tf.test.noise_pp;
+  j["iterations"] = fit.iterations;
+  j["evaluations"] = fit.evaluations;
+  j["refits"] = fit.refits;
+  j["condition"] = std::isfinite(fit.condition) ? nlohmann::json(fit.condition) : nlohmann::json();
+  j["seconds"] = seconds;
+  j["contact"] = {{"law", run.contact.law},
+                  {"restitution", run.contact.restitution},
+                  {"friction", run.contact.friction},
+                  {"stiffness_N_m", run.contact.stiffness_N_m},
+                  {"youngs_modulus_Pa", run.contact.youngs_modulus_Pa}};
+  j["build"] = {{"version", version()}, {"commit", build_commit()}};
+  io::write_file_atomic(out / "fit.json", j.dump(2) + "\n");
+  draw_fit(out, t, fit,
+           fmt::format("{}: fitted through the run ({:.1f} W), rms {:.3g} pp",
+                       tf.title.empty() ? std::string("batch test") : tf.title, run.power_W, fit.rms_pp));
+  bool any_at_bound = false;
+  for (const FittedParameter& p : fit.parameters) any_at_bound = any_at_bound || p.at_bound;
+  if (!o.quiet) {
+    std::printf("batch test %s: %zu times x %zu sieves, %d data; run %.1f W, hold-up %.4g kg, %s contact\n",
+                o.fit_test.c_str(), t.times_min.size(), t.sieve_m.size(), fit.data, run.power_W, holdup_kg,
+                run.contact.law.c_str());
+    for (const FittedParameter& p : fit.parameters) {
+      if (p.identified)
+        std::printf("  %-16s %.6g +- %.2g (%.2g %%)%s   start %.6g\n", p.name.c_str(), p.value, p.se,
+                    100 * p.se / std::fabs(p.value), p.at_bound ? "  on its bound: the test wants it past the ore file's range" : "", p.start);
+      else
+        std::printf("  %-16s unidentified: %s (%.6g)\n", p.name.c_str(), p.why.c_str(), p.value);
+    }
+    std::printf("  rms residual %.4g pp; %d iterations, %d evaluations, %.2f s\n", fit.rms_pp, fit.iterations,
+                fit.evaluations, seconds);
+    if (fit.rms_pp > 2 * t.noise_pp)
+      std::printf("  note: the rms residual is above twice the test's noise_pp (%g pp): the model cannot reproduce "
+                  "the test with these parameters free%s\n",
+                  t.noise_pp, any_at_bound ? " (one is held on its bound)" : "");
+    std::printf("wrote %s/{ore_fitted.toml, fit_residuals.csv, fit.json, fit.png}\n", out.string().c_str());
+  }
+  return 0;
+}
+
+int fit_wi(const GrindOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Ore start = io::read_ore(o.ore);
+  Ore on_p1 = start;
+  put_sieve_on_class_top(on_p1, o.bond_p1_um * 1e-6);
+  if (!(o.bond_p1_um * 1e-6 < on_p1.f80_m))
+    throw std::invalid_argument(fmt::format("--bond {:g}: the closing sieve must lie below the feed's F80 ({:.1f} um)",
+                                            o.bond_p1_um, on_p1.f80_m * 1e6));
+  const io::Run run = io::read_run(o.run_dir, start.model == RateModel::spectrum);
+  if (!(run.speed_rpm > 0)) throw std::invalid_argument(o.run_dir + "/summary.json: speed_rpm missing");
+  const std::string name = o.fit_params.empty() ? default_parameter(start.model) : o.fit_params.front();
+  const WiFit w = fit_work_index(on_p1, run.normal, run.power_W, run.speed_rpm, o.bond_p1_um * 1e-6, o.fit_wi_kWh_t,
+                                 name);
+  Ore fitted = start;
+  find_ore_parameter(name)->set(fitted, w.value);
+  fitted.fitted_under = record(run, fmt::format("Bond Wi {:g} kWh/t at P1 {:g} um", o.fit_wi_kWh_t, o.bond_p1_um),
+                               o.run_dir, {name}, 0);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  const fs::path out = o.out.empty() ? fs::path(o.run_dir) / "fit" : fs::path(o.out);
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw std::runtime_error(out.string() + ": cannot create: " + ec.message());
+  io::write_file_atomic(out / "ore_fitted.toml",
+                        io::ore_toml(fitted, header(fmt::format("{} set so that Bond's test at P1 {:g} um gives Wi {:g} "
+                                                                "kWh/t in the run {}",
+                                                                name, o.bond_p1_um, o.fit_wi_kWh_t, o.run_dir))));
+  nlohmann::ordered_json j;
+  j["target_work_index_kWh_t"] = o.fit_wi_kWh_t;
+  j["P1_um"] = o.bond_p1_um;
+  j["parameter"] = name;
+  j["start"] = w.start;
+  j["value"] = w.value;
+  j["value_per_kWh_t"] = w.dvalue_dwi;
+  j["work_index_kWh_t"] = w.bond.wi_kWh_t;
+  j["Gbp_g_per_rev"] = w.bond.gbp_g_rev;
+  j["P80_um"] = w.bond.p80_um;
+  j["F80_um"] = w.bond.f80_um;
+  j["cycles"] = w.bond.cycles;
+  j["evaluations"] = w.evaluations;
+  j["seconds"] = seconds;
+  j["build"] = {{"version", version()}, {"commit", build_commit()}};
+  io::write_file_atomic(out / "fit.json", j.dump(2) + "\n");
+  if (!o.quiet) {
+    std::printf("Bond test at P1 %g um in the run (%.1f W, %.0f rpm, %s contact): Wi %g kWh/t wanted\n", o.bond_p1_um,
+                run.power_W, run.speed_rpm, run.contact.law.c_str(), o.fit_wi_kWh_t);
+    std::printf("  %s %.6g (start %.6g): Wi %.4f kWh/t, Gbp %.3f g/rev, P80 %.0f um, %d cycles\n", name.c_str(),
+                w.value, w.start, w.bond.wi_kWh_t, w.bond.gbp_g_rev, w.bond.p80_um, w.bond.cycles);
+    std::printf("  a work index 1 kWh/t higher would move %s by %.3g (%.2g %%); %d Bond tests, %.2f s\n", name.c_str(),
+                w.dvalue_dwi, 100 * w.dvalue_dwi / w.value, w.evaluations, seconds);
+    std::printf("  one number fixes one parameter: the rest (how the rates fall with size, the appearance function) "
+                "stay the starting ore's\n");
+    std::printf("wrote %s/{ore_fitted.toml, fit.json}\n", out.string().c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int cmd_grind_fit(const GrindOptions& o) {
+  check_fit_options(o);
+  return o.fit_test.empty() ? fit_wi(o) : fit_batch(o);
+}
+
+}  // namespace mc::app

@@ -1,0 +1,144 @@
+// An ore fitted to a laboratory batch grinding test (docs/grinding.md):
+// the test (the feed and the products' cumulative passing at the same
+// sieves after each grinding time), the ore's parameters a fit may move,
+// a small Levenberg–Marquardt least-squares solver with a numerical
+// Jacobian, the parameters' standard errors from (JᵀJ)⁻¹ s² at the
+// solution and which of them the data cannot fix, and the fit of one
+// parameter to a measured Bond work index.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "grind/bond.h"
+#include "grind/ore.h"
+#include "grind/pbm.h"
+
+namespace mc::grind {
+
+// A batch grinding test in the laboratory mill (src/io/batch_test_file.h
+// reads one): one set of sieves for the feed and every product.
+struct BatchTest {
+  std::vector<double> sieve_m;               // descending, coarsest first
+  std::vector<double> feed_passing;          // at each sieve, the first 1
+  std::vector<double> times_min;             // ascending, > 0
+  std::vector<std::vector<double>> passing;  // [time][sieve], 0..1
+  double holdup_kg = 0;                      // the ore in the test mill; 0: the ore file's
+  double noise_pp = 1;                       // the sieving's scatter, percentage points
+};
+
+// Cumulative passing of class masses m (summing to 1) at size x: log-linear
+// between the class tops, 1 above the top class. x must not lie below the
+// finest class top.
+double passing_at(const SizeSeries& s, const std::vector<double>& m, double x_m);
+
+// The test's products as the ore makes them in a mill of this power and
+// spectrum with this hold-up: [time][sieve]. The ore's own feed is replaced
+// by the test's.
+std::vector<std::vector<double>> batch_test_products(const Ore& ore, const std::vector<SpectrumBin>& spectrum,
+                                                     double power_W, double holdup_kg, const BatchTest& test);
+
+// ------------------------------------------------------------ parameters
+
+// An ore parameter a fit may move, named by its key in the ore file
+// ("efficiency", "e_inf_J_kg", "breakage.beta", ...), in the file's units.
+// `log`: fitted as its logarithm (a positive scale); else as itself.
+struct OreParameter {
+  std::string name;
+  bool log = true;
+  double lo = 0, hi = 0;  // the ore file's range, file units
+  bool any_model = false;  // the appearance function: every rate model
+  RateModel model = RateModel::spectrum;
+  double (*get)(const Ore&) = nullptr;
+  void (*set)(Ore&, double) = nullptr;
+};
+const std::vector<OreParameter>& ore_parameters();
+// nullptr: no such name. "phi" alone is ambiguous (rates.phi, breakage.phi).
+const OreParameter* find_ore_parameter(const std::string& name);
+
+// ------------------------------------------------------------ least squares
+
+// Minimise sum r_i(x)² over x within [lo, hi] (componentwise):
+// Levenberg–Marquardt with Marquardt's diagonal scaling and a central-
+// difference Jacobian. Converged when the residuals are orthogonal to
+// every column of J (cosine below 1e-8), when a step changes no x by more
+// than 1e-10 (1 + |x|) and the sum by less than 1e-12 of itself, or when
+// the sum falls below 1e-28.
+struct LmProblem {
+  std::function<void(const std::vector<double>& x, std::vector<double>& r)> residuals;
+  std::vector<double> x0, lo, hi;
+  int n_data = 0;
+  int max_iterations = 300;
+};
+struct LmResult {
+  std::vector<double> x, r;
+  std::vector<std::vector<double>> J;  // [data][parameter] at x
+  double ssr = 0;
+  int iterations = 0, evaluations = 0;
+  bool converged = false;
+};
+LmResult levenberg_marquardt(const LmProblem& p);
+
+// Standard errors of the parameters from (JᵀJ)⁻¹ s², s² = ssr / (n - p),
+// through the eigen-decomposition of JᵀJ scaled to a unit diagonal. A
+// parameter is unidentified when it has the largest component of a
+// direction of JᵀJ whose eigenvalue is below 1e-10 of the largest (a
+// singular direction: the others can take its part), when the data do not
+// depend on it at all, or when its standard error (in the fitted variable:
+// the logarithm for a scale) is above 1, a factor of e.
+struct Identification {
+  std::vector<double> se;        // of the fitted variables; NaN where unidentified
+  std::vector<bool> identified;
+  std::vector<std::string> why;  // for the unidentified
+  double condition = 0;          // largest over smallest eigenvalue of the scaled JᵀJ
+};
+Identification identify(const std::vector<std::vector<double>>& J, double ssr);
+
+// ------------------------------------------------------------ the fit
+
+struct FittedParameter {
+  std::string name;
+  double start = 0, value = 0;
+  double se = 0;            // standard error in the parameter's units (NaN: unidentified)
+  bool identified = true;   // false: held at its start and refitted without it
+  bool at_bound = false;    // the fit ended on the ore file's range
+  std::string why;          // why it is unidentified
+};
+struct BatchFit {
+  Ore ore;                                      // the start with the fitted values
+  std::vector<FittedParameter> parameters;
+  std::vector<std::vector<double>> predicted;   // [time][sieve]
+  double rms_pp = 0, ssr = 0;
+  int iterations = 0, evaluations = 0, data = 0, refits = 0;
+  double condition = 0;
+};
+// Fits the named parameters of `start` to the test through the mill's
+// spectrum and power, with the hold-up `holdup_kg`. An unidentified
+// parameter is held at its start and the rest fitted again, one at a time. Throws
+// std::invalid_argument for a name it does not know or that the ore's rate
+// model lacks, more parameters than data, sieves below the finest class,
+// and a fit that does not converge.
+BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectrum, double power_W,
+                        double holdup_kg, const BatchTest& test, const std::vector<std::string>& names,
+                        int max_iterations = 300);
+
+// One parameter set so that Bond's test (bond.h) in this mill gives the
+// work index `wi_kWh_t`: bisection on the parameter's logarithm over its
+// range, to 1e-4 of the index. Throws std::invalid_argument where the
+// range cannot reach it (naming the index at the ends) or it is not met.
+struct WiFit {
+  double value = 0, start = 0;
+  double dvalue_dwi = 0;  // the parameter's change per kWh/t at the solution
+  BondResult bond;
+  int evaluations = 0;
+};
+WiFit fit_work_index(const Ore& ore_on_p1, const std::vector<SpectrumBin>& spectrum, double power_W, double rpm,
+                     double p1_m, double wi_kWh_t, const std::string& name);
+
+// What differs between the contact an ore was fitted under and a run's
+// ("restitution 0.4 -> 0.7, ..."); empty when they agree to 1e-6 relative
+// or the ore was not fitted.
+std::string contact_mismatch(const ContactRecord& fitted, const ContactRecord& run);
+
+}  // namespace mc::grind
