@@ -109,6 +109,15 @@ void draw_fit(const fs::path& out, const BatchTest& t, const BatchFit& f, const 
   io::draw_or_warn(out / "fit.png", [&] { io::write_line_plots_png(out / "fit.png", {psd, res}); });
 }
 
+// The fit's folder (--out, else RUN/fit), made.
+fs::path fit_folder(const GrindOptions& o) {
+  const fs::path out = o.out.empty() ? fs::path(o.run_dir) / "fit" : fs::path(o.out);
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw std::runtime_error(out.string() + ": cannot create: " + ec.message());
+  return out;
+}
+
 nlohmann::ordered_json parameter_json(const FittedParameter& p) {
   nlohmann::ordered_json q;
   q["name"] = p.name;
@@ -140,10 +149,7 @@ int fit_batch(const GrindOptions& o) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Everything computed; now the files.
-  const fs::path out = o.out.empty() ? fs::path(o.run_dir) / "fit" : fs::path(o.out);
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) throw std::runtime_error(out.string() + ": cannot create: " + ec.message());
+  const fs::path out = fit_folder(o);
   io::write_file_atomic(out / "ore_fitted.toml",
                         io::ore_toml(fit.ore, header("fitted to the batch test " + o.fit_test + " through the run " +
                                                      o.run_dir)));
@@ -224,10 +230,7 @@ int fit_wi(const GrindOptions& o) {
                                o.run_dir, {name}, 0);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  const fs::path out = o.out.empty() ? fs::path(o.run_dir) / "fit" : fs::path(o.out);
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) throw std::runtime_error(out.string() + ": cannot create: " + ec.message());
+  const fs::path out = fit_folder(o);
   io::write_file_atomic(out / "ore_fitted.toml",
                         io::ore_toml(fitted, header(fmt::format("{} set so that Bond's test at P1 {:g} um gives Wi {:g} "
                                                                 "kWh/t in the run {}",

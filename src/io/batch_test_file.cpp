@@ -18,22 +18,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-class TestReader {
+class TestReader : public TomlFileMessages {
  public:
-  explicit TestReader(std::string file) : file_(std::move(file)) {}
-  [[noreturn]] void fail(const std::string& key, const toml::node* n, const std::string& what) const {
-    std::string where = file_;
-    if (n && n->source().begin.line > 0) where += ":" + std::to_string(n->source().begin.line);
-    throw std::invalid_argument(where + ": " + key + ": " + what);
-  }
-  void knows(const toml::table& t, const std::string& prefix, const std::set<std::string>& keys) const {
-    for (const auto& [k, v] : t)
-      if (!keys.count(std::string(k.str()))) {
-        std::string list;
-        for (const auto& x : keys) list += (list.empty() ? "" : ", ") + x;
-        fail(prefix + std::string(k.str()), &v, "unknown key (known here: " + list + ")");
-      }
-  }
+  explicit TestReader(std::string file) : TomlFileMessages(std::move(file)) {}
   double number(const toml::table& t, const std::string& key, const std::string& name, double lo, double hi,
                 const std::string& range) const {
     const toml::node* n = t.get(key);
@@ -55,9 +42,6 @@ class TestReader {
     }
     return v;
   }
-
- private:
-  std::string file_;
 };
 
 std::string text_key(const toml::table& t, const TestReader& r, const std::string& key) {

@@ -24,15 +24,10 @@ using namespace mc::grind;
 namespace {
 
 // The ore file's tables and keys, with file:line in every message.
-class OreReader {
+class OreReader : public TomlFileMessages {
  public:
-  OreReader(const toml::table& t, std::string file) : top_(t), file_(std::move(file)) {}
+  OreReader(const toml::table& t, std::string file) : TomlFileMessages(std::move(file)), top_(t) {}
 
-  [[noreturn]] void fail(const std::string& key, const toml::node* n, const std::string& what) const {
-    std::string where = file_;
-    if (n && n->source().begin.line > 0) where += ":" + std::to_string(n->source().begin.line);
-    throw std::invalid_argument(where + ": " + key + ": " + what);
-  }
   const toml::table* table(const std::string& name, bool required) const {
     const toml::node* n = top_.get(name);
     if (!n) {
@@ -41,14 +36,6 @@ class OreReader {
     }
     if (!n->is_table()) fail(name, n, "must be a table, not " + type_name(*n));
     return n->as_table();
-  }
-  void knows(const toml::table& t, const std::string& prefix, const std::set<std::string>& keys) const {
-    for (const auto& [k, v] : t)
-      if (!keys.count(std::string(k.str()))) {
-        std::string list;
-        for (const auto& x : keys) list += (list.empty() ? "" : ", ") + x;
-        fail(prefix + std::string(k.str()), &v, "unknown key (known here: " + list + ")");
-      }
   }
   // A number in [lo, hi] (open ends where `open`), or the default when the
   // key is absent and a default is given.
@@ -80,7 +67,6 @@ class OreReader {
 
  private:
   const toml::table& top_;
-  std::string file_;
 };
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
