@@ -14,7 +14,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -22,6 +21,8 @@
 #include <nlohmann/json.hpp>
 
 #include "io/case_file.h"
+#include "io/csv_read.h"
+#include "text_file.h"
 
 namespace fs = std::filesystem;
 
@@ -38,39 +39,23 @@ fs::path scratch(const std::string& name) {
   return p;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 
 int life(const std::string& args, std::string* err = nullptr) {
   const fs::path log = scratch("stderr.txt");
   const int st =
       std::system((std::string(MC_BINARY) + " life " + args + " >/dev/null 2>'" + log.string() + "'").c_str());
-  if (err) *err = slurp(log);
+  if (err) *err = read_text(log);
   fs::remove(log);
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
-// A CSV file as rows of named fields.
+// A CSV file millcharge wrote (read strictly) as rows of named fields.
 std::vector<std::map<std::string, std::string>> read_csv(const fs::path& p) {
-  std::ifstream in(p);
-  std::string line;
-  std::vector<std::string> head;
+  const mc::io::CsvTable t = mc::io::read_csv_strict(p);
   std::vector<std::map<std::string, std::string>> rows;
-  auto split = [](const std::string& s) {
-    std::vector<std::string> f;
-    std::stringstream ss(s);
-    std::string x;
-    while (std::getline(ss, x, ',')) f.push_back(x);
-    if (!s.empty() && s.back() == ',') f.push_back("");
-    return f;
-  };
-  if (std::getline(in, line)) head = split(line);
-  while (std::getline(in, line)) {
-    const std::vector<std::string> f = split(line);
+  for (const auto& f : t.rows) {
     std::map<std::string, std::string> r;
-    for (std::size_t k = 0; k < head.size() && k < f.size(); ++k) r[head[k]] = f[k];
+    for (std::size_t k = 0; k < t.header.size(); ++k) r[t.header[k]] = f[k];
     rows.push_back(r);
   }
   return rows;
@@ -140,11 +125,11 @@ TEST_CASE("a life study of the lab mill removes what its runs booked and resumes
   REQUIRE(worn.lifter_pattern.size() == 1);
   CHECK(worn.lifter_pattern[0].points.size() >= 4);
   CHECK(worn.diameter == Approx(num(rows[2], "diameter_m")).epsilon(1e-5));
-  const nlohmann::json j = nlohmann::json::parse(slurp(a / "life.json"));
+  const nlohmann::json j = nlohmann::json::parse(read_text(a / "life.json"));
   CHECK(j.at("stopped").get<std::string>().find("200000 operating hours reached") != std::string::npos);
   CHECK(fs::exists(a / "life.png"));
   CHECK(fs::exists(a / "stage-02" / "liner.vtp"));
-  const std::string pvd = slurp(a / "life.pvd");
+  const std::string pvd = read_text(a / "life.pvd");
   CHECK(pvd.find("stage-02/liner.vtp") != std::string::npos);
 
   // Killed in its second stage's run, then the same command: the same table.
@@ -166,13 +151,13 @@ TEST_CASE("a life study of the lab mill removes what its runs booked and resumes
   const int resumed = life(study + " --out '" + b.string() + "'", &err);
   INFO(err);
   REQUIRE(resumed == 0);
-  CHECK(slurp(b / "life.csv") == slurp(a / "life.csv"));
+  CHECK(read_text(b / "life.csv") == read_text(a / "life.csv"));
 
   // The same folder with another request is refused, and left as it was.
-  const std::string table = slurp(a / "life.csv");
+  const std::string table = read_text(a / "life.csv");
   CHECK(life(" --stages 2 --hours 300000" + kShort + " --out '" + a.string() + "'", &err) == 2);
   CHECK(err.find("holds a life study of another case or options") != std::string::npos);
-  CHECK(slurp(a / "life.csv") == table);
+  CHECK(read_text(a / "life.csv") == table);
   fs::remove_all(a);
   fs::remove_all(b);
 }
@@ -188,7 +173,7 @@ TEST_CASE("a stage that wears the lifters away stops the study by name and keeps
   CHECK(num(rows[0], "height_mm") == Approx(25.0).epsilon(1e-6));
   CHECK(fs::exists(dir / "stage-00" / "summary.json"));
   CHECK_FALSE(fs::exists(dir / "stage-01"));
-  const nlohmann::json j = nlohmann::json::parse(slurp(dir / "life.json"));
+  const nlohmann::json j = nlohmann::json::parse(read_text(dir / "life.json"));
   CHECK(j.at("stopped").get<std::string>().find("wears the lifter away") != std::string::npos);
   fs::remove_all(dir);
 }
@@ -230,14 +215,14 @@ TEST_CASE("bad life study requests are refused by name, status 2 and nothing wri
   std::string err;
   CHECK(life("--stages 2 --hours 10" + o, &err) == 2);
   CHECK(err.find("exists and holds no life study") != std::string::npos);
-  CHECK(slurp(out / "notes.txt") == "mine\n");
+  CHECK(read_text(out / "notes.txt") == "mine\n");
   fs::remove_all(out);
 }
 
 TEST_CASE("a lab run with its bars given as points is the h x w x theta run bit for bit", "[life][cli]") {
   // The lab bar, 25 mm x 30 mm with 20 degree faces, written as its outline
   // in the bar's frame, the base as profile_outline computes it.
-  std::string lab = slurp(mc::io::default_case());
+  std::string lab = read_text(mc::io::default_case());
   const std::string bar = "height = 0.025";
   const std::size_t at = lab.find(bar);
   REQUIRE(at != std::string::npos);
@@ -263,10 +248,10 @@ TEST_CASE("a lab run with its bars given as points is the h x w x theta run bit 
   const mc::MillCase c = mc::io::read_case(dir / "polygon" / "case.toml");
   REQUIRE(c.lifter_pattern.size() == 1);
   CHECK(c.lifter_pattern[0].points.size() == 4);
-  const std::string a = slurp(dir / "trapezoid" / "timeseries.csv"), b = slurp(dir / "polygon" / "timeseries.csv");
+  const std::string a = read_text(dir / "trapezoid" / "timeseries.csv"), b = read_text(dir / "polygon" / "timeseries.csv");
   REQUIRE(a.size() > 1000);
   CHECK(a == b);
-  CHECK(slurp(dir / "trapezoid" / "wear.csv") == slurp(dir / "polygon" / "wear.csv"));
-  CHECK(slurp(dir / "trapezoid" / "lifter_wear.csv") == slurp(dir / "polygon" / "lifter_wear.csv"));
+  CHECK(read_text(dir / "trapezoid" / "wear.csv") == read_text(dir / "polygon" / "wear.csv"));
+  CHECK(read_text(dir / "trapezoid" / "lifter_wear.csv") == read_text(dir / "polygon" / "lifter_wear.csv"));
   fs::remove_all(dir);
 }
