@@ -187,6 +187,100 @@ TEST_CASE("the breakage probability: half at E50, Tavares' size effect, certain 
   CHECK(captured_mass(1e-3, 0.01, 2700, 0.6) == Approx(0.6 * 9.8696044 / 3 * 2700 * 1e-6 * 0.01).epsilon(1e-6));
 }
 
+TEST_CASE("the incomplete beta function: closed forms, its symmetry and a tabulated value", "[grind][t10]") {
+  for (double x : {1e-6, 0.01, 0.1, 0.37, 0.5, 0.9, 0.999}) {
+    INFO("x " << x);
+    CHECK(incomplete_beta(x, 1, 1) == Approx(x).epsilon(1e-12));
+    CHECK(incomplete_beta(x, 2.7, 1) == Approx(std::pow(x, 2.7)).epsilon(1e-12));
+    CHECK(incomplete_beta(x, 1, 3.5) == Approx(-std::expm1(3.5 * std::log1p(-x))).epsilon(1e-12));
+    CHECK(incomplete_beta(x, 2, 2) == Approx(3 * x * x - 2 * x * x * x).epsilon(1e-12));
+    CHECK(incomplete_beta(x, 0.4, 7.0) + incomplete_beta(1 - x, 7.0, 0.4) == Approx(1.0).epsilon(1e-12));
+  }
+  CHECK(incomplete_beta(0, 2, 3) == 0.0);
+  CHECK(incomplete_beta(1, 2, 3) == 1.0);
+  // Cephes' incbet(0.3, 0.6, 0.5), as its documentation tabulates it.
+  CHECK(incomplete_beta(0.5, 0.3, 0.6) == Approx(0.68786273145845922).epsilon(1e-13));
+}
+
+namespace {
+// Tavares' t10 with the Schuhmann family: t_n = t10^log10(n).
+T10Breakage schuhmann_t10(double a, double b_prime) {
+  T10Breakage t;
+  t.a = a;
+  t.b_prime = b_prime;
+  t.n = {2, 4, 25, 50, 75};
+  for (double n : t.n) t.alpha.push_back(std::log10(n)), t.beta.push_back(1.0);
+  return t;
+}
+}  // namespace
+
+TEST_CASE("Tavares' t10: its closed form, the Schuhmann family as Austin's B, the median of the broken",
+          "[grind][t10]") {
+  const T10Breakage t = schuhmann_t10(0.45, 0.8);
+  CHECK(t.t10(0) == 0.0);
+  CHECK(t.t10(2.0) == Approx(0.45 * (1 - std::exp(-1.6))).epsilon(1e-14));
+  CHECK(t.t10(1e3) == Approx(0.45).epsilon(1e-14));  // A at high energy
+  // With tn_alpha = log10(n), tn_beta = 1, B(u) = u^gamma, gamma = -log10(t10),
+  // at the nodes, between them and below the last.
+  for (double t10 : {0.02, 0.1, 0.3}) {
+    const double gamma = -std::log10(t10);
+    for (double u : {1.0, 0.7, 0.5, 0.3, 0.1, 0.06, 0.04, 0.02, 1.0 / 75, 0.005, 1e-4}) {
+      INFO("t10 " << t10 << " u " << u);
+      CHECK(t.cumulative(u, t10) == Approx(std::pow(u, gamma)).epsilon(1e-12));
+    }
+  }
+  // E50b: P(E50b) = P(e) / 2; above Emax every particle breaks and E50b is E50.
+  const Fracture f{60.0, 2e-3, 1.2, 0.8, 10.0};
+  for (double d : {0.1e-3, 1e-3, 3e-3})
+    for (double r : {0.3, 1.0, 3.0}) {
+      const double e = r * f.e50(d), e50b = median_broken_energy(f, e, d);
+      INFO("d " << d << " e/E50 " << r);
+      CHECK(e50b < e);
+      CHECK(f.broken(e50b, d) == Approx(0.5 * f.broken(e, d)).epsilon(1e-10));
+    }
+  CHECK(median_broken_energy(f, 20 * f.e50(1e-3), 1e-3) == Approx(f.e50(1e-3)).epsilon(1e-10));
+  CHECK(median_broken_energy(f, 0.0, 1e-3) == 0.0);
+}
+
+TEST_CASE("Tavares' t10 in a mill: each class's events as Austin's B, mass kept, finer progeny from harder hits",
+          "[grind][t10]") {
+  const SizeSeries s = geometric_series(3.35e-3, std::sqrt(2.0), 20);
+  const Fracture f{60.0, 2e-3, 1.2, 0.8, 10.0};
+  const T10Breakage t = schuhmann_t10(0.5, 0.1);
+  // One bin: every class meets one event, whose t10 sets Austin's B with
+  // phi = 1 and gamma = -log10(t10).
+  const std::vector<SpectrumBin> one{{1e4, 2e-3, 0.01}};
+  std::vector<double> t10;
+  const auto b = t10_breakage_matrix(s, one, f, t, 2700, 0.6, &t10);
+  for (int j = 0; j + 1 < s.size(); ++j) {
+    const double d = s.mid_m(j), e = 2e-3 / captured_mass(d, 0.01, 2700, 0.6);
+    INFO("class " << j);
+    if (f.broken(e, d) > 0) CHECK(t10[j] == Approx(t.t10(e / median_broken_energy(f, e, d))).epsilon(1e-12));
+    const auto austin = breakage_matrix(s, AustinBreakage{1.0, -std::log10(t10[j]), 4.0});
+    double sum = 0;
+    for (int i = j + 1; i < s.size(); ++i) {
+      CHECK(b[i][j] == Approx(austin[i][j]).margin(1e-12));
+      CHECK(b[i][j] >= 0);
+      sum += b[i][j];
+    }
+    CHECK(sum == Approx(1.0).margin(1e-12));
+  }
+  // Harder collisions break with more energy to spare: each class's mean
+  // t10 rises, and the progeny are finer (more of the mass two classes down).
+  const std::vector<SpectrumBin> weak{{1e4, 1e-3, 0.01}, {1e3, 3e-3, 0.01}},
+      strong{{1e4, 1e-2, 0.01}, {1e3, 3e-2, 0.01}};
+  std::vector<double> tw, ts;
+  const auto bw = t10_breakage_matrix(s, weak, f, t, 2700, 0.6, &tw);
+  const auto bs = t10_breakage_matrix(s, strong, f, t, 2700, 0.6, &ts);
+  for (int j = 0; j + 3 < s.size(); ++j) {
+    INFO("class " << j << " t10 weak " << tw[j] << " strong " << ts[j]);
+    CHECK(ts[j] > tw[j]);
+    double below_w = 0, below_s = 0;
+    for (int i = j + 3; i < s.size(); ++i) below_w += bw[i][j], below_s += bs[i][j];
+    CHECK(below_s > below_w);
+  }
+}
+
 // ------------------------------------------------------------ the command
 
 #include <sys/wait.h>
@@ -201,6 +295,7 @@ TEST_CASE("the breakage probability: half at E50, Tavares' size effect, certain 
 #include "app/grind.h"
 #include "core/version.h"
 #include "io/case_file.h"
+#include "io/ore_file.h"
 
 namespace {
 
@@ -233,8 +328,8 @@ const fs::path& short_run() {
 fs::path ore_file(const std::string& name) { return fs::path(MC_ASSET_DIR) / "ores" / name; }
 
 // The example ore with one line replaced (or a line added).
-fs::path edited_ore(const std::string& from, const std::string& to) {
-  std::string t = text_of(ore_file("example_energy.toml"));
+fs::path edited_ore(const std::string& from, const std::string& to, const std::string& base = "example_energy.toml") {
+  std::string t = text_of(ore_file(base));
   const std::size_t at = t.find(from);
   REQUIRE(at != std::string::npos);
   t.replace(at, from.size(), to);
@@ -398,6 +493,76 @@ TEST_CASE("grind refuses bad ore files and run folders by name, writing nothing"
   CHECK(text_of(out.string() + ".log").find("rates.model") != std::string::npos);
   CHECK(!fs::exists(out));
   fs::remove_all(old);
+}
+
+TEST_CASE("grind with Tavares' t10: each class's mean t10 written, the ore file read back, bad t10 keys refused",
+          "[grind][t10][failures]") {
+  const fs::path run = short_run();
+  mc::app::GrindOptions o;
+  o.run_dir = run.string();
+  o.ore = ore_file("example_t10.toml").string();
+  o.out = (run / "grind-t10").string();
+  o.quiet = true;
+  REQUIRE(mc::app::cmd_grind(o) == 0);
+  const nlohmann::json j = nlohmann::json::parse(text_of(fs::path(o.out) / "grind.json"));
+  CHECK(j["appearance"] == "t10");
+  const auto t10 = j["t10_mean_by_class"].get<std::vector<double>>();
+  REQUIRE(t10.size() == 20);
+  // Under A = 50 %; finer classes take more specific energy from the same
+  // collisions, so their mean t10 rises down the classes.
+  for (std::size_t i = 0; i + 1 < t10.size(); ++i) {
+    INFO("class " << i);
+    CHECK(t10[i] > 0.01);
+    CHECK(t10[i] < 0.5);
+    if (i > 0 && i + 1 < t10.size()) CHECK(t10[i] > t10[i - 1]);
+  }
+  CHECK(text_of(fs::path(o.out) / "rates.csv").rfind("class,top_um,mid_um,S_per_min,SE_t_per_kWh,t10\n", 0) == 0);
+  // The ore file written (as a fit writes it) reads back to the same ore.
+  const Ore ore = mc::io::read_ore(o.ore);
+  const fs::path back = fs::temp_directory_path() / ("millcharge_test_t10_back_" + std::to_string(::getpid()) + ".toml");
+  std::ofstream(back) << mc::io::ore_toml(ore, "");
+  const Ore again = mc::io::read_ore(back);
+  fs::remove(back);
+  CHECK(again.appearance == Appearance::t10);
+  CHECK(again.t10.a == Approx(ore.t10.a).epsilon(1e-9));
+  CHECK(again.t10.b_prime == Approx(ore.t10.b_prime).epsilon(1e-9));
+  CHECK(again.t10.n == ore.t10.n);
+  for (std::size_t k = 0; k < ore.t10.n.size(); ++k) {
+    CHECK(again.t10.alpha[k] == Approx(ore.t10.alpha[k]).epsilon(1e-9));
+    CHECK(again.t10.beta[k] == Approx(ore.t10.beta[k]).epsilon(1e-9));
+  }
+
+  const fs::path out = fs::temp_directory_path() / ("millcharge_test_grind_t10_bad_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  auto refuses = [&](const fs::path& ore_path, const std::string& says) {
+    mc::app::GrindOptions b;
+    b.run_dir = run.string();
+    b.ore = ore_path.string();
+    b.out = out.string();
+    b.quiet = true;
+    INFO("expected: " << says);
+    CHECK_THROWS_WITH(mc::app::cmd_grind(b), Catch::Contains(says));
+    CHECK(!fs::exists(out));
+  };
+  const std::string base = "example_t10.toml";
+  refuses(edited_ore("tn_n = [2, 4, 25, 50, 75]", "tn_n = [2, 4, 10, 50, 75]", base), "breakage.tn_n: holds 10");
+  refuses(edited_ore("tn_n = [2, 4, 25, 50, 75]", "tn_n = [2, 4, 50, 25, 75]", base), "must ascend");
+  refuses(edited_ore("tn_beta = [1, 1, 1, 1, 1]", "tn_beta = [1, 1, 1, 1]", base),
+          "breakage.tn_beta: holds 4 values for the 5 sizes");
+  refuses(edited_ore("tn_alpha = [0.30103,", "tn_alpha = [3.0,", base), "must fall as n rises");
+  refuses(edited_ore("tn_beta = [1, 1, 1, 1, 1]", "tn_beta = [1, 1, 1, 0, 1]", base), "breakage.tn_beta");
+  refuses(edited_ore("model = \"t10\"", "model = \"t10\"\nphi = 0.5", base), "breakage.phi: unknown key");
+  refuses(edited_ore("model = \"t10\"", "model = \"kick\"", base), "breakage.model");
+  refuses(edited_ore("t10_max_percent = 50", "t10_max_percent = 0.5", base), "breakage.t10_max_percent");
+  refuses(edited_ore("b_prime = 0.1", "b_prime = \"0.1\"", base), "breakage.b_prime");
+  // t10 needs the collisions: with the energy-specific rates it is refused.
+  {
+    const std::string t = text_of(ore_file(base)), e = text_of(ore_file("example_energy.toml"));
+    const fs::path p = fs::temp_directory_path() / ("millcharge_test_t10_energy_" + std::to_string(::getpid()) + ".toml");
+    std::ofstream(p) << t.substr(0, t.find("[rates]")) + e.substr(e.find("[rates]"));
+    refuses(p, "needs rates.model = \"spectrum\"");
+    fs::remove(p);
+  }
 }
 
 TEST_CASE("grind --bond: a locked-cycle test that settles at 250 % and Bond's formula", "[grind]") {

@@ -184,6 +184,36 @@ TEST_CASE("grind --fit round trip: five parameters of a known ore back to 1e-6 w
                         Catch::Contains("nothing written"));
 }
 
+TEST_CASE("grind --fit round trip: Tavares' t10 (A, b') and the efficiency back to 1e-6 without noise",
+          "[grind][fit][t10]") {
+  const mc::io::Run run = mc::io::read_run(bond_run(), true);
+  Ore truth = mc::io::read_ore(ore_file("example_t10.toml"));
+  truth.efficiency = 0.35;
+  const double H = 1.2;
+  const BatchTest t = synthetic_test(truth, run, H, 0);
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.t10.a = 0.35;
+  start.t10.b_prime = 0.2;
+  const std::vector<std::string> names = {"efficiency", "breakage.t10_max_percent", "breakage.b_prime"};
+  const BatchFit f = fit_batch_test(start, run.normal, run.power_W, H, t, names);
+  std::printf("t10 round trip, no noise: %d iterations, %d evaluations, rms %.2e pp\n", f.iterations, f.evaluations,
+              f.rms_pp);
+  CHECK(f.rms_pp < 1e-6);
+  REQUIRE(f.parameters.size() == 3);
+  for (const FittedParameter& p : f.parameters) {
+    INFO(p.name << " fitted " << p.value << " true " << get(truth, p.name));
+    CHECK(p.identified);
+    CHECK(p.value == Approx(get(truth, p.name)).epsilon(1e-6));
+  }
+  // Austin's B is not this ore's appearance function, nor t10 Austin's ore's.
+  CHECK_THROWS_WITH(fit_batch_test(start, run.normal, run.power_W, H, t, {"breakage.phi"}),
+                    Catch::Contains("--fit-params breakage.phi: not a parameter of the ore's appearance function"));
+  const Ore austin = mc::io::read_ore(ore_file("example_spectrum.toml"));
+  CHECK_THROWS_WITH(fit_batch_test(austin, run.normal, run.power_W, H, t, {"breakage.b_prime"}),
+                    Catch::Contains("breakage.model"));
+}
+
 TEST_CASE("grind --fit round trip: with ±1 pp of scatter the parameters come back within their errors",
           "[grind][fit]") {
   const mc::io::Run run = mc::io::read_run(bond_run(), true);

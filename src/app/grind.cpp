@@ -128,10 +128,12 @@ void write_tables(const fs::path& out, const Circuit& c, const std::vector<Produ
     csv += "\n";
   }
   io::write_file_atomic(out / "grind.csv", csv);
-  std::string rates = "class,top_um,mid_um,S_per_min,SE_t_per_kWh\n";
+  const bool t10 = !c.t10_mean.empty();
+  std::string rates = std::string("class,top_um,mid_um,S_per_min,SE_t_per_kWh") + (t10 ? ",t10\n" : "\n");
   for (int i = 0; i < n; ++i)
-    rates += fmt::format("{},{:.6g},{:.6g},{:.8g},{:.8g}\n", i, s.top_m[i] * 1e6, s.mid_m(i) * 1e6, c.S_per_min[i],
-                         SE[i]);
+    rates += fmt::format("{},{:.6g},{:.6g},{:.8g},{:.8g}", i, s.top_m[i] * 1e6, s.mid_m(i) * 1e6, c.S_per_min[i],
+                         SE[i]) +
+             (t10 ? fmt::format(",{:.8g}\n", c.t10_mean[i]) : std::string("\n"));
   io::write_file_atomic(out / "rates.csv", rates);
 }
 
@@ -142,6 +144,8 @@ nlohmann::ordered_json summary(const GrindOptions& o, const Ore& ore, const io::
   j["ore"] = ore.name;
   j["run"] = run.title;
   j["model"] = model_name(ore.model);
+  j["appearance"] = ore.appearance == Appearance::t10 ? "t10" : "austin";
+  if (!c.t10_mean.empty()) j["t10_mean_by_class"] = c.t10_mean;
   j["power_W"] = run.power_W;
   j["holdup_kg"] = holdup_kg;
   j["mean_ball_diameter_mm"] = 2e3 * run.ball_radius_m;
@@ -266,6 +270,9 @@ ScaleUp scale_up(const GrindOptions& o, const Ore& ore, const io::Run& plant, co
   const double lab_holdup = mill_holdup_kg(ore, up.lab.porosity, up.lab.filling, up.lab.mill_volume);
   up.SE_t_per_kWh = mill_rates(ore, up.lab.normal, up.lab.power_W, lab_holdup).SE_t_per_kWh;
   Circuit he = c;
+  // The energy-specific scale-up holds the laboratory's appearance too: with
+  // Tavares' t10, that of the laboratory mill's collisions.
+  if (ore.appearance == Appearance::t10) he.b = appearance_matrix(ore, up.lab.normal);
   for (std::size_t i = 0; i < he.S_per_min.size(); ++i)
     he.S_per_min[i] = up.SE_t_per_kWh[i] * c.power_kW / c.holdup_t / 60;
   try {
@@ -313,10 +320,20 @@ void print_scale_up(const GrindOptions& o, const ScaleUp& up, const std::vector<
                 o.target_p80_um, all[n - 1].feed_t_h, up.target_rate);
 }
 
-void print(const GrindOptions& o, const Ore& ore, const io::Run& run, double holdup_kg,
+void print(const GrindOptions& o, const Ore& ore, const io::Run& run, const Circuit& c, double holdup_kg,
            const std::vector<Product>& products, const BondResult& bond) {
   std::printf("ore %s, %s rates; mill power %.1f W, hold-up %.3g kg, F80 %s um\n", ore.name.c_str(),
               model_name(ore.model), run.power_W, holdup_kg, fmt_um(ore.f80_m).c_str());
+  if (!c.t10_mean.empty()) {
+    // Tavares' appearance: the mean t10 of the coarsest class, the class
+    // at the feed's F80 and the finest that breaks.
+    std::string t10s;
+    const int n = c.sizes.size();
+    for (int i : {0, n / 2, n - 2})
+      t10s += fmt::format("{}{:.1f} % at {:.0f} um", t10s.empty() ? "" : ", ", 100 * c.t10_mean[i],
+                          c.sizes.mid_m(i) * 1e6);
+    std::printf("  appearance: Tavares' t10 from this mill's collisions, mean t10 %s\n", t10s.c_str());
+  }
   for (const Product& p : products)
     std::printf("  %-28s %s %8.3g kWh/t  P80 %s um%s\n", p.label.c_str(),
                 p.feed_t_h > 0 ? fmt::format("{:9.4g} t/h", p.feed_t_h).c_str() : "             ", p.kWh_t,
@@ -371,7 +388,7 @@ int cmd_grind(const GrindOptions& o) {
   c.sizes = ore.sizes;
   c.feed = ore.feed;
   c.S_per_min = rates.S_per_min;
-  c.b = breakage_matrix(ore.sizes, ore.breakage);
+  c.b = appearance_matrix(ore, run.normal, &c.t10_mean);
   c.power_kW = run.power_W / 1000;
   c.holdup_t = holdup_kg / 1000;
   c.tanks = o.tanks > 0 ? o.tanks : ore.tanks;
@@ -415,7 +432,7 @@ int cmd_grind(const GrindOptions& o) {
   io::write_file_atomic(out / "grind.json", j.dump(2) + "\n");
   draw(out, ore, run, c, products);
   if (!o.quiet) {
-    print(o, ore, run, holdup_kg, products, bond);
+    print(o, ore, run, c, holdup_kg, products, bond);
     if (!o.scale_from.empty()) print_scale_up(o, up, products);
     std::printf("wrote %s/{grind.csv, rates.csv, grind.json, grind.png}\n", out.string().c_str());
   }

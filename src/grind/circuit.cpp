@@ -33,6 +33,14 @@ MillRates mill_rates(const Ore& ore, const std::vector<SpectrumBin>& spectrum, d
   return {S, SE};
 }
 
+std::vector<std::vector<double>> appearance_matrix(const Ore& ore, const std::vector<SpectrumBin>& spectrum,
+                                                   std::vector<double>* t10_mean) {
+  if (t10_mean) t10_mean->clear();
+  if (ore.appearance == Appearance::t10)
+    return t10_breakage_matrix(ore.sizes, spectrum, ore.fracture, ore.t10, ore.density, ore.packing, t10_mean);
+  return breakage_matrix(ore.sizes, ore.breakage);
+}
+
 Product batch_product(const Circuit& c, double t_min) {
   Product p;
   p.t_min = t_min;

@@ -26,6 +26,12 @@ struct MillRates {
 };
 MillRates mill_rates(const Ore& ore, const std::vector<SpectrumBin>& spectrum, double power_W, double holdup_kg);
 
+// The appearance matrix b_ij of the ore in this mill: Austin's B, or
+// Tavares' t10 from the collisions of the spectrum (t10_breakage_matrix).
+// t10_mean (optional): each class's mean t10 (t10 only; left empty else).
+std::vector<std::vector<double>> appearance_matrix(const Ore& ore, const std::vector<SpectrumBin>& spectrum,
+                                                   std::vector<double>* t10_mean = nullptr);
+
 // The mill: the fresh feed's class masses (summing to 1), the rates, the
 // appearance matrix, the power and the hold-up, tanks in series, and the
 // classifier when the circuit is closed.
@@ -34,6 +40,7 @@ struct Circuit {
   std::vector<double> feed;
   std::vector<double> S_per_min;
   std::vector<std::vector<double>> b;
+  std::vector<double> t10_mean;  // Tavares' t10: each class's mean t10 in this mill; empty for Austin's B
   double power_kW = 0, holdup_t = 0;
   int tanks = 1;
   bool closed = false;

@@ -112,7 +112,7 @@ std::vector<std::vector<double>> batch_test_products(const Ore& ore, const std::
                                                      double power_W, double holdup_kg, const BatchTest& test) {
   const std::vector<double> feed = feed_masses(ore.sizes, test.sieve_m, test.feed_passing);
   const MillRates rates = mill_rates(ore, spectrum, power_W, holdup_kg);
-  const auto b = breakage_matrix(ore.sizes, ore.breakage);
+  const auto b = appearance_matrix(ore, spectrum);
   std::vector<std::vector<double>> out;
   std::vector<double> m = feed;
   double t = 0;
@@ -132,37 +132,41 @@ const std::vector<OreParameter>& ore_parameters() {
   using R = RateModel;
   static const std::vector<OreParameter> all = {
       {"efficiency", true, 1e-4, 1, false, R::spectrum, [](const Ore& o) { return o.efficiency; },
-       [](Ore& o, double v) { o.efficiency = v; }},
+       [](Ore& o, double v) { o.efficiency = v; }, {}},
       {"e_inf_J_kg", true, 1e-3, 1e5, false, R::spectrum, [](const Ore& o) { return o.fracture.e_inf_J_kg; },
-       [](Ore& o, double v) { o.fracture.e_inf_J_kg = v; }},
+       [](Ore& o, double v) { o.fracture.e_inf_J_kg = v; }, {}},
       {"d0_mm", true, 1e-4, 1e3, false, R::spectrum, [](const Ore& o) { return o.fracture.d0_m * 1e3; },
-       [](Ore& o, double v) { o.fracture.d0_m = v * 1e-3; }},
+       [](Ore& o, double v) { o.fracture.d0_m = v * 1e-3; }, {}},
       {"rates.phi", true, 1e-3, 5, false, R::spectrum, [](const Ore& o) { return o.fracture.phi; },
-       [](Ore& o, double v) { o.fracture.phi = v; }},
+       [](Ore& o, double v) { o.fracture.phi = v; }, {}},
       {"sigma", true, 0.05, 3, false, R::spectrum, [](const Ore& o) { return o.fracture.sigma; },
-       [](Ore& o, double v) { o.fracture.sigma = v; }},
+       [](Ore& o, double v) { o.fracture.sigma = v; }, {}},
       {"s1e_t_per_kWh", true, 1e-6, 100, false, R::energy, [](const Ore& o) { return o.energy.s1e_t_per_kWh; },
-       [](Ore& o, double v) { o.energy.s1e_t_per_kWh = v; }},
+       [](Ore& o, double v) { o.energy.s1e_t_per_kWh = v; }, {}},
       {"x1_mm", true, 1e-3, 1e3, false, R::energy, [](const Ore& o) { return o.energy.x1_m * 1e3; },
-       [](Ore& o, double v) { o.energy.x1_m = v * 1e-3; }},
+       [](Ore& o, double v) { o.energy.x1_m = v * 1e-3; }, {}},
       {"zeta1", false, -5, 5, false, R::energy, [](const Ore& o) { return o.energy.zeta1; },
-       [](Ore& o, double v) { o.energy.zeta1 = v; }},
+       [](Ore& o, double v) { o.energy.zeta1 = v; }, {}},
       {"zeta2", false, -5, 5, false, R::energy, [](const Ore& o) { return o.energy.zeta2; },
-       [](Ore& o, double v) { o.energy.zeta2 = v; }},
+       [](Ore& o, double v) { o.energy.zeta2 = v; }, {}},
       {"a_per_min", true, 1e-6, 100, false, R::austin, [](const Ore& o) { return o.austin.a_per_min; },
-       [](Ore& o, double v) { o.austin.a_per_min = v; }},
+       [](Ore& o, double v) { o.austin.a_per_min = v; }, {}},
       {"alpha", true, 0.1, 3, false, R::austin, [](const Ore& o) { return o.austin.alpha; },
-       [](Ore& o, double v) { o.austin.alpha = v; }},
+       [](Ore& o, double v) { o.austin.alpha = v; }, {}},
       {"mu_mm", true, 1e-3, 1e3, false, R::austin, [](const Ore& o) { return o.austin.mu_m * 1e3; },
-       [](Ore& o, double v) { o.austin.mu_m = v * 1e-3; }},
+       [](Ore& o, double v) { o.austin.mu_m = v * 1e-3; }, {}},
       {"lambda", true, 0.5, 10, false, R::austin, [](const Ore& o) { return o.austin.lambda; },
-       [](Ore& o, double v) { o.austin.lambda = v; }},
+       [](Ore& o, double v) { o.austin.lambda = v; }, {}},
       {"breakage.phi", false, 0, 1, true, R::spectrum, [](const Ore& o) { return o.breakage.phi; },
-       [](Ore& o, double v) { o.breakage.phi = v; }},
+       [](Ore& o, double v) { o.breakage.phi = v; }, Appearance::austin},
       {"breakage.gamma", true, 0.2, 3, true, R::spectrum, [](const Ore& o) { return o.breakage.gamma; },
-       [](Ore& o, double v) { o.breakage.gamma = v; }},
+       [](Ore& o, double v) { o.breakage.gamma = v; }, Appearance::austin},
       {"breakage.beta", true, 1, 10, true, R::spectrum, [](const Ore& o) { return o.breakage.beta; },
-       [](Ore& o, double v) { o.breakage.beta = v; }},
+       [](Ore& o, double v) { o.breakage.beta = v; }, Appearance::austin},
+      {"breakage.t10_max_percent", true, 1, 100, false, R::spectrum, [](const Ore& o) { return 100 * o.t10.a; },
+       [](Ore& o, double v) { o.t10.a = v / 100; }, Appearance::t10},
+      {"breakage.b_prime", true, 1e-3, 100, false, R::spectrum, [](const Ore& o) { return o.t10.b_prime; },
+       [](Ore& o, double v) { o.t10.b_prime = v; }, Appearance::t10},
   };
   return all;
 }
@@ -375,6 +379,9 @@ void check_names(const Ore& start, const std::vector<std::string>& names, std::v
     }
     if (!p->any_model && p->model != start.model)
       throw std::invalid_argument("--fit-params " + nm + ": not a parameter of the ore's rate model (rates.model)");
+    if (p->appearance && *p->appearance != start.appearance)
+      throw std::invalid_argument("--fit-params " + nm +
+                                  ": not a parameter of the ore's appearance function (breakage.model)");
     if (std::find(params.begin(), params.end(), p) != params.end())
       throw std::invalid_argument("--fit-params " + nm + ": named twice");
     params.push_back(p);
@@ -490,18 +497,18 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
 WiFit fit_work_index(const Ore& ore_on_p1, const std::vector<SpectrumBin>& spectrum, double power_W, double rpm,
                      double p1_m, double wi_kWh_t, const std::string& name) {
   const OreParameter* p = find_ore_parameter(name);
-  if (!p || (!p->any_model && p->model != ore_on_p1.model) || !p->log)
+  if (!p || (!p->any_model && p->model != ore_on_p1.model) || !p->log || p->appearance)
     throw std::invalid_argument("--fit-params " + name +
                                 ": a work index fits one scale of the ore's rates (efficiency or e_inf_J_kg for the "
                                 "spectrum model, s1e_t_per_kWh for the energy model, a_per_min for Austin's)");
   WiFit w;
   w.start = p->get(ore_on_p1);
   const double charge = bond_charge_kg(ore_on_p1);
-  const auto b = breakage_matrix(ore_on_p1.sizes, ore_on_p1.breakage);
   auto bond_at = [&](double v) {
     Ore o = ore_on_p1;
     p->set(o, v);
     const MillRates r = mill_rates(o, spectrum, power_W, charge);
+    const auto b = appearance_matrix(o, spectrum);  // t10's moves with the fracture energies
     ++w.evaluations;
     return bond_test(o.sizes, o.feed, r.S_per_min, b, rpm, charge, p1_m);
   };

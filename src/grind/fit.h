@@ -8,6 +8,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,7 @@ struct OreParameter {
   RateModel model = RateModel::spectrum;
   double (*get)(const Ore&) = nullptr;
   void (*set)(Ore&, double) = nullptr;
+  std::optional<Appearance> appearance;  // a parameter of this appearance function only
 };
 const std::vector<OreParameter>& ore_parameters();
 // nullptr: no such name. "phi" alone is ambiguous (rates.phi, breakage.phi).

@@ -1,7 +1,7 @@
 // An ore as the grinding model takes it (what an ore file describes,
 // src/io/ore_file.h): its density and hold-up, the size series and the
-// feed on it, Austin's appearance function and the parameters of one of
-// the three rate models.
+// feed on it, its appearance function (Austin's B or Tavares' t10) and the
+// parameters of one of the three rate models.
 #pragma once
 
 #include <string>
@@ -12,6 +12,9 @@
 namespace mc::grind {
 
 enum class RateModel { austin, energy, spectrum };
+// The appearance function of broken material: Austin's B, or Tavares'
+// energy-dependent t10 (the spectrum model only).
+enum class Appearance { austin, t10 };
 
 // The contact law and parameters of the DEM run an ore was fitted through
 // (the [fitted] table of an ore file): the normal energy spectrum, and so
@@ -39,7 +42,9 @@ struct Ore {
   std::vector<double> sieve_m, sieve_passing;  // the feed as given
   double ratio = 0;
   double f80_m = 0;
+  Appearance appearance = Appearance::austin;
   AustinBreakage breakage;
+  T10Breakage t10;
   RateModel model = RateModel::energy;
   AustinRates austin;
   EnergyRates energy;

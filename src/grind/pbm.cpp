@@ -41,6 +41,79 @@ double AustinBreakage::cumulative(double u) const {
   return std::min(1.0, phi * std::pow(u, gamma) + (1 - phi) * std::pow(u, beta));
 }
 
+double incomplete_beta(double x, double a, double b) {
+  if (!(x > 0)) return 0.0;
+  if (x >= 1) return 1.0;
+  // The continued fraction converges fast below (a + 1) / (a + b + 2);
+  // above it, I_x(a, b) = 1 - I_{1-x}(b, a).
+  if (x > (a + 1) / (a + b + 2)) return 1.0 - incomplete_beta(1 - x, b, a);
+  const double front =
+      std::exp(a * std::log(x) + b * std::log1p(-x) - (std::lgamma(a) + std::lgamma(b) - std::lgamma(a + b))) / a;
+  // I_x = front / (1 + d1 / (1 + d2 / (1 + ...))), with
+  // d_{2m+1} = -(a + m)(a + b + m) x / ((a + 2m)(a + 2m + 1)) and
+  // d_{2m} = m (b - m) x / ((a + 2m - 1)(a + 2m)); Lentz's method on
+  // 1 + 1 / (1 + d1 / ...), whose value less one is the fraction.
+  constexpr double tiny = 1e-300;
+  double f = 1, c = 1, d = 0;
+  for (int i = 0; i <= 1000; ++i) {
+    const double m = i / 2;
+    double num = 1;
+    if (i > 0 && i % 2 == 0) num = m * (b - m) * x / ((a + 2 * m - 1) * (a + 2 * m));
+    if (i % 2 == 1) num = -(a + m) * (a + b + m) * x / ((a + 2 * m) * (a + 2 * m + 1));
+    d = 1 + num * d;
+    d = 1 / (std::fabs(d) < tiny ? tiny : d);
+    c = 1 + num / c;
+    if (std::fabs(c) < tiny) c = tiny;
+    f *= c * d;
+    if (std::fabs(1 - c * d) < 1e-15) break;
+  }
+  return std::clamp(front * (f - 1), 0.0, 1.0);
+}
+
+double T10Breakage::t10(double r) const { return a * (1 - std::exp(-b_prime * std::max(r, 0.0))); }
+
+double T10Breakage::tn(std::size_t k, double t) const { return incomplete_beta(t, alpha[k], beta[k]); }
+
+namespace {
+// One event's cumulative B(u): (ln u, ln B) nodes from u = 1 down to the
+// smallest 1/n, log-log linear between them, the last segment's power law
+// below. Each node is kept at or under the one above, so B never falls as
+// u grows.
+class T10Curve {
+ public:
+  T10Curve(const T10Breakage& t, double t10) {
+    lu_.push_back(0.0);
+    lb_.push_back(0.0);
+    bool ten = false;
+    auto node = [&](double n, double tn) {
+      const double l = std::log(std::max(tn, 1e-300));
+      lu_.push_back(-std::log(n));
+      lb_.push_back(std::min(l, lb_.back()));
+    };
+    for (std::size_t k = 0; k < t.n.size(); ++k) {
+      if (!ten && t.n[k] > 10) node(10, t10), ten = true;
+      node(t.n[k], t.tn(k, t10));
+    }
+    if (!ten) node(10, t10);
+  }
+  double operator()(double u) const {
+    if (u >= 1) return 1.0;
+    if (!(u > 0)) return 0.0;
+    const double l = std::log(u);
+    std::size_t k = 1;
+    while (k + 1 < lu_.size() && l < lu_[k]) ++k;
+    // Segment k-1 .. k (below the last node: its slope carried on).
+    const double slope = (lb_[k - 1] - lb_[k]) / (lu_[k - 1] - lu_[k]);
+    return std::min(1.0, std::exp(lb_[k] + slope * (l - lu_[k])));
+  }
+
+ private:
+  std::vector<double> lu_, lb_;
+};
+}  // namespace
+
+double T10Breakage::cumulative(double u, double t) const { return T10Curve(*this, t)(u); }
+
 std::vector<std::vector<double>> breakage_matrix(const SizeSeries& s, const AustinBreakage& br) {
   const int n = s.size();
   std::vector<std::vector<double>> b(n, std::vector<double>(n, 0.0));
@@ -262,6 +335,52 @@ double Fracture::broken(double e, double d_m) const {
 
 double captured_mass(double d_m, double r_eff_m, double ore_density, double packing) {
   return packing * kPi * kPi / 3 * ore_density * d_m * d_m * r_eff_m;
+}
+
+double median_broken_energy(const Fracture& f, double e, double d_m) {
+  const double half = 0.5 * f.broken(e, d_m);
+  if (!(half > 0)) return 0.0;
+  // P rises with the energy: bisect its logarithm below e.
+  double lo = std::log(e) - 80, hi = std::log(e);
+  for (int k = 0; k < 100; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (f.broken(std::exp(mid), d_m) < half ? lo : hi) = mid;
+  }
+  return std::exp(0.5 * (lo + hi));
+}
+
+std::vector<std::vector<double>> t10_breakage_matrix(const SizeSeries& s, const std::vector<SpectrumBin>& spectrum,
+                                                     const Fracture& f, const T10Breakage& t, double ore_density,
+                                                     double packing, std::vector<double>* t10_mean) {
+  const int n = s.size();
+  std::vector<std::vector<double>> b(n, std::vector<double>(n, 0.0));
+  if (t10_mean) t10_mean->assign(n, 0.0);
+  for (int j = 0; j + 1 < n; ++j) {
+    const double d = s.mid_m(j), lower = s.top_m[j + 1];
+    double weight = 0, t10_sum = 0;
+    auto add = [&](double t10, double w) {
+      const T10Curve B(t, t10);
+      for (int i = j + 1; i < n; ++i) {
+        const double hi = B(s.top_m[i] / lower), lo = i + 1 < n ? B(s.top_m[i + 1] / lower) : 0.0;
+        b[i][j] += w * (hi - lo);
+      }
+      weight += w;
+      t10_sum += w * t10;
+    };
+    for (const SpectrumBin& k : spectrum) {
+      if (k.collisions_per_s <= 0 || k.energy_J <= 0) continue;
+      const double m = captured_mass(d, k.r_eff_m, ore_density, packing), e = k.energy_J / m;
+      const double w = k.collisions_per_s * m * f.broken(e, d);
+      if (w > 0) add(t.t10(e / median_broken_energy(f, e, d)), w);
+    }
+    if (!(weight > 0)) {
+      const double e = f.e50(d);
+      add(t.t10(e / median_broken_energy(f, e, d)), 1.0);
+    }
+    for (int i = j + 1; i < n; ++i) b[i][j] /= weight;
+    if (t10_mean) (*t10_mean)[j] = t10_sum / weight;
+  }
+  return b;
 }
 
 std::vector<double> spectrum_rates(const SizeSeries& s, const std::vector<SpectrumBin>& spectrum,

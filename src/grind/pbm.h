@@ -37,6 +37,30 @@ struct AustinBreakage {
 // class i; each column sums to 1 (the sink takes the rest).
 std::vector<std::vector<double>> breakage_matrix(const SizeSeries& s, const AustinBreakage& b);
 
+// Tavares' energy-dependent appearance function (Tavares' review, KONA 34,
+// 2017; Carvalho & Tavares, Miner. Eng. 43-44, 2013): an event of
+// mass-specific energy e gives its broken particles
+//   t10 = A (1 - exp(-b' e / E50b)),
+// E50b the median fracture energy of the particles the event breaks, and
+// each other t_n (the share finer than the parent's size / n) follows from
+// t10 by the regularized incomplete beta function,
+//   t_n = I_{t10}(alpha_n, beta_n)
+// (t10 and t_n as fractions). The cumulative B(u) of u = size / parent's
+// size is 1 at u = 1 and t_n at u = 1/n (t10 at 0.1), log-log linear
+// between them, and below the smallest 1/n the last segment's power law.
+struct T10Breakage {
+  double a = 0.5;        // A, t10's limit at high energy (a fraction)
+  double b_prime = 1.0;  // b'
+  std::vector<double> n, alpha, beta;  // n ascending, > 1, 10 left out
+  double t10(double e_over_e50b) const;
+  double tn(std::size_t k, double t10) const;  // t_n[k] at this t10
+  double cumulative(double u, double t10) const;
+};
+
+// The regularized incomplete beta function I_x(a, b), a, b > 0, 0 <= x <= 1
+// (continued fraction, Lentz's method, to 1e-14).
+double incomplete_beta(double x, double a, double b);
+
 // Batch grinding, dm_i/dt = -S_i m_i + sum_{j<i} b_ij S_j m_j, from m0 over
 // time t (S per unit of t): fourth-order Runge-Kutta with steps of at most
 // 0.01 / max S. The sink does not break (its S is ignored).
@@ -133,6 +157,20 @@ struct SpectrumBin {
 // effective radius R_eff: a monolayer where the gap is under d,
 // m = packing · (pi²/3) · rho · d² · R_eff (docs/grinding.md).
 double captured_mass(double d_m, double r_eff_m, double ore_density, double packing);
+
+// The median fracture energy of the particles of size d that an event of
+// specific energy e breaks: P(E50b) = P(e) / 2 (0 where P(e) is 0).
+double median_broken_energy(const Fracture& f, double e_J_kg, double d_m);
+
+// The appearance matrix of Tavares' t10 in a mill of this spectrum: for each
+// class j, the t10 appearance of each collision bin (its specific energy
+// E_k / m_cap,j) weighted by the mass the bin breaks of class j
+// (N_k m_cap,j P_j). A class nothing breaks gets that of an event at its
+// E50 (its rate is 0). Each column sums to 1, as breakage_matrix's.
+// t10_mean (optional): each class's mass-weighted mean t10.
+std::vector<std::vector<double>> t10_breakage_matrix(const SizeSeries& s, const std::vector<SpectrumBin>& spectrum,
+                                                     const Fracture& f, const T10Breakage& t, double ore_density,
+                                                     double packing, std::vector<double>* t10_mean = nullptr);
 
 // S_i (per second) = efficiency / H · sum_k N_k · m_cap,i · P_i(E_k / m_cap,i).
 std::vector<double> spectrum_rates(const SizeSeries& s, const std::vector<SpectrumBin>& spectrum,

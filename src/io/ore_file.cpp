@@ -96,6 +96,54 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   c.rms_residual_pp = r.number(ft, "fitted.", "rms_residual_pp", 0, kInf, ">= 0", 0.0);
 }
 
+// [breakage] with model = "t10": Tavares' energy-dependent t10 (grind::T10Breakage).
+void read_t10(const OreReader& r, const toml::table& bk, T10Breakage& t) {
+  r.knows(bk, "breakage.", {"model", "t10_max_percent", "b_prime", "tn_n", "tn_alpha", "tn_beta"});
+  t.a = r.number(bk, "breakage.", "t10_max_percent", 1, 100, "A, the largest t10, 1 to 100 %") / 100;
+  t.b_prime = r.number(bk, "breakage.", "b_prime", 1e-3, 100, "b', 0.001 to 100");
+  t.n = r.numbers(bk, "breakage.", "tn_n");
+  t.alpha = r.numbers(bk, "breakage.", "tn_alpha");
+  t.beta = r.numbers(bk, "breakage.", "tn_beta");
+  for (const char* key : {"tn_alpha", "tn_beta"}) {
+    const std::vector<double>& v = std::string(key) == "tn_alpha" ? t.alpha : t.beta;
+    if (v.size() != t.n.size())
+      r.fail(std::string("breakage.") + key, bk.get(key),
+             fmt::format("holds {} values for the {} sizes of breakage.tn_n", v.size(), t.n.size()));
+    for (double x : v)
+      if (!(x > 0 && x <= 100))
+        r.fail(std::string("breakage.") + key, bk.get(key), fmt::format("{:g} is out of range: 0 to 100, > 0", x));
+  }
+  for (std::size_t k = 0; k < t.n.size(); ++k) {
+    if (!(t.n[k] > 1 && t.n[k] <= 1000))
+      r.fail("breakage.tn_n", bk.get("tn_n"), fmt::format("{:g} is out of range: n from 1 to 1000, > 1", t.n[k]));
+    if (t.n[k] == 10)
+      r.fail("breakage.tn_n", bk.get("tn_n"), "holds 10: t10 is the model's own (t10_max_percent, b_prime); leave it out");
+    if (k > 0 && !(t.n[k] > t.n[k - 1])) r.fail("breakage.tn_n", bk.get("tn_n"), "the sizes n must ascend");
+  }
+  // t_n must fall as n rises (a finer size passes less) at every t10 the
+  // model can give: checked on a grid up to A.
+  for (int g = 0; g <= 60; ++g) {
+    const double t10 = t.a * std::pow(1e-3, 1 - g / 60.0);
+    double above = 1;  // t_n of the next coarser size
+    std::string above_name = "t_1";
+    bool ten = false;
+    auto check = [&](double n, double tn) {
+      if (tn > above + 1e-9)
+        r.fail("breakage.tn_alpha", bk.get("tn_alpha"),
+               fmt::format("t_{:g} ({:.4g} %) is above {} ({:.4g} %) at t10 = {:.4g} %: t_n must fall as n rises; "
+                           "check tn_alpha and tn_beta",
+                           n, 100 * tn, above_name, 100 * above, 100 * t10));
+      above = tn;
+      above_name = fmt::format("t_{:g}", n);
+    };
+    for (std::size_t k = 0; k < t.n.size(); ++k) {
+      if (!ten && t.n[k] > 10) check(10, t10), ten = true;
+      check(t.n[k], t.tn(k, t10));
+    }
+    if (!ten) check(10, t10);
+  }
+}
+
 }  // namespace
 
 grind::Ore read_ore(const fs::path& path) {
@@ -172,10 +220,21 @@ grind::Ore read_ore(const fs::path& path) {
   o.f80_m = passing_size(o.sizes, o.feed, 0.8);
 
   const toml::table& bk = *r.table("breakage", true);
-  r.knows(bk, "breakage.", {"phi", "gamma", "beta"});
-  o.breakage.phi = r.number(bk, "breakage.", "phi", 0, 1, "0 to 1");
-  o.breakage.gamma = r.number(bk, "breakage.", "gamma", 0.2, 3, "0.2 to 3");
-  o.breakage.beta = r.number(bk, "breakage.", "beta", 1, 10, "1 to 10");
+  const toml::node* bm = bk.get("model");
+  if (bm && !bm->is_string()) r.fail("breakage.model", bm, "must be a string, not " + type_name(*bm));
+  const std::string appearance = bm ? bm->value<std::string>().value() : "austin";
+  if (appearance == "austin") {
+    r.knows(bk, "breakage.", {"model", "phi", "gamma", "beta"});
+    o.breakage.phi = r.number(bk, "breakage.", "phi", 0, 1, "0 to 1");
+    o.breakage.gamma = r.number(bk, "breakage.", "gamma", 0.2, 3, "0.2 to 3");
+    o.breakage.beta = r.number(bk, "breakage.", "beta", 1, 10, "1 to 10");
+  } else if (appearance == "t10") {
+    o.appearance = Appearance::t10;
+    read_t10(r, bk, o.t10);
+  } else {
+    r.fail("breakage.model", bm, "must be \"austin\" (Austin's B) or \"t10\" (Tavares' energy-dependent t10), not \"" +
+                                     appearance + "\"");
+  }
 
   const toml::table& rt = *r.table("rates", true);
   const toml::node* mn = rt.get("model");
@@ -208,6 +267,10 @@ grind::Ore read_ore(const fs::path& path) {
     r.fail("rates.model", mn, "must be \"austin\", \"energy\" or \"spectrum\"" +
                                   (mn ? std::string(", not \"") + model + "\"" : std::string(" (missing)")));
   }
+  if (o.appearance == Appearance::t10 && o.model != RateModel::spectrum)
+    r.fail("breakage.model", bm,
+           "\"t10\" takes each collision's energy from the run's normal spectrum: it needs rates.model = "
+           "\"spectrum\" (with another rate model give Austin's B: phi, gamma, beta)");
   if (const toml::table* ft = r.table("fitted", false)) read_fitted(r, *ft, o.fitted_under);
   return o;
 }
@@ -235,8 +298,13 @@ std::string ore_toml(const grind::Ore& o, const std::string& header) {
   s += "\n[sizes]\ntop_mm = " + g(o.sizes.top_m.front() * 1e3) + "\nratio = " + g(o.ratio) +
        "\nclasses = " + std::to_string(o.sizes.size()) + "\n";
   s += "\n[feed]\nsieve_mm = " + list(o.sieve_m, 1e3) + "\npassing = " + list(o.sieve_passing, 1) + "\n";
-  s += "\n[breakage]\nphi = " + g(o.breakage.phi) + "\ngamma = " + g(o.breakage.gamma) + "\nbeta = " +
-       g(o.breakage.beta) + "\n";
+  if (o.appearance == Appearance::t10)
+    s += "\n[breakage]\nmodel = \"t10\"\nt10_max_percent = " + g(100 * o.t10.a) + "\nb_prime = " + g(o.t10.b_prime) +
+         "\ntn_n = " + list(o.t10.n, 1) + "\ntn_alpha = " + list(o.t10.alpha, 1) + "\ntn_beta = " + list(o.t10.beta, 1) +
+         "\n";
+  else
+    s += "\n[breakage]\nphi = " + g(o.breakage.phi) + "\ngamma = " + g(o.breakage.gamma) + "\nbeta = " +
+         g(o.breakage.beta) + "\n";
   s += "\n[rates]\n";
   if (o.model == RateModel::austin)
     s += "model = \"austin\"\na_per_min = " + g(o.austin.a_per_min) + "\nalpha = " + g(o.austin.alpha) +
