@@ -221,7 +221,20 @@ void draw(const fs::path& out, const Ore& ore, const io::Run& run, const Circuit
   rs.markers = true;
   for (int i = 0; i + 1 < n; ++i) rs.x.push_back(s.mid_m(i) * 1e6), rs.y.push_back(c.S_per_min[i]);
   rp.series.push_back(rs);
-  io::draw_or_warn(out / "grind.png", [&] { io::write_line_plots_png(out / "grind.png", {psd, rp}); });
+  std::vector<io::LinePlot> plots = {psd, rp};
+  if (!c.t10_mean.empty()) {  // Tavares' appearance: what the mill's collisions leave of each class
+    io::LinePlot tp;
+    tp.title = "Tavares' t10: mean over this mill's collisions";
+    tp.x_label = "size (um, class's geometric mean)";
+    tp.y_label = "t10 (%)";
+    tp.log_x = true;
+    io::PlotSeries ts{"t10", {}, {}, 0xd62728};
+    ts.markers = true;
+    for (int i = 0; i + 1 < n; ++i) ts.x.push_back(s.mid_m(i) * 1e6), ts.y.push_back(100 * c.t10_mean[i]);
+    tp.series.push_back(ts);
+    plots.push_back(tp);
+  }
+  io::draw_or_warn(out / "grind.png", [&] { io::write_line_plots_png(out / "grind.png", plots); });
 }
 
 // The products asked for, in a mill.
