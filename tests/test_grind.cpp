@@ -338,6 +338,19 @@ fs::path edited_ore(const std::string& from, const std::string& to, const std::s
   return p;
 }
 
+// grind of this ore on this run folder throws a message holding `says`
+// and writes nothing in `out`.
+void refuses_grind(const fs::path& ore, const fs::path& run_dir, const fs::path& out, const std::string& says) {
+  mc::app::GrindOptions o;
+  o.run_dir = run_dir.string();
+  o.ore = ore.string();
+  o.out = out.string();
+  o.quiet = true;
+  INFO("expected: " << says);
+  CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains(says));
+  CHECK(!fs::exists(out));
+}
+
 }  // namespace
 
 TEST_CASE("grind: a run's product size in batch and continuous, both rate models", "[grind][outputs]") {
@@ -434,14 +447,7 @@ TEST_CASE("grind refuses bad ore files and run folders by name, writing nothing"
   const fs::path out = fs::temp_directory_path() / ("millcharge_test_grind_bad_" + std::to_string(::getpid()));
   fs::remove_all(out);
   auto refuses = [&](const fs::path& ore, const fs::path& dir, const std::string& says) {
-    mc::app::GrindOptions o;
-    o.run_dir = dir.string();
-    o.ore = ore.string();
-    o.out = out.string();
-    o.quiet = true;
-    INFO("expected: " << says);
-    CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains(says));
-    CHECK(!fs::exists(out));
+    refuses_grind(ore, dir, out, says);
   };
   refuses(edited_ore("passing  = [1.00,", "passing  = [0.90,"), run, "feed.passing");
   refuses(edited_ore("passing  = [1.00,", "passing  = [0.90,"), run, "must sum to 1");
@@ -534,16 +540,7 @@ TEST_CASE("grind with Tavares' t10: each class's mean t10 written, the ore file 
 
   const fs::path out = fs::temp_directory_path() / ("millcharge_test_grind_t10_bad_" + std::to_string(::getpid()));
   fs::remove_all(out);
-  auto refuses = [&](const fs::path& ore_path, const std::string& says) {
-    mc::app::GrindOptions b;
-    b.run_dir = run.string();
-    b.ore = ore_path.string();
-    b.out = out.string();
-    b.quiet = true;
-    INFO("expected: " << says);
-    CHECK_THROWS_WITH(mc::app::cmd_grind(b), Catch::Contains(says));
-    CHECK(!fs::exists(out));
-  };
+  auto refuses = [&](const fs::path& ore_path, const std::string& says) { refuses_grind(ore_path, run, out, says); };
   const std::string base = "example_t10.toml";
   refuses(edited_ore("tn_n = [2, 4, 25, 50, 75]", "tn_n = [2, 4, 10, 50, 75]", base), "breakage.tn_n: holds 10");
   refuses(edited_ore("tn_n = [2, 4, 25, 50, 75]", "tn_n = [2, 4, 50, 25, 75]", base), "must ascend");

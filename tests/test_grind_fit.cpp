@@ -155,12 +155,32 @@ TEST_CASE("least squares: a straight line's standard errors are the closed form'
   CHECK(!levenberg_marquardt(p).converged);
 }
 
+namespace {
+
+// The noiseless products of `truth` in the Bond mill (hold-up 1.2 kg),
+// fitted from `start` by the parameters `names`: each comes back to 1e-6.
+BatchFit check_round_trip(const mc::io::Run& run, const Ore& truth, const Ore& start,
+                          const std::vector<std::string>& names, const BatchTest& t, const char* label) {
+  const BatchFit f = fit_batch_test(start, run.normal, run.power_W, 1.2, t, names);
+  std::printf("%s round trip, no noise: %d iterations, %d evaluations, rms %.2e pp\n", label, f.iterations,
+              f.evaluations, f.rms_pp);
+  CHECK(f.rms_pp < 1e-6);
+  REQUIRE(f.parameters.size() == names.size());
+  for (const FittedParameter& p : f.parameters) {
+    INFO(p.name << " fitted " << p.value << " true " << get(truth, p.name));
+    CHECK(p.identified);
+    CHECK(p.value == Approx(get(truth, p.name)).epsilon(1e-6));
+  }
+  return f;
+}
+
+}  // namespace
+
 TEST_CASE("grind --fit round trip: five parameters of a known ore back to 1e-6 without noise", "[grind][fit]") {
   const mc::io::Run run = mc::io::read_run(bond_run(), true);
   Ore truth = mc::io::read_ore(ore_file("example_spectrum.toml"));
   truth.efficiency = 0.35;
-  const double H = 1.2;
-  const BatchTest t = synthetic_test(truth, run, H, 0);
+  const BatchTest t = synthetic_test(truth, run, 1.2, 0);
   Ore start = truth;
   start.efficiency = 0.6;
   start.fracture.e_inf_J_kg = 45;
@@ -168,18 +188,9 @@ TEST_CASE("grind --fit round trip: five parameters of a known ore back to 1e-6 w
   start.fracture.phi = 1.0;
   start.fracture.sigma = 1.0;
   const std::vector<std::string> names = {"efficiency", "e_inf_J_kg", "d0_mm", "rates.phi", "sigma"};
-  const BatchFit f = fit_batch_test(start, run.normal, run.power_W, H, t, names);
-  std::printf("round trip, no noise: %d iterations, %d evaluations, rms %.2e pp\n", f.iterations, f.evaluations,
-              f.rms_pp);
-  CHECK(f.rms_pp < 1e-6);
-  REQUIRE(f.parameters.size() == 5);
-  for (const FittedParameter& p : f.parameters) {
-    INFO(p.name << " fitted " << p.value << " true " << get(truth, p.name));
-    CHECK(p.identified);
-    CHECK(p.value == Approx(get(truth, p.name)).epsilon(1e-6));
-  }
+  check_round_trip(run, truth, start, names, t, "spectrum");
   // The same fit cut at two iterations has not converged: said, no ore.
-  CHECK_THROWS_WITH(fit_batch_test(start, run.normal, run.power_W, H, t, names, 2),
+  CHECK_THROWS_WITH(fit_batch_test(start, run.normal, run.power_W, 1.2, t, names, 2),
                     Catch::Contains("--fit: the fit did not converge in 2 iterations") &&
                         Catch::Contains("nothing written"));
 }
@@ -189,28 +200,17 @@ TEST_CASE("grind --fit round trip: Tavares' t10 (A, b') and the efficiency back 
   const mc::io::Run run = mc::io::read_run(bond_run(), true);
   Ore truth = mc::io::read_ore(ore_file("example_t10.toml"));
   truth.efficiency = 0.35;
-  const double H = 1.2;
-  const BatchTest t = synthetic_test(truth, run, H, 0);
+  const BatchTest t = synthetic_test(truth, run, 1.2, 0);
   Ore start = truth;
   start.efficiency = 0.6;
   start.t10.a = 0.35;
   start.t10.b_prime = 0.2;
-  const std::vector<std::string> names = {"efficiency", "breakage.t10_max_percent", "breakage.b_prime"};
-  const BatchFit f = fit_batch_test(start, run.normal, run.power_W, H, t, names);
-  std::printf("t10 round trip, no noise: %d iterations, %d evaluations, rms %.2e pp\n", f.iterations, f.evaluations,
-              f.rms_pp);
-  CHECK(f.rms_pp < 1e-6);
-  REQUIRE(f.parameters.size() == 3);
-  for (const FittedParameter& p : f.parameters) {
-    INFO(p.name << " fitted " << p.value << " true " << get(truth, p.name));
-    CHECK(p.identified);
-    CHECK(p.value == Approx(get(truth, p.name)).epsilon(1e-6));
-  }
+  check_round_trip(run, truth, start, {"efficiency", "breakage.t10_max_percent", "breakage.b_prime"}, t, "t10");
   // Austin's B is not this ore's appearance function, nor t10 Austin's ore's.
-  CHECK_THROWS_WITH(fit_batch_test(start, run.normal, run.power_W, H, t, {"breakage.phi"}),
+  CHECK_THROWS_WITH(fit_batch_test(start, run.normal, run.power_W, 1.2, t, {"breakage.phi"}),
                     Catch::Contains("--fit-params breakage.phi: not a parameter of the ore's appearance function"));
   const Ore austin = mc::io::read_ore(ore_file("example_spectrum.toml"));
-  CHECK_THROWS_WITH(fit_batch_test(austin, run.normal, run.power_W, H, t, {"breakage.b_prime"}),
+  CHECK_THROWS_WITH(fit_batch_test(austin, run.normal, run.power_W, 1.2, t, {"breakage.b_prime"}),
                     Catch::Contains("breakage.model"));
 }
 
