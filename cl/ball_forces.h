@@ -110,11 +110,10 @@ MC_FN WallRef analytic_wall(int key, Books* books) {
 
 /* One wall contact: its record (the slot's with the key it continues, or a
  * new one), the law, force, torque and observables into the ball's sums,
- * the books. `out` is the direction from a lifter bar to the ball in the
- * mill frame (unused for the other walls). */
+ * the books. */
 MC_FN void wall_contact(WallRef wr, real3 n, real overlap, real3 p, real4 vel, real4 om, real radius, PairParams pp,
                         MillState mill, MC_GLOBAL const SimParams* sp,
-                        MC_GLOBAL const LifterPolygon* lifters, int law, real2 out, WallSlots* ws, Books* books,
+                        MC_GLOBAL const LifterPolygon* lifters, int law, WallSlots* ws, Books* books,
                         BallSums* sums) {
   int rec = MC_NO_RECORD;
   for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s)
@@ -154,13 +153,14 @@ MC_FN void wall_contact(WallRef wr, real3 n, real overlap, real3 p, real4 vel, r
   record_step(books, rec, fresh, v3_dot(g.v_rel, g.normal), c);
 #if MC_ENERGY_BOOKS
   int element = wr.element;
-  if (element < 0) element = liner_element(books->bp, sp, lifters, wr.key, rotate_z(rc, mill.cos_angle, -mill.sin_angle), out);
+  const real3 rm = rotate_z(rc, mill.cos_angle, -mill.sin_angle); /* the contact point in the mill frame */
+  const int on_bar = wr.element < 0 && wr.key >= MC_WALL_LIFTER0 && wr.key < MC_WALL_MESH0;
+  const real along = on_bar ? lifter_path_place(&lifters[wr.key - MC_WALL_LIFTER0], make_real2(rm.x, rm.y)) : R(0.0);
+  if (element < 0) element = liner_element(books->bp, sp, lifters, wr.key, rm, along);
   liner_step(books, element, fresh, c, wr.wear_k, wr.type != MC_WALL_TYPE_PLATE, atan2_fast(rc.y, rc.x));
-  if (wr.element < 0 && wr.key >= MC_WALL_LIFTER0 && wr.key < MC_WALL_MESH0) { /* where on the bar: its wear station */
+  if (on_bar) { /* where on the bar: its wear station */
     const int k = wr.key - MC_WALL_LIFTER0;
-    const real3 rm = rotate_z(rc, mill.cos_angle, -mill.sin_angle);
-    liner_step(books, lifter_station(books->bp, &lifters[k], k, make_real2(rm.x, rm.y)), fresh, c, wr.wear_k, 0,
-               R(0.0));
+    liner_step(books, lifter_station(books->bp, &lifters[k], k, along), fresh, c, wr.wear_k, 0, R(0.0));
   }
 #endif
   if (ws->n_new < MC_MAX_WALL_CONTACTS) {
@@ -230,7 +230,7 @@ MC_FN void mesh_walls(const Meshes* m, real3 p, real4 vi, real4 wi, real ri, int
       wr.wear_k = tr->a.w;
       const real3 nrm = turning ? rotate_z(hits[h].normal, c, s) : hits[h].normal;
       const PairParams pp = m->pairs[tr->pair_row + mat_i];
-      wall_contact(wr, nrm, ri - hits[h].dist, p, vi, wi, ri, pp, mill, sp, lifters, law, make_real2(0, 0), ws,
+      wall_contact(wr, nrm, ri - hits[h].dist, p, vi, wi, ri, pp, mill, sp, lifters, law, ws,
                    books, sums);
     }
   }
@@ -367,24 +367,23 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
   ws.n_new = 0;
   ws.overflow = 0;
   const PairParams pw = pairs[MC_PAIR_INDEX(sp, mat_i, sp->n_materials)];
-  const real2 no_out = make_real2(0, 0);
 
   if (near_shell) { /* the root only for a ball that may reach the shell */
     real3 nrm;
     const real ov = shell_overlap(p, ri, sp->shell_radius, &nrm);
     if (ov > R(0.0))
-      wall_contact(analytic_wall(MC_WALL_SHELL, books), nrm, ov, p, vi, wi, ri, pw, mill, sp, lifters, law, no_out, &ws, books,
+      wall_contact(analytic_wall(MC_WALL_SHELL, books), nrm, ov, p, vi, wi, ri, pw, mill, sp, lifters, law, &ws, books,
                    sums);
   }
   if (sp->length > R(0.0)) {
     const real ov_low = ri - p.z;
     if (ov_low > R(0.0))
       wall_contact(analytic_wall(MC_WALL_PLATE_LOW, books), make_real3(0, 0, 1), ov_low, p, vi, wi, ri, pw, mill, sp, lifters, law,
-                   no_out, &ws, books, sums);
+                   &ws, books, sums);
     const real ov_high = ri - (sp->length - p.z);
     if (ov_high > R(0.0))
       wall_contact(analytic_wall(MC_WALL_PLATE_HIGH, books), make_real3(0, 0, -1), ov_high, p, vi, wi, ri, pw, mill, sp, lifters,
-                   law, no_out, &ws, books, sums);
+                   law, &ws, books, sums);
   }
   if (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach) {
     const real c = mill.cos_angle, s = mill.sin_angle;
@@ -405,7 +404,7 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
       const real ov = ri - dist;
       if (ov > R(0.0)) {
         const real3 nrm = rotate_z(make_real3(out2.x, out2.y, 0), c, s);
-        wall_contact(analytic_wall(MC_WALL_LIFTER0 + k, books), nrm, ov, p, vi, wi, ri, pw, mill, sp, lifters, law, out2, &ws,
+        wall_contact(analytic_wall(MC_WALL_LIFTER0 + k, books), nrm, ov, p, vi, wi, ri, pw, mill, sp, lifters, law, &ws,
                      books, sums);
       }
     }

@@ -155,14 +155,14 @@ MC_FN void record_step(Books* b, int rec, int fresh, real vn, ContactOut c) {
 /* ------------------------------------------------------------ the liner */
 
 /* The liner element under a wall contact: `key` the wall, `rc` the contact
- * point in the mill frame, `out` (lifters) the direction from the bar to the
- * ball in the mill frame. Element order (src/sim/liner.h): the shell, gap by
+ * point in the mill frame, `along` (lifters) the contact's place along the
+ * bar's wear path (lifter_path_place). Element order (src/sim/liner.h): the shell, gap by
  * gap (gap k from row k to row k + 1, counter-clockwise), shell_bins over
  * its bare arc, each in axial bins; then each lifter row's leading face, top
  * and trailing face, in axial bins; then the end plates (z = 0, then
  * z = length) in rings and sectors. */
 MC_FN int liner_element(MC_GLOBAL const BookParams* bp, MC_GLOBAL const SimParams* sp,
-                        MC_GLOBAL const LifterPolygon* lifters, int key, real3 rc, real2 out) {
+                        MC_GLOBAL const LifterPolygon* lifters, int key, real3 rc, real along) {
   const real two_pi = R(6.283185307179586);
   const int nl = sp->n_lifters;
   int axial = 0;
@@ -190,12 +190,11 @@ MC_FN int liner_element(MC_GLOBAL const BookParams* bp, MC_GLOBAL const SimParam
     return (gap * bp->shell_bins + j) * bp->axial_bins + axial;
   }
   if (key >= MC_WALL_LIFTER0) {
+    /* Its face by place: the leading face up to where the top begins, the
+     * trailing face after it ends, however far either lays back. */
     const int k = key - MC_WALL_LIFTER0;
-    const real4 bd = lifters[k].bound;
-    const real inv = R(1.0) / sqrt(bd.x * bd.x + bd.y * bd.y);
-    const real radial = (out.x * bd.x + out.y * bd.y) * inv;      /* outward from the axis */
-    const real ahead = (out.y * bd.x - out.x * bd.y) * inv;       /* counter-clockwise */
-    const int face = -radial >= fabs(ahead) ? MC_FACE_TOP : ahead > R(0.0) ? MC_FACE_LEADING : MC_FACE_TRAILING;
+    const real4 fc = lifters[k].faces;
+    const int face = along < fc.x ? MC_FACE_LEADING : along <= fc.y ? MC_FACE_TOP : MC_FACE_TRAILING;
     return bp->first_lifter_element + (k * 3 + face) * bp->axial_bins + axial;
   }
   const int plate = key == MC_WALL_PLATE_HIGH ? 1 : 0;
@@ -206,11 +205,10 @@ MC_FN int liner_element(MC_GLOBAL const BookParams* bp, MC_GLOBAL const SimParam
   return bp->first_plate_element + (plate * bp->plate_rings + ring) * bp->plate_sectors + sector;
 }
 
-/* The wear station of a contact point `p` (mill frame) on lifter row k:
- * the closest point of the bar's outline, as a length along its wear path
- * (layout.h LifterPolygon.wear), in MC_WEAR_STATIONS equal parts of the
- * exposed outline; row k's stations follow bp->first_station. */
-MC_FN int lifter_station(MC_GLOBAL const BookParams* bp, MC_GLOBAL const LifterPolygon* poly, int k, real2 p) {
+/* Where a contact point `p` (mill frame) lies on a lifter bar: the closest
+ * point of its outline, as a length along its wear path (layout.h
+ * LifterPolygon.wear), which sets its face (liner_element) and its station. */
+MC_FN real lifter_path_place(MC_GLOBAL const LifterPolygon* poly, real2 p) {
   const int nv = poly->n_vertices;
   const int start = (int)poly->wear.z;
   real along = R(0.0), best_d2 = R(1e30), best_s = R(0.0);
@@ -227,8 +225,15 @@ MC_FN int lifter_station(MC_GLOBAL const BookParams* bp, MC_GLOBAL const LifterP
     if (d2 < best_d2) { best_d2 = d2; best_s = along + t * len; }
     along += len;
   }
+  return best_s;
+}
+
+/* The wear station of a contact at `along` (lifter_path_place) on lifter
+ * row k: MC_WEAR_STATIONS equal parts of the exposed outline; row k's
+ * stations follow bp->first_station. */
+MC_FN int lifter_station(MC_GLOBAL const BookParams* bp, MC_GLOBAL const LifterPolygon* poly, int k, real along) {
   const real span = poly->wear.y - poly->wear.x;
-  int j = span > R(0.0) ? (int)floor((best_s - poly->wear.x) / span * (real)MC_WEAR_STATIONS) : 0;
+  int j = span > R(0.0) ? (int)floor((along - poly->wear.x) / span * (real)MC_WEAR_STATIONS) : 0;
   j = j < 0 ? 0 : j >= MC_WEAR_STATIONS ? MC_WEAR_STATIONS - 1 : j;
   return bp->first_station + k * MC_WEAR_STATIONS + j;
 }

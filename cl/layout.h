@@ -143,6 +143,9 @@ typedef struct {
   real4 wear;  /* the wear stations' path: it starts at vertex z and runs
                   along the edges in order; the exposed outline is from
                   x to y (m along that path) */
+  real4 faces; /* where its faces meet, m along the wear path: the leading
+                  face up to x, the top from x to y, the trailing face
+                  after y (src/core/lifters.h lifter_face_split) */
 } LifterPolygon;
 
 /* Parameters fixed for a run (changed only at a step boundary by the host). */

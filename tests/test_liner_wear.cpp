@@ -78,6 +78,11 @@ TEST_CASE("bad lifter outlines are refused with their cause", "[lifters]") {
   CHECK(fault({{0.015, 0}, {0.015, 0.025}, {0, 0.01}, {-0.015, 0.025}, {-0.015, 0}}).find("non-convex") !=
         std::string::npos);
   CHECK(fault({{0.015, 0}, {-0.015, 0.025}, {0.015, 0.025}, {-0.015, 0}}).find("non-convex") != std::string::npos);
+  // Needles: feet within the coincidence tolerance, or just past it with no
+  // area to speak of (2.5e-10 m² under a 25 mm bar's 6.25e-10).
+  CHECK(fault({{1e-10, 0}, {0, 0.025}, {-1e-10, 0}}).find("the feet coincide") != std::string::npos);
+  CHECK(fault({{1e-8, 0}, {0, 0.025}, {-1e-8, 0}}).find("no area to speak of") != std::string::npos);
+  CHECK(fault({{1e-3, 0}, {0, 0.025}, {-1e-3, 0}}).empty());  // a thin bar is a bar
 }
 
 TEST_CASE("a lifter worn by a uniform depth loses the booked area and its height by that depth", "[lifters]") {

@@ -207,6 +207,19 @@ void write_run_results(const FinishedRun& r, const RunReport& rep) {
   j["precision"] = c.precision == Precision::double_ ? "double" : "float";
   j["build"] = {{"version", version()}, {"commit", build_commit()}};  // the code that made it
 
+  // The results first: once the charge has turned, nothing after them (a
+  // picture, a mesh) may lose them; what cannot be drawn or written then is
+  // a warning that names the file.
+  io::write_spectra_csv(out / "spectra.csv", spectra);
+  io::write_wear_csv(out / "wear.csv", layout, liner);
+  if (c.lifter_rows > 0) {
+    std::vector<std::vector<Vec2>> outlines;
+    for (const LifterProfile& p : c.lifter_pattern) outlines.push_back(profile_outline(p));
+    io::write_lifter_wear_csv(out / "lifter_wear.csv",
+                              lifter_stations(r.s.books, s.window_s, outlines, 0.5 * c.diameter, c.length));
+  }
+  io::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
+
   // Pictures: power against time, and the end view with toe and shoulder.
   io::LinePlot plot;
   plot.title = c.name + ": power draw, " + std::to_string(static_cast<int>(std::lround(100 * d.speed_fraction))) +
@@ -238,27 +251,26 @@ void write_run_results(const FinishedRun& r, const RunReport& rep) {
   io::draw_or_warn(out / "charge.png", [&] { io::write_end_view_png(out / "charge.png", view); });
   io::draw_or_warn(out / "liner.png", [&] { io::write_liner_png(out / "liner.png", c.name, layout, liner); });
   io::draw_or_warn(out / "spectra.png", [&] { io::write_spectra_png(out / "spectra.png", c.name, spectra); });
-  io::write_spectra_csv(out / "spectra.csv", spectra);
-  io::write_wear_csv(out / "wear.csv", layout, liner);
-  if (c.lifter_rows > 0) {
-    std::vector<std::vector<Vec2>> outlines;
-    for (const LifterProfile& p : c.lifter_pattern) outlines.push_back(profile_outline(p));
-    io::write_lifter_wear_csv(out / "lifter_wear.csv",
-                              lifter_stations(r.s.books, s.window_s, outlines, 0.5 * c.diameter, c.length));
-  }
   // The liner in the mill frame, and beside each snapshot turned to the
   // mill's angle then (part 1 of the same times in charge.pvd).
-  io::write_mesh_vtp(out / "liner.vtp", io::liner_mesh(layout, &liner, 0.0, s.turning_s));
+  io::write_or_warn(out / "liner.vtp",
+                    [&] { io::write_mesh_vtp(out / "liner.vtp", io::liner_mesh(layout, &liner, 0.0, s.turning_s)); });
   {
     const std::vector<double> times = r.pvd.times();
     for (std::size_t k = 0; k < times.size(); ++k) {
       char name[64];
       std::snprintf(name, sizeof name, "snapshots/liner_%06zu.vtp", k);
-      io::write_mesh_vtp(out / name, io::liner_mesh(layout, &liner, r.scene.mill_angle + d.omega * times[k], times[k]));
+      const bool written = io::write_or_warn(out / name, [&] {
+        io::write_mesh_vtp(out / name, io::liner_mesh(layout, &liner, r.scene.mill_angle + d.omega * times[k], times[k]));
+      });
+      if (!written) {  // the rest would fail alike: one warning is enough
+        std::fprintf(stderr, "warning: the liner beside the %zu later snapshots not written either\n",
+                     times.size() - k - 1);
+        break;
+      }
       r.pvd.add(times[k], name, 1);
     }
   }
-  io::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
 }
 
 void print_run_results(const FinishedRun& r, const RunReport& rep) {
@@ -334,9 +346,17 @@ void print_run_results(const FinishedRun& r, const RunReport& rep) {
               "particle-updates/s\n",
               thousands(s.steps).c_str(), s.wall_s, s.settle_s, s.settle_wall_s,
               s.wall_s > 0 ? 100 * s.settle_wall_s / s.wall_s : 0.0, s.updates_per_s);
-  std::printf("wrote           %s/{summary.json, timeseries.csv, charge.pvd, power.png, charge.png, spectra.csv, "
-              "spectra.png, wear.csv, lifter_wear.csv, liner.vtp, liner.png}\n",
-              out.string().c_str());
+  // What is there: a picture or mesh that could not be written was a warning.
+  std::string wrote, missing;
+  for (const char* f : {"summary.json", "timeseries.csv", "charge.pvd", "power.png", "charge.png", "spectra.csv",
+                        "spectra.png", "wear.csv", "lifter_wear.csv", "liner.vtp", "liner.png"}) {
+    std::error_code ec;
+    if (std::string(f) == "lifter_wear.csv" && c.lifter_rows == 0) continue;
+    std::string& to = fs::is_regular_file(out / f, ec) ? wrote : missing;
+    to += (to.empty() ? "" : ", ") + std::string(f);
+  }
+  std::printf("wrote           %s/{%s}%s\n", out.string().c_str(), wrote.c_str(),
+              missing.empty() ? "" : ("; not written (see the warnings): " + missing).c_str());
 }
 
 }  // namespace mc::app

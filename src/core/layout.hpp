@@ -44,8 +44,8 @@ static_assert(sizeof(f64::SimParams) == 2 * 32 + 11 * 8 + 13 * 4 + 20);
 static_assert(sizeof(f32::MeshTriangle) == 4 * 16 + 8 * 4 && sizeof(f64::MeshTriangle) == 4 * 32 + 8 * 4);
 static_assert(sizeof(f32::MeshGrid) == 16 + 4 * 4 + 8 * 4 && sizeof(f64::MeshGrid) == 32 + 4 * 8 + 8 * 4);
 static_assert(sizeof(f32::BookParams) == 4 * 4 + 10 * 4 && sizeof(f64::BookParams) == 4 * 8 + 10 * 4);
-static_assert(sizeof(f32::LifterPolygon) == MC_POLY_MAX_VERTS * 8 + 16 + 2 * 16 &&
-              sizeof(f64::LifterPolygon) == MC_POLY_MAX_VERTS * 16 + 32 + 2 * 32);
+static_assert(sizeof(f32::LifterPolygon) == MC_POLY_MAX_VERTS * 8 + 16 + 3 * 16 &&
+              sizeof(f64::LifterPolygon) == MC_POLY_MAX_VERTS * 16 + 32 + 3 * 32);
 
 // The types of one precision, for code templated on it.
 template <class Real>

@@ -74,7 +74,7 @@ std::string profile_outline_fault(const std::vector<Vec2>& o, double R, double r
     if (std::hypot(o[k].x, o[k].y) > R) return at(k) + " lies farther from the bar's centre than the shell's radius";
   for (std::size_t k = 0; k + 1 < n; ++k)
     if (std::hypot(o[k + 1].x - o[k].x, o[k + 1].y - o[k].y) <= tol) return at(k) + " and the next coincide";
-  if (!(o.front().x > o.back().x)) return "the feet coincide";
+  if (!(o.front().x - o.back().x > tol)) return "the feet coincide";
   // Closed by the shell from the trailing foot to the leading one, the outline
   // must turn left at every point, once round: convex and not crossing itself.
   double turned = 0;
@@ -88,6 +88,11 @@ std::string profile_outline_fault(const std::vector<Vec2>& o, double R, double r
     turned += std::atan2(c, (cur.x - prev.x) * (next.x - cur.x) + (cur.y - prev.y) * (next.y - cur.y));
   }
   if (std::fabs(turned - 2 * M_PI) > 1e-6) return "the outline crosses itself (it winds more than once)";
+  double area = 0;
+  for (std::size_t k = 0; k < n; ++k) area += 0.5 * (o[k].x * o[(k + 1) % n].y - o[(k + 1) % n].x * o[k].y);
+  if (!(std::fabs(area) > 1e-6 * h * h))
+    return "the outline encloses no area to speak of (as much as a square " + mm(std::sqrt(std::fabs(area))) +
+           " mm on a side): a needle or a line, not a bar";
   return "";
 }
 
@@ -148,6 +153,76 @@ WearPath lifter_wear_path(const std::vector<Vec2>& poly, double R) {
     along += len;
   }
   return w;
+}
+
+FaceSplit lifter_face_split(const std::vector<Vec2>& poly, double R, Vec2 centre) {
+  FaceSplit f;
+  const WearPath path = lifter_wear_path(poly, R);
+  f.from = path.from;
+  f.to = path.to;
+  f.top_from = f.top_to = 0.5 * (path.from + path.to);
+  const std::size_t n = poly.size();
+  if (n < 2) return f;
+  // The exposed outline's edges in path order, each with its ends' length
+  // along the path, height above the shell and place along its tangent.
+  struct Piece {
+    double s0, s1, y0, y1, x0, x1;
+  };
+  const Vec2 ahead{-centre.y, centre.x};
+  auto height = [&](Vec2 p) { return R - (p.x * centre.x + p.y * centre.y); };
+  auto across = [&](Vec2 p) { return p.x * ahead.x + p.y * ahead.y; };
+  std::vector<Piece> pieces;
+  double along = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    const Vec2 a = poly[(path.start + j) % n], b = poly[(path.start + j + 1) % n];
+    const double len = std::hypot(b.x - a.x, b.y - a.y);
+    const double s0 = std::max(along, path.from), s1 = std::min(along + len, path.to);
+    if (len > 0 && s1 > s0) {
+      auto at = [&](double s) {
+        const double t = (s - along) / len;
+        return Vec2{a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)};
+      };
+      const Vec2 p0 = at(s0), p1 = at(s1);
+      pieces.push_back({s0, s1, height(p0), height(p1), across(p0), across(p1)});
+    }
+    along += len;
+  }
+  if (pieces.empty()) return f;
+  double h = 0;
+  for (const Piece& q : pieces) h = std::max({h, q.y0, q.y1});
+  if (!(h > 0)) return f;
+  const double tol = 1e-9 * h;
+  auto flat_top = [&](const Piece& q) {
+    return std::min(q.y0, q.y1) >= 0.5 * h - tol && std::fabs(q.y1 - q.y0) <= std::fabs(q.x1 - q.x0);
+  };
+  // The run of flat edges above half the height that holds the summit.
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    if (!(std::max(pieces[i].y0, pieces[i].y1) >= h - tol && flat_top(pieces[i]))) continue;
+    std::size_t lo = i, hi = i;
+    while (lo > 0 && flat_top(pieces[lo - 1])) --lo;
+    while (hi + 1 < pieces.size() && flat_top(pieces[hi + 1])) ++hi;
+    f.top_from = pieces[lo].s0;
+    f.top_to = pieces[hi].s1;
+    return f;
+  }
+  // A pointed bar: its top is where it stands above 90 % of its height (one
+  // stretch round the summit, the outline being convex).
+  const double level = 0.9 * h;
+  double lo = path.to, hi = path.from;
+  for (const Piece& q : pieces) {
+    auto take = [&](double s) {
+      lo = std::min(lo, s);
+      hi = std::max(hi, s);
+    };
+    if (q.y0 >= level) take(q.s0);
+    if (q.y1 >= level) take(q.s1);
+    if ((q.y0 - level) * (q.y1 - level) < 0) take(q.s0 + (q.s1 - q.s0) * (level - q.y0) / (q.y1 - q.y0));
+  }
+  if (lo < hi) {
+    f.top_from = lo;
+    f.top_to = hi;
+  }
+  return f;
 }
 
 std::vector<Vec2> lifter_polygon(double shell_radius, const LifterProfile& p, double angle) {
@@ -241,6 +316,32 @@ std::vector<std::vector<Vec2>> bars_on_shell(const std::vector<std::vector<Vec2>
     out.push_back(clipped);
   }
   return out;
+}
+
+bool convex_polygons_overlap(const std::vector<Vec2>& a, const std::vector<Vec2>& b, double tol) {
+  // Separating axes: the edges' normals of both; apart when one separates
+  // them by more than -tol (touching within tol is not overlapping).
+  for (const auto* poly : {&a, &b}) {
+    const std::size_t n = poly->size();
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vec2 p = (*poly)[k], q = (*poly)[(k + 1) % n];
+      const double nx = q.y - p.y, ny = p.x - q.x, len = std::hypot(nx, ny);
+      if (!(len > 0)) continue;
+      double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
+      for (const Vec2& v : a) {
+        const double d = (v.x * nx + v.y * ny) / len;
+        amin = std::min(amin, d);
+        amax = std::max(amax, d);
+      }
+      for (const Vec2& v : b) {
+        const double d = (v.x * nx + v.y * ny) / len;
+        bmin = std::min(bmin, d);
+        bmax = std::max(bmax, d);
+      }
+      if (amax <= bmin + tol || bmax <= amin + tol) return false;
+    }
+  }
+  return true;
 }
 
 double polygon_signed_distance(const std::vector<Vec2>& poly, double x, double y) {

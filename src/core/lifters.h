@@ -61,6 +61,20 @@ struct WearPath {
 };
 WearPath lifter_wear_path(const std::vector<Vec2>& polygon, double R);
 
+// A bar's faces by their place on its exposed outline, as lengths along its
+// wear path (WearPath): the leading face from `from` to `top_from`, the top
+// to `top_to`, the trailing face to `to`. The top is the run of edges round
+// the summit that lie above half the bar's height and are flatter than 45°
+// to the shell's tangent; a bar with no such edge (a triangle, a face laid
+// back past 45° to a point) has as top the part above 90 % of its height.
+// However far a face lays back it stays a face: the leading face always runs
+// from the leading foot up to the top. `centre` is the direction of the bar's
+// centre from the axis (unit), which sets its height above the shell.
+struct FaceSplit {
+  double from = 0, top_from = 0, top_to = 0, to = 0;
+};
+FaceSplit lifter_face_split(const std::vector<Vec2>& polygon, double R, Vec2 centre);
+
 // The counter-clockwise cross-section of one bar centred at `angle` (rad) on a
 // shell of inside radius `shell_radius`. The base lies just outside the shell
 // so that no gap opens between bar and shell.
@@ -82,6 +96,10 @@ std::vector<Triangle> lifter_triangles(const std::vector<std::vector<Vec2>>& bar
 // shell dropped; a chord closes each): the cross-sections a CAD model of
 // lifters bolted to the shell has, for lifter_triangles.
 std::vector<std::vector<Vec2>> bars_on_shell(const std::vector<std::vector<Vec2>>& bars, double R);
+
+// Whether two convex polygons overlap by more than `tol` (m) across every
+// separating direction: bars that meet as solids.
+bool convex_polygons_overlap(const std::vector<Vec2>& a, const std::vector<Vec2>& b, double tol);
 
 // Signed distance from (x, y) to a convex counter-clockwise polygon: negative
 // inside. For packing and checks on the host (the kernels use cl/walls.h).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/lifters.h"
 #include "core/wall_mesh.h"
 
 namespace mc {
@@ -116,53 +117,34 @@ LinerLayout liner_layout(const Scene& scene) {
       }
   }
 
-  // Lifters: each row's faces, the edges of its cross-section inside the
-  // shell, sorted by where their outward normal points.
+  // Lifters: each row's leading face, top and trailing face, by their place
+  // along the bar's exposed outline (lifter_face_split), as polylines.
   L.first_lifter = L.size();
   for (int k = 0; k < nl; ++k) {
     const std::vector<Vec2>& poly = w.lifters[k];
     const double c = L.lifter_centre[k];
-    const Vec2 rad{std::cos(c), std::sin(c)}, ahead{-std::sin(c), std::cos(c)};
-    std::vector<Vec2> strip[3];  // the clipped edges of each face, as a polyline
+    const FaceSplit split = lifter_face_split(poly, R, Vec2{std::cos(c), std::sin(c)});
+    const WearPath path = lifter_wear_path(poly, R);
+    std::vector<Vec2> strip[3];  // each face's stretch of the outline
     double face_len[3] = {0, 0, 0};
+    const double cuts[4] = {split.from, split.top_from, split.top_to, split.to};
     const std::size_t n = poly.size();
-    for (std::size_t v = 0; v < n; ++v) {
-      const Vec2 a = poly[v], b = poly[(v + 1) % n];
-      const double ex = b.x - a.x, ey = b.y - a.y, el = std::hypot(ex, ey);
-      if (el <= 0) continue;
-      const Vec2 nrm{ey / el, -ex / el};  // outward for counter-clockwise vertices
-      const double radial = nrm.x * rad.x + nrm.y * rad.y, fwd = nrm.x * ahead.x + nrm.y * ahead.y;
-      if (radial > 0.5) continue;  // the base, behind the shell
-      const int face = -radial >= std::fabs(fwd) ? static_cast<int>(LifterFace::top)
-                       : fwd > 0                 ? static_cast<int>(LifterFace::leading)
-                                                 : static_cast<int>(LifterFace::trailing);
-      // The part of the edge inside the shell (the bar's base lies behind it).
-      auto inside = [&](double t) { return std::hypot(a.x + t * ex, a.y + t * ey) <= R * (1 + 1e-12) || R <= 0; };
-      double t0 = 0, t1 = 1;
-      if (!inside(0) || !inside(1)) {
-        const int steps = 64;
-        double first = -1, last = -1;
-        for (int s = 0; s <= steps; ++s)
-          if (inside(static_cast<double>(s) / steps)) {
-            if (first < 0) first = static_cast<double>(s) / steps;
-            last = static_cast<double>(s) / steps;
-          }
-        if (first < 0) continue;
-        // Refine the crossings by bisection.
-        auto refine = [&](double in, double out) {
-          for (int it = 0; it < 50; ++it) {
-            const double m = 0.5 * (in + out);
-            (inside(m) ? in : out) = m;
-          }
-          return in;
+    double along = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      const Vec2 a = poly[(path.start + j) % n], b = poly[(path.start + j + 1) % n];
+      const double len = std::hypot(b.x - a.x, b.y - a.y);
+      for (int f = 0; f < 3 && len > 0; ++f) {
+        const double s0 = std::max(along, cuts[f]), s1 = std::min(along + len, cuts[f + 1]);
+        if (!(s1 > s0)) continue;
+        auto at = [&](double s) {
+          const double t = (s - along) / len;
+          return Vec2{a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)};
         };
-        t0 = inside(0) ? 0.0 : refine(first, std::max(0.0, first - 1.0 / steps));
-        t1 = inside(1) ? 1.0 : refine(last, std::min(1.0, last + 1.0 / steps));
+        if (strip[f].empty()) strip[f].push_back(at(s0));
+        strip[f].push_back(at(s1));
+        face_len[f] += s1 - s0;
       }
-      const Vec2 p0{a.x + t0 * ex, a.y + t0 * ey}, p1{a.x + t1 * ex, a.y + t1 * ey};
-      if (strip[face].empty()) strip[face].push_back(p0);
-      strip[face].push_back(p1);
-      face_len[face] += (t1 - t0) * el;
+      along += len;
     }
     for (int f = 0; f < 3; ++f)
       for (int a = 0; a < A; ++a) {

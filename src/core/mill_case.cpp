@@ -165,6 +165,13 @@ MillDerived derive(const MillCase& c) {
       if (half_angle[a] + half_angle[b] >= spacing)
         fail("lifters.rows", std::to_string(c.lifter_rows) + " rows of these profiles overlap at the shell: use fewer "
                              "rows or narrower lifters");
+      // A bar may lean over the next one above their feet: the bars inside
+      // the shell must not meet.
+      const auto bars = bars_on_shell(lifter_rows(R, c.lifter_rows, {c.lifter_pattern[a], c.lifter_pattern[b]}), R);
+      if (c.lifter_rows >= 2 && convex_polygons_overlap(bars[0], bars[1], 1e-9 * R))
+        fail("lifters.profile[" + std::to_string(c.lifter_pattern[a].polygon() ? a : b) + "].points",
+             "the bar reaches over the next one: with " + std::to_string(c.lifter_rows) +
+                 " rows the bars meet inside the mill though their feet do not; use fewer rows or lean it less");
       const LifterProfile& p = c.lifter_pattern[a];
       lifter_area += p.polygon() ? measure_profile(profile_outline(p)).area
                                  : p.height * (p.top_width + p.height * std::tan(p.face_angle_deg * kPi / 180.0));

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -56,6 +57,16 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view data)
   if (dfd >= 0) {
     ::fsync(dfd);
     ::close(dfd);
+  }
+}
+
+bool write_or_warn(const std::filesystem::path& path, const std::function<void()>& write) {
+  try {
+    write();
+    return true;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "warning: %s not written: %s\n", path.string().c_str(), e.what());
+    return false;
   }
 }
 

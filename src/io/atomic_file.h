@@ -4,11 +4,17 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string_view>
 
 namespace mc::io {
 
 // Throws std::runtime_error naming the path and the system error.
 void write_file_atomic(const std::filesystem::path& path, std::string_view data);
+
+// Writes a file that comes after a run's results (a mesh, a picture's data)
+// with `write`; one that cannot be written is a warning on stderr naming the
+// file and why, never an end to the command. Returns whether it was written.
+bool write_or_warn(const std::filesystem::path& path, const std::function<void()>& write);
 
 }  // namespace mc::io

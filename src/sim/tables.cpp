@@ -131,6 +131,11 @@ SceneTables scene_tables(const Scene& scene) {
     p.bound = {cx, cy, radius * (1 + 1e-4) + 1e-6, w.shell_radius > 0 ? lifter_half_angle(poly, w.shell_radius) : 0.0};
     const WearPath path = lifter_wear_path(poly, w.shell_radius > 0 ? w.shell_radius : 1e300);
     p.wear = {path.from, path.to, static_cast<double>(path.start), 0.0};
+    const double centre = w.lifter_first_angle + 2.0 * M_PI * static_cast<double>(t.lifters.size()) /
+                                                     static_cast<double>(w.lifters.size());
+    const FaceSplit split = lifter_face_split(poly, w.shell_radius > 0 ? w.shell_radius : 1e300,
+                                              Vec2{std::cos(centre), std::sin(centre)});
+    p.faces = {split.top_from, split.top_to, 0.0, 0.0};
     t.lifters.push_back(p);
   }
   if (t.lifters.empty()) t.lifters.push_back(f64::LifterPolygon{});
