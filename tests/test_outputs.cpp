@@ -166,3 +166,27 @@ TEST_CASE("a window whose charge is still gaining energy: the console says so, a
   fs::remove_all(out);
   fs::remove(log);
 }
+
+TEST_CASE("a --duration shorter than the case's warm-up cuts the warm-up to half the run and says so",
+          "[outputs][cli]") {
+  const fs::path out = fs::temp_directory_path() / ("millcharge_test_short_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  const fs::path err = out.string() + ".err";
+  // The lab case's warm-up is 1.5 s; the run turns 0.2 s.
+  const std::string cmd = std::string(MC_BINARY) + " run --duration 0.2 --set mill.length=0.06 --set run.settle=0.05 "
+                          "--out '" + out.string() + "' --quiet > /dev/null 2> '" + err.string() + "'";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  std::ifstream e(err);
+  const std::string message((std::istreambuf_iterator<char>(e)), std::istreambuf_iterator<char>());
+  CHECK_THAT(message, Catch::Contains("the warm-up is cut to 0.1 s, half the run"));
+  std::ifstream js(out / "summary.json");
+  const nlohmann::json j = nlohmann::json::parse(js);
+  CHECK(j["average"]["from_s"].get<double>() == Approx(0.1).margin(2e-4));
+  CHECK(j["average"]["to_s"].get<double>() == Approx(0.2).margin(2e-4));
+  // The case as run keeps the cut warm-up: it resumes as it ran.
+  std::ifstream ct(out / "case.toml");
+  const std::string case_text((std::istreambuf_iterator<char>(ct)), std::istreambuf_iterator<char>());
+  CHECK_THAT(case_text, Catch::Contains("warmup = 0.1"));
+  fs::remove_all(out);
+  fs::remove(err);
+}

@@ -27,7 +27,28 @@ std::vector<std::string> case_overrides(const CaseOptions& o) {
 Prepared prepare(const CaseOptions& o, const fs::path& default_path) {
   Prepared p;
   p.path = o.case_path.empty() ? default_path : fs::path(o.case_path);
-  p.c = io::read_case(p.path, case_overrides(o));
+  // A --duration not longer than the case's own warm-up: the warm-up (unless
+  // given with --set) becomes half the run, said once, rather than a refusal
+  // that blames a line of the case the user never touched.
+  std::vector<std::string> overrides = case_overrides(o);
+  bool warmup_set = false;
+  for (const std::string& s : o.overrides) warmup_set = warmup_set || s.rfind("run.warmup=", 0) == 0;
+  if (!o.duration_auto && o.duration > 0 && !warmup_set) {
+    CaseOptions plain = o;
+    plain.duration = 0;
+    const double warmup = io::read_case(p.path, case_overrides(plain)).warmup;
+    if (!(warmup < o.duration)) {
+      std::fprintf(stderr,
+                   "millcharge: note: --duration %.4g s is not longer than the case's warm-up (run.warmup = %.4g s): "
+                   "the warm-up is cut to %.4g s, half the run (--set run.warmup=S to choose another)\n",
+                   o.duration, warmup, 0.5 * o.duration);
+      std::ostringstream w;
+      w.precision(17);
+      w << "run.warmup=" << 0.5 * o.duration;
+      overrides.push_back(w.str());
+    }
+  }
+  p.c = io::read_case(p.path, overrides);
   p.d = derive(p.c);
   try {
     p.scene = build_scene(p.c, p.d);
