@@ -161,3 +161,30 @@ TEST_CASE("a stage that wears a lifter through says so", "[lifters]") {
   std::vector<double> area(mc::kWearStations, 1e-4);  // far more than the bar holds
   CHECK(mc::wear_lifter(o, kR, area, 0.0).worn_away);
 }
+
+TEST_CASE("a laid-back foot over a worn shell follows its face down to the worn shell", "[lifters]") {
+  // Faces laid back 72 and 79 degrees from the radial, the latter so wide
+  // that its foot lies behind the curved shell: with no wear on the bar the
+  // outline only rises by the shell's depth, its feet carried along its
+  // faces to the worn shell (the face line y = h (x_foot - x) / run meets
+  // y = -depth at x_foot + depth run / h).
+  struct Bar {
+    std::vector<Vec2> o;
+    double run, h;  // the leading face's horizontal run and rise
+  };
+  const std::vector<Bar> bars = {{{{0.05, 0}, {-0.01, 0.02}, {-0.02, 0.02}, {-0.02, 0}}, 0.06, 0.02},
+                                 {{{0.06, 0}, {0.0, 0.012}, {-0.01, 0.012}, {-0.03, 0}}, 0.06, 0.012}};
+  for (const Bar& b : bars)
+    for (double shell : {0.0, 0.005, 0.02}) {
+      INFO("bar " << &b - &bars[0] << ", shell worn " << shell << " m");
+      const mc::WornLifter w = mc::wear_lifter(b.o, kR, std::vector<double>(mc::kWearStations, 0.0), shell);
+      REQUIRE_FALSE(w.worn_away);
+      CHECK(std::fabs(w.removed_area) < 1e-12);
+      REQUIRE(w.outline.size() == b.o.size());
+      CHECK(w.outline.front().x == Approx(b.o.front().x + shell * b.run / b.h).margin(1e-9));
+      for (std::size_t k = 1; k + 1 < b.o.size(); ++k) {  // the bar above the old shell, risen by its depth
+        CHECK(w.outline[k].x == Approx(b.o[k].x).margin(1e-9));
+        CHECK(w.outline[k].y == Approx(b.o[k].y + shell).margin(1e-9));
+      }
+    }
+}

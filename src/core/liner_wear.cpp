@@ -148,16 +148,23 @@ Moved move(const Bar& bar, const std::vector<Sample>& samples, const std::vector
       if (polygon_signed_distance(bar.poly, c.x, c.y) <= 1e-9 * R && !in_a_strip(c)) keep.push_back(c);
     }
   }
-  // The feet: the end pieces' worn lines carried on behind the shell.
+  // The feet: the end pieces' worn lines carried on behind the worn shell,
+  // to a quarter of the bar's height past its line (x = R + shell_depth in
+  // this frame, where the hull is cut below): however far a foot lays back
+  // and however deep the shell wore, the face meets the worn shell.
   if (!samples.empty()) {
     double u_min = R;
     for (const Vec2& v : bar.poly) u_min = std::min(u_min, v.x);
-    const double reach = 0.5 * (R - u_min) + 2 * shell_depth;
-    const Sample& f = samples.front();
-    const Sample& l = samples.back();
-    const double df = scale * depth.front() + reach, dl = scale * depth.back() + reach;
-    keep.push_back({f.p.x - scale * depth.front() * f.n.x - df * f.t.x, f.p.y - scale * depth.front() * f.n.y - df * f.t.y});
-    keep.push_back({l.p.x - scale * depth.back() * l.n.x + dl * l.t.x, l.p.y - scale * depth.back() * l.n.y + dl * l.t.y});
+    const double beyond = R + shell_depth + 0.25 * (R - u_min);
+    auto foot = [&](const Sample& e, double d, double outward) {  // outward: −1 back along the path, +1 on
+      const Vec2 start{e.p.x - d * e.n.x, e.p.y - d * e.n.y};
+      const double dx = outward * e.t.x;  // how fast the line leaves the axis
+      const double reach = dx > 1e-6 ? (beyond - start.x) / dx : 4 * R;
+      const double r = std::max(reach, 0.5 * e.len);
+      return Vec2{start.x + outward * r * e.t.x, start.y + outward * r * e.t.y};
+    };
+    keep.push_back(foot(samples.front(), scale * depth.front(), -1));
+    keep.push_back(foot(samples.back(), scale * depth.back(), +1));
   }
   Moved m;
   const std::vector<Vec2> hull = hull_of(keep);
