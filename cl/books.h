@@ -182,7 +182,7 @@ MC_FN int liner_element(MC_GLOBAL const BookParams* bp, MC_GLOBAL const SimParam
       gap = (int)floor(rel / sp->lifter_spacing);
       gap = gap >= nl ? nl - 1 : gap;
       const real from = lifters[gap].bound.w;
-      const real to = sp->lifter_spacing - lifters[(gap + 1) % nl].bound.w;
+      const real to = sp->lifter_spacing - lifters[(gap + 1) % nl].faces.z;
       u = (rel - (real)gap * sp->lifter_spacing - from) / (to - from);
     }
     int j = (int)floor(u * (real)bp->shell_bins);

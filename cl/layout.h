@@ -138,14 +138,17 @@ typedef struct {
   int n_vertices;
   int pad0, pad1, pad2;
   real4 bound; /* a circle holding the polygon: centre xy, radius z; w the
-                  half-angle (rad) the bar covers on the shell, where the
-                  bare shell between two rows begins */
+                  angle (rad) from the row's centre to where the bar meets
+                  the shell ahead (counter-clockwise): the bare shell after
+                  it begins there */
   real4 wear;  /* the wear stations' path: it starts at vertex z and runs
                   along the edges in order; the exposed outline is from
                   x to y (m along that path) */
   real4 faces; /* where its faces meet, m along the wear path: the leading
                   face up to x, the top from x to y, the trailing face
-                  after y (src/core/lifters.h lifter_face_split) */
+                  after y (src/core/lifters.h lifter_face_split); z the
+                  angle (rad) from the row's centre to where the bar meets
+                  the shell behind: the bare shell before it ends there */
 } LifterPolygon;
 
 /* Parameters fixed for a run (changed only at a step boundary by the host). */

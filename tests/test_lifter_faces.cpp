@@ -267,3 +267,35 @@ TEST_CASE("a bar with faces laid back 50 degrees runs whole and books its faces"
   std::filesystem::remove_all(out);
   std::filesystem::remove(out.parent_path() / (out.filename().string() + ".toml"));
 }
+
+TEST_CASE("the bare shell between lopsided bars is the mill's arc less each bar's footprint", "[lifters][faces]") {
+  // A worn ramp: its leading foot 30 mm ahead of its row's centre, its
+  // trailing foot 30 mm behind, its top leaning back. Its footprint is the
+  // arc between where its two foot edges cross the shell, found here by
+  // bisection along each edge.
+  const std::vector<Vec2> ramp{{0.03, 0}, {-0.02, 0.025}, {-0.03, 0.025}, {-0.03, 0}};
+  auto crossing_angle = [](Vec2 top, Vec2 foot) {
+    double lo = 0, hi = 1;
+    auto at = [&](double t) { return Vec2{top.x + t * (foot.x - top.x), top.y + t * (foot.y - top.y)}; };
+    for (int it = 0; it < 200; ++it) {
+      const Vec2 p = at(0.5 * (lo + hi));
+      ((kR - p.y) * (kR - p.y) + p.x * p.x < kR * kR ? lo : hi) = 0.5 * (lo + hi);
+    }
+    const Vec2 p = at(lo);
+    return std::atan2(p.x, kR - p.y);  // from the row's centre, counter-clockwise positive
+  };
+  const double lead = crossing_angle({-0.02, 0.025}, {0.03 + 0.05 * 0.25, -0.025 * 0.25});
+  const double trail = -crossing_angle({-0.03, 0.025}, {-0.03, -0.025});
+  const int rows = 10;
+  Scene sc;
+  sc.walls.shell_radius = kR;
+  sc.walls.length = 0.2;
+  sc.walls.lifters = lifter_rows(kR, rows, {points(ramp)}, 0.0);
+  const LinerLayout L = liner_layout(sc);
+  double shell = 0;
+  for (const LinerElement& e : L.elements)
+    if (e.part == LinerPart::shell) shell += e.area_m2;
+  CHECK(L.lifter_lead_angle[3] == Approx(lead).epsilon(1e-9));
+  CHECK(L.lifter_trail_angle[3] == Approx(trail).epsilon(1e-9));
+  CHECK(shell == Approx(kR * 0.2 * (2 * M_PI - rows * (lead + trail))).epsilon(1e-9));
+}

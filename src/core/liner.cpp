@@ -30,14 +30,9 @@ Vec3 on_circle(double r, double theta, double z) { return {r * std::cos(theta), 
 
 }  // namespace
 
-double lifter_half_angle(const std::vector<Vec2>& poly, double R) {
-  double cx = 0, cy = 0;
-  for (const Vec2& v : poly) {
-    cx += v.x;
-    cy += v.y;
-  }
-  const double centre = std::atan2(cy, cx);
-  double half = 0;
+FootAngles lifter_foot_angles(const std::vector<Vec2>& poly, double R, double centre) {
+  FootAngles f;
+  bool crossed = false;
   const std::size_t n = poly.size();
   for (std::size_t k = 0; k < n; ++k) {
     const Vec2 a = poly[k], b = poly[(k + 1) % n];
@@ -49,12 +44,19 @@ double lifter_half_angle(const std::vector<Vec2>& poly, double R) {
     for (double sgn : {-1.0, 1.0}) {
       const double t = (-qb + sgn * std::sqrt(disc)) / (2 * qa);
       if (t < 0 || t > 1) continue;
-      half = std::max(half, std::fabs(angle_diff(centre, std::atan2(a.y + t * ey, a.x + t * ex))));
+      const double d = angle_diff(centre, std::atan2(a.y + t * ey, a.x + t * ex));
+      f.lead = std::max(f.lead, d);
+      f.trail = std::max(f.trail, -d);
+      crossed = true;
     }
   }
-  if (half == 0)  // wholly inside the shell: the vertices' spread
-    for (const Vec2& v : poly) half = std::max(half, std::fabs(angle_diff(centre, std::atan2(v.y, v.x))));
-  return half;
+  if (!crossed)  // wholly inside the shell: the vertices' spread
+    for (const Vec2& v : poly) {
+      const double d = angle_diff(centre, std::atan2(v.y, v.x));
+      f.lead = std::max(f.lead, d);
+      f.trail = std::max(f.trail, -d);
+    }
+  return f;
 }
 
 LinerLayout liner_layout(const Scene& scene) {
@@ -69,14 +71,17 @@ LinerLayout liner_layout(const Scene& scene) {
   const double spacing = nl > 0 ? 2 * kPi / nl : 2 * kPi;
   for (int k = 0; k < nl; ++k) {
     L.lifter_centre.push_back(wrap(w.lifter_first_angle + k * spacing));
-    L.lifter_half_angle.push_back(R > 0 ? lifter_half_angle(w.lifters[k], R) : 0.0);
+    const FootAngles f = R > 0 ? lifter_foot_angles(w.lifters[k], R, L.lifter_centre[k]) : FootAngles{};
+    L.lifter_lead_angle.push_back(f.lead);
+    L.lifter_trail_angle.push_back(f.trail);
+    L.lifter_half_angle.push_back(0.5 * (f.lead + f.trail));
   }
   L.shell_bins = nl > 0 ? g.shell_bins : g.smooth_shell_bins;
   // Axial bins: about square shell elements, at most 32.
   double bare = 2 * kPi;
   if (nl > 0) {
     bare = 0;
-    for (int k = 0; k < nl; ++k) bare += spacing - L.lifter_half_angle[k] - L.lifter_half_angle[(k + 1) % nl];
+    for (int k = 0; k < nl; ++k) bare += spacing - L.lifter_lead_angle[k] - L.lifter_trail_angle[(k + 1) % nl];
     bare /= nl;
   }
   const double elem_width = R * bare / L.shell_bins;
@@ -94,8 +99,8 @@ LinerLayout liner_layout(const Scene& scene) {
   // Shell: gap by gap, bins over the bare arc, each in axial bins.
   const int gaps = nl > 0 ? nl : 1;
   for (int k = 0; k < gaps; ++k) {
-    const double from = nl > 0 ? L.lifter_centre[k] + L.lifter_half_angle[k] : 0.0;
-    const double to = nl > 0 ? L.lifter_centre[k] + spacing - L.lifter_half_angle[(k + 1) % nl] : 2 * kPi;
+    const double from = nl > 0 ? L.lifter_centre[k] + L.lifter_lead_angle[k] : 0.0;
+    const double to = nl > 0 ? L.lifter_centre[k] + spacing - L.lifter_trail_angle[(k + 1) % nl] : 2 * kPi;
     for (int j = 0; j < L.shell_bins; ++j)
       for (int a = 0; a < A; ++a) {
         LinerElement e;

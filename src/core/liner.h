@@ -48,16 +48,23 @@ struct LinerLayout {
   int first_plate = 0;
   int first_mesh = 0;    // the mesh triangles, one element each, in the device order (core/wall_mesh.h)
   std::vector<double> lifter_centre;      // rad, mill frame
-  std::vector<double> lifter_half_angle;  // rad the bar covers on the shell
+  std::vector<double> lifter_half_angle;  // rad: half the arc the bar covers on the shell
+  // rad from the row's centre to where the bar meets the shell, ahead
+  // (counter-clockwise, its leading foot) and behind: a worn bar's are unequal.
+  std::vector<double> lifter_lead_angle, lifter_trail_angle;
   std::vector<LinerElement> elements;
   int size() const { return static_cast<int>(elements.size()); }
 };
 
 LinerLayout liner_layout(const Scene& scene);
 
-// Half the angle (rad) that a bar's cross-section covers on a shell of
-// radius R, about its centre angle: where its faces cross the shell.
-double lifter_half_angle(const std::vector<Vec2>& polygon, double shell_radius);
+// The angles (rad) from a bar's row centre `centre` (rad) to where its
+// cross-section meets a shell of radius R: ahead (counter-clockwise) and
+// behind, both positive; the bar covers lead + trail of the shell.
+struct FootAngles {
+  double lead = 0, trail = 0;
+};
+FootAngles lifter_foot_angles(const std::vector<Vec2>& polygon, double shell_radius, double centre);
 
 // The spectra's pair types: each pair of ball materials (a <= b), then per
 // ball material its contacts with the shell, the lifters and the end plates

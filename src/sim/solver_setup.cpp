@@ -301,7 +301,7 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
     const auto& w = t.lifters[k].wear;
     lifters_.host[k].wear = {Real(w.x), Real(w.y), Real(w.z), Real(0)};
     const auto& f = t.lifters[k].faces;
-    lifters_.host[k].faces = {Real(f.x), Real(f.y), Real(0), Real(0)};
+    lifters_.host[k].faces = {Real(f.x), Real(f.y), Real(f.z), Real(0)};
   }
   lifters_.write_to_device();
   setup_meshes(t);

@@ -128,14 +128,15 @@ SceneTables scene_tables(const Scene& scene) {
     double radius = 0;
     for (const auto& v : poly) radius = std::max(radius, std::hypot(v.x - cx, v.y - cy));
     // A little over, so that rounding in float never rejects a touching ball.
-    p.bound = {cx, cy, radius * (1 + 1e-4) + 1e-6, w.shell_radius > 0 ? lifter_half_angle(poly, w.shell_radius) : 0.0};
-    const WearPath path = lifter_wear_path(poly, w.shell_radius > 0 ? w.shell_radius : 1e300);
-    p.wear = {path.from, path.to, static_cast<double>(path.start), 0.0};
     const double centre = w.lifter_first_angle + 2.0 * M_PI * static_cast<double>(t.lifters.size()) /
                                                      static_cast<double>(w.lifters.size());
+    const FootAngles feet = w.shell_radius > 0 ? lifter_foot_angles(poly, w.shell_radius, centre) : FootAngles{};
+    p.bound = {cx, cy, radius * (1 + 1e-4) + 1e-6, feet.lead};
+    const WearPath path = lifter_wear_path(poly, w.shell_radius > 0 ? w.shell_radius : 1e300);
+    p.wear = {path.from, path.to, static_cast<double>(path.start), 0.0};
     const FaceSplit split = lifter_face_split(poly, w.shell_radius > 0 ? w.shell_radius : 1e300,
                                               Vec2{std::cos(centre), std::sin(centre)});
-    p.faces = {split.top_from, split.top_to, 0.0, 0.0};
+    p.faces = {split.top_from, split.top_to, feet.trail, 0.0};
     t.lifters.push_back(p);
   }
   if (t.lifters.empty()) t.lifters.push_back(f64::LifterPolygon{});
