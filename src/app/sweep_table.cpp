@@ -177,13 +177,13 @@ SweepTable collect_table(const fs::path& sweep_dir) {
     // throughput at the target P80.
     if (have) {
       nlohmann::json grind;
-      try {
-        std::ifstream g(folder / "grind" / "grind.json");
-        if (g) g >> grind;
-      } catch (const nlohmann::json::exception& e) {
+      std::ifstream g(folder / "grind" / "grind.json", std::ios::binary);
+      if (g) {
+        const std::string text{std::istreambuf_iterator<char>(g), std::istreambuf_iterator<char>()};
+        const std::string fault = io::json_text_fault(text);
         // Said in the row, not read as no grind at all.
-        row["error"] = "grind/grind.json is not valid JSON (" + std::string(e.what()) + "); its columns are left empty";
-        grind = nullptr;
+        if (fault.empty()) grind = nlohmann::json::parse(text);
+        else row["error"] = "grind/grind.json: " + fault + "; its columns are left empty";
       }
       auto put = [&](const std::string& column, const json& v) {
         row[column] = v;
