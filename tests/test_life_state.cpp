@@ -66,17 +66,21 @@ std::map<std::string, std::string> files_under(const fs::path& dir) {
   return out;
 }
 
-// One short study, run once for this process's tests.
-const fs::path& study() {
-  static const fs::path dir = [] {
-    const fs::path d = scratch("study");
+// One short study, run once for this process's tests and removed at its exit.
+struct SharedStudy {
+  fs::path dir = scratch("study");
+  SharedStudy() {
     std::string err;
-    const int rc = millcharge("life" + kStudy + " --out '" + d.string() + "'", &err);
+    const int rc = millcharge("life" + kStudy + " --out '" + dir.string() + "'", &err);
     INFO(err);
     REQUIRE(rc == 0);
-    return d;
-  }();
-  return dir;
+  }
+  ~SharedStudy() { fs::remove_all(dir); }
+};
+
+const fs::path& study() {
+  static const SharedStudy s;
+  return s.dir;
 }
 
 // A copy of the study to damage.
