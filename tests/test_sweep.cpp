@@ -464,7 +464,8 @@ TEST_CASE("sweep run: a damaged record of submitted jobs is refused, not read as
   const fs::path work = temp_dir("jobs");
   write_text(work / "s.toml", "name = \"t\"\ncase = \"" + (fs::path(MC_ASSET_DIR) / "cases" / "lab.toml").string() +
                                   "\"\n[axes]\nmill.speed_fraction = [0.7, 0.8]\n");
-  for (const char* damaged : {"{broken", "{\"job\": \"12\"}"}) {
+  for (const char* damaged : {"{broken", "{\"job\": \"12\"}", "[{\"job\": \"12\", \"tas", "[{\"job\": 12}]",
+                              "[{\"job\": \"12\", \"tasks\": {\"0\": 3}}]"}) {
     INFO(damaged);
     fs::create_directories(work / "out");
     write_text(work / "out" / "jobs.json", damaged);
@@ -475,7 +476,9 @@ TEST_CASE("sweep run: a damaged record of submitted jobs is refused, not read as
     const std::string said = read_text(log);
     INFO(said);
     CHECK(WEXITSTATUS(st) == 2);
-    CHECK_THAT(said, Catch::Contains("jobs.json: not ") && Catch::Contains("record of submitted jobs is damaged"));
+    CHECK_THAT(said, Catch::Contains("jobs.json: ") && Catch::Contains("record of submitted jobs is damaged"));
+    CHECK(std::count(said.begin(), said.end(), '\n') == 1);
+    CHECK(said.find("json.exception") == std::string::npos);
     CHECK_FALSE(fs::exists(work / "out" / "sweep.sh"));
     CHECK_FALSE(fs::exists(work / "out" / "cases.json"));
     fs::remove_all(work / "out");

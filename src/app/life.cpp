@@ -2,9 +2,9 @@
 // above runs, like a sweep: run a stage on the liner as it is, take each
 // lifter wear station's and the shell's wear rate, move the lifters' faces
 // and the shell by the stage's wear, and run the next stage on the worn
-// liner. life.json holds the study's state (written after each step, so a
-// killed study resumes where it stopped); life.csv, life.png and life.pvd
-// are the whole life.
+// liner. life.json holds the study's state (written before the first run and
+// after each step, so a killed study resumes where it stopped; life_state.h
+// reads it back strictly); life.csv, life.png and life.pvd are the whole life.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "app/commands.h"
+#include "app/life_state.h"
 #include "app/prepare.h"
 #include "core/lifters.h"
 #include "core/liner_wear.h"
@@ -33,101 +34,9 @@ using nlohmann::json;
 
 namespace {
 
-constexpr const char* kFormat = "millcharge life 1";
-
-// What a stage's run reported (its summary.json and lifter_wear.csv).
-struct StageResult {
-  double power_W = 0, power_sem_W = 0, toe_deg = NAN, shoulder_deg = NAN, impact_deg = NAN, bare_share = NAN;
-  double liner_kg_h = 0;          // shell and lifters, at the case's wear coefficient
-  double shell_mm_per_1000h = 0;  // the shell's mean depth rate, likewise
-  std::vector<std::vector<double>> station_m3_s;  // per profile, per station: one row's volume rate
-};
-
-struct Stage {
-  int index = 0;
-  double case_hours = 0;  // at its start, at the case's wear coefficient
-  double diameter = 0, filling = 0, shell_wear_m = 0;  // shell_wear_m: since the new liner
-  std::vector<std::vector<Vec2>> outlines;              // per profile, the bar's frame
-  bool ran = false;
-  StageResult r;
-  // The wear carried to the next stage (none for the last).
-  double span_case_hours = 0, shell_depth_m = 0;
-  std::vector<double> booked_mm2, removed_mm2, scale;
-  std::vector<int> spread;
-};
-
-json points_json(const std::vector<Vec2>& o) {
-  json a = json::array();
-  for (const Vec2& v : o) a.push_back({v.x, v.y});
-  return a;
-}
-
-std::vector<Vec2> points_of(const json& a) {
-  std::vector<Vec2> o;
-  for (const json& v : a) o.push_back({v.at(0).get<double>(), v.at(1).get<double>()});
-  return o;
-}
-
-json stage_json(const Stage& s) {
-  json j;
-  j["index"] = s.index;
-  j["case_hours"] = s.case_hours;
-  j["diameter_m"] = s.diameter;
-  j["filling"] = s.filling;
-  j["shell_wear_m"] = s.shell_wear_m;
-  j["profiles"] = json::array();
-  for (const auto& o : s.outlines) j["profiles"].push_back(points_json(o));
-  j["ran"] = s.ran;
-  if (s.ran) {
-    const StageResult& r = s.r;
-    j["result"] = {{"power_W", r.power_W},       {"power_sem_W", number_or_null(r.power_sem_W)},
-                   {"toe_deg", number_or_null(r.toe_deg)}, {"shoulder_deg", number_or_null(r.shoulder_deg)},
-                   {"impact_point_deg", number_or_null(r.impact_deg)},
-                   {"bare_liner_impact_share", number_or_null(r.bare_share)},
-                   {"liner_wear_kg_per_h", r.liner_kg_h}, {"shell_wear_mm_per_1000h", r.shell_mm_per_1000h},
-                   {"station_wear_m3_per_s", r.station_m3_s}};
-  }
-  if (s.span_case_hours > 0)
-    j["wear"] = {{"span_case_hours", s.span_case_hours}, {"shell_depth_m", s.shell_depth_m},
-                 {"booked_mm2", s.booked_mm2}, {"removed_mm2", s.removed_mm2}, {"scale", s.scale},
-                 {"spread", s.spread}};
-  return j;
-}
-
-double num_or_nan(const json& j) { return j.is_number() ? j.get<double>() : NAN; }
-
-Stage stage_of(const json& j) {
-  Stage s;
-  s.index = j.at("index").get<int>();
-  s.case_hours = j.at("case_hours").get<double>();
-  s.diameter = j.at("diameter_m").get<double>();
-  s.filling = j.at("filling").get<double>();
-  s.shell_wear_m = j.at("shell_wear_m").get<double>();
-  for (const json& o : j.at("profiles")) s.outlines.push_back(points_of(o));
-  s.ran = j.at("ran").get<bool>();
-  if (s.ran) {
-    const json& r = j.at("result");
-    s.r.power_W = r.at("power_W").get<double>();
-    s.r.power_sem_W = num_or_nan(r.at("power_sem_W"));
-    s.r.toe_deg = num_or_nan(r.at("toe_deg"));
-    s.r.shoulder_deg = num_or_nan(r.at("shoulder_deg"));
-    s.r.impact_deg = num_or_nan(r.at("impact_point_deg"));
-    s.r.bare_share = num_or_nan(r.at("bare_liner_impact_share"));
-    s.r.liner_kg_h = r.at("liner_wear_kg_per_h").get<double>();
-    s.r.shell_mm_per_1000h = r.at("shell_wear_mm_per_1000h").get<double>();
-    s.r.station_m3_s = r.at("station_wear_m3_per_s").get<std::vector<std::vector<double>>>();
-  }
-  if (j.contains("wear")) {
-    const json& w = j.at("wear");
-    s.span_case_hours = w.at("span_case_hours").get<double>();
-    s.shell_depth_m = w.at("shell_depth_m").get<double>();
-    s.booked_mm2 = w.at("booked_mm2").get<std::vector<double>>();
-    s.removed_mm2 = w.at("removed_mm2").get<std::vector<double>>();
-    s.scale = w.at("scale").get<std::vector<double>>();
-    s.spread = w.at("spread").get<std::vector<int>>();
-  }
-  return s;
-}
+using life::kFormat;
+using life::Stage;
+using life::StageResult;
 
 // The request a study was started with: a study resumes only with the same.
 json request_of(const LifeOptions& o, const Prepared& p) {
@@ -139,45 +48,6 @@ json request_of(const LifeOptions& o, const Prepared& p) {
           {"calibrate_loss_mm", o.calibrate_loss_mm},
           {"calibrate_hours", o.calibrate_hours},
           {"calibrate_rate_kg_h", o.calibrate_rate_kg_h}};
-}
-
-StageResult read_stage(const fs::path& dir, int profiles) {
-  StageResult r;
-  const fs::path sj = dir / "summary.json";
-  json j;
-  try {
-    std::ifstream in(sj);
-    j = json::parse(in);
-  } catch (const std::exception& e) {
-    throw std::invalid_argument(sj.string() + ": not valid JSON: " + e.what());
-  }
-  try {
-    r.power_W = j.at("power_W").at("torque").get<double>();
-    r.power_sem_W = num_or_nan(j.at("power_W").at("torque_sem"));
-    r.toe_deg = num_or_nan(j.at("toe_deg"));
-    r.shoulder_deg = num_or_nan(j.at("shoulder_deg"));
-    const json& l = j.at("liner");
-    r.impact_deg = num_or_nan(l.at("impact_point_deg"));
-    r.bare_share = num_or_nan(l.at("bare_liner_impact_share"));
-    for (const json& part : l.at("parts")) {
-      const std::string name = part.at("part").get<std::string>();
-      if (name == "shell") r.shell_mm_per_1000h = part.at("mean_wear_mm_per_1000h").get<double>();
-      if (name == "shell" || name.rfind("lifter", 0) == 0) r.liner_kg_h += part.at("wear_kg_per_h").get<double>();
-    }
-  } catch (const std::exception& e) {
-    throw std::invalid_argument(sj.string() + ": not a millcharge run's summary (" + e.what() + ")");
-  }
-  const io::CsvTable t = io::read_csv_strict(dir / "lifter_wear.csv", "the stage's run wrote no lifter wear");
-  const int c_p = t.column("profile"), c_s = t.column("station"), c_w = t.column("wear_m3_per_s");
-  r.station_m3_s.assign(profiles, std::vector<double>(kWearStations, 0.0));
-  for (std::size_t k = 0; k < t.rows.size(); ++k) {
-    const int p = static_cast<int>(t.number(k, c_p)), s = static_cast<int>(t.number(k, c_s));
-    if (p < 0 || p >= profiles || s < 0 || s >= kWearStations)
-      throw std::invalid_argument(t.where(k) + ": profile " + std::to_string(p) + ", station " + std::to_string(s) +
-                                  " is not one of this case's");
-    r.station_m3_s[p][s] = t.number(k, c_w);
-  }
-  return r;
 }
 
 // The rate (mm per hour at the case's coefficient) at which a profile's
@@ -273,14 +143,7 @@ MillCase stage_case(const Prepared& base, const Stage& s) {
 }
 
 void save(const fs::path& out, const json& request, const Study& st, const std::string& stopped) {
-  json j;
-  j["format"] = kFormat;
-  j["request"] = request;
-  j["calibration"] = {{"factor", st.factor}, {"how", st.calibration}};
-  j["stages"] = json::array();
-  for (const Stage& s : st.stages) j["stages"].push_back(stage_json(s));
-  if (!stopped.empty()) j["stopped"] = stopped;
-  io::write_file_atomic(out / "life.json", j.dump(1) + "\n");
+  life::save_life_state(out, request, st.stages, st.factor, st.calibration, stopped);
 }
 
 void write_table(const fs::path& out, const Study& st, double length) {
@@ -301,7 +164,7 @@ void write_table(const fs::path& out, const Study& st, double length) {
           s.index, s.case_hours / st.factor, s.case_hours, k, m.height * 1000, m.top_width * 1000, m.leading_angle_deg,
           m.trailing_angle_deg, m.area * 1e6, worn[k], s.shell_wear_m * 1000, s.diameter, s.r.power_W, s.r.power_sem_W,
           s.r.toe_deg, s.r.shoulder_deg, s.r.impact_deg, s.r.bare_share, s.r.liner_kg_h * st.factor,
-          top * 1000 * 1000 * st.factor, carried ? fmt::format("{:.6g}", s.span_case_hours / st.factor) : "",
+          top * 1000 * st.factor, carried ? fmt::format("{:.6g}", s.span_case_hours / st.factor) : "",
           carried ? fmt::format("{:.6g}", s.booked_mm2[k]) : "", carried ? fmt::format("{:.6g}", s.removed_mm2[k]) : "");
       if (carried) worn[k] += s.removed_mm2[k];
     }
@@ -461,21 +324,19 @@ int cmd_life(const LifeOptions& o) {
         measure_profile(profile_outline(c.lifter_pattern[st.tallest])).height)
       st.tallest = static_cast<int>(k);
   std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw std::invalid_argument("--out " + out.string() + ": exists and is not a folder");
   if (fs::exists(out / "life.json", ec) && !o.force) {
-    json j;
-    try {
-      std::ifstream in(out / "life.json");
-      j = json::parse(in);
-      if (j.at("format") != kFormat) throw std::runtime_error("format " + j.at("format").dump());
-      for (const json& s : j.at("stages")) st.stages.push_back(stage_of(s));
-    } catch (const std::exception& e) {
-      throw std::invalid_argument((out / "life.json").string() + ": damaged or of another version (" + e.what() +
-                                  "); add --force to start the study again");
-    }
-    if (j.at("request") != request)
+    // The whole state is read and checked before anything is written: a
+    // damaged one is refused and the study left as it is.
+    life::LifeState state = life::read_life_state(
+        out / "life.json", {c.lifter_pattern.size(), base.d.largest_ball_diameter});
+    const std::string differs = life::request_difference(state.request, request);
+    if (!differs.empty())
       throw std::invalid_argument("--out " + out.string() + " holds a life study of another case or options (" +
-                                  j.at("request").dump() + "); give the same to resume it, or --force to start again");
-    if (st.stages.empty()) throw std::invalid_argument((out / "life.json").string() + ": holds no stages; add --force");
+                                  (out / "life.json").string() + ": " + differs +
+                                  "); give the same to resume it, or --force to start again");
+    st.stages = std::move(state.stages);
     std::printf("life            resuming %s at stage %d\n", out.string().c_str(), st.stages.back().index);
   } else {
     if (fs::exists(out, ec) && !fs::is_empty(out, ec) && !fs::exists(out / "life.json", ec))
@@ -490,6 +351,11 @@ int cmd_life(const LifeOptions& o) {
     s0.filling = c.filling;
     for (const LifterProfile& p : c.lifter_pattern) s0.outlines.push_back(profile_outline(p));
     st.stages.push_back(s0);
+    // The state before the first run, so that a study killed in stage 0
+    // resumes.
+    fs::create_directories(out, ec);
+    if (ec) throw std::runtime_error("cannot create " + out.string() + ": " + ec.message());
+    save(out, request, st, "");
   }
   fs::create_directories(out / "cases", ec);
   if (ec) throw std::runtime_error("cannot create " + (out / "cases").string() + ": " + ec.message());
@@ -503,7 +369,6 @@ int cmd_life(const LifeOptions& o) {
       // The stage's case file and its run (resumed from its checkpoint
       // after a kill).
       const fs::path case_file = out / "cases" / fmt::format("stage-{:02d}.toml", s.index);
-      io::write_file_atomic(case_file, io::case_to_toml(stage_case(base, s)));
       if (!fs::exists(dir / "summary.json", ec)) {
         RunOptions ro;
         ro.c.device = o.c.device;
@@ -511,6 +376,7 @@ int cmd_life(const LifeOptions& o) {
         if (fs::exists(dir / "checkpoint.bin", ec) && fs::exists(dir / "case.toml", ec)) {
           ro.resume = dir.string();
         } else {
+          io::write_file_atomic(case_file, io::case_to_toml(stage_case(base, s)));
           ro.c.case_path = case_file.string();
           ro.out = dir.string();
           ro.force = true;
@@ -519,7 +385,7 @@ int cmd_life(const LifeOptions& o) {
         std::fflush(stdout);
         if (const int rc = cmd_run(ro); rc != 0) return rc;
       }
-      s.r = read_stage(dir, static_cast<int>(c.lifter_pattern.size()));
+      s.r = life::read_stage_result(dir, static_cast<int>(c.lifter_pattern.size()));
       s.ran = true;
     }
     calibrate(st, o, length);

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -28,6 +29,7 @@
 #include "core/scene.h"
 #include "io/atomic_file.h"
 #include "io/case_file.h"
+#include "io/json_read.h"
 #include "io/png_plot.h"
 #include "io/sweep_file.h"
 
@@ -203,19 +205,32 @@ std::string now_utc() {
 // A damaged one is refused, not read as empty: the cases Slurm still holds
 // would be submitted again, and the record overwritten.
 nlohmann::json read_jobs(const fs::path& p) {
-  std::ifstream in(p);
-  if (!in) return nlohmann::json::array();
-  nlohmann::json j;
-  try {
-    in >> j;
-  } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(p.string() + ": not valid JSON (" + e.what() +
-                                "): the sweep's record of submitted jobs is damaged; if none of its jobs is queued "
+  std::error_code ec;
+  if (!fs::exists(p, ec)) return nlohmann::json::array();
+  std::ifstream in(p, std::ios::binary);
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  const std::string fault = io::json_text_fault(text);
+  if (!fault.empty())
+    throw std::invalid_argument(p.string() + ": " + fault +
+                                ": the sweep's record of submitted jobs is damaged; if none of its jobs is queued "
                                 "(squeue), move it aside and run again");
-  }
+  const nlohmann::json j = nlohmann::json::parse(text);
   if (!j.is_array())
     throw std::invalid_argument(p.string() + ": not a list of jobs: the sweep's record of submitted jobs is damaged; "
                                 "if none of its jobs is queued (squeue), move it aside and run again");
+  // Each entry as `sweep run --slurm` writes it: the job's id and its tasks' folders.
+  for (std::size_t k = 0; k < j.size(); ++k) {
+    const nlohmann::json& e = j[k];
+    bool ok = e.is_object() && e.contains("job") && e["job"].is_string() &&
+              (!e.contains("tasks") || e["tasks"].is_object());
+    if (ok && e.contains("tasks"))
+      for (const auto& task : e["tasks"].items()) ok = ok && task.value().is_string();
+    if (!ok)
+      throw std::invalid_argument(p.string() + ": entry " + std::to_string(k) +
+                                  " is not a job (its id as \"job\", its tasks' folders as \"tasks\"): the sweep's "
+                                  "record of submitted jobs is damaged; if none of its jobs is queued (squeue), move "
+                                  "it aside and run again");
+  }
   return j;
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
@@ -13,6 +14,7 @@
 
 #include "app/sweep_runs.h"
 #include "core/version.h"
+#include "io/json_read.h"
 #include "io/png_plot.h"
 
 namespace mc::app {
@@ -90,14 +92,18 @@ SweepTable collect_table(const fs::path& sweep_dir) {
   if (!in)
     throw std::invalid_argument(sweep_dir.string() +
                                 ": not a sweep folder (no cases.json; `millcharge sweep run FILE` writes one)");
-  nlohmann::json cases;
+  nlohmann::json cases = io::read_json_file(index);
+  const io::JsonAt at(cases, index.string());
   try {
-    in >> cases;
-  } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(index.string() + ": not valid JSON: " + e.what());
+    if (at.has("sweep")) (void)at["sweep"].text();
+    for (std::size_t a = 0; a < at["axes"].size(); ++a) (void)at["axes"][a]["key"].text();
+    for (std::size_t k = 0; k < at["cases"].size(); ++k) {
+      (void)at["cases"][k]["dir"].text();
+      at["cases"][k]["values"].object();
+    }
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + "; not a sweep's cases.json");
   }
-  if (!cases.contains("axes") || !cases.contains("cases") || !cases["cases"].is_array())
-    throw std::invalid_argument(index.string() + ": not a sweep's cases.json (no axes or cases)");
 
   SweepTable t;
   t.name = cases.value("sweep", sweep_dir.filename().string());
@@ -116,13 +122,14 @@ SweepTable collect_table(const fs::path& sweep_dir) {
     row["status"] = status_name(st.status);
     nlohmann::json summary;
     if (st.status == CaseStatus::done) {
-      try {
-        std::ifstream s(folder / "summary.json");
-        s >> summary;
-      } catch (const nlohmann::json::exception& e) {
+      std::ifstream s(folder / "summary.json", std::ios::binary);
+      const std::string text{std::istreambuf_iterator<char>(s), std::istreambuf_iterator<char>()};
+      const std::string fault = io::json_text_fault(text);
+      if (fault.empty()) {
+        summary = nlohmann::json::parse(text);
+      } else {
         row["status"] = status_name(CaseStatus::failed);
-        row["error"] = "summary.json is not valid JSON: " + std::string(e.what());
-        summary = nullptr;
+        row["error"] = "summary.json: " + fault;
       }
     }
     const bool have = summary.is_object();
@@ -170,13 +177,13 @@ SweepTable collect_table(const fs::path& sweep_dir) {
     // throughput at the target P80.
     if (have) {
       nlohmann::json grind;
-      try {
-        std::ifstream g(folder / "grind" / "grind.json");
-        if (g) g >> grind;
-      } catch (const nlohmann::json::exception& e) {
+      std::ifstream g(folder / "grind" / "grind.json", std::ios::binary);
+      if (g) {
+        const std::string text{std::istreambuf_iterator<char>(g), std::istreambuf_iterator<char>()};
+        const std::string fault = io::json_text_fault(text);
         // Said in the row, not read as no grind at all.
-        row["error"] = "grind/grind.json is not valid JSON (" + std::string(e.what()) + "); its columns are left empty";
-        grind = nullptr;
+        if (fault.empty()) grind = nlohmann::json::parse(text);
+        else row["error"] = "grind/grind.json: " + fault + "; its columns are left empty";
       }
       auto put = [&](const std::string& column, const json& v) {
         row[column] = v;
@@ -371,10 +378,12 @@ std::vector<fs::path> write_sweep_plots(const SweepTable& t, const fs::path& swe
   // Axis groups from cases.json: zipped axes share the first axis's x.
   std::vector<int> groups(t.axes.size());
   {
-    std::ifstream in(sweep_dir / "cases.json");
-    nlohmann::json cases;
-    in >> cases;
-    for (std::size_t a = 0; a < t.axes.size(); ++a) groups[a] = cases["axes"][a].value("group", static_cast<int>(a));
+    nlohmann::json cases = io::read_json_file(sweep_dir / "cases.json");
+    for (std::size_t a = 0; a < t.axes.size(); ++a) {
+      nlohmann::json& axis = cases["axes"][a];
+      groups[a] = axis.contains("group") && axis["group"].is_number_integer() ? axis["group"].get<int>()
+                                                                               : static_cast<int>(a);
+    }
   }
   const Lines l = split_lines(t, groups);
 

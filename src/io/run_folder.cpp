@@ -14,6 +14,7 @@
 #include "core/mill_case.h"
 #include "io/case_file.h"
 #include "io/csv_read.h"
+#include "io/json_read.h"
 
 namespace mc::io {
 
@@ -24,28 +25,21 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw std::invalid_argument(dir.string() + ": not a run folder");
   const fs::path sj = dir / "summary.json";
-  if (!fs::exists(sj, ec))
-    throw std::invalid_argument(sj.string() + ": missing; grind needs a finished run (millcharge run)");
-  nlohmann::json j;
-  try {
-    std::ifstream in(sj);
-    j = nlohmann::json::parse(in);
-  } catch (const std::exception& e) {
-    throw std::invalid_argument(sj.string() + ": not valid JSON: " + e.what());
-  }
+  const nlohmann::json doc = read_json_file(sj, "grind needs a finished run (millcharge run)");
+  const JsonAt j(doc, sj.string());
   Run r;
   try {
-    r.power_W = j.at("power_W").at("torque").get<double>();
-    r.filling = j.at("filling").get<double>();
-    r.title = j.value("title", std::string());
-    r.speed_rpm = j.value("speed_rpm", 0.0);
-    const auto& pw = j.at("power_W");
-    if (pw.contains("dissipation") && pw["dissipation"].is_number()) r.dissipation_W = pw["dissipation"].get<double>();
-    if (pw.contains("imbalance") && pw["imbalance"].is_number()) r.imbalance = pw["imbalance"].get<double>();
-    if (pw.contains("energy_change") && pw["energy_change"].is_number())
-      r.energy_change_W = pw["energy_change"].get<double>();
-  } catch (const std::exception&) {
-    throw std::invalid_argument(sj.string() + ": power_W.torque or filling missing; not a millcharge run's summary");
+    r.power_W = j["power_W"]["torque"].number();
+    r.filling = j["filling"].number();
+    if (j.has("title")) r.title = j["title"].text();
+    if (j.has("speed_rpm")) r.speed_rpm = j["speed_rpm"].number();
+    const JsonAt pw = j["power_W"];
+    if (pw.has("dissipation") && pw["dissipation"].value().is_number()) r.dissipation_W = pw["dissipation"].number();
+    if (pw.has("imbalance") && pw["imbalance"].value().is_number()) r.imbalance = pw["imbalance"].number();
+    if (pw.has("energy_change") && pw["energy_change"].value().is_number())
+      r.energy_change_W = pw["energy_change"].number();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + "; not a millcharge run's summary");
   }
   if (!(r.power_W > 0)) throw std::invalid_argument(sj.string() + ": power_W.torque is not > 0: the mill drew no power");
   const MillCase c = read_case(dir / "case.toml");
@@ -110,8 +104,9 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
     throw std::invalid_argument(fmt::format("{}: pair {} has {} bins, the first pair {}: the file was cut short",
                                             t.where(t.rows.size() - 1), pairs.back(), bin, bins));
   // The pairs and their collision rates are those summary.json gives.
-  if (j.contains("spectra") && j["spectra"].is_object() && j["spectra"].contains("by_pair") && c_all >= 0) {
-    const auto& by_pair = j["spectra"]["by_pair"];
+  if (doc.contains("spectra") && doc["spectra"].is_object() && doc["spectra"].contains("by_pair") &&
+      doc["spectra"]["by_pair"].is_array() && c_all >= 0) {
+    const auto& by_pair = doc["spectra"]["by_pair"];
     std::vector<std::string> want;
     for (const auto& q : by_pair)
       if (q.is_object() && q.contains("pair") && q["pair"].is_string()) want.push_back(q["pair"].get<std::string>());
@@ -123,7 +118,8 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
                                   "; the file is damaged or from another run");
     }
     for (std::size_t k = 0; k < pairs.size(); ++k) {
-      const double rate = by_pair[k].value("collisions_per_s", std::nan(""));
+      const auto it = by_pair[k].find("collisions_per_s");
+      const double rate = it != by_pair[k].end() && it->is_number() ? it->get<double>() : std::nan("");
       if (std::isfinite(rate) && std::fabs(pair_collisions[k] - rate) > 1e-5 * std::max(rate, 1.0))
         throw std::invalid_argument(fmt::format(
             "{}: pair {} sums to {:.6g} collisions/s, summary.json gives {:.6g}; the file is damaged or from "

@@ -1,0 +1,230 @@
+// A life study's state, written and read back strictly (life_state.h).
+#include "app/life_state.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "app/prepare.h"
+#include "core/lifters.h"
+#include "io/atomic_file.h"
+#include "io/csv_read.h"
+#include "io/json_read.h"
+
+namespace mc::app::life {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using io::JsonAt;
+
+namespace {
+
+json points_json(const std::vector<Vec2>& o) {
+  json a = json::array();
+  for (const Vec2& v : o) a.push_back({v.x, v.y});
+  return a;
+}
+
+json stage_json(const Stage& s) {
+  json j;
+  j["index"] = s.index;
+  j["case_hours"] = s.case_hours;
+  j["diameter_m"] = s.diameter;
+  j["filling"] = s.filling;
+  j["shell_wear_m"] = s.shell_wear_m;
+  j["profiles"] = json::array();
+  for (const auto& o : s.outlines) j["profiles"].push_back(points_json(o));
+  j["ran"] = s.ran;
+  if (s.ran) {
+    const StageResult& r = s.r;
+    j["result"] = {{"power_W", r.power_W},       {"power_sem_W", number_or_null(r.power_sem_W)},
+                   {"toe_deg", number_or_null(r.toe_deg)}, {"shoulder_deg", number_or_null(r.shoulder_deg)},
+                   {"impact_point_deg", number_or_null(r.impact_deg)},
+                   {"bare_liner_impact_share", number_or_null(r.bare_share)},
+                   {"liner_wear_kg_per_h", r.liner_kg_h}, {"shell_wear_mm_per_1000h", r.shell_mm_per_1000h},
+                   {"station_wear_m3_per_s", r.station_m3_s}};
+  }
+  if (s.span_case_hours > 0)
+    j["wear"] = {{"span_case_hours", s.span_case_hours}, {"shell_depth_m", s.shell_depth_m},
+                 {"booked_mm2", s.booked_mm2}, {"removed_mm2", s.removed_mm2}, {"scale", s.scale},
+                 {"spread", s.spread}};
+  return j;
+}
+
+// A bar's outline: points of two finite numbers, a valid profile by the
+// case reader's check on the stage's shell.
+std::vector<Vec2> outline_of(const JsonAt& a, double R, double room) {
+  const std::size_t n = a.size();
+  if (n == 0) a.fail("empty list");
+  if (n > static_cast<std::size_t>(kLifterMaxPoints))
+    a.fail(fmt::format("{} points: a profile has at most {}", n, kLifterMaxPoints));
+  std::vector<Vec2> o;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::vector<double> xy = a[k].numbers(2, "coordinates (x, y in m)");
+    o.push_back({xy[0], xy[1]});
+  }
+  const std::string fault = profile_outline_fault(o, R, room);
+  if (!fault.empty()) a.fail(fault);
+  return o;
+}
+
+StageResult result_of(const JsonAt& r, std::size_t profiles) {
+  StageResult x;
+  r.object();
+  x.power_W = r["power_W"].number();
+  x.power_sem_W = r["power_sem_W"].number_or_nan();
+  x.toe_deg = r["toe_deg"].number_or_nan();
+  x.shoulder_deg = r["shoulder_deg"].number_or_nan();
+  x.impact_deg = r["impact_point_deg"].number_or_nan();
+  x.bare_share = r["bare_liner_impact_share"].number_or_nan();
+  x.liner_kg_h = r["liner_wear_kg_per_h"].number_at_least(0);
+  x.shell_mm_per_1000h = r["shell_wear_mm_per_1000h"].number_at_least(0);
+  const JsonAt st = r["station_wear_m3_per_s"];
+  st.size(profiles, "profiles");
+  for (std::size_t k = 0; k < profiles; ++k) {
+    x.station_m3_s.push_back(st[k].numbers(kWearStations, "wear stations"));
+    for (int j = 0; j < kWearStations; ++j)
+      if (x.station_m3_s[k][j] < 0) st[k][j].fail("a wear rate below 0");
+  }
+  return x;
+}
+
+void wear_of(const JsonAt& w, std::size_t profiles, Stage& s) {
+  w.object();
+  s.span_case_hours = w["span_case_hours"].number();
+  if (!(s.span_case_hours > 0)) w["span_case_hours"].fail("must be > 0");
+  s.shell_depth_m = w["shell_depth_m"].number_at_least(0);
+  s.booked_mm2 = w["booked_mm2"].numbers(profiles, "profiles");
+  s.removed_mm2 = w["removed_mm2"].numbers(profiles, "profiles");
+  s.scale = w["scale"].numbers(profiles, "profiles");
+  const JsonAt sp = w["spread"];
+  sp.size(profiles, "profiles");
+  for (std::size_t k = 0; k < profiles; ++k) s.spread.push_back(static_cast<int>(sp[k].whole()));
+}
+
+Stage stage_of(const JsonAt& j, int i, const StateShape& shape, const Stage* before) {
+  Stage s;
+  j.object();
+  const long index = j["index"].whole();
+  if (index != i) j["index"].fail(fmt::format("{} where {} is due (the stages in order from 0)", index, i));
+  s.index = i;
+  s.case_hours = j["case_hours"].number_at_least(0);
+  // The hours add up: a stage starts where the one before it and its wear end.
+  const double due = before ? before->case_hours + before->span_case_hours : 0.0;
+  if (std::fabs(s.case_hours - due) > 1e-9 * std::max(1.0, due))
+    j["case_hours"].fail(fmt::format("{:.9g} where {:.9g} is due (the stage before and its wear's hours)", s.case_hours,
+                                     due));
+  s.diameter = j["diameter_m"].number();
+  if (!(s.diameter > 0)) j["diameter_m"].fail("must be > 0");
+  s.filling = j["filling"].number();
+  if (!(s.filling > 0 && s.filling < 1)) j["filling"].fail("must be between 0 and 1");
+  s.shell_wear_m = j["shell_wear_m"].number_at_least(0);
+  const JsonAt profiles = j["profiles"];
+  profiles.size(shape.profiles, "lifter profiles of the case");
+  for (std::size_t k = 0; k < shape.profiles; ++k)
+    s.outlines.push_back(outline_of(profiles[k], 0.5 * s.diameter, shape.largest_ball_m));
+  s.ran = j["ran"].boolean();
+  if (s.ran) s.r = result_of(j["result"], shape.profiles);
+  if (j.has("wear")) wear_of(j["wear"], shape.profiles, s);
+  return s;
+}
+
+}  // namespace
+
+LifeState read_life_state(const fs::path& file, const StateShape& shape) {
+  const json doc = io::read_json_file(file);
+  const JsonAt top(doc, file.string());
+  top.object();
+  const std::string format = top["format"].text();
+  if (format != kFormat) top["format"].fail("\"" + format + "\", this millcharge reads \"" + kFormat + "\"");
+  LifeState st;
+  top["request"].object();
+  st.request = doc.at("request");
+  const JsonAt cal = top["calibration"];
+  if (!(cal["factor"].number() > 0)) cal["factor"].fail("must be > 0");
+  (void)cal["how"].text();
+  const JsonAt stages = top["stages"];
+  const std::size_t n = stages.size();
+  if (n == 0) stages.fail("empty list: the study holds no stage");
+  for (std::size_t i = 0; i < n; ++i) {
+    // Named "FILE: stage i: key" rather than by the list's index.
+    const JsonAt named = JsonAt(stages[i].value(), file.string()).part(fmt::format("stage {}", i));
+    st.stages.push_back(stage_of(named, static_cast<int>(i), shape, i > 0 ? &st.stages[i - 1] : nullptr));
+    const Stage& s = st.stages.back();
+    const bool last = i + 1 == n;
+    // What the study writes: every stage but the last has run and carried
+    // its wear to the next; the last carries none.
+    if (!last && !s.ran) named.fail(fmt::format("ran: false, yet stage {} follows", i + 1));
+    if (!last && !(s.span_case_hours > 0)) named.fail(fmt::format("wear: missing, yet stage {} follows", i + 1));
+    if (last && s.span_case_hours > 0)
+      named.fail(fmt::format("wear: carried to a stage {} that the file lacks", i + 1));
+  }
+  if (top.has("stopped")) st.stopped = top["stopped"].text();
+  return st;
+}
+
+std::string request_difference(const json& there, const json& asked) {
+  if (there == asked) return "";
+  std::vector<std::string> keys;
+  for (const auto& [k, v] : asked.items()) keys.push_back(k);
+  if (there.is_object())
+    for (const auto& [k, v] : there.items())
+      if (!asked.contains(k)) keys.push_back(k);
+  for (const std::string& k : keys) {
+    const json a = there.is_object() && there.contains(k) ? there.at(k) : json("(none)");
+    const json b = asked.contains(k) ? asked.at(k) : json("(none)");
+    if (a != b) return fmt::format("{}: {} there, {} asked", k, a.dump(), b.dump());
+  }
+  return "the request differs";
+}
+
+void save_life_state(const fs::path& out, const json& request, const std::vector<Stage>& stages, double factor,
+                     const std::string& calibration, const std::string& stopped) {
+  json j;
+  j["format"] = kFormat;
+  j["request"] = request;
+  j["calibration"] = {{"factor", factor}, {"how", calibration}};
+  j["stages"] = json::array();
+  for (const Stage& s : stages) j["stages"].push_back(stage_json(s));
+  if (!stopped.empty()) j["stopped"] = stopped;
+  io::write_file_atomic(out / "life.json", j.dump(1) + "\n");
+}
+
+StageResult read_stage_result(const fs::path& dir, int profiles) {
+  StageResult r;
+  const fs::path sj = dir / "summary.json";
+  const json doc = io::read_json_file(sj, "the stage's run wrote no summary");
+  const JsonAt j(doc, sj.string());
+  const std::string not_run = "; not a millcharge run's summary";
+  try {
+    r.power_W = j["power_W"]["torque"].number();
+    r.power_sem_W = j["power_W"]["torque_sem"].number_or_nan();
+    r.toe_deg = j["toe_deg"].number_or_nan();
+    r.shoulder_deg = j["shoulder_deg"].number_or_nan();
+    const JsonAt l = j["liner"];
+    r.impact_deg = l["impact_point_deg"].number_or_nan();
+    r.bare_share = l["bare_liner_impact_share"].number_or_nan();
+    const JsonAt parts = l["parts"];
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      const std::string name = parts[k]["part"].text();
+      if (name == "shell") r.shell_mm_per_1000h = parts[k]["mean_wear_mm_per_1000h"].number();
+      if (name == "shell" || name.rfind("lifter", 0) == 0) r.liner_kg_h += parts[k]["wear_kg_per_h"].number();
+    }
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(e.what() + not_run);
+  }
+  const io::CsvTable t = io::read_csv_strict(dir / "lifter_wear.csv", "the stage's run wrote no lifter wear");
+  const int c_p = t.column("profile"), c_s = t.column("station"), c_w = t.column("wear_m3_per_s");
+  r.station_m3_s.assign(profiles, std::vector<double>(kWearStations, 0.0));
+  for (std::size_t k = 0; k < t.rows.size(); ++k) {
+    const int p = static_cast<int>(t.number(k, c_p)), s = static_cast<int>(t.number(k, c_s));
+    if (p < 0 || p >= profiles || s < 0 || s >= kWearStations)
+      throw std::invalid_argument(t.where(k) + ": profile " + std::to_string(p) + ", station " + std::to_string(s) +
+                                  " is not one of this case's");
+    r.station_m3_s[p][s] = t.number(k, c_w);
+  }
+  return r;
+}
+
+}  // namespace mc::app::life

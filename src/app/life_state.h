@@ -1,0 +1,70 @@
+// A life study's state (docs/liner-life.md): its stages as life.json holds
+// them, what each stage's run reported, and the strict reading of both.
+// life.json is read and checked whole (types, keys, list lengths against
+// the case's profiles and the wear stations, outlines by the case reader's
+// own check) before a resumed study writes anything: a damaged state is
+// refused in one line naming the file, the stage and the key.
+#pragma once
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/vec.h"
+
+namespace mc::app::life {
+
+inline constexpr const char* kFormat = "millcharge life 1";
+
+// What a stage's run reported (its summary.json and lifter_wear.csv).
+struct StageResult {
+  double power_W = 0, power_sem_W = 0, toe_deg = NAN, shoulder_deg = NAN, impact_deg = NAN, bare_share = NAN;
+  double liner_kg_h = 0;          // shell and lifters, at the case's wear coefficient
+  double shell_mm_per_1000h = 0;  // the shell's mean depth rate, likewise
+  std::vector<std::vector<double>> station_m3_s;  // per profile, per station: one row's volume rate
+};
+
+struct Stage {
+  int index = 0;
+  double case_hours = 0;  // at its start, at the case's wear coefficient
+  double diameter = 0, filling = 0, shell_wear_m = 0;  // shell_wear_m: since the new liner
+  std::vector<std::vector<Vec2>> outlines;              // per profile, the bar's frame
+  bool ran = false;
+  StageResult r;
+  // The wear carried to the next stage (none for the last).
+  double span_case_hours = 0, shell_depth_m = 0;
+  std::vector<double> booked_mm2, removed_mm2, scale;
+  std::vector<int> spread;
+};
+
+// What a study's state must fit: its case's lifter profiles and the room a
+// bar must leave for a ball (the largest ball's diameter).
+struct StateShape {
+  std::size_t profiles = 0;
+  double largest_ball_m = 0;
+};
+
+struct LifeState {
+  nlohmann::json request;  // the request the study was started with
+  std::vector<Stage> stages;
+  std::string stopped;  // why it stopped, when it has
+};
+
+// life.json read and checked whole; std::invalid_argument naming the file,
+// the stage and the key otherwise.
+LifeState read_life_state(const std::filesystem::path& file, const StateShape& shape);
+
+// How the request in life.json differs from this one, in words ("stages:
+// 2 there, 3 asked"); "" when they are the same.
+std::string request_difference(const nlohmann::json& there, const nlohmann::json& asked);
+
+// Writes life.json (atomically).
+void save_life_state(const std::filesystem::path& out, const nlohmann::json& request, const std::vector<Stage>& stages,
+                     double factor, const std::string& calibration, const std::string& stopped);
+
+// A stage's run folder: its summary.json and lifter_wear.csv, checked.
+StageResult read_stage_result(const std::filesystem::path& dir, int profiles);
+
+}  // namespace mc::app::life
