@@ -97,3 +97,16 @@ TEST_CASE("batch grinding exactly: Reid's closed form, the Runge-Kutta reference
   CHECK(seconds < 0.05);
   std::printf("batch grind to S_max t = 1e6: %.4f s\n", seconds);
 }
+
+TEST_CASE("a feed whose passing rises within its noise: made monotone, masses summing to 1", "[grind][numbers]") {
+  // Sieves 4, 2, 1, 0.5 mm passing 1, 0.5, 0.515 (1.5 pp up), 0.2. Its
+  // running minimum is 1, 0.5, 0.5, 0.2; differenced on classes of tops 4,
+  // 2, 1 and 0.5 mm (the last the sink): 0.5, 0, 0.3, 0.2.
+  const SizeSeries s = geometric_series(4e-3, 2.0, 4);
+  const std::vector<double> m = feed_masses(s, {4e-3, 2e-3, 1e-3, 0.5e-3}, {1.0, 0.5, 0.515, 0.2});
+  CHECK(m[0] == Approx(0.5).margin(1e-12));
+  CHECK(m[1] == Approx(0.0).margin(1e-12));
+  CHECK(m[2] == Approx(0.3).margin(1e-12));
+  CHECK(m[3] == Approx(0.2).margin(1e-12));
+  CHECK(sum(m) == Approx(1.0).margin(1e-12));
+}
