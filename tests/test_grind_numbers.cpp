@@ -110,3 +110,39 @@ TEST_CASE("a feed whose passing rises within its noise: made monotone, masses su
   CHECK(m[3] == Approx(0.2).margin(1e-12));
   CHECK(sum(m) == Approx(1.0).margin(1e-12));
 }
+
+TEST_CASE("Whiten's curve at any sharpness: finite, and the sharp cut in the limit", "[grind][numbers]") {
+  // As alpha grows, E -> C below d50c, C/2 at it, 0 above. At y = 0.95 and
+  // 1.05 the curve differs from that by about C e^(-0.05 alpha).
+  for (double alpha : {800.0, 5000.0, 1e6}) {
+    INFO("alpha " << alpha);
+    const WhitenClassifier c{106e-6, alpha, 0.3, 0};
+    CHECK(c.to_overflow(0.95 * 106e-6) == Approx(0.7).margin(1e-15 + 0.7 * std::exp(-0.05 * alpha)));
+    CHECK(c.to_overflow(106e-6) == Approx(0.35).epsilon(1e-12));
+    CHECK(c.to_overflow(1.05 * 106e-6) <= 0.7 * std::exp(-0.05 * alpha) * 1.01);
+    CHECK(c.to_overflow(1e-3) == 0.0);
+    CHECK(c.to_overflow(1e-7) == Approx(0.7).epsilon(1e-12));
+    // With a fish hook too: finite, C/2 at d50c.
+    const WhitenClassifier h{106e-6, alpha, 0.3, 0.5};
+    CHECK(std::isfinite(h.to_overflow(50e-6)));
+    CHECK(h.to_overflow(106e-6) == Approx(0.35).epsilon(1e-6));
+  }
+  // A closed circuit at sharpness 800 is the sharp cut's: classes whose
+  // mean lies below d50c all to the overflow, the rest back (a class's
+  // mean is never within 1 % of d50c here, where e^-8 < 4e-4).
+  const SizeSeries s = geometric_series(3.35e-3, std::sqrt(2.0), 20);
+  const Matrix b = breakage_matrix(s, AustinBreakage{0.55, 1.2, 4.0});
+  const std::vector<double> S = austin_rates(s, AustinRates{0.9, 1.1, 2.5e-3, 2.5});
+  std::vector<double> fresh(20, 0.0);
+  fresh[0] = 0.006, fresh[1] = 0.003, fresh[2] = 0.001;  // t/h
+  const ClosedCircuit sharp = closed_circuit(s, fresh, S, b, 0.02, 1, WhitenClassifier{106e-6, 800, 0, 0});
+  REQUIRE(sharp.converged);
+  CHECK(sum(sharp.product) == Approx(0.01).epsilon(1e-9));
+  INFO("circulating load " << sharp.circulating_load);
+  for (int i = 0; i < s.size(); ++i) {
+    INFO("class " << i << " mean " << s.mid_m(i) * 1e6 << " um");
+    if (s.mid_m(i) > 106e-6) CHECK(sharp.product[i] <= 1e-12);
+    else CHECK(sharp.product[i] == Approx(sharp.mill_product[i]).epsilon(1e-3));
+  }
+  CHECK(std::isfinite(passing_size(s, sharp.product, 0.8)));
+}

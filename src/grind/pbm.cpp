@@ -250,8 +250,10 @@ double WhitenClassifier::beta_star() const {
   if (beta <= 0) return 1.0;
   // E(d50c) = C/2: (1 + beta b*)(e^a - 1) = (e^(a b*) + e^a - 2) / 2, with
   // the left side growing slower than the right for b* past the root.
-  const double ea = std::exp(alpha);
-  auto f = [&](double bs) { return 2 * (1 + beta * bs) * (ea - 1) - (std::exp(alpha * bs) + ea - 2); };
+  // Divided by e^a, so that no sharpness overflows: with q = 1 - e^-a,
+  // 2 (1 + beta b*) q - (e^(a (b* - 1)) - 1 + 2 q).
+  const double q = -std::expm1(-alpha);
+  auto f = [&](double bs) { return 2 * (1 + beta * bs) * q - (std::expm1(alpha * (bs - 1)) + 2 * q); };
   double lo = 1e-6, hi = 1.0;
   while (f(hi) > 0 && hi < 1e3) hi *= 2;
   for (int k = 0; k < 200; ++k) {
@@ -262,11 +264,15 @@ double WhitenClassifier::beta_star() const {
 }
 
 double WhitenClassifier::to_overflow(double x_m) const {
-  const double bs = beta_star(), y = x_m / d50c_m, ea = std::exp(alpha);
-  const double ay = alpha * bs * y;
-  if (ay > 700) return 0.0;  // e^(ay) overflows: nothing this coarse reaches the overflow
-  const double e = (1 - bypass) * (1 + beta * bs * y) * (ea - 1) / (std::exp(ay) + ea - 2);
-  return std::clamp(e, 0.0, 1.0);
+  const double bs = beta_star(), y = x_m / d50c_m;
+  // Numerator and denominator divided by e^alpha: with q = 1 - e^-alpha,
+  //   E = C (1 + beta b* y) q / (e^(alpha (b* y - 1)) - 1 + 2 q),
+  // which holds for any sharpness (e^alpha itself overflows past about
+  // 709); as alpha grows it tends to the sharp cut: C below d50c, C/2 at
+  // it, 0 above.
+  const double q = -std::expm1(-alpha);
+  const double e = (1 - bypass) * (1 + beta * bs * y) * q / (std::expm1(alpha * (bs * y - 1)) + 2 * q);
+  return std::isfinite(e) ? std::clamp(e, 0.0, 1.0) : 0.0;
 }
 
 ClosedCircuit closed_circuit(const SizeSeries& s, const std::vector<double>& fresh_t_h, const std::vector<double>& S,
