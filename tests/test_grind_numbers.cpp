@@ -146,3 +146,78 @@ TEST_CASE("Whiten's curve at any sharpness: finite, and the sharp cut in the lim
   }
   CHECK(std::isfinite(passing_size(s, sharp.product, 0.8)));
 }
+
+TEST_CASE("Bond's locked cycles reach the equilibrium found directly", "[grind][numbers]") {
+  // A toy ore on a sqrt(2) series, P1 on a class top. At the equilibrium
+  // every cycle starts from the same charge m, turns N revolutions, and the
+  // undersize u is a third of the oversize (250 %). For a given N the cycle
+  // is linear in m: m' = (I - P) E m + f 1'(P E m), E = exp(A N / rpm) (by
+  // Reid's closed form here), P the classes below P1, f the fresh feed; its
+  // fixed point of mass `charge` is solved as a linear system, and N
+  // bisected until u = charge / 3.5. Then Gbp = (u - u_fresh) / N.
+  const int n = 24;
+  const SizeSeries s = geometric_series(3.35e-3, std::sqrt(2.0), n);
+  const Matrix b = breakage_matrix(s, AustinBreakage{0.55, 1.2, 4.0});
+  const std::vector<double> S = austin_rates(s, AustinRates{0.4, 1.1, 2.5e-3, 2.5});
+  std::vector<double> feed(n, 0.0);
+  const double f_w[] = {0.2, 0.2, 0.15, 0.12, 0.1, 0.08, 0.06, 0.04, 0.03, 0.02};
+  for (int i = 0; i < 10; ++i) feed[i] = f_w[i];
+  feed[n - 1] = 1 - sum(feed);
+  const int k1 = 10;  // P1 = top of class 10
+  const double p1 = s.top_m[k1], rpm = 70, charge_g = 1260;
+  double fresh_fines = 0;
+  for (int i = k1; i < n; ++i) fresh_fines += feed[i];
+
+  auto equilibrium = [&](double N, std::vector<double>& m) {
+    Matrix E(n, std::vector<double>(n));
+    for (int j = 0; j < n; ++j) {
+      std::vector<double> e(n, 0.0);
+      e[j] = 1;
+      const std::vector<double> col = reid_batch(e, S, b, N / rpm);
+      for (int i = 0; i < n; ++i) E[i][j] = col[i];
+    }
+    Matrix A(n, std::vector<double>(n, 0.0));  // M - I
+    for (int j = 0; j < n; ++j) {
+      double pe = 0;
+      for (int i = k1; i < n; ++i) pe += E[i][j];
+      for (int i = 0; i < n; ++i) A[i][j] = (i < k1 ? E[i][j] : 0.0) + feed[i] * pe - (i == j ? 1 : 0);
+    }
+    std::vector<double> y(n, 0.0);
+    A[0].assign(n, 1.0);  // one equation traded for the mass
+    y[0] = charge_g;
+    m = solve(A, y);
+    double u = 0;
+    for (int i = k1; i < n; ++i)
+      for (int j = 0; j < n; ++j) u += E[i][j] * m[j];
+    return u;
+  };
+  double lo = 10, hi = 5000;
+  std::vector<double> m;
+  for (int k = 0; k < 200; ++k) {
+    const double mid = std::sqrt(lo * hi);
+    (equilibrium(mid, m) < charge_g / 3.5 ? lo : hi) = mid;
+  }
+  const double N = std::sqrt(lo * hi), u = equilibrium(N, m);
+  const double gbp = (u - fresh_fines * u) / N;
+
+  const BondResult r = bond_test(s, feed, S, b, rpm, charge_g / 1000, p1);
+  INFO("cycles " << r.cycles << " Gbp " << r.gbp_g_rev << " direct " << gbp << " revs " << N);
+  REQUIRE(r.steady);
+  CHECK(r.gbp_g_rev == Approx(gbp).epsilon(1e-5));
+  CHECK(r.revs_by_cycle.back() == Approx(N).epsilon(1e-5));
+  CHECK(r.circulating_load == Approx(2.5).epsilon(1e-5));
+  // Bond's formula at the equilibrium, per tonne (1 short ton = 907.18474 kg).
+  const double wi = 1000 / 907.18474 * 44.5 /
+                    (std::pow(p1 * 1e6, 0.23) * std::pow(gbp, 0.82) *
+                     (10 / std::sqrt(r.p80_um) - 10 / std::sqrt(r.f80_um)));
+  CHECK(r.wi_kWh_t == Approx(wi).epsilon(1e-5));
+  std::printf("Bond's cycles: %d to the equilibrium, Gbp %.6f g/rev (direct %.6f), %.2f rev\n", r.cycles,
+              r.gbp_g_rev, gbp, N);
+}
+
+TEST_CASE("Bond's test needs classes below its closing sieve", "[grind][numbers]") {
+  const SizeSeries s = geometric_series(3.35e-3, std::sqrt(2.0), 20);
+  CHECK_THROWS_WITH(check_bond_sieve(s, s.top_m.back()), Catch::Contains("--bond") && Catch::Contains("finest class"));
+  CHECK_THROWS_AS(check_bond_sieve(s, s.top_m.back() / 2), std::invalid_argument);
+  CHECK_NOTHROW(check_bond_sieve(s, s.top_m[s.size() - 2]));
+}

@@ -219,6 +219,7 @@ int fit_wi(const GrindOptions& o) {
   if (!(o.bond_p1_um * 1e-6 < on_p1.f80_m))
     throw std::invalid_argument(fmt::format("--bond {:g}: the closing sieve must lie below the feed's F80 ({:.1f} um)",
                                             o.bond_p1_um, on_p1.f80_m * 1e6));
+  check_bond_sieve(on_p1.sizes, o.bond_p1_um * 1e-6);
   const io::Run run = io::read_run(o.run_dir, start.model == RateModel::spectrum);
   if (!(run.speed_rpm > 0)) throw std::invalid_argument(o.run_dir + "/summary.json: speed_rpm missing");
   const std::string name = o.fit_params.empty() ? default_parameter(start.model) : o.fit_params.front();
