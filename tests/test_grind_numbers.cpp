@@ -221,3 +221,49 @@ TEST_CASE("Bond's test needs classes below its closing sieve", "[grind][numbers]
   CHECK_THROWS_AS(check_bond_sieve(s, s.top_m.back() / 2), std::invalid_argument);
   CHECK_NOTHROW(check_bond_sieve(s, s.top_m[s.size() - 2]));
 }
+
+TEST_CASE("Tavares' t10 against the parent's size, the class's geometric mean", "[grind][numbers][t10]") {
+  // A series of ratio r = 10^(1/3.5): the top of class j + 4 is a tenth of
+  // class j's geometric mean, so the broken mass of class 0 finer than it is
+  // t10 of what breaks. One collision bin hard enough to break every
+  // particle (e above E_max), so E50b = E50 and t10 = A (1 - exp(-b' e / E50)).
+  // The Schuhmann family (alpha_n = log10 n, beta_n = 1): B(u) = u^(-log10 t10).
+  // What leaves class 0 is its progeny finer than its lower size,
+  // L = B(r^(-1/2)); the column is per unit of that, and the rate S L.
+  const double r = std::pow(10.0, 1 / 3.5);
+  Ore ore;
+  ore.sizes = geometric_series(3.35e-3, r, 8);
+  ore.density = 2700;
+  ore.packing = 0.6;
+  ore.efficiency = 0.5;
+  ore.model = RateModel::spectrum;
+  ore.appearance = Appearance::t10;
+  ore.fracture = Fracture{100, 1e-3, 1.0, 0.8, 10};
+  ore.t10.a = 0.5;
+  ore.t10.b_prime = 0.1;
+  for (double n : {2.0, 4.0, 25.0, 50.0, 75.0}) {
+    ore.t10.n.push_back(n);
+    ore.t10.alpha.push_back(std::log10(n));
+    ore.t10.beta.push_back(1.0);
+  }
+  const std::vector<SpectrumBin> spectrum = {{30.0, 1.0, 0.01}};  // 30 /s of 1 J, R_eff 10 mm
+  const double d = 3.35e-3 / std::sqrt(r);
+  const double m_cap = 0.6 * M_PI * M_PI / 3 * 2700 * d * d * 0.01;
+  const double e50 = 100 * (1 + 1e-3 / d), e = 1.0 / m_cap;
+  REQUIRE(e > 10 * e50);
+  const double t10 = 0.5 * (1 - std::exp(-0.1 * e / e50));
+  const double L = std::pow(std::pow(r, -0.5), -std::log10(t10));
+  std::vector<double> t10_mean, leaving;
+  const Matrix b = t10_breakage_matrix(ore.sizes, spectrum, ore.fracture, ore.t10, 2700, 0.6, &t10_mean, &leaving);
+  double finer = 0, column = 0;
+  for (int i = 1; i < ore.sizes.size(); ++i) column += b[i][0];
+  for (int i = 4; i < ore.sizes.size(); ++i) finer += b[i][0];
+  CHECK(t10_mean[0] == Approx(t10).epsilon(1e-12));
+  CHECK(leaving[0] == Approx(L).epsilon(1e-9));
+  CHECK(column == Approx(1.0).epsilon(1e-12));
+  CHECK(finer * L == Approx(t10).epsilon(1e-9));
+  // The rate: efficiency / H · N · m_cap · P (= 1) · L, per minute.
+  const double H = 2.0;
+  const MillRates rates = mill_rates(ore, spectrum, 100.0, H);
+  CHECK(rates.S_per_min[0] == Approx(0.5 / H * 30 * m_cap * L * 60).epsilon(1e-9));
+}

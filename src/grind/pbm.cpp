@@ -417,21 +417,26 @@ double median_broken_energy(const Fracture& f, double e, double d_m) {
 
 std::vector<std::vector<double>> t10_breakage_matrix(const SizeSeries& s, const std::vector<SpectrumBin>& spectrum,
                                                      const Fracture& f, const T10Breakage& t, double ore_density,
-                                                     double packing, std::vector<double>* t10_mean) {
+                                                     double packing, std::vector<double>* t10_mean,
+                                                     std::vector<double>* leaving) {
   const int n = s.size();
   std::vector<std::vector<double>> b(n, std::vector<double>(n, 0.0));
   if (t10_mean) t10_mean->assign(n, 0.0);
+  if (leaving) leaving->assign(n, 1.0);
   for (int j = 0; j + 1 < n; ++j) {
+    // The parent's size is the class's geometric mean, for the event's
+    // energy (captured mass, E50) and for its progeny B(size / parent).
     const double d = s.mid_m(j), lower = s.top_m[j + 1];
-    double weight = 0, t10_sum = 0;
+    double weight = 0, t10_sum = 0, left = 0;
     auto add = [&](double t10, double w) {
       const T10Curve B(t, t10);
       for (int i = j + 1; i < n; ++i) {
-        const double hi = B(s.top_m[i] / lower), lo = i + 1 < n ? B(s.top_m[i + 1] / lower) : 0.0;
+        const double hi = B(s.top_m[i] / d), lo = i + 1 < n ? B(s.top_m[i + 1] / d) : 0.0;
         b[i][j] += w * (hi - lo);
       }
       weight += w;
       t10_sum += w * t10;
+      left += w * B(lower / d);  // the progeny finer than the class: what leaves it
     };
     for (const SpectrumBin& k : spectrum) {
       if (k.collisions_per_s <= 0 || k.energy_J <= 0) continue;
@@ -443,8 +448,11 @@ std::vector<std::vector<double>> t10_breakage_matrix(const SizeSeries& s, const 
       const double e = f.e50(d);
       add(t.t10(e / median_broken_energy(f, e, d)), 1.0);
     }
-    for (int i = j + 1; i < n; ++i) b[i][j] /= weight;
+    // The progeny still coarser than the class's lower size stay in it: the
+    // column is what leaves, and sums to 1.
+    for (int i = j + 1; i < n; ++i) b[i][j] /= left;
     if (t10_mean) (*t10_mean)[j] = t10_sum / weight;
+    if (leaving) (*leaving)[j] = left / weight;
   }
   return b;
 }

@@ -173,12 +173,17 @@ double median_broken_energy(const Fracture& f, double e_J_kg, double d_m);
 // The appearance matrix of Tavares' t10 in a mill of this spectrum: for each
 // class j, the t10 appearance of each collision bin (its specific energy
 // E_k / m_cap,j) weighted by the mass the bin breaks of class j
-// (N_k m_cap,j P_j). A class nothing breaks gets that of an event at its
-// E50 (its rate is 0). Each column sums to 1, as breakage_matrix's.
+// (N_k m_cap,j P_j). The parent's size is the class's geometric mean, for
+// the energy and for B(u) alike; the progeny still coarser than the class's
+// lower size stay in it, so each column is what leaves the class, summing
+// to 1 as breakage_matrix's, and `leaving` (optional) says which share of
+// the broken mass that is (the rates are S_j times it). A class nothing
+// breaks gets that of an event at its E50 (its rate is 0).
 // t10_mean (optional): each class's mass-weighted mean t10.
 std::vector<std::vector<double>> t10_breakage_matrix(const SizeSeries& s, const std::vector<SpectrumBin>& spectrum,
                                                      const Fracture& f, const T10Breakage& t, double ore_density,
-                                                     double packing, std::vector<double>* t10_mean = nullptr);
+                                                     double packing, std::vector<double>* t10_mean = nullptr,
+                                                     std::vector<double>* leaving = nullptr);
 
 // S_i (per second) = efficiency / H · sum_k N_k · m_cap,i · P_i(E_k / m_cap,i).
 std::vector<double> spectrum_rates(const SizeSeries& s, const std::vector<SpectrumBin>& spectrum,
