@@ -222,6 +222,27 @@ TEST_CASE("Bond's test needs classes below its closing sieve", "[grind][numbers]
   CHECK_NOTHROW(check_bond_sieve(s, s.top_m[s.size() - 2]));
 }
 
+TEST_CASE("the captured mass against a direct integration over the gap narrower than d", "[grind][numbers]") {
+  // A sphere of radius R over a plane leaves the gap h(r) = R - sqrt(R² - r²)
+  // at a distance r from the contact; particles of size d sit where h < d,
+  // one per d² lattice site of a square lattice of spacing d, a share p of
+  // the sites filled, each of mass rho pi d³ / 6. Integrated over r here by
+  // the midpoint rule; as d / R -> 0 it tends to p (pi²/3) rho d² R, and
+  // with the area fraction of circles phi = p pi / 4 that is
+  // phi (4 pi / 3) rho d² R.
+  const double R = 0.02, d = 2e-6, rho = 2700, p = 0.6;
+  const int steps = 2000000;
+  const double dr = R / steps;
+  double mass = 0;
+  for (int k = 0; k < steps; ++k) {
+    const double r = (k + 0.5) * dr;
+    if (R - std::sqrt(R * R - r * r) < d) mass += 2 * M_PI * r * dr * p / (d * d) * rho * M_PI * d * d * d / 6;
+  }
+  CHECK(captured_mass(d, R, rho, p) == Approx(mass).epsilon(2e-3));
+  const double phi = p * M_PI / 4;
+  CHECK(captured_mass(d, R, rho, p) == Approx(phi * 4 * M_PI / 3 * rho * d * d * R).epsilon(1e-12));
+}
+
 TEST_CASE("Tavares' t10 against the parent's size, the class's geometric mean", "[grind][numbers][t10]") {
   // A series of ratio r = 10^(1/3.5): the top of class j + 4 is a tenth of
   // class j's geometric mean, so the broken mass of class 0 finer than it is
