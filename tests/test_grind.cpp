@@ -580,8 +580,9 @@ TEST_CASE("grind --bond: a locked-cycle test that settles at 250 % and Bond's fo
   const double gbp = b["Gbp_g_per_rev"].get<double>(), p80 = b["P80_um"].get<double>(), f80 = b["F80_um"].get<double>();
   CHECK(gbp > 0);
   CHECK(p80 < 150);
+  // Bond's formula per short ton, per tonne: 1000 / 907.18474.
   CHECK(b["work_index_kWh_t"].get<double>() ==
-        Approx(1.1 * 44.5 / (std::pow(150.0, 0.23) * std::pow(gbp, 0.82) * (10 / std::sqrt(p80) - 10 / std::sqrt(f80))))
+        Approx(1000 / 907.18474 * 44.5 / (std::pow(150.0, 0.23) * std::pow(gbp, 0.82) * (10 / std::sqrt(p80) - 10 / std::sqrt(f80))))
             .epsilon(1e-9));
   // The last three cycles' Gbp agree within 3 %.
   const auto& g = b["Gbp_by_cycle"];
@@ -594,6 +595,37 @@ TEST_CASE("grind --bond: a locked-cycle test that settles at 250 % and Bond's fo
   o.out = (run / "grind-bond-bad").string();
   CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains("--bond 3000"));
   CHECK(!fs::exists(o.out));
+  // P1 on the finest class top (3350 um / sqrt(2)^19) leaves the product no
+  // class below it: refused by name, not a NaN work index.
+  o.bond_p1_um = 3350 / std::pow(std::sqrt(2.0), 19);
+  CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains("--bond 4.6") && Catch::Contains("finest class top"));
+  CHECK(!fs::exists(o.out));
+}
+
+TEST_CASE("grind --bond leaves the call's other products as they are without it", "[grind]") {
+  // Bond's test holds 700 cm³ of feed; the other products of the call are
+  // the run's, at the run's hold-up: the same numbers as a call without --bond.
+  const fs::path run = short_run();
+  auto grind = [&](double p1_um, const std::string& name) {
+    mc::app::GrindOptions o;
+    o.run_dir = run.string();
+    o.ore = ore_file("example_energy.toml").string();
+    o.times_min = {4};
+    o.bond_p1_um = p1_um;
+    o.out = (run / name).string();
+    o.quiet = true;
+    REQUIRE(mc::app::cmd_grind(o) == 0);
+    return nlohmann::json::parse(text_of(fs::path(o.out) / "grind.json"));
+  };
+  const nlohmann::json alone = grind(0, "grind-alone"), with = grind(150, "grind-with-bond");
+  const double power_W = nlohmann::json::parse(text_of(run / "summary.json"))["power_W"]["torque"].get<double>();
+  const double H = alone["holdup_kg"].get<double>();
+  CHECK(with["holdup_kg"].get<double>() == Approx(H).epsilon(1e-12));
+  const auto& a = alone["products"][0];
+  const auto& w = with["products"][0];
+  CHECK(w["specific_energy_kWh_t"].get<double>() == Approx(power_W / 1000 * 4 / 60 / (H / 1000)).epsilon(1e-9));
+  CHECK(w["P80_um"].get<double>() == Approx(a["P80_um"].get<double>()).epsilon(1e-12));
+  CHECK(with["bond"]["work_index_kWh_t"].get<double>() > 0);
 }
 
 TEST_CASE("grind reads a run's spectra.csv strictly: a cut or damaged or foreign file is refused by its line",

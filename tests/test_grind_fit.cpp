@@ -266,6 +266,74 @@ TEST_CASE("grind --fit: a parameter the data cannot fix is said to be unidentifi
   CHECK(f.rms_pp < 1e-4);
 }
 
+TEST_CASE("grind --fit with nothing left free reports the starting ore's residuals", "[grind][fit]") {
+  // Austin's B with gamma = beta does not depend on phi: breakage.phi, the
+  // only parameter named, is held, and nothing is fitted. The rms residual
+  // is then the starting ore's, computed here from its products directly.
+  const mc::io::Run run = mc::io::read_run(bond_run(), false);
+  const Ore truth = mc::io::read_ore(ore_file("example_energy.toml"));
+  const BatchTest t = synthetic_test(truth, run, 1.2, 0);
+  Ore start = truth;
+  start.energy.s1e_t_per_kWh = 0.9;
+  start.breakage.beta = start.breakage.gamma;
+  const BatchFit f = fit_batch_test(start, run.normal, run.power_W, 1.2, t, {"breakage.phi"});
+  REQUIRE(f.parameters.size() == 1);
+  CHECK(!f.parameters[0].identified);
+  CHECK(f.free == 0);
+  const auto pred = batch_test_products(start, run.normal, run.power_W, 1.2, t);
+  double ssr = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < t.times_min.size(); ++i)
+    for (std::size_t k = 1; k < t.sieve_m.size(); ++k, ++n) ssr += std::pow(100 * (pred[i][k] - t.passing[i][k]), 2);
+  CHECK(f.data == n);
+  CHECK(f.rms_pp == Approx(std::sqrt(ssr / n)).epsilon(1e-9));
+  CHECK(f.rms_pp > 1);
+}
+
+TEST_CASE("grind --fit: a parameter on its bound has no standard error, a value's error judged on its range",
+          "[grind][fit]") {
+  // The test made with 1.2 kg in the mill, fitted with 3 kg: the rates
+  // must be 2.5 times those of efficiency 1, past its range (at most 1).
+  const mc::io::Run run = mc::io::read_run(bond_run(), true);
+  const Ore truth = mc::io::read_ore(ore_file("example_spectrum.toml"));
+  const BatchTest t = synthetic_test(truth, run, 1.2, 0);
+  const BatchFit f = fit_batch_test(truth, run.normal, run.power_W, 3.0, t, {"efficiency"});
+  REQUIRE(f.parameters.size() == 1);
+  CHECK(f.parameters[0].at_bound);
+  CHECK(f.parameters[0].value == Approx(1.0).epsilon(1e-9));
+  CHECK(std::isnan(f.parameters[0].se));
+  // One parameter, 4 data, J = 1: SE = sqrt(ssr / 3 / 4) = 0.6 for ssr =
+  // 4.32. A logarithm (limit 1, a factor of e) is identified; a value
+  // whose range is 0 to 1, as breakage.phi (limit 1/4), is not.
+  const std::vector<std::vector<double>> J = {{1}, {1}, {1}, {1}};
+  const Identification log_scale = identify(J, 4.32);
+  CHECK(log_scale.se[0] == Approx(0.6).epsilon(1e-12));
+  CHECK(log_scale.identified[0]);
+  const Identification value = identify(J, 4.32, {(find_ore_parameter("breakage.phi")->hi - 0) / 4});
+  CHECK(!value.identified[0]);
+  CHECK(value.why[0].find("quarter of its range") != std::string::npos);
+}
+
+TEST_CASE("grind --fit-params: an unknown name gets the one it most likely meant", "[grind][fit][failures]") {
+  CHECK(closest_ore_parameter("EFFICIENCY") == "efficiency");
+  CHECK(closest_ore_parameter("Breakage.Phi") == "breakage.phi");
+  CHECK(closest_ore_parameter("e_inf") == "e_inf_J_kg");
+  CHECK(closest_ore_parameter("sigm") == "sigma");
+  CHECK(closest_ore_parameter("b_prime") == "breakage.b_prime");
+  const mc::io::Run run = mc::io::read_run(bond_run(), true);
+  const Ore ore = mc::io::read_ore(ore_file("example_spectrum.toml"));
+  const BatchTest t = synthetic_test(ore, run, 1.2, 0);
+  try {
+    fit_batch_test(ore, run.normal, run.power_W, 1.2, t, {"EFFICIENCY"});
+    FAIL("EFFICIENCY accepted");
+  } catch (const std::invalid_argument& e) {
+    const std::string m = e.what();
+    CHECK(m.find("did you mean efficiency?") != std::string::npos);
+    CHECK(m.find("zeta1") == std::string::npos);  // one name, not the list
+    CHECK(m.size() < 160);
+  }
+}
+
 TEST_CASE("grind --fit through the command: the fitted ore, its record of the contact, the warning",
           "[grind][fit][outputs]") {
   const fs::path run_dir = bond_run();
@@ -470,6 +538,13 @@ passing = [1.0, 0.9, 0.70, 0.50, 0.35]
     const int status = std::system(cmd.c_str());
     CHECK(WEXITSTATUS(status) == 2);
     CHECK(text_of(out.string() + ".log").find("--fit-params phi: ambiguous") != std::string::npos);
+    CHECK(!fs::exists(out));
+    // An empty --fit-params names nothing: refused, not the default fitted.
+    const std::string empty = std::string(MC_BINARY) + " grind " + run_dir.string() + " --ore " +
+                              ore_file("example_spectrum.toml").string() + " --fit " + p.string() +
+                              " --fit-params '' --out " + out.string() + " > " + out.string() + ".log 2>&1";
+    CHECK(WEXITSTATUS(std::system(empty.c_str())) == 2);
+    CHECK(text_of(out.string() + ".log").find("--fit-params \"\": names no parameter") != std::string::npos);
     CHECK(!fs::exists(out));
     fs::remove(out.string() + ".log");
     fs::remove(p);

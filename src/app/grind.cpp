@@ -59,14 +59,31 @@ void check_classifier(const GrindOptions& o, const Ore& ore) {
   }
 }
 
-void check_bond(const GrindOptions& o, const Ore& ore, const io::Run& run) {
-  if (!(o.bond_p1_um * 1e-6 < ore.f80_m))
+// `bond_ore`: the ore with its series moved onto P1.
+void check_bond(const GrindOptions& o, const Ore& bond_ore, const io::Run& run) {
+  if (!(o.bond_p1_um * 1e-6 < bond_ore.f80_m))
     throw std::invalid_argument(fmt::format("--bond {:g}: the closing sieve must lie below the feed's F80 ({} um)",
-                                            o.bond_p1_um, fmt_um(ore.f80_m)));
-  if (o.bond_p1_um * 1e-6 < ore.sizes.top_m.back())
-    throw std::invalid_argument(fmt::format("--bond {:g}: below the finest class top ({:.1f} um): more sizes.classes",
-                                            o.bond_p1_um, ore.sizes.top_m.back() * 1e6));
+                                            o.bond_p1_um, fmt_um(bond_ore.f80_m)));
+  check_bond_sieve(bond_ore.sizes, o.bond_p1_um * 1e-6);
   if (!(run.speed_rpm > 0)) throw std::invalid_argument(o.run_dir + "/summary.json: speed_rpm missing");
+}
+
+// Bond's test of the ore in its own mill: 700 cm³ of feed as the hold-up,
+// on the series moved onto P1; the run's other products keep the run's
+// hold-up and the ore's own series.
+BondResult run_bond(const GrindOptions& o, const Ore& bond_ore, const io::Run& run) {
+  const double charge = bond_charge_kg(bond_ore);
+  const MillRates r = mill_rates(bond_ore, run.normal, run.power_W, charge);
+  const auto b = appearance_matrix(bond_ore, run.normal);
+  const BondResult bond =
+      bond_test(bond_ore.sizes, bond_ore.feed, r.S_per_min, b, run.speed_rpm, charge, o.bond_p1_um * 1e-6);
+  if (!std::isfinite(bond.wi_kWh_t) || !(bond.wi_kWh_t > 0))
+    throw std::invalid_argument(fmt::format(
+        "--bond {:g}: no work index: the test's product has P80 {} um and Gbp {:.4g} g/rev (more sizes.classes "
+        "below P1, or a faster ore)",
+        o.bond_p1_um, std::isfinite(bond.p80_um) ? fmt::format("{:.1f}", bond.p80_um) : "below the finest class",
+        bond.gbp_g_rev));
+  return bond;
 }
 
 Product continuous(const Circuit& c, double feed_t_h) {
@@ -357,9 +374,9 @@ void print(const GrindOptions& o, const Ore& ore, const io::Run& run, const Circ
                           .c_str()
                     : "");
   if (o.bond_p1_um > 0)
-    std::printf("  Bond test at P1 %g um: %d cycles%s, Gbp %.3f g/rev, CL %.0f %%, F80 %.0f um, P80 %.0f um, Wi %.2f "
-                "kWh/t\n",
-                bond.p1_um, bond.cycles, bond.steady ? "" : " (not steady)", bond.gbp_g_rev,
+    std::printf("  Bond test at P1 %g um, %.0f g charge: %d cycles%s, Gbp %.3f g/rev, CL %.0f %%, F80 %.0f um, P80 %.0f um, "
+                "Wi %.2f kWh/t\n",
+                bond.p1_um, bond.charge_g, bond.cycles, bond.steady ? "" : " (not steady)", bond.gbp_g_rev,
                 100 * bond.circulating_load, bond.f80_um, bond.p80_um, bond.wi_kWh_t);
 }
 
@@ -369,11 +386,12 @@ int cmd_grind(const GrindOptions& o) {
   if (!o.fit_test.empty() || o.fit_wi_kWh_t > 0) return cmd_grind_fit(o);
   if (!o.fit_params.empty()) throw std::invalid_argument("--fit-params: names what --fit or --fit-wi fits; give one");
   // The inputs, checked before anything is computed.
-  Ore ore = io::read_ore(o.ore);
-  if (o.bond_p1_um > 0) put_sieve_on_class_top(ore, o.bond_p1_um * 1e-6);
+  const Ore ore = io::read_ore(o.ore);
+  Ore bond_ore = ore;
+  if (o.bond_p1_um > 0) put_sieve_on_class_top(bond_ore, o.bond_p1_um * 1e-6);
   check_classifier(o, ore);
   const io::Run run = io::read_run(o.run_dir, ore.model == RateModel::spectrum);
-  if (o.bond_p1_um > 0) check_bond(o, ore, run);
+  if (o.bond_p1_um > 0) check_bond(o, bond_ore, run);
   // A run still settling into its motion: its torque also lifts the charge
   // (the energy-specific and Austin rates take the torque's power, the
   // spectrum only the collisions).
@@ -394,8 +412,7 @@ int cmd_grind(const GrindOptions& o) {
                  o.ore.c_str(), contact_changed.c_str());
 
   // The mill: the ore in it, the rates, the circuit.
-  const double holdup_kg = o.bond_p1_um > 0 ? bond_charge_kg(ore)
-                                            : mill_holdup_kg(ore, run.porosity, run.filling, run.mill_volume);
+  const double holdup_kg = mill_holdup_kg(ore, run.porosity, run.filling, run.mill_volume);
   const MillRates rates = mill_rates(ore, run.normal, run.power_W, holdup_kg);
   Circuit c;
   c.sizes = ore.sizes;
@@ -425,8 +442,7 @@ int cmd_grind(const GrindOptions& o) {
     products.insert(products.end(), up.products.begin(), up.products.end());
   }
   BondResult bond;
-  if (o.bond_p1_um > 0)
-    bond = bond_test(c.sizes, c.feed, c.S_per_min, c.b, run.speed_rpm, bond_charge_kg(ore), o.bond_p1_um * 1e-6);
+  if (o.bond_p1_um > 0) bond = run_bond(o, bond_ore, run);
 
   // Everything computed; now the files.
   const fs::path out = o.out.empty() ? fs::path(o.run_dir) / "grind" : fs::path(o.out);

@@ -125,9 +125,11 @@ nlohmann::ordered_json parameter_json(const FittedParameter& p) {
   q["identified"] = p.identified;
   if (p.identified) {
     q["value"] = p.value;
-    q["standard_error"] = p.se;
-    q["relative_standard_error"] = p.value != 0 ? nlohmann::json(p.se / std::fabs(p.value)) : nlohmann::json();
     q["at_bound"] = p.at_bound;
+    if (!p.at_bound) {  // on its bound it is not free: no standard error
+      q["standard_error"] = p.se;
+      q["relative_standard_error"] = p.value != 0 ? nlohmann::json(p.se / std::fabs(p.value)) : nlohmann::json();
+    }
   } else {
     q["held_at"] = p.value;
     q["why"] = p.why;
@@ -170,6 +172,7 @@ int fit_batch(const GrindOptions& o) {
   j["data"] = fit.data;
   j["parameters"] = nlohmann::json::array();
   for (const FittedParameter& p : fit.parameters) j["parameters"].push_back(parameter_json(p));
+  j["free_parameters"] = fit.free;
   j["rms_residual_pp"] = fit.rms_pp;
   j["within_twice_noise"] = fit.rms_pp <= 2 * tf.test.noise_pp;
   j["iterations"] = fit.iterations;
@@ -194,15 +197,21 @@ int fit_batch(const GrindOptions& o) {
                 o.fit_test.c_str(), t.times_min.size(), t.sieve_m.size(), fit.data, run.power_W, holdup_kg,
                 run.contact.law.c_str());
     for (const FittedParameter& p : fit.parameters) {
-      if (p.identified)
-        std::printf("  %-16s %.6g +- %.2g (%.2g %%)%s   start %.6g\n", p.name.c_str(), p.value, p.se,
-                    100 * p.se / std::fabs(p.value), p.at_bound ? "  on its bound: the test wants it past the ore file's range" : "", p.start);
+      if (p.identified && p.at_bound)
+        std::printf("  %-16s %.6g on its bound: the test wants it past the ore file's range (no standard error)   "
+                    "start %.6g\n",
+                    p.name.c_str(), p.value, p.start);
+      else if (p.identified)
+        std::printf("  %-16s %.6g +- %.2g (%.2g %%)   start %.6g\n", p.name.c_str(), p.value, p.se,
+                    100 * p.se / std::fabs(p.value), p.start);
       else
         std::printf("  %-16s unidentified: %s (%.6g)\n", p.name.c_str(), p.why.c_str(), p.value);
     }
+    if (fit.free == 0)
+      std::printf("  no parameter left free: every one is held, the residuals are the starting ore's\n");
     std::printf("  rms residual %.4g pp; %d iterations, %d evaluations, %.2f s\n", fit.rms_pp, fit.iterations,
                 fit.evaluations, seconds);
-    if (fit.rms_pp > 2 * t.noise_pp)
+    if (fit.rms_pp > 2 * t.noise_pp && fit.free > 0)
       std::printf("  note: the rms residual is above twice the test's noise_pp (%g pp): the model cannot reproduce "
                   "the test with these parameters free%s\n",
                   t.noise_pp, any_at_bound ? " (one is held on its bound)" : "");
@@ -219,6 +228,7 @@ int fit_wi(const GrindOptions& o) {
   if (!(o.bond_p1_um * 1e-6 < on_p1.f80_m))
     throw std::invalid_argument(fmt::format("--bond {:g}: the closing sieve must lie below the feed's F80 ({:.1f} um)",
                                             o.bond_p1_um, on_p1.f80_m * 1e6));
+  check_bond_sieve(on_p1.sizes, o.bond_p1_um * 1e-6);
   const io::Run run = io::read_run(o.run_dir, start.model == RateModel::spectrum);
   if (!(run.speed_rpm > 0)) throw std::invalid_argument(o.run_dir + "/summary.json: speed_rpm missing");
   const std::string name = o.fit_params.empty() ? default_parameter(start.model) : o.fit_params.front();

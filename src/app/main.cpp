@@ -215,7 +215,7 @@ int main(int argc, char** argv) {
                     "fit the ore to this laboratory batch test (TOML) through the run, the test's mill: writes the "
                     "fitted ore, its residuals, fit.json and fit.png")
       ->type_name("TEST");
-  grind->add_option("--fit-params", fit_params,
+  CLI::Option* fit_params_opt = grind->add_option("--fit-params", fit_params,
                     "the ore parameters --fit or --fit-wi moves, comma-separated (default: the rate model's scale, "
                     "efficiency for the spectrum model)")
       ->type_name("NAME,...");
@@ -258,6 +258,9 @@ int main(int argc, char** argv) {
         go.times_min.push_back(t);
         start = end + 1;
       }
+      if (fit_params_opt->count() > 0 && fit_params.empty())
+        throw std::invalid_argument("--fit-params \"\": names no parameter; name one or more (e.g. --fit-params "
+                                    "efficiency), or leave the option out for the rate model's scale");
       for (std::size_t start = 0; start < fit_params.size();) {
         const std::size_t end = std::min(fit_params.find(',', start), fit_params.size());
         const std::string item = fit_params.substr(start, end - start);

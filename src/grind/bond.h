@@ -15,15 +15,25 @@ double bond_charge_kg(const Ore& ore);
 
 // Bond's test screens at P1: the series is moved up to put P1 on a class
 // top (it still covers the feed; the classes keep their count), and the
-// feed is put on the moved classes.
+// feed (and its F80) is put on the moved classes.
 void put_sieve_on_class_top(Ore& ore, double p1_m);
+
+// The closing sieve must leave class tops below it (P1 above the finest
+// top of the moved series): throws std::invalid_argument naming --bond.
+void check_bond_sieve(const SizeSeries& s, double p1_m);
 
 // Bond's locked-cycle test (F. C. Bond 1961, the standard procedure): 700
 // cm³ of feed, ground, screened at P1; the undersize replaced by fresh
 // feed; the revolutions of each cycle set so that the undersize is 1/3.5
 // of the charge (a circulating load of 250 %); Gbp the net grams of
-// undersize made per revolution, over the last three cycles once they
-// agree within 3 % with the load within 3 % of 250 %.
+// undersize made per revolution. The laboratory stops once three cycles
+// agree within 3 %; here the cycles go on to the equilibrium that rule
+// approximates: Gbp changing by less than kBondSteady (relative) from one
+// cycle to the next, the load then 250 % (steady false: not reached in
+// kBondMaxCycles). Wi in kWh per tonne (Bond's per short ton x 1.10231).
+constexpr double kBondSteady = 1e-7;
+constexpr int kBondMaxCycles = 2000;
+constexpr double kShortTonsPerTonne = 1000 / 907.18474;
 struct BondResult {
   double p1_um = 0, gbp_g_rev = 0, p80_um = 0, f80_um = 0, wi_kWh_t = 0, charge_g = 0, circulating_load = 0;
   int cycles = 0;

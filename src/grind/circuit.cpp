@@ -25,7 +25,12 @@ MillRates mill_rates(const Ore& ore, const std::vector<SpectrumBin>& spectrum, d
   }
   if (ore.model == RateModel::spectrum) {
     S = spectrum_rates(s, spectrum, ore.fracture, ore.density, ore.packing, ore.efficiency, holdup_kg);
-    for (double& x : S) x *= 60;
+    // Tavares' t10: of what a collision breaks, the progeny finer than the
+    // class leave it; the rest stays (t10_breakage_matrix).
+    std::vector<double> leaving(n, 1.0);
+    if (ore.appearance == Appearance::t10)
+      t10_breakage_matrix(s, spectrum, ore.fracture, ore.t10, ore.density, ore.packing, nullptr, &leaving);
+    for (int i = 0; i < n; ++i) S[i] *= 60 * leaving[i];
   }
   if (ore.model != RateModel::energy)
     for (int i = 0; i < n; ++i) SE[i] = S[i] * 60 * holdup_t / power_kW;

@@ -20,7 +20,8 @@ double mill_holdup_kg(const Ore& ore, double ball_bed_porosity, double filling, 
 
 // Each class's specific breakage rate, S per minute and S^E in t/kWh (the
 // one from the other by the power and the hold-up); the sink's are 0.
-// `spectrum`: the run's normal energy spectrum, for the spectrum model.
+// `spectrum`: the run's normal energy spectrum, for the spectrum model
+// (with Tavares' t10, the rates of the mass that leaves each class).
 struct MillRates {
   std::vector<double> S_per_min, SE_t_per_kWh;
 };

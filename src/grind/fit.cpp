@@ -2,6 +2,7 @@
 #include "grind/fit.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -94,6 +95,27 @@ double sum_sq(const std::vector<double>& r) {
 double to_var(const OreParameter& p, double v) { return p.log ? std::log(v) : v; }
 double from_var(const OreParameter& p, double x) { return p.log ? std::exp(x) : x; }
 
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// Levenshtein's edit distance.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
 }  // namespace
 
 double passing_at(const SizeSeries& s, const std::vector<double>& m, double x) {
@@ -176,6 +198,24 @@ const OreParameter* find_ore_parameter(const std::string& name) {
   for (const OreParameter& p : ore_parameters())
     if (p.name == key) return &p;
   return nullptr;
+}
+
+std::string closest_ore_parameter(const std::string& name) {
+  const std::string key = lower(name);
+  std::string best;
+  std::size_t best_d = std::string::npos;
+  for (const OreParameter& p : ore_parameters())
+    if (lower(p.name) == key) return p.name;  // the case alone differs
+  for (const OreParameter& p : ore_parameters())  // the start of a name ("e_inf")
+    if (!key.empty() && lower(p.name).rfind(key, 0) == 0) return p.name;
+  for (const OreParameter& p : ore_parameters()) {
+    // Also against the name without its table ("phi" in "rates.phi").
+    const std::size_t dot = p.name.find('.');
+    std::size_t d = edit_distance(key, lower(p.name));
+    if (dot != std::string::npos) d = std::min(d, edit_distance(key, lower(p.name.substr(dot + 1))));
+    if (d < best_d) best_d = d, best = p.name;
+  }
+  return best;
 }
 
 // ------------------------------------------------------------ least squares
@@ -296,7 +336,7 @@ LmResult levenberg_marquardt(const LmProblem& prob) {
   return res;
 }
 
-Identification identify(const Matrix& J, double ssr) {
+Identification identify(const Matrix& J, double ssr, const std::vector<double>& se_limit) {
   const std::size_t n = J.size(), np = n ? J[0].size() : 0;
   Identification id;
   id.se.assign(np, kNaN);
@@ -353,9 +393,11 @@ Identification identify(const Matrix& J, double ssr) {
     for (std::size_t k = 0; k < m; ++k)
       if (lambda[k] >= 1e-10 * lmax) var += V[a][k] * V[a][k] / lambda[k];
     id.se[p] = std::sqrt(var * s2) * d[a];
-    if (id.se[p] > 1) {
+    const double limit = se_limit.empty() ? 1.0 : se_limit[p];
+    if (id.se[p] > limit) {
       id.identified[p] = false;
-      id.why[p] = "its standard error is more than a factor of e";
+      id.why[p] = limit == 1.0 ? "its standard error is more than a factor of e"
+                               : "its standard error is more than a quarter of its range";
     }
   }
   return id;
@@ -372,11 +414,9 @@ void check_names(const Ore& start, const std::vector<std::string>& names, std::v
       throw std::invalid_argument(
           "--fit-params phi: ambiguous: rates.phi (the size effect of E50) or breakage.phi (Austin's B)");
     const OreParameter* p = find_ore_parameter(nm);
-    if (!p) {
-      std::string list;
-      for (const OreParameter& q : ore_parameters()) list += (list.empty() ? "" : ", ") + q.name;
-      throw std::invalid_argument("--fit-params " + nm + ": not a parameter a fit can move (" + list + ")");
-    }
+    if (!p)
+      throw std::invalid_argument("--fit-params " + nm + ": not a parameter a fit can move; did you mean " +
+                                  closest_ore_parameter(nm) + "? (docs/grinding.md lists them)");
     if (!p->any_model && p->model != start.model)
       throw std::invalid_argument("--fit-params " + nm + ": not a parameter of the ore's rate model (rates.model)");
     if (p->appearance && *p->appearance != start.appearance)
@@ -452,7 +492,34 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
                     lm.iterations, std::sqrt(lm.ssr / static_cast<double>(n)));
       throw std::invalid_argument(buf);
     }
-    const Identification id = free.empty() ? Identification{} : identify(lm.J, lm.ssr);
+    // A parameter the fit left on its bound is not free there: it has no
+    // standard error, and the others' are those with it fixed.
+    std::vector<bool> on_bound(free.size(), false);
+    std::vector<std::size_t> inner;  // indices into free, off their bounds
+    for (std::size_t a = 0; a < free.size(); ++a) {
+      on_bound[a] = std::fabs(lm.x[a] - prob.lo[a]) < 1e-9 || std::fabs(lm.x[a] - prob.hi[a]) < 1e-9;
+      if (!on_bound[a]) inner.push_back(a);
+    }
+    // Which the data cannot fix, judged with every free parameter; the
+    // standard errors of those off their bounds, with the bound ones fixed.
+    std::vector<double> limits;  // unidentified past a factor of e (a logarithm), a quarter of the range (a value)
+    for (std::size_t k : free) limits.push_back(params[k]->log ? 1.0 : (params[k]->hi - params[k]->lo) / 4);
+    Identification id = free.empty() ? Identification{} : identify(lm.J, lm.ssr, limits);
+    if (!inner.empty() && inner.size() < free.size()) {
+      Matrix Jin(lm.J.size(), std::vector<double>(inner.size()));
+      std::vector<double> lim_in;
+      for (std::size_t a = 0; a < inner.size(); ++a) {
+        lim_in.push_back(limits[inner[a]]);
+        for (std::size_t i = 0; i < lm.J.size(); ++i) Jin[i][a] = lm.J[i][inner[a]];
+      }
+      const Identification in = identify(Jin, lm.ssr, lim_in);
+      for (std::size_t a = 0; a < inner.size(); ++a) {
+        id.se[inner[a]] = in.se[a];
+        id.identified[inner[a]] = in.identified[a];
+        id.why[inner[a]] = in.why[a];
+      }
+      id.condition = in.condition;
+    }
     // Hold one parameter at a time, and fit the rest again: first one the
     // others can stand in for, else the one with the largest error.
     std::size_t hold = free.size();
@@ -468,10 +535,15 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
     }
     for (std::size_t a = 0; a < free.size(); ++a) params[free[a]]->set(ore, from_var(*params[free[a]], lm.x[a]));
     fit.ore = ore;
-    fit.ssr = lm.ssr;
-    fit.rms_pp = std::sqrt(lm.ssr / static_cast<double>(n));
+    fit.free = static_cast<int>(free.size());
     fit.condition = id.condition;
     fit.predicted = batch_test_products(ore, spectrum, power_W, holdup_kg, test);
+    // The residuals of the products as written, whatever is free (with
+    // nothing free, those of the starting ore).
+    fit.ssr = 0;
+    for (std::size_t t = 0; t < nt; ++t)
+      for (std::size_t k : used) fit.ssr += std::pow(100 * (fit.predicted[t][k] - test.passing[t][k]), 2);
+    fit.rms_pp = std::sqrt(fit.ssr / static_cast<double>(n));
     for (std::size_t k = 0; k < params.size(); ++k) {
       FittedParameter f;
       f.name = params[k]->name;
@@ -484,9 +556,8 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
         f.why = held_why[k] + "; held at its start";
       } else {
         const std::size_t a = static_cast<std::size_t>(it - free.begin());
-        const double se_var = id.se[a];
-        f.se = params[k]->log ? f.value * se_var : se_var;
-        f.at_bound = std::fabs(lm.x[a] - prob.lo[a]) < 1e-9 || std::fabs(lm.x[a] - prob.hi[a]) < 1e-9;
+        f.at_bound = on_bound[a];
+        f.se = f.at_bound ? kNaN : params[k]->log ? f.value * id.se[a] : id.se[a];
       }
       fit.parameters.push_back(f);
     }

@@ -58,6 +58,9 @@ struct OreParameter {
 const std::vector<OreParameter>& ore_parameters();
 // nullptr: no such name. "phi" alone is ambiguous (rates.phi, breakage.phi).
 const OreParameter* find_ore_parameter(const std::string& name);
+// The parameter a name not found most likely meant: the one it matches
+// ignoring case, else the nearest by edit distance (case ignored).
+std::string closest_ore_parameter(const std::string& name);
 
 // ------------------------------------------------------------ least squares
 
@@ -88,36 +91,41 @@ LmResult levenberg_marquardt(const LmProblem& p);
 // direction of JᵀJ whose eigenvalue is below 1e-10 of the largest (a
 // singular direction: the others can take its part), when the data do not
 // depend on it at all, or when its standard error (in the fitted variable:
-// the logarithm for a scale) is above 1, a factor of e.
+// the logarithm for a scale) is above se_limit (by parameter; empty: 1, a
+// factor of e for a logarithm).
 struct Identification {
   std::vector<double> se;        // of the fitted variables; NaN where unidentified
   std::vector<bool> identified;
   std::vector<std::string> why;  // for the unidentified
   double condition = 0;          // largest over smallest eigenvalue of the scaled JᵀJ
 };
-Identification identify(const std::vector<std::vector<double>>& J, double ssr);
+Identification identify(const std::vector<std::vector<double>>& J, double ssr,
+                        const std::vector<double>& se_limit = {});
 
 // ------------------------------------------------------------ the fit
 
 struct FittedParameter {
   std::string name;
   double start = 0, value = 0;
-  double se = 0;            // standard error in the parameter's units (NaN: unidentified)
+  double se = 0;            // standard error in the parameter's units (NaN: unidentified or on its bound)
   bool identified = true;   // false: held at its start and refitted without it
-  bool at_bound = false;    // the fit ended on the ore file's range
+  bool at_bound = false;    // the fit ended on the ore file's range: no standard error
   std::string why;          // why it is unidentified
 };
 struct BatchFit {
   Ore ore;                                      // the start with the fitted values
   std::vector<FittedParameter> parameters;
   std::vector<std::vector<double>> predicted;   // [time][sieve]
-  double rms_pp = 0, ssr = 0;
+  double rms_pp = 0, ssr = 0;                   // of `predicted` against the test
   int iterations = 0, evaluations = 0, data = 0, refits = 0;
+  int free = 0;                                 // parameters left free (0: every one held)
   double condition = 0;
 };
 // Fits the named parameters of `start` to the test through the mill's
 // spectrum and power, with the hold-up `holdup_kg`. An unidentified
-// parameter is held at its start and the rest fitted again, one at a time. Throws
+// parameter is held at its start and the rest fitted again, one at a time.
+// A scale (fitted as its logarithm) is unidentified past a standard error of
+// 1 (a factor of e), any other past a quarter of its range. Throws
 // std::invalid_argument for a name it does not know or that the ore's rate
 // model lacks, more parameters than data, sieves below the finest class,
 // and a fit that does not converge.

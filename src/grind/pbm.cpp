@@ -128,8 +128,63 @@ std::vector<std::vector<double>> breakage_matrix(const SizeSeries& s, const Aust
   return b;
 }
 
+namespace {
+using Matrix = std::vector<std::vector<double>>;
+
+// C = A B for lower-triangular A and B (C lower-triangular).
+Matrix lower_product(const Matrix& A, const Matrix& B) {
+  const std::size_t n = A.size();
+  Matrix C(n, std::vector<double>(n, 0.0));
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t k = 0; k <= i; ++k) {
+      const double a = A[i][k];
+      if (a == 0) continue;
+      for (std::size_t j = 0; j <= k; ++j) C[i][j] += a * B[k][j];
+    }
+  return C;
+}
+}  // namespace
+
 std::vector<double> batch_grind(const std::vector<double>& m0, const std::vector<double>& S,
                                 const std::vector<std::vector<double>>& b, double t) {
+  if (!(t > 0)) return m0;
+  const std::size_t n = m0.size();
+  // The system's matrix times t: -S_j t on the diagonal, b_ij S_j t below
+  // (the sink's S taken as 0).
+  Matrix A(n, std::vector<double>(n, 0.0));
+  double norm = 0;  // its 1-norm (largest column sum of magnitudes)
+  for (std::size_t j = 0; j + 1 < n; ++j) {
+    A[j][j] = -S[j] * t;
+    double col = std::fabs(A[j][j]);
+    for (std::size_t i = j + 1; i < n; ++i) col += std::fabs(A[i][j] = b[i][j] * S[j] * t);
+    norm = std::max(norm, col);
+  }
+  if (!(norm > 0)) return m0;
+  // exp(A) by scaling and squaring: A / 2^q has a norm of at most 1/4, where
+  // Taylor's series to the 14th power is exact to about 1e-20; then squared
+  // q times. The cost grows with log2(S_max t), not with S_max t.
+  const int q = std::max(0, static_cast<int>(std::ceil(std::log2(norm / 0.25))));
+  const double scale = std::ldexp(1.0, -q);
+  for (auto& row : A)
+    for (double& a : row) a *= scale;
+  Matrix E(n, std::vector<double>(n, 0.0));
+  for (std::size_t i = 0; i < n; ++i) E[i][i] = 1;
+  for (int k = 14; k >= 1; --k) {  // Horner: I + A (I + A/2 (I + A/3 (...)))
+    E = lower_product(A, E);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j <= i; ++j) E[i][j] /= k;
+      E[i][i] += 1;
+    }
+  }
+  for (int k = 0; k < q; ++k) E = lower_product(E, E);
+  std::vector<double> m(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j <= i; ++j) m[i] += E[i][j] * m0[j];
+  return m;
+}
+
+std::vector<double> batch_grind_rk4(const std::vector<double>& m0, const std::vector<double>& S,
+                                    const std::vector<std::vector<double>>& b, double t) {
   std::vector<double> m = m0;
   if (!(t > 0)) return m;
   double s_max = 0;
@@ -195,8 +250,10 @@ double WhitenClassifier::beta_star() const {
   if (beta <= 0) return 1.0;
   // E(d50c) = C/2: (1 + beta b*)(e^a - 1) = (e^(a b*) + e^a - 2) / 2, with
   // the left side growing slower than the right for b* past the root.
-  const double ea = std::exp(alpha);
-  auto f = [&](double bs) { return 2 * (1 + beta * bs) * (ea - 1) - (std::exp(alpha * bs) + ea - 2); };
+  // Divided by e^a, so that no sharpness overflows: with q = 1 - e^-a,
+  // 2 (1 + beta b*) q - (e^(a (b* - 1)) - 1 + 2 q).
+  const double q = -std::expm1(-alpha);
+  auto f = [&](double bs) { return 2 * (1 + beta * bs) * q - (std::expm1(alpha * (bs - 1)) + 2 * q); };
   double lo = 1e-6, hi = 1.0;
   while (f(hi) > 0 && hi < 1e3) hi *= 2;
   for (int k = 0; k < 200; ++k) {
@@ -207,11 +264,15 @@ double WhitenClassifier::beta_star() const {
 }
 
 double WhitenClassifier::to_overflow(double x_m) const {
-  const double bs = beta_star(), y = x_m / d50c_m, ea = std::exp(alpha);
-  const double ay = alpha * bs * y;
-  if (ay > 700) return 0.0;  // e^(ay) overflows: nothing this coarse reaches the overflow
-  const double e = (1 - bypass) * (1 + beta * bs * y) * (ea - 1) / (std::exp(ay) + ea - 2);
-  return std::clamp(e, 0.0, 1.0);
+  const double bs = beta_star(), y = x_m / d50c_m;
+  // Numerator and denominator divided by e^alpha: with q = 1 - e^-alpha,
+  //   E = C (1 + beta b* y) q / (e^(alpha (b* y - 1)) - 1 + 2 q),
+  // which holds for any sharpness (e^alpha itself overflows past about
+  // 709); as alpha grows it tends to the sharp cut: C below d50c, C/2 at
+  // it, 0 above.
+  const double q = -std::expm1(-alpha);
+  const double e = (1 - bypass) * (1 + beta * bs * y) * q / (std::expm1(alpha * (bs * y - 1)) + 2 * q);
+  return std::isfinite(e) ? std::clamp(e, 0.0, 1.0) : 0.0;
 }
 
 ClosedCircuit closed_circuit(const SizeSeries& s, const std::vector<double>& fresh_t_h, const std::vector<double>& S,
@@ -279,8 +340,13 @@ double passing_size(const SizeSeries& s, const std::vector<double>& m, double p)
 }
 
 std::vector<double> feed_masses(const SizeSeries& s, const std::vector<double>& sieve_m,
-                                const std::vector<double>& pass) {
+                                const std::vector<double>& pass_given) {
   const int n = s.size();
+  // A test's passing may rise a little toward the finer sieves (within its
+  // noise); differenced as it stands, the class masses would sum past 1.
+  // The running minimum makes it monotone first.
+  std::vector<double> pass(pass_given);
+  for (std::size_t k = 1; k < pass.size(); ++k) pass[k] = std::min(pass[k], pass[k - 1]);
   auto at = [&](double x) {
     if (x >= sieve_m.front()) return 1.0;
     for (std::size_t k = 0; k + 1 < sieve_m.size(); ++k)
@@ -351,21 +417,26 @@ double median_broken_energy(const Fracture& f, double e, double d_m) {
 
 std::vector<std::vector<double>> t10_breakage_matrix(const SizeSeries& s, const std::vector<SpectrumBin>& spectrum,
                                                      const Fracture& f, const T10Breakage& t, double ore_density,
-                                                     double packing, std::vector<double>* t10_mean) {
+                                                     double packing, std::vector<double>* t10_mean,
+                                                     std::vector<double>* leaving) {
   const int n = s.size();
   std::vector<std::vector<double>> b(n, std::vector<double>(n, 0.0));
   if (t10_mean) t10_mean->assign(n, 0.0);
+  if (leaving) leaving->assign(n, 1.0);
   for (int j = 0; j + 1 < n; ++j) {
+    // The parent's size is the class's geometric mean, for the event's
+    // energy (captured mass, E50) and for its progeny B(size / parent).
     const double d = s.mid_m(j), lower = s.top_m[j + 1];
-    double weight = 0, t10_sum = 0;
+    double weight = 0, t10_sum = 0, left = 0;
     auto add = [&](double t10, double w) {
       const T10Curve B(t, t10);
       for (int i = j + 1; i < n; ++i) {
-        const double hi = B(s.top_m[i] / lower), lo = i + 1 < n ? B(s.top_m[i + 1] / lower) : 0.0;
+        const double hi = B(s.top_m[i] / d), lo = i + 1 < n ? B(s.top_m[i + 1] / d) : 0.0;
         b[i][j] += w * (hi - lo);
       }
       weight += w;
       t10_sum += w * t10;
+      left += w * B(lower / d);  // the progeny finer than the class: what leaves it
     };
     for (const SpectrumBin& k : spectrum) {
       if (k.collisions_per_s <= 0 || k.energy_J <= 0) continue;
@@ -377,8 +448,11 @@ std::vector<std::vector<double>> t10_breakage_matrix(const SizeSeries& s, const 
       const double e = f.e50(d);
       add(t.t10(e / median_broken_energy(f, e, d)), 1.0);
     }
-    for (int i = j + 1; i < n; ++i) b[i][j] /= weight;
+    // The progeny still coarser than the class's lower size stay in it: the
+    // column is what leaves, and sums to 1.
+    for (int i = j + 1; i < n; ++i) b[i][j] /= left;
     if (t10_mean) (*t10_mean)[j] = t10_sum / weight;
+    if (leaving) (*leaving)[j] = left / weight;
   }
   return b;
 }

@@ -62,10 +62,17 @@ struct T10Breakage {
 double incomplete_beta(double x, double a, double b);
 
 // Batch grinding, dm_i/dt = -S_i m_i + sum_{j<i} b_ij S_j m_j, from m0 over
-// time t (S per unit of t): fourth-order Runge-Kutta with steps of at most
-// 0.01 / max S. The sink does not break (its S is ignored).
+// time t (S per unit of t): the linear system's exact solution,
+// m(t) = exp(A t) m0, the exponential by scaling and squaring (its cost
+// grows with log(S_max t) only; equal rates are fine). The sink does not
+// break (its S is ignored).
 std::vector<double> batch_grind(const std::vector<double>& m0, const std::vector<double>& S,
                                 const std::vector<std::vector<double>>& b, double t);
+
+// The same equations stepped by fourth-order Runge-Kutta, steps of at most
+// 0.01 / max S (the tests' reference; its cost grows with S_max t).
+std::vector<double> batch_grind_rk4(const std::vector<double>& m0, const std::vector<double>& S,
+                                    const std::vector<std::vector<double>>& b, double t);
 
 // The same equations' closed form (Reid 1965): valid where the S_i differ.
 std::vector<double> reid_batch(const std::vector<double>& m0, const std::vector<double>& S,
@@ -117,8 +124,9 @@ std::vector<double> passing(const std::vector<double>& m);
 double passing_size(const SizeSeries& s, const std::vector<double>& m, double p);
 
 // Class masses of a feed given as cumulative passing at sieve sizes
-// (descending sizes, passing in 0..1, the first sieve passing 1): passing
-// interpolated log-linearly at the class tops.
+// (descending sizes, passing in 0..1, the first sieve passing 1): the
+// passing made monotone (a running minimum toward the finer sieves), then
+// interpolated log-linearly at the class tops; the masses sum to 1.
 std::vector<double> feed_masses(const SizeSeries& s, const std::vector<double>& sieve_m,
                                 const std::vector<double>& passing);
 
@@ -165,12 +173,17 @@ double median_broken_energy(const Fracture& f, double e_J_kg, double d_m);
 // The appearance matrix of Tavares' t10 in a mill of this spectrum: for each
 // class j, the t10 appearance of each collision bin (its specific energy
 // E_k / m_cap,j) weighted by the mass the bin breaks of class j
-// (N_k m_cap,j P_j). A class nothing breaks gets that of an event at its
-// E50 (its rate is 0). Each column sums to 1, as breakage_matrix's.
+// (N_k m_cap,j P_j). The parent's size is the class's geometric mean, for
+// the energy and for B(u) alike; the progeny still coarser than the class's
+// lower size stay in it, so each column is what leaves the class, summing
+// to 1 as breakage_matrix's, and `leaving` (optional) says which share of
+// the broken mass that is (the rates are S_j times it). A class nothing
+// breaks gets that of an event at its E50 (its rate is 0).
 // t10_mean (optional): each class's mass-weighted mean t10.
 std::vector<std::vector<double>> t10_breakage_matrix(const SizeSeries& s, const std::vector<SpectrumBin>& spectrum,
                                                      const Fracture& f, const T10Breakage& t, double ore_density,
-                                                     double packing, std::vector<double>* t10_mean = nullptr);
+                                                     double packing, std::vector<double>* t10_mean = nullptr,
+                                                     std::vector<double>* leaving = nullptr);
 
 // S_i (per second) = efficiency / H · sum_k N_k · m_cap,i · P_i(E_k / m_cap,i).
 std::vector<double> spectrum_rates(const SizeSeries& s, const std::vector<SpectrumBin>& spectrum,
