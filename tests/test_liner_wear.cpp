@@ -188,3 +188,36 @@ TEST_CASE("a laid-back foot over a worn shell follows its face down to the worn 
       }
     }
 }
+
+TEST_CASE("the hours a bar takes to lose a height: the shell's wear adds to its height hour for hour", "[lifters][life]") {
+  // The shell falling away under a bar at q raises the bar's height above
+  // it by q t and leaves the bar itself as it wears without it: so the
+  // hours t_q to lose L with the shell wearing satisfy
+  // h0 - H(t_q) - q t_q = L, H the height worn with the shell still.
+  const double len = 0.15;
+  const std::vector<Vec2> o = rectangle(0.03, 0.025);
+  const double h0 = 0.025, r = 1e-6;  // m per hour of depth on every station
+  mc::BarWearRates still;
+  still.length = len;
+  still.station_m3_s.assign(mc::kWearStations, r / 3600 * (0.0795 / mc::kWearStations) * len);
+  for (double q_over_r : {0.0, 0.3}) {
+    mc::BarWearRates rates = still;
+    rates.shell_m_per_h = q_over_r * r;
+    for (double loss : {0.001, 0.005}) {
+      const double t = mc::hours_to_lose(o, kR, rates, loss);
+      INFO("q/r " << q_over_r << ", loss " << loss << " m: " << t << " h");
+      REQUIRE(t > 0);
+      const double H = mc::measure_profile(mc::wear_for_hours(o, kR, still, t).outline).height;
+      CHECK(h0 - H - rates.shell_m_per_h * t == Approx(loss).epsilon(1e-6));
+      // The top wears about r an hour: a small loss comes in about loss / r.
+      if (q_over_r == 0 && loss < 0.002) CHECK(t == Approx(loss / r).epsilon(0.05));
+    }
+  }
+  // No wear on the bar, or nothing to lose: no hours.
+  mc::BarWearRates shell_only;
+  shell_only.length = len;
+  shell_only.station_m3_s.assign(mc::kWearStations, 0.0);
+  shell_only.shell_m_per_h = r;
+  CHECK(mc::hours_to_lose(o, kR, shell_only, 0.001) < 0);
+  CHECK(mc::hours_to_lose(o, kR, still, 0.0) < 0);
+}

@@ -65,10 +65,12 @@ double top_rate_mm_h(const std::vector<Vec2>& outline, double R, double length, 
   return n > 0 ? sum / n : at_best;
 }
 
-// The rate at which its height above the shell falls: the top's wear less
-// the shell's (mm per hour at the case's coefficient).
-double height_rate_mm_h(const Stage& s, int k, double length) {
-  return top_rate_mm_h(s.outlines[k], 0.5 * s.diameter, length, s.r.station_m3_s[k]) - s.r.shell_mm_per_1000h / 1000;
+// The case hours in which stage s's wear takes `loss` mm off profile k's
+// height above the shell (core/liner_wear.h hours_to_lose); negative when
+// that wear does not lower it.
+double span_for_loss(const Stage& s, int k, double length, double loss) {
+  const BarWearRates rates{s.r.station_m3_s[k], length, s.r.shell_mm_per_1000h * 1e-6};
+  return hours_to_lose(s.outlines[k], 0.5 * s.diameter, rates, loss * 1e-3);
 }
 
 struct Study {
@@ -84,6 +86,9 @@ double height_of(const Stage& s, int k) { return measure_profile(s.outlines[k]).
 void calibrate(Study& st, const LifeOptions& o, double length) {
   const Stage& s0 = st.stages.front();
   if (o.calibrate_rate_kg_h > 0) {
+    if (!(s0.r.liner_kg_h > 0))
+      throw std::invalid_argument("--calibrate-rate: the new liner's run booked no wear on the shell and the lifters; "
+                                  "nothing to set the measured rate against");
     st.factor = o.calibrate_rate_kg_h / s0.r.liner_kg_h;
     st.calibration = fmt::format("the new shell liner's wear rate, {:.4g} kg/h measured against {:.4g} kg/h at the "
                                  "case's wear coefficient",
@@ -106,16 +111,18 @@ void calibrate(Study& st, const LifeOptions& o, double length) {
            (o.calibrate_loss_mm - l0) / (l1 - l0) * (st.stages[i].case_hours - st.stages[i - 1].case_hours);
   }
   std::string how = "interpolated between stages";
-  if (at < 0) {  // not reached yet: on at the last stage's rate
+  if (at < 0) {  // not reached yet: on at the rate the last stage's wear lowers the bar
     const Stage& last = st.stages.back();
-    for (auto it = st.stages.rbegin(); it != st.stages.rend(); ++it)
-      if (it->ran) {
-        const double rate = height_rate_mm_h(*it, k, length);
-        const double lost = h0 - height_of(last, k) * 1000;
-        at = last.case_hours + (o.calibrate_loss_mm - lost) / std::max(rate, 1e-300);
-        break;
-      }
-    how = "extrapolated at the last stage's rate (the study has not reached it yet)";
+    const double lost = h0 - height_of(last, k) * 1000, left = o.calibrate_loss_mm - lost;
+    const double span = span_for_loss(last, k, length, left);
+    if (!(span > 0))
+      throw std::invalid_argument(fmt::format(
+          "--calibrate-loss {:g}: the wear of stage {} does not lower the lifters (profile {}, {:.1f} mm high): their "
+          "tops wear no faster than the shell under them, so no hours bring the loss measured; give "
+          "--calibrate-rate, or check the case's wear coefficients",
+          o.calibrate_loss_mm, last.index, k, height_of(last, k) * 1000));
+    at = last.case_hours + span;
+    how = "extrapolated at the last stage's wear (the study has not reached it yet)";
   }
   st.factor = at / o.calibrate_hours;
   st.calibration = fmt::format("the lifters lost {:g} mm of height in {:g} h ({})", o.calibrate_loss_mm,
@@ -223,7 +230,9 @@ void write_picture(const fs::path& out, const std::string& name, const Study& st
       for (int q = 0; q <= 40; ++q) {
         const double x = -w + 2 * w * q / 40;
         arc.x.push_back(x + x_shift);
-        arc.y.push_back(-(R - std::sqrt(std::max(0.0, R * R - x * x))) - s->shell_wear_m * 1000);
+        // The shell rises towards the axis away from the bar's centre line
+        // (heights here are measured from its tangent there).
+        arc.y.push_back((R - std::sqrt(std::max(0.0, R * R - x * x))) - s->shell_wear_m * 1000);
       }
       if (k == 0) arc.label = s == ran.front() ? "new shell" : "worn shell";
       prof.series.push_back(arc);
@@ -300,6 +309,12 @@ int cmd_life(const LifeOptions& o) {
                                               m));
   if (c.lifter_rows == 0)
     throw std::invalid_argument("lifters.rows = 0: a life study wears lifter bars; this mill has none");
+  if (o.calibrate_rate_kg_h > 0 && c.periodic)
+    throw std::invalid_argument(fmt::format(
+        "--calibrate-rate {:g}: mill.ends = \"periodic\": the case is a {:g} m slice of a longer mill, and a whole "
+        "mill's kg/h (its ends and its full length) cannot be set against a slice's; calibrate a slice by the "
+        "height its lifters lost, --calibrate-loss MM --calibrate-hours H",
+        o.calibrate_rate_kg_h, c.length));
   if (!(base.scene.wall_material.wear_coefficient > 0))
     throw std::invalid_argument("materials." + c.liner + ".wear_coefficient is 0: a life study needs the liner's "
                                 "wear coefficient > 0 (its size sets only the hours; --calibrate-loss or "
@@ -411,13 +426,16 @@ int cmd_life(const LifeOptions& o) {
         stopped = fmt::format("{} stages run; they cover {:.0f} of the {:g} operating hours asked", i, hours_now, o.hours);
       else span = std::min(step, left) * st.factor;
     } else {
-      const double rate = height_rate_mm_h(s, st.tallest, length);
+      // Each stage takes an equal share of the height left: the hours in
+      // which this stage's wear lowers the bar by it.
       if (h_now <= o.until_height_mm + 0.05) stopped = fmt::format("the lifters are down to {:.1f} mm", h_now);
       else if (i >= 3 * o.stages) stopped = fmt::format("{} stages run; the lifters are still {:.1f} mm high", i, h_now);
-      else if (!(rate > 0))
-        throw std::invalid_argument(dir.string() + ": the lifters' height above the shell did not fall in this "
-                                                   "stage (their tops wear no faster than the shell); give --hours");
-      else span = (h_now - o.until_height_mm) / std::max(1, o.stages - i) / rate;
+      else span = span_for_loss(s, st.tallest, length, (h_now - o.until_height_mm) / std::max(1, o.stages - i));
+      if (stopped.empty() && !(span > 0))
+        throw std::invalid_argument(fmt::format(
+            "--until-height {:g}: the wear of stage {} ({}) does not lower the lifters (profile {}, {:.1f} mm high): "
+            "their tops wear no faster than the shell under them; give --hours",
+            o.until_height_mm, i, dir.string(), st.tallest, h_now));
     }
     if (!stopped.empty()) {
       save(out, request, st, stopped);

@@ -279,35 +279,72 @@ WornLifter wear_lifter(const std::vector<Vec2>& outline, double R, const std::ve
   // volume stays) once, and then ever wider until a scale of at most
   // kMaxScale on them removes the booked area.
   constexpr double kMaxScale = 2;
-  std::vector<double> sm = d;
-  for (int passes = 1, done = 0; passes <= 256; passes *= 2) {
-    for (; done < passes; ++done) {
-      std::vector<double> next(kWearStations);
-      for (int j = 0; j < kWearStations; ++j)
-        next[j] = 0.25 * sm[std::max(j - 1, 0)] + 0.5 * sm[j] + 0.25 * sm[std::min(j + 1, kWearStations - 1)];
-      sm = next;
-    }
+  // Depths at the samples from station depths (interpolated between the
+  // stations' centres).
+  auto at_samples = [&](const std::vector<double>& st) {
     std::vector<double> depth;
     for (const Sample& s : samples) {
       const double u = (s.s - bar.path.from) / ds - 0.5;  // in station centres
       const int j0 = std::clamp(static_cast<int>(std::floor(u)), 0, kWearStations - 1);
       const int j1 = std::min(j0 + 1, kWearStations - 1);
       const double f = std::clamp(u - j0, 0.0, 1.0);
-      depth.push_back(u <= 0 ? sm[0] : (1 - f) * sm[j0] + f * sm[j1]);
+      depth.push_back(u <= 0 ? st[0] : (1 - f) * st[j0] + f * st[j1]);
     }
-    w.spread = passes;
-    m = move(bar, samples, depth, R, shell_depth, target > 0 ? 1.0 : 0.0);
-    w.scale = target > 0 ? 1.0 : 0.0;
-    if (!(target > 0)) break;
+    return depth;
+  };
+  auto smooth = [&](std::vector<double> st, int passes) {
+    for (int p = 0; p < passes; ++p) {
+      std::vector<double> next(kWearStations);
+      for (int j = 0; j < kWearStations; ++j)
+        next[j] = 0.25 * st[std::max(j - 1, 0)] + 0.5 * st[j] + 0.25 * st[std::min(j + 1, kWearStations - 1)];
+      st = next;
+    }
+    return st;
+  };
+  auto short_of = [&](const Moved& t) { return !t.worn_away && removed(t) < target; };
+  // The fewest passes (1, 2, 4, ...) after which a scale of at most
+  // kMaxScale removes the booked area; between that and half as many the
+  // depths are blended, by the least share of the wider that does, so that
+  // the worn shape moves on smoothly with the wear and never jumps as the
+  // smoothing widens.
+  std::vector<double> depth = at_samples(smooth(d, 1));
+  w.spread = 1;
+  if (target > 0 && short_of(move(bar, samples, depth, R, shell_depth, kMaxScale))) {
+    std::vector<double> narrow = depth, wide;
+    int passes = 2;
+    for (; passes <= 256; passes *= 2) {
+      wide = at_samples(smooth(d, passes));
+      if (!short_of(move(bar, samples, wide, R, shell_depth, kMaxScale))) break;
+      narrow = wide;
+    }
+    if (passes > 256) {
+      depth = wide;
+      w.spread = 256;
+    } else {
+      auto blend = [&](double f) {
+        std::vector<double> x(narrow.size());
+        for (std::size_t i = 0; i < x.size(); ++i) x[i] = (1 - f) * narrow[i] + f * wide[i];
+        return x;
+      };
+      double lo = 0, hi = 1;
+      for (int it = 0; it < 30; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (short_of(move(bar, samples, blend(mid), R, shell_depth, kMaxScale)) ? lo : hi) = mid;
+      }
+      depth = blend(hi);
+      w.spread = passes;
+    }
+  }
+  m = move(bar, samples, depth, R, shell_depth, target > 0 ? 1.0 : 0.0);
+  w.scale = target > 0 ? 1.0 : 0.0;
+  if (target > 0) {
     // The scale that removes the booked area: bracket it, then bisect.
-    auto short_of = [&](const Moved& t) { return !t.worn_away && removed(t) < target; };
     double lo = 0, hi = 1;
     while (short_of(m) && hi < kMaxScale) {
       lo = hi;
-      hi *= 2;
+      hi = std::min(2 * hi, kMaxScale);
       m = move(bar, samples, depth, R, shell_depth, hi);
     }
-    if (short_of(m) && passes < 256) continue;  // spread wider
     for (int it = 0; it < 60 && hi - lo > 1e-7 * hi; ++it) {
       const double mid = 0.5 * (lo + hi);
       (short_of(move(bar, samples, depth, R, shell_depth, mid)) ? lo : hi) = mid;
@@ -318,7 +355,6 @@ WornLifter wear_lifter(const std::vector<Vec2>& outline, double R, const std::ve
     w.scale = take_hi || at_lo.outline.empty() ? hi : lo;
     m = take_hi || at_lo.outline.empty() ? at_hi : at_lo;
     if (at_hi.worn_away && removed(at_lo) < 0.99 * target) m.worn_away = true;  // the stage wears it away
-    break;
   }
   // The hull and the thinning make the removed area a step function of the
   // scale: the last step's residue comes off (or goes back) as a uniform
@@ -358,6 +394,43 @@ std::vector<StationPlace> station_places(const std::vector<Vec2>& outline, doubl
     out.push_back({{p.y, R - p.x}, ds});
   }
   return out;
+}
+
+WornLifter wear_for_hours(const std::vector<Vec2>& outline, double R, const BarWearRates& rates, double hours) {
+  std::vector<double> area(kWearStations, 0.0);
+  for (int j = 0; j < kWearStations && j < static_cast<int>(rates.station_m3_s.size()); ++j)
+    area[j] = rates.station_m3_s[j] * hours * 3600 / rates.length;
+  return wear_lifter(outline, R, area, rates.shell_m_per_h * hours);
+}
+
+double hours_to_lose(const std::vector<Vec2>& outline, double R, const BarWearRates& rates, double loss) {
+  const double h0 = measure_profile(outline).height;
+  // The top's own rate, the shell standing still: where the search starts.
+  const std::vector<StationPlace> places = station_places(outline, R);
+  double top = 0;
+  int n = 0;
+  for (int j = 0; j < kWearStations && j < static_cast<int>(rates.station_m3_s.size()); ++j)
+    if (places[j].centre.y >= 0.9 * h0 && places[j].length > 0) {
+      top += rates.station_m3_s[j] * 3600 / (places[j].length * rates.length);
+      ++n;
+    }
+  if (n > 0) top /= n;
+  if (!(top > 0) || !(loss > 0)) return -1;
+  auto lost = [&](double hours) {
+    const WornLifter w = wear_for_hours(outline, R, rates, hours);
+    return w.worn_away ? h0 : h0 - measure_profile(w.outline).height;
+  };
+  double lo = 0, hi = loss / top;
+  for (int it = 0; it < 60 && lost(hi) < loss; ++it) {
+    lo = hi;
+    hi *= 2;
+  }
+  if (lost(hi) < loss) return -1;
+  for (int it = 0; it < 80 && hi - lo > 1e-9 * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (lost(mid) < loss ? lo : hi) = mid;
+  }
+  return hi;
 }
 
 }  // namespace mc

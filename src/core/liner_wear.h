@@ -33,7 +33,10 @@ inline constexpr double kWornAwayHeight = 1e-3;
 // with its feet on the worn shell, is the worn bar. The depths are scaled
 // (by at most 2) so that the area removed equals the booked area to 1e-5;
 // where wear gathers on a corner more than a convex bar can lose there, the
-// depths are first smoothed along the outline until it can (`spread`).
+// depths are first smoothed along the outline until it can: 1 2 1 passes
+// doubled (`spread`, the passes of the wider), the last two blended by the
+// least share of the wider that does, so that the shape moves on smoothly
+// as the booked wear grows.
 WornLifter wear_lifter(const std::vector<Vec2>& outline, double R, const std::vector<double>& station_area,
                        double shell_depth);
 
@@ -44,5 +47,23 @@ struct StationPlace {
   double length = 0;
 };
 std::vector<StationPlace> station_places(const std::vector<Vec2>& outline, double R);
+
+// A stage's wear rates on one bar: its stations' volume per second over a
+// mill of `length` (m³/s), the shell's mean depth per hour (m/h).
+struct BarWearRates {
+  std::vector<double> station_m3_s;
+  double length = 1, shell_m_per_h = 0;
+};
+
+// The bar (outline above a shell of radius R) after `hours` of those rates,
+// worn as wear_lifter wears it.
+WornLifter wear_for_hours(const std::vector<Vec2>& outline, double R, const BarWearRates& rates, double hours);
+
+// The hours in which those rates take `loss` (m) off the bar's height above
+// the shell: the height it actually loses as it wears (its top rounds, its
+// faces lay back, the shell falls away under it), found by bisection on
+// wear_for_hours to 1e-9; negative when that wear does not lower it (the
+// shell wears as fast as its top) or `loss` is not positive.
+double hours_to_lose(const std::vector<Vec2>& outline, double R, const BarWearRates& rates, double loss);
 
 }  // namespace mc
