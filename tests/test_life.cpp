@@ -88,7 +88,7 @@ TEST_CASE("a life study of the lab mill removes what its runs booked and resumes
     if (i + 1 < rows.size()) {
       CHECK(num(rows[i], "stage_hours") == Approx(100000.0));
       CHECK(num(rows[i], "booked_mm2") > 1.0);
-      CHECK(num(rows[i], "removed_mm2") == Approx(num(rows[i], "booked_mm2")).epsilon(0.01));
+      CHECK(num(rows[i], "removed_mm2") == Approx(num(rows[i], "booked_mm2")).epsilon(2e-5));  // 6 digits
       // The top wears back (its height above the new shell's line falls);
       // the shell wears too, so its height above the worn shell may not.
       CHECK(num(rows[i + 1], "height_mm") - num(rows[i + 1], "shell_wear_mm") <
@@ -104,6 +104,34 @@ TEST_CASE("a life study of the lab mill removes what its runs booked and resumes
   CHECK(num(rows[0], "diameter_m") == Approx(0.9).epsilon(1e-9));
   CHECK(num(rows[2], "shell_wear_mm") ==
         Approx(500 * (num(rows[2], "diameter_m") - num(rows[0], "diameter_m"))).epsilon(1e-3));
+
+  // Removed = booked to 1e-6 (life.json's full precision), and the booked
+  // area is each stage run's own station volumes (lifter_wear.csv, nine
+  // digits) times the stage's hours over the mill's length; the shell moved
+  // by its run's mean rate (summary.json) times those hours.
+  {
+    const nlohmann::json life_json = nlohmann::json::parse(read_text(a / "life.json"));
+    const double length = mc::io::read_case(a / "cases" / "stage-00.toml").length;
+    for (int i = 0; i < 2; ++i) {
+      INFO("stage " << i);
+      const nlohmann::json& w = life_json.at("stages").at(i).at("wear");
+      const double booked = w.at("booked_mm2").at(0).get<double>(), removed = w.at("removed_mm2").at(0).get<double>();
+      CHECK(std::fabs(removed - booked) <= 1e-6 * booked);
+      const fs::path stage = a / ("stage-0" + std::to_string(i));
+      double m3_s = 0;
+      for (const auto& r : read_csv(stage / "lifter_wear.csv"))
+        if (r.at("profile") == "0") m3_s += num(r, "wear_m3_per_s");
+      const double hours = num(rows[i], "stage_hours");
+      CHECK(booked == Approx(m3_s * hours * 3600 / length * 1e6).epsilon(1e-6));
+      const nlohmann::json summary = nlohmann::json::parse(read_text(stage / "summary.json"));
+      double shell_mm_per_1000h = -1;
+      for (const auto& part : summary.at("liner").at("parts"))
+        if (part.at("part") == "shell") shell_mm_per_1000h = part.at("mean_wear_mm_per_1000h").get<double>();
+      const double shell_m = life_json.at("stages").at(i + 1).at("shell_wear_m").get<double>() -
+                             life_json.at("stages").at(i).at("shell_wear_m").get<double>();
+      CHECK(shell_m * 1000 == Approx(shell_mm_per_1000h * hours / 1000).epsilon(1e-9));
+    }
+  }
 
   // The stations of the first stage's run hold what its lifter elements
   // hold: each row's mean, times the rows.
