@@ -398,6 +398,20 @@ TEST_CASE("sweep collect: a row per case, status and cause, open spectra and lin
     REQUIRE(png.size() > 1000);
     CHECK(png.substr(1, 3) == "PNG");
   }
+
+  // A finished case's summary.json damaged after its run (a figure turned to
+  // text): said in its row, not read as a run without that figure.
+  {
+    const fs::path summary = work / "s" / "cases" / "speed_fraction=0.6,face_angle=10" / "summary.json";
+    nlohmann::json bad = nlohmann::json::parse(read_text(summary));
+    bad["toe_deg"] = "225.5";
+    write_text(summary, bad.dump(2));
+    REQUIRE(run_binary("sweep collect '" + (work / "s").string() + "'", work).status == 0);
+    const nlohmann::json again = nlohmann::json::parse(read_text(work / "s" / "sweep.json"));
+    CHECK(again["cases"][0]["status"] == "failed");
+    CHECK(again["cases"][0]["error"] == "summary.json: toe_deg: expected a number, found string; the file is damaged");
+    CHECK(again["cases"][1]["status"] == "done");
+  }
   fs::remove_all(work);
 }
 

@@ -134,6 +134,19 @@ SweepTable collect_table(const fs::path& sweep_dir) {
     }
     const bool have = summary.is_object();
     for (const auto& [column, path] : kSummaryFields) row[column] = have ? number_at(summary, path) : json();
+    // A figure the run writes as a number (or null, where it has none) that
+    // is anything else: the file was damaged after the run; said in the row.
+    if (have)
+      for (const auto& [column, path] : kSummaryFields) {
+        const nlohmann::json::json_pointer ptr(path);
+        if (!summary.contains(ptr)) continue;
+        const nlohmann::json& v = summary.at(ptr);
+        if (v.is_number() || v.is_null()) continue;
+        row["status"] = status_name(CaseStatus::failed);
+        row["error"] = "summary.json: " + path.substr(1) + ": expected a number, found " + std::string(v.type_name()) +
+                       "; the file is damaged";
+        break;
+      }
 
     // Per metre of mill: the run's own figure where it gives one (a periodic
     // slice), else the power over the case's length.
