@@ -147,13 +147,13 @@ TEST_CASE("a window whose charge is still gaining energy: the console says so, a
   std::stringstream ss;
   ss << in.rdbuf();
   const std::string text = ss.str();
-  std::size_t at = text.find("the charge's energy rose by ");
-  if (at == std::string::npos) at = text.find("the charge's energy fell by ");
+  std::size_t at = text.find("the charge's energy rose at ");
+  if (at == std::string::npos) at = text.find("the charge's energy fell at ");
   INFO(text);
   REQUIRE(at != std::string::npos);
-  const std::size_t books = text.find("that change: ", at);
+  const std::size_t books = text.find("that rate: ", at);
   REQUIRE(books != std::string::npos);
-  const double percent = std::strtod(text.c_str() + books + 13, nullptr);
+  const double percent = std::strtod(text.c_str() + books + 11, nullptr);
   std::ifstream js(out / "summary.json");
   const nlohmann::json j = nlohmann::json::parse(js);
   const double torque = j["power_W"]["torque"], diss = j["power_W"]["dissipation"], de = j["power_W"]["energy_change"];
@@ -189,4 +189,18 @@ TEST_CASE("a --duration shorter than the case's warm-up cuts the warm-up to half
   CHECK_THAT(case_text, Catch::Contains("warmup = 0.1"));
   fs::remove_all(out);
   fs::remove(err);
+}
+
+TEST_CASE("check gives a plant mill's power in MW and its charge in tonnes", "[outputs][cli]") {
+  // mill_b: Morrell's 4.491e6 W and a 1.955e5 kg charge, as a plant reads them.
+  const fs::path log = fs::temp_directory_path() / ("millcharge_test_check_units_" + std::to_string(::getpid()));
+  const std::string cmd = std::string(MC_BINARY) + " check '" + (fs::path(MC_TEST_DATA) / ".." / ".." / "assets" /
+                          "cases" / "mill_b.toml").string() + "' > '" + log.string() + "' 2>&1";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  CHECK_THAT(text, Catch::Contains("morrell c-model power 4.491 MW (k 1.26 x net 3.565 MW)"));
+  CHECK_THAT(text, Catch::Contains("94,157 balls, 195.5 t;"));
+  CHECK_THAT(text, !Catch::Contains(" W (") && !Catch::Contains("e+05 kg"));
+  fs::remove(log);
 }

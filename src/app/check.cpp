@@ -67,8 +67,9 @@ int cmd_check(const CaseOptions& o) {
               d.speed_rpm, 100 * d.speed_fraction, d.omega, d.revolution_s, d.tip_speed);
   std::printf("volume          %.4g m^3 inside the shell, lifters excluded (lifters %.3g m^3)\n", d.mill_volume,
               d.lifter_volume);
-  std::printf("charge          J %.3f requested: %s balls, %.4g kg; J %.4f from the whole ball counts\n", c.filling,
-              thousands(d.n_balls).c_str(), d.charge_mass, d.filling_from_counts);
+  std::printf("charge          J %.3f requested: %s balls, %s; J %.4f from the whole ball counts (the balls' bulk "
+              "volume at the case's porosity over the free volume)\n",
+              c.filling, thousands(d.n_balls).c_str(), kilograms(d.charge_mass).c_str(), d.filling_from_counts);
   for (std::size_t k = 0; k < c.sizes.size(); ++k) {
     const SizeClass& s = c.sizes[k];
     char dia[64];
@@ -150,8 +151,8 @@ int cmd_check(const CaseOptions& o) {
               c.settle < 0 ? "auto" : (std::to_string(c.settle) + " s").c_str(), d.settle_damping, turn, c.warmup,
               c.precision == Precision::double_ ? "double" : "float");
   const MorrellResult m = morrell_c_model(morrell_input(c, d));
-  std::printf("morrell c-model power %.4g W (k %.2f x net %.4g W), toe %.1f deg, shoulder %.1f deg\n",
-              m.charge_power_W, kMorrellK, m.net_power_W, m.toe_deg, m.shoulder_deg);
+  std::printf("morrell c-model power %s (k %.2f x net %s), toe %.1f deg, shoulder %.1f deg\n",
+              watts(m.charge_power_W).c_str(), kMorrellK, watts(m.net_power_W).c_str(), m.toe_deg, m.shoulder_deg);
   if (p.scene.bodies.empty())
     std::printf("packing         %s balls placed without overlaps\n", thousands(static_cast<long>(p.scene.balls.size())).c_str());
   else

@@ -73,6 +73,22 @@ Prepared prepare_from_checkpoint(const fs::path& dir, io::Checkpoint& cp, const 
   return p;
 }
 
+std::string watts(double w) {
+  char b[48];
+  const double a = std::fabs(w);
+  if (a >= 1e6) std::snprintf(b, sizeof b, "%.4g MW", w / 1e6);
+  else if (a >= 1e3) std::snprintf(b, sizeof b, "%.4g kW", w / 1e3);
+  else std::snprintf(b, sizeof b, "%.4g W", w);
+  return b;
+}
+
+std::string kilograms(double kg) {
+  char b[48];
+  if (std::fabs(kg) >= 1e3) std::snprintf(b, sizeof b, "%.4g t", kg / 1e3);
+  else std::snprintf(b, sizeof b, "%.4g kg", kg);
+  return b;
+}
+
 std::string thousands(long v) {
   std::string s = std::to_string(v);
   for (int i = static_cast<int>(s.size()) - 3; i > (v < 0 ? 1 : 0); i -= 3) s.insert(i, ",");

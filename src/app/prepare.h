@@ -38,6 +38,10 @@ Prepared prepare(const CaseOptions& o, const std::filesystem::path& default_path
 Prepared prepare_from_checkpoint(const std::filesystem::path& dir, io::Checkpoint& cp, const std::string& consequence);
 
 std::string thousands(long v);        // 1234567 -> "1,234,567"
+// A power or a mass in the unit a reader expects at its size, to 4 figures:
+// 874.4 W, 1.234 kW, 4.491 MW; 15.6 kg, 195.5 t.
+std::string watts(double w);
+std::string kilograms(double kg);
 std::string duration_text(double s);  // "42s", "3m05s", "2h10m"
 nlohmann::json number_or_null(double v);
 

@@ -340,8 +340,12 @@ void announce(const RunStart& r) {
     std::printf("millcharge: extended: the mill turns to %.4g s; the window %s at %.4g s%s\n",
                 plan.turn_steps * d.dt, r.cp.run.window_begun == 0 ? "begins" : "goes on from its start",
                 plan.window_start * d.dt,
-                r.window_restarted ? " (the window already begun could not be kept: its books started elsewhere)"
-                                   : "");
+                r.window_restarted
+                    ? ". The averages start again there: the longer run averages over its own last whole "
+                      "revolutions, which begin where the first run's window had not, so the first run's books "
+                      "cannot be carried on. Nothing is lost and nothing needs doing: the figures at the end are "
+                      "the longer run's (its summary.json replaces the first's; copy that first to keep it)"
+                    : "");
   }
   std::fflush(stdout);
 }

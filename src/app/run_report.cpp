@@ -295,8 +295,8 @@ void print_run_results(const FinishedRun& r, const RunReport& rep) {
   // starts before the charge has settled into its motion) is not an error
   // of the books: say so, and what the books give with the change counted.
   if (s.torque_power_W != 0 && std::fabs(s.energy_change_W) > 0.01 * std::fabs(s.torque_power_W))
-    std::printf("                the charge's energy %s by %.4g W over the window (not yet in a steady motion: "
-                "a longer warm-up helps); torque - dissipation - that change: %+.2f %% of torque\n",
+    std::printf("                the charge's energy %s at %.4g W (its rate of change over the window: not yet in "
+                "a steady motion, a longer warm-up helps); torque - dissipation - that rate: %+.2f %% of torque\n",
                 s.energy_change_W < 0 ? "fell" : "rose", std::fabs(s.energy_change_W),
                 100 * (s.torque_power_W - s.dissipation_power_W - s.energy_change_W) / s.torque_power_W);
   std::printf("per metre       torque %s, dissipation %s, torque %.4g N m/m over %.4g m%s\n",
