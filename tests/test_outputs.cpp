@@ -204,3 +204,44 @@ TEST_CASE("check gives a plant mill's power in MW and its charge in tonnes", "[o
   CHECK_THAT(text, !Catch::Contains(" W (") && !Catch::Contains("e+05 kg"));
   fs::remove(log);
 }
+
+TEST_CASE("a run shorter than a revolution says why it has no standard error, or gives a rough one marked so",
+          "[outputs][cli]") {
+  // The lab mill turns once in 1.769 s; its batches are eighths (0.221 s).
+  struct Case {
+    const char* duration;
+    const char* kind;
+    int batches;
+  };
+  for (const Case& k : {Case{"0.3", "none", 0}, Case{"1.0", "rough", 4}}) {
+    const fs::path out = fs::temp_directory_path() / ("millcharge_test_sem_" + std::to_string(::getpid()));
+    fs::remove_all(out);
+    const fs::path log = out.string() + ".log";
+    const std::string cmd = std::string(MC_BINARY) + " run --quiet --duration " + k.duration +
+                            " --set run.warmup=0.1 --set mill.length=0.06 --set run.settle=0.05"
+                            " --set run.snapshot_interval=0 --out '" + out.string() + "' > '" + log.string() + "' 2>&1";
+    REQUIRE(std::system(cmd.c_str()) == 0);
+    std::ifstream in(log);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ifstream js(out / "summary.json");
+    const nlohmann::json j = nlohmann::json::parse(js);
+    INFO(text);
+    const auto& conv = j["convergence"];
+    CHECK(conv["standard_errors"] == k.kind);
+    CHECK(conv["batches"].get<int>() == k.batches);  // whole eighths in the window after 0.1 s
+    CHECK(conv["standard_errors_why"].is_string());
+    if (std::string(k.kind) == "none") {
+      CHECK(j["power_W"]["torque_sem"].is_null());
+      CHECK(j["toe_deg_sem"].is_null());
+      // Half a revolution after the warm-up for a rough one, one for a whole one.
+      CHECK_THAT(text, Catch::Contains("no standard error: the averaging window (0.2 s after the warm-up of 0.1 s)"));
+      CHECK_THAT(text, Catch::Contains("turn at least 0.984 s for a rough error, 1.87 s"));
+    } else {
+      CHECK(j["power_W"]["torque_sem"].get<double>() > 0);
+      CHECK(j["power_W"]["torque_sem"].get<double>() < 0.5 * j["power_W"]["torque"].get<double>());
+      CHECK_THAT(text, Catch::Contains("\u00b1 a rough standard error, from 4 batches of 1/8 revolution"));
+    }
+    fs::remove_all(out);
+    fs::remove(log);
+  }
+}

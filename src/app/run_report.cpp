@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -99,6 +100,34 @@ RunReport report_of(const FinishedRun& r) {
   rep.err = errors_of(s.window_batches);
   rep.per_rev = std::max(1, s.batches_per_revolution);
   rep.window_revs = static_cast<int>(s.window_batches.size()) / rep.per_rev;
+  // A window of less than a revolution: batches of 1/8 revolution give a
+  // rough error from half a revolution on (4 of them); less gives none.
+  constexpr int kRoughBatches = 4;
+  const double rev_s = d.revolution_s, window_s = s.window_to_s - s.window_from_s;
+  char why[400];
+  if (rep.window_revs >= 1) {
+    rep.sem_kind = "whole revolutions";
+  } else if (rep.err.power.batches >= kRoughBatches) {
+    rep.sem_kind = "rough";
+    std::snprintf(why, sizeof why,
+                  "from %d batches of 1/%d revolution in a window of %.3g s, less than one revolution (%.3g s): each "
+                  "batch sees part of the charge's cycle; turn at least %.3g s (the warm-up and one revolution) for "
+                  "an error from whole revolutions",
+                  rep.err.power.batches, rep.per_rev, window_s, rev_s, c.warmup + rev_s);
+    rep.sem_why = why;
+  } else {
+    rep.sem_kind = "none";
+    std::snprintf(why, sizeof why,
+                  "the averaging window (%.3g s after the warm-up of %.3g s) holds less than half a revolution "
+                  "(a revolution is %.3g s); turn at least %.3g s for a rough error, %.3g s (the warm-up and one revolution) for one "
+                  "from whole revolutions",
+                  window_s, c.warmup, rev_s, c.warmup + 0.5 * rev_s, c.warmup + rev_s);
+    rep.sem_why = why;
+    for (BatchMeans* b : {&rep.err.power, &rep.err.dissipation, &rep.err.torque, &rep.err.arm, &rep.err.toe,
+                          &rep.err.shoulder, &rep.err.com, &rep.err.collisions, &rep.err.collision_power,
+                          &rep.err.impacts, &rep.err.impact, &rep.err.shear, &rep.err.wear})
+      b->sem = std::numeric_limits<double>::quiet_NaN();
+  }
   rep.rel_err = rep.err.power.sem / std::fabs(rep.err.power.mean);
   // Where the energy went over the window: collision spectra and the liner.
   rep.layout = liner_layout(r.scene);
@@ -181,7 +210,9 @@ void write_run_results(const FinishedRun& r, const RunReport& rep) {
                       {"revolutions_per_batch", static_cast<double>(err.power.batch_length) / per_rev},
                       {"lag1_autocorrelation", number_or_null(err.power.lag1)},
                       {"batches_correlated", err.power.correlated},
-                      {"power_relative_sem", number_or_null(rel_err)}};
+                      {"power_relative_sem", number_or_null(rel_err)},
+                      {"standard_errors", rep.sem_kind},
+                      {"standard_errors_why", rep.sem_why.empty() ? nlohmann::json() : nlohmann::json(rep.sem_why)}};
   j["neighbours_per_ball"] = s.neighbours_per_ball;
   j["morrell"] = {{"power_W", m.charge_power_W},
                   {"k", kMorrellK},
@@ -304,7 +335,11 @@ void print_run_results(const FinishedRun& r, const RunReport& rep) {
               plus_minus(s.dissipation_power_W / c.length, err.dissipation.sem / c.length, " W/m").c_str(),
               s.torque_Nm / c.length, c.length, c.periodic ? " of periodic slice" : " between the end plates");
   const std::string batch = batch_words(err.power.batch_length, per_rev);
-  if (err.power.batches >= 2 && std::isfinite(err.power.lag1))
+  if (rep.sem_kind == "none")
+    std::printf("                no standard error: %s\n", rep.sem_why.c_str());
+  else if (rep.sem_kind == "rough")
+    std::printf("                \u00b1 a rough standard error, %s\n", rep.sem_why.c_str());
+  else if (err.power.batches >= 2 && std::isfinite(err.power.lag1))
     std::printf("                \u00b1 one standard error, from %d batch means of %s (lag-1 "
                 "autocorrelation %.2f%s)\n",
                 err.power.batches, batch.c_str(), err.power.lag1,

@@ -50,14 +50,19 @@ struct RunReport {
   Errors err;
   int per_rev = 1, window_revs = 0;
   double rel_err = 0;
+  // How the standard errors were had: "whole revolutions", "rough" (batches
+  // of less than one revolution), or "none"; `sem_why` says why, and what
+  // run length gives one.
+  std::string sem_kind, sem_why;
   LinerLayout layout;
   SpectraReport spectra;
   LinerReport liner;
 };
 
 RunReport report_of(const FinishedRun& r);
-// summary.json (written last, atomically), the pictures, spectra.csv,
-// wear.csv, liner.vtp and the liner beside each snapshot.
+// spectra.csv, wear.csv, lifter_wear.csv and summary.json first, then the
+// pictures, liner.vtp and the liner beside each snapshot (a warning each
+// where one cannot be written).
 void write_run_results(const FinishedRun& r, const RunReport& rep);
 // The result lines: power, per metre, convergence, angles, collisions,
 // liner, impact point, Morrell, speed, the files.

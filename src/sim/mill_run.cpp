@@ -86,9 +86,18 @@ TurnPlan plan_turning(const MillCase& c, const MillDerived& d, double dt, long w
 
 namespace {
 
+// Batches of a plan's window: its whole revolutions' batches, or in a
+// window of less than a revolution its whole batches of 1/per_rev of one
+// (a short run's rough error).
+long window_batches(const TurnPlan& p, int per_rev) {
+  if (p.revolutions > 0) return p.revolutions * per_rev;
+  if (!(p.rev_steps > 0) || p.turn_steps <= p.window_start) return 0;
+  return static_cast<long>(std::floor((p.turn_steps - p.window_start) / (p.rev_steps / per_rev) + 1e-9));
+}
+
 // Batches of the window that have ended by turning step s under a plan.
 long batches_ended_by(const TurnPlan& p, int per_rev, long s) {
-  const long n = p.revolutions * per_rev;
+  const long n = window_batches(p, per_rev);
   long k = 0;
   while (k < n) {
     const long next = k + 1;
@@ -185,7 +194,7 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   const long window_start = plan.window_start, revs = plan.revolutions;
   sum.whole_revolutions = plan.whole;
   const int per_rev = std::max(1, st.batches_per_revolution);
-  const long n_batches = revs * per_rev;
+  const long n_batches = window_batches(plan, per_rev);
   sum.batches_per_revolution = per_rev;
 
   auto report = [&](const char* phase, double sim, double revs, double done, bool force) {
@@ -384,7 +393,7 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
       st.comy += o.com_y_m;
       st.neigh += o.neighbours_per_ball;
       ++st.rows_in_window;
-      if (revs >= 1) {  // the row ends in the open batch
+      if (static_cast<long>(st.batches.size()) < n_batches) {  // the row ends in the open batch
         add_row_share(o.interval_s, o.wall_work_J, o.dissipated_J, o.wall_torque_Nm * o.interval_s);
         rev.row_span = rev.row_work = rev.row_diss = rev.row_torque_time = 0;
         for (int k = 0; k < kProfileBins; ++k) st.batch_profile[k] += prof[k];
