@@ -449,13 +449,13 @@ int cmd_life(const LifeOptions& o) {
     next.index = i + 1;
     next.case_hours = s.case_hours + span;
     s.span_case_hours = span;
-    s.shell_depth_m = s.r.shell_mm_per_1000h * 1e-3 * span * 1e-3;
+    s.shell_depth_m = s.r.shell_mm_per_1000h * 1e-6 * span;  // mm per 1000 h to m per h, times the hours
     const double R = 0.5 * s.diameter;
     s.booked_mm2.clear(), s.removed_mm2.clear(), s.scale.clear(), s.spread.clear();
     for (std::size_t k = 0; k < s.outlines.size(); ++k) {
-      std::vector<double> area(kWearStations);
-      for (int j = 0; j < kWearStations; ++j) area[j] = s.r.station_m3_s[k][j] * span * 3600 / length;
-      const WornLifter w = wear_lifter(s.outlines[k], R, area, s.shell_depth_m);
+      // As the plan wore it (span_for_loss): the same rates, the same hours.
+      const WornLifter w =
+          wear_for_hours(s.outlines[k], R, BarWearRates{s.r.station_m3_s[k], length, s.r.shell_mm_per_1000h * 1e-6}, span);
       if (w.worn_away) {
         const std::string why = fmt::format(
             "lifters.profile[{}]: stage {} wears the lifter away within its {:.4g} h (it is {:.1f} mm high now); the "

@@ -31,7 +31,8 @@ Vec3 on_circle(double r, double theta, double z) { return {r * std::cos(theta), 
 }  // namespace
 
 FootAngles lifter_foot_angles(const std::vector<Vec2>& poly, double R, double centre) {
-  FootAngles f;
+  // Signed: a bar wholly ahead of its row's centre has a negative trail.
+  FootAngles f{-1e300, -1e300};
   bool crossed = false;
   const std::size_t n = poly.size();
   for (std::size_t k = 0; k < n; ++k) {
@@ -56,6 +57,7 @@ FootAngles lifter_foot_angles(const std::vector<Vec2>& poly, double R, double ce
       f.lead = std::max(f.lead, d);
       f.trail = std::max(f.trail, -d);
     }
+  if (poly.empty()) f = FootAngles{};
   return f;
 }
 

@@ -60,7 +60,8 @@ LinerLayout liner_layout(const Scene& scene);
 
 // The angles (rad) from a bar's row centre `centre` (rad) to where its
 // cross-section meets a shell of radius R: ahead (counter-clockwise) and
-// behind, both positive; the bar covers lead + trail of the shell.
+// behind (signed: a bar wholly ahead of its centre has a negative trail);
+// the bar covers lead + trail of the shell.
 struct FootAngles {
   double lead = 0, trail = 0;
 };

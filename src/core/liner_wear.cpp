@@ -156,15 +156,21 @@ Moved move(const Bar& bar, const std::vector<Sample>& samples, const std::vector
     double u_min = R;
     for (const Vec2& v : bar.poly) u_min = std::min(u_min, v.x);
     const double beyond = R + shell_depth + 0.25 * (R - u_min);
+    // A face that runs nearly along the shell (a flat top cut by the curved
+    // shell, a ramp) is carried at most four times the bar's height and the
+    // shell's depth, and from there straight down to the worn shell.
+    const double cap = 4 * ((R - u_min) + shell_depth);
     auto foot = [&](const Sample& e, double d, double outward) {  // outward: −1 back along the path, +1 on
       const Vec2 start{e.p.x - d * e.n.x, e.p.y - d * e.n.y};
       const double dx = outward * e.t.x;  // how fast the line leaves the axis
-      const double reach = dx > 1e-6 ? (beyond - start.x) / dx : 4 * R;
-      const double r = std::max(reach, 0.5 * e.len);
-      return Vec2{start.x + outward * r * e.t.x, start.y + outward * r * e.t.y};
+      const double reach = dx > 0 ? (beyond - start.x) / dx : cap;
+      const double r = std::max(std::min(reach, cap), 0.5 * e.len);
+      const Vec2 end{start.x + outward * r * e.t.x, start.y + outward * r * e.t.y};
+      keep.push_back(end);
+      if (end.x < beyond) keep.push_back({beyond, end.y});
     };
-    keep.push_back(foot(samples.front(), scale * depth.front(), -1));
-    keep.push_back(foot(samples.back(), scale * depth.back(), +1));
+    foot(samples.front(), scale * depth.front(), -1);
+    foot(samples.back(), scale * depth.back(), +1);
   }
   Moved m;
   const std::vector<Vec2> hull = hull_of(keep);
@@ -420,8 +426,14 @@ double hours_to_lose(const std::vector<Vec2>& outline, double R, const BarWearRa
     const WornLifter w = wear_for_hours(outline, R, rates, hours);
     return w.worn_away ? h0 : h0 - measure_profile(w.outline).height;
   };
+  // The first hours (on a doubling scan from the top's own rate) at which
+  // the bar is down by `loss`, then bisection between the last scan point
+  // short of it and the first past it. A shell that wears faster than the
+  // top raises the bar at first; its height may then fall in a step (a
+  // thin ridge going). A bar that would be worn through there never lost
+  // `loss` while it stood: no hours.
   double lo = 0, hi = loss / top;
-  for (int it = 0; it < 60 && lost(hi) < loss; ++it) {
+  for (int it = 0; it < 40 && lost(hi) < loss; ++it) {
     lo = hi;
     hi *= 2;
   }
@@ -430,6 +442,7 @@ double hours_to_lose(const std::vector<Vec2>& outline, double R, const BarWearRa
     const double mid = 0.5 * (lo + hi);
     (lost(mid) < loss ? lo : hi) = mid;
   }
+  if (wear_for_hours(outline, R, rates, hi).worn_away) return -1;
   return hi;
 }
 

@@ -161,13 +161,15 @@ MillDerived derive(const MillCase& c) {
       half_angle.push_back(std::asin(std::min(1.0, base_half / R)));
     }
     for (int k = 0; k < c.lifter_rows; ++k) {
-      const std::size_t a = k % c.lifter_pattern.size(), b = (k + 1) % c.lifter_pattern.size();
+      // Row k and the next row round (the last row's next is row 0).
+      const std::size_t a = k % c.lifter_pattern.size(), b = ((k + 1) % c.lifter_rows) % c.lifter_pattern.size();
       if (half_angle[a] + half_angle[b] >= spacing)
         fail("lifters.rows", std::to_string(c.lifter_rows) + " rows of these profiles overlap at the shell: use fewer "
                              "rows or narrower lifters");
       // A bar may lean over the next one above their feet: the bars inside
       // the shell must not meet.
-      const auto bars = bars_on_shell(lifter_rows(R, c.lifter_rows, {c.lifter_pattern[a], c.lifter_pattern[b]}), R);
+      const auto bars = bars_on_shell(
+          {lifter_polygon(R, c.lifter_pattern[a], 0.0), lifter_polygon(R, c.lifter_pattern[b], spacing)}, R);
       if (c.lifter_rows >= 2 && convex_polygons_overlap(bars[0], bars[1], 1e-9 * R))
         fail("lifters.profile[" + std::to_string(c.lifter_pattern[a].polygon() ? a : b) + "].points",
              "the bar reaches over the next one: with " + std::to_string(c.lifter_rows) +

@@ -258,7 +258,8 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
       if (nl % period != 0) continue;
       bool repeats = true;
       for (int k = 0; k < nl && repeats; ++k)
-        repeats = std::fabs(layout.lifter_half_angle[k] - layout.lifter_half_angle[(k + period) % nl]) < 1e-9;
+        repeats = std::fabs(layout.lifter_lead_angle[k] - layout.lifter_lead_angle[(k + period) % nl]) < 1e-9 &&
+                  std::fabs(layout.lifter_trail_angle[k] - layout.lifter_trail_angle[(k + period) % nl]) < 1e-9;
       if (repeats) break;
     }
   }
@@ -274,7 +275,7 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
                           "face), averaged over the " + std::to_string(repeats) + " repeats of the pattern"
                         : "angle in the mill frame (deg, counter-clockwise)";
     m->y_label = "axial position (m)";
-    m->x_lo = nl > 0 ? -layout.lifter_half_angle[0] * kDeg : 0;
+    m->x_lo = nl > 0 ? -layout.lifter_trail_angle[0] * kDeg : 0;
     m->x_hi = m->x_lo + period * spacing;
     m->y_lo = 0;
     m->y_hi = layout.length > 0 ? layout.length : 1;
@@ -297,12 +298,13 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
       x0 = el.theta0 * kDeg - (nl > 0 ? layout.lifter_centre[el.row] * kDeg : 0) + base;
       x1 = x0 + (el.theta1 - el.theta0) * kDeg;
     } else {  // the bar's width on the shell in three: trailing, top, leading
-      const double h = layout.lifter_half_angle[el.row] * kDeg;
+      // From its trailing foot to its leading one, as the shell cells meet it.
+      const double trail = layout.lifter_trail_angle[el.row] * kDeg, lead = layout.lifter_lead_angle[el.row] * kDeg;
       const int third = el.bin == static_cast<int>(LifterFace::trailing) ? 0
                         : el.bin == static_cast<int>(LifterFace::top)    ? 1
                                                                           : 2;
-      x0 = base - h + 2 * h * third / 3;
-      x1 = base - h + 2 * h * (third + 1) / 3;
+      x0 = base - trail + (lead + trail) * third / 3;
+      x1 = base - trail + (lead + trail) * (third + 1) / 3;
     }
     Cell& c = cells[{row, static_cast<int>(el.part), el.bin, el.axial}];
     c.x0 = x0, c.x1 = x1, c.z0 = el.z0, c.z1 = layout.length > 0 ? el.z1 : 1;
