@@ -1,7 +1,9 @@
 // The forward model of `grind` against computations that share none of its
 // code: the batch products `--fit` inverts (batch_test_products), made from
 // a hand-made spectrum of one energy bin, against the rates worked out from
-// docs/grinding.md's formulas and the two-class closed form of a batch grind.
+// docs/grinding.md's formulas and the two-class closed form of a batch grind;
+// Tavares' t_n with tn_beta other than 1 against a numerical integration of
+// the beta density.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -12,6 +14,7 @@
 
 #include "grind/circuit.h"
 #include "grind/fit.h"
+#include "io/ore_file.h"
 
 using namespace mc::grind;
 
@@ -25,6 +28,21 @@ double broken_share(double e, double d, double e_inf, double d0, double phi, dou
   if (e >= emax) return 1;
   const double z = std::log((emax * e / (emax - e)) / (emax * e50 / (emax - e50))) / sigma;
   return 0.5 * std::erfc(-z / std::sqrt(2.0));
+}
+
+// I_x(a, b) by integrating the beta density, independent of the code's
+// continued fraction: with x = X v^m, m = 4/a, the integral of
+// x^(a-1) (1-x)^(b-1) from 0 to X is X^a m times that of
+// v^3 (1 - X v^m)^(b-1) over 0..1, smooth for X < 1 (composite Simpson,
+// 4000 intervals); B(a, b) from lgamma.
+double beta_by_quadrature(double X, double a, double b) {
+  const double m = 4 / a;
+  const int n = 4000;
+  auto f = [&](double v) { return v * v * v * std::pow(1 - X * std::pow(v, m), b - 1); };
+  double sum = f(0) + f(1);
+  for (int i = 1; i < n; ++i) sum += (i % 2 ? 4 : 2) * f(static_cast<double>(i) / n);
+  const double integral = std::pow(X, a) * m * sum / (3.0 * n);
+  return integral / std::exp(std::lgamma(a) + std::lgamma(b) - std::lgamma(a + b));
 }
 
 }  // namespace
@@ -86,4 +104,37 @@ TEST_CASE("the batch products --fit inverts: one class breaking into the next, a
     worst = std::max({worst, std::fabs(rows[k][1] / (1 - m0) - 1), std::fabs(rows[k][2] / (1 - m0 - m1) - 1)});
   }
   std::printf("batch products against the closed form: worst relative difference %.1e\n", worst);
+}
+
+TEST_CASE("Tavares' t_n with tn_beta other than 1: the incomplete beta against the beta density integrated",
+          "[grind][t10][numbers]") {
+  // tests/data/ore_t10_beta.toml: made-up alpha and beta, t_n falling with
+  // n as the ore file asks.
+  const Ore ore = mc::io::read_ore(std::string(MC_TEST_DATA) + "/ore_t10_beta.toml");
+  const T10Breakage& t = ore.t10;
+  REQUIRE(t.n.size() == 5);
+  CHECK(t.beta[2] == 0.8);
+  double worst = 0, worst_b = 0;
+  for (double x : {0.003, 0.02, 0.1, 0.3, 0.5}) {
+    std::vector<double> tn;
+    for (std::size_t k = 0; k < t.n.size(); ++k) {
+      const double ref = beta_by_quadrature(x, t.alpha[k], t.beta[k]);
+      INFO("t10 " << x << " n " << t.n[k] << " alpha " << t.alpha[k] << " beta " << t.beta[k]);
+      CHECK(t.tn(k, x) == Approx(ref).epsilon(2e-12));  // measured 2e-13
+      worst = std::max(worst, std::fabs(t.tn(k, x) / ref - 1));
+      tn.push_back(ref);
+    }
+    // The event's B(u) through those nodes: t_n at u = 1/n, log-log linear
+    // between 1/2 and 1/4, the last segment's power law below 1/75.
+    const double between = std::exp(std::log(tn[0]) + std::log(2.0 / 3) / std::log(0.5) * std::log(tn[1] / tn[0]));
+    const double below = tn[4] * std::pow((1.0 / 150) / (1.0 / 75), std::log(tn[4] / tn[3]) / std::log(50.0 / 75));
+    const double u[] = {0.25, 0.1, 1.0 / 3, 1.0 / 150}, want[] = {tn[1], x, between, below};
+    for (int k = 0; k < 4; ++k) {
+      INFO("t10 " << x << " u " << u[k]);
+      CHECK(t.cumulative(u[k], x) == Approx(want[k]).epsilon(2e-12));
+      worst_b = std::max(worst_b, std::fabs(t.cumulative(u[k], x) / want[k] - 1));
+    }
+  }
+  std::printf("t_n with tn_beta != 1 against the quadrature: worst relative difference %.1e, B(u) %.1e\n", worst,
+              worst_b);
 }
