@@ -301,33 +301,46 @@ TEST_CASE("an auto run killed while turning resumes to the same stop, bit for bi
   const std::string args = "run" + kSmall + " --set run.duration=auto --set run.tolerance=0.1 --set run.max_duration=16";
   REQUIRE(run_cmd(args + " --out '" + a.string() + "'", log) == 0);
 
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const std::string cmd = "exec " + std::string(MC_BINARY) + " " + args + " --out '" + b.string() + "' >/dev/null 2>&1";
-    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  // Kill it once a checkpoint holds a revolution or more.
-  bool mid = false;
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(300);
-  while (!mid && !fs::exists(b / "summary.json") && std::chrono::steady_clock::now() < until) {
+  // The unbroken run's stop: the kill must come before it.
+  const io::Checkpoint ca = io::read_checkpoint(a / io::kCheckpointFile);
+  REQUIRE(ca.run.stop_step > 0);
+  // A checkpoint of the turning (phase 2) that holds a batch or more and
+  // lies before the stop.
+  auto mid_turning = [&](const fs::path& dir) {
     try {
-      const io::Checkpoint cp = io::read_checkpoint(b / io::kCheckpointFile);
-      mid = cp.run.phase == 2 && !cp.run.batches.empty();
+      const io::Checkpoint cp = io::read_checkpoint(dir / io::kCheckpointFile);
+      return cp.run.phase == 2 && !cp.run.batches.empty() && cp.run.turn_step < ca.run.stop_step;
     } catch (const std::exception&) {
+      return false;
     }
-    if (!mid) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  };
+  // Kill the same run once such a checkpoint is written. On a loaded
+  // machine the poll can miss the window and the run end first: then try
+  // again, polling faster; a kill that never lands mid-run fails the test,
+  // which would otherwise resume nothing.
+  bool killed_mid = false;
+  for (int attempt = 0; attempt < 3 && !killed_mid; ++attempt) {
+    fs::remove_all(b);
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      const std::string cmd =
+          "exec " + std::string(MC_BINARY) + " " + args + " --out '" + b.string() + "' >/dev/null 2>&1";
+      ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(300);
+    while (!mid_turning(b) && !fs::exists(b / "summary.json") && std::chrono::steady_clock::now() < until)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20 >> (2 * attempt)));
+    ::kill(pid, SIGKILL);
+    int st = 0;
+    ::waitpid(pid, &st, 0);
+    // What the resume starts from: a checkpoint mid-turning, no summary.
+    killed_mid = !fs::exists(b / "summary.json") && mid_turning(b);
+    if (!killed_mid) WARN("attempt " << attempt + 1 << ": the run ended before it was killed; trying again");
   }
-  ::kill(pid, SIGKILL);
-  int st = 0;
-  ::waitpid(pid, &st, 0);
-  REQUIRE((mid || fs::exists(b / "summary.json")));
-  if (fs::exists(b / "summary.json")) {
-    WARN("the run ended before it was killed; nothing resumed");
-  } else {
-    REQUIRE(run_cmd("run --quiet --resume '" + b.string() + "'", log) == 0);
-  }
-  const io::Checkpoint ca = io::read_checkpoint(a / io::kCheckpointFile), cb = io::read_checkpoint(b / io::kCheckpointFile);
+  REQUIRE(killed_mid);
+  REQUIRE(run_cmd("run --quiet --resume '" + b.string() + "'", log) == 0);
+  const io::Checkpoint cb = io::read_checkpoint(b / io::kCheckpointFile);
   CHECK(ca.solver.steps == cb.solver.steps);
   CHECK(ca.run.stop_step == cb.run.stop_step);
   REQUIRE(ca.run.batches.size() == cb.run.batches.size());

@@ -3,12 +3,14 @@
 // forms, the round trip from a known ore through a short run of the Bond
 // mill (to 1e-6 without noise, within the stated errors with ±1 percentage
 // point of it), parameters the data cannot fix, the work index met, the
-// contact recorded, and bad input refused by key and line.
+// contact recorded, bad input refused by key and line, and Tavares' t10 off
+// the Schuhmann family: its grind.png panel and --scale-from.
 #include <catch2/catch.hpp>
 
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -26,6 +28,10 @@
 #include "io/batch_test_file.h"
 #include "io/ore_file.h"
 #include "io/run_folder.h"
+
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
 
 using namespace mc::grind;
 namespace fs = std::filesystem;
@@ -73,9 +79,13 @@ const fs::path& bond_run() {
 
 fs::path ore_file(const std::string& name) { return fs::path(MC_ASSET_DIR) / "ores" / name; }
 
-// Uniform scatter in [-1, 1], the same on every machine.
+// Uniform scatter in [-1, 1], the same on every machine (xorshift64; seed
+// 0 is the suite's usual draw, others give other draws).
 struct Scatter {
-  std::uint64_t state = 88172645463325252ULL;
+  std::uint64_t state;
+  explicit Scatter(std::uint64_t seed = 0) : state(88172645463325252ULL + seed * 0x9E3779B97F4A7C15ULL) {
+    if (state == 0) state = 1;
+  }
   double next() {
     state ^= state << 13;
     state ^= state >> 7;
@@ -86,7 +96,8 @@ struct Scatter {
 
 // 5 times x 12 sieves on the √2 series from 2.36 mm down, the feed the
 // ore's: the products the ore makes, with `noise_pp` of uniform scatter.
-BatchTest synthetic_test(const Ore& ore, const mc::io::Run& run, double holdup_kg, double noise_pp) {
+BatchTest synthetic_test(const Ore& ore, const mc::io::Run& run, double holdup_kg, double noise_pp,
+                         std::uint64_t seed = 0) {
   BatchTest t;
   for (int k = 0; k < 12; ++k) t.sieve_m.push_back(2.36e-3 / std::pow(std::sqrt(2.0), k));
   t.sieve_m.insert(t.sieve_m.begin(), 3.35e-3);
@@ -96,7 +107,7 @@ BatchTest synthetic_test(const Ore& ore, const mc::io::Run& run, double holdup_k
   t.holdup_kg = holdup_kg;
   t.noise_pp = std::max(noise_pp, 0.1);
   t.passing = batch_test_products(ore, run.normal, run.power_W, holdup_kg, t);
-  Scatter s;
+  Scatter s(seed);
   for (auto& row : t.passing)
     for (std::size_t k = 1; k < row.size(); ++k) row[k] = std::clamp(row[k] + noise_pp / 100 * s.next(), 0.0, 1.0);
   return t;
@@ -220,7 +231,6 @@ TEST_CASE("grind --fit round trip: with ±1 pp of scatter the parameters come ba
   Ore truth = mc::io::read_ore(ore_file("example_spectrum.toml"));
   truth.efficiency = 0.35;
   const double H = 1.2;
-  const BatchTest t = synthetic_test(truth, run, H, 1.0);
   // Two parameters: with this much scatter on 5 times x 12 sieves of the
   // short run, more of the spectrum model's are not all identified
   // (docs/grinding.md gives the five-parameter fit).
@@ -228,20 +238,38 @@ TEST_CASE("grind --fit round trip: with ±1 pp of scatter the parameters come ba
   start.efficiency = 0.6;
   start.fracture.sigma = 1.0;
   const std::vector<std::string> names = {"efficiency", "sigma"};
-  const BatchFit f = fit_batch_test(start, run.normal, run.power_W, H, t, names);
-  REQUIRE(f.parameters.size() == 2);
-  // Uniform scatter of ±1 pp has a standard deviation of 1/√3 pp.
-  CHECK(f.rms_pp == Approx(1 / std::sqrt(3.0)).epsilon(0.25));
-  for (const FittedParameter& p : f.parameters) {
-    const double truth_v = get(truth, p.name);
-    std::printf("  %-12s %.5g +- %.2g (true %.5g, %.2f standard errors off)\n", p.name.c_str(), p.value, p.se, truth_v,
-                std::fabs(p.value - truth_v) / p.se);
-    INFO(p.name << " fitted " << p.value << " +- " << p.se << " true " << truth_v);
-    REQUIRE(p.identified);
-    CHECK(std::fabs(p.value - truth_v) <= 3 * p.se);
-    CHECK(p.se < 0.2 * p.value);  // an error that says something
-    CHECK(p.se > 1e-5 * p.value);
+  // 16 draws of the scatter: each parameter's distance from the truth in its
+  // own standard errors, z. Errors that mean what they say give z an rms
+  // near 1 (16 draws: 0.62 to 1.37 at 95 %, the two z of a draw being
+  // nearly opposite); measured 1.11 and 1.11, the largest |z| 2.31. The
+  // suite's usual draw (seed 0) lands at 0.45 and 0.11.
+  double sum_z2 = 0, max_z = 0;
+  for (std::uint64_t seed = 0; seed < 16; ++seed) {
+    const BatchFit f = fit_batch_test(start, run.normal, run.power_W, H, synthetic_test(truth, run, H, 1.0, seed), names);
+    REQUIRE(f.parameters.size() == 2);
+    INFO("seed " << seed);
+    // Uniform scatter of ±1 pp has a standard deviation of 1/√3 pp.
+    CHECK(f.rms_pp == Approx(1 / std::sqrt(3.0)).epsilon(0.25));
+    for (const FittedParameter& p : f.parameters) {
+      const double truth_v = get(truth, p.name), z = (p.value - truth_v) / p.se;
+      INFO(p.name << " fitted " << p.value << " +- " << p.se << " true " << truth_v);
+      REQUIRE(p.identified);
+      CHECK(p.se < 0.2 * p.value);  // an error that says something
+      CHECK(p.se > 1e-5 * p.value);
+      if (seed == 0) {
+        std::printf("  %-12s %.5g +- %.2g (true %.5g, %.2f standard errors off)\n", p.name.c_str(), p.value, p.se,
+                    truth_v, std::fabs(z));
+        CHECK(std::fabs(z) < 0.6);  // docs/grinding.md
+      }
+      sum_z2 += z * z;
+      max_z = std::max(max_z, std::fabs(z));
+    }
   }
+  const double rms_z = std::sqrt(sum_z2 / 32);
+  std::printf("  16 draws: rms %.3f standard errors off, largest %.2f\n", rms_z, max_z);
+  CHECK(rms_z > 0.7);
+  CHECK(rms_z < 1.5);
+  CHECK(max_z < 3.0);
 }
 
 TEST_CASE("grind --fit: a parameter the data cannot fix is said to be unidentified", "[grind][fit]") {
@@ -617,4 +645,185 @@ TEST_CASE("grind --scale-from: the energy-specific scale-up beside the spectrum 
   CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains("--scale-from") && Catch::Contains("rates.model"));
   CHECK(!fs::exists(o.out));
   for (const char* d : {"scale_self", "scale_twice", "plant_run"}) fs::remove_all(temp(d));
+}
+
+namespace {
+
+// The centres of the discs of colour (r, g, b) in rows [y0, y1) of a
+// picture (radius 3.5 px): 4 x 4 blocks all of that colour (a line 1.8 px
+// wide holds none), merged within 4 px.
+struct Disc {
+  double x = 0, y = 0;
+  int n = 0;
+};
+std::vector<Disc> discs(const unsigned char* px, int w, int y0, int y1, int r, int g, int b) {
+  auto is = [&](int x, int y) {
+    const unsigned char* p = px + (static_cast<long>(y) * w + x) * 3;
+    return std::abs(p[0] - r) < 40 && std::abs(p[1] - g) < 40 && std::abs(p[2] - b) < 40;
+  };
+  std::vector<Disc> out;
+  for (int y = y0; y < y1 - 3; ++y)
+    for (int x = 0; x < w - 3; ++x) {
+      bool all = true;
+      for (int dy = 0; dy < 4 && all; ++dy)
+        for (int dx = 0; dx < 4 && all; ++dx) all = is(x + dx, y + dy);
+      if (!all) continue;
+      auto near = std::find_if(out.begin(), out.end(), [&](const Disc& d) {
+        return std::fabs(d.x / d.n - x) < 4 && std::fabs(d.y / d.n - y) < 4;
+      });
+      if (near == out.end()) out.push_back({static_cast<double>(x), static_cast<double>(y), 1});
+      else near->x += x, near->y += y, ++near->n;
+    }
+  for (Disc& d : out) d.x /= d.n, d.y /= d.n;
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("grind with Tavares' t10 off the Schuhmann family: the t10 panel of grind.png, and --scale-from holds "
+          "the lab's appearance",
+          "[grind][fit][t10][outputs]") {
+  const fs::path lab = bond_run();
+  const std::string ore = std::string(MC_TEST_DATA) + "/ore_t10_beta.toml";
+  auto grind = [&](const fs::path& run, const fs::path& out, bool scale) {
+    mc::app::GrindOptions o;
+    o.run_dir = run.string();
+    o.ore = ore;
+    o.times_min = {1, 2, 4};
+    if (scale) o.scale_from = lab.string();
+    o.out = out.string();
+    o.quiet = true;
+    REQUIRE(mc::app::cmd_grind(o) == 0);
+    return nlohmann::json::parse(text_of(out / "grind.json"));
+  };
+  const nlohmann::json here = grind(lab, temp("t10_lab"), false);
+  const std::vector<double> t10 = here["t10_mean_by_class"].get<std::vector<double>>();
+  const Ore o = mc::io::read_ore(ore);
+  const int classes = o.sizes.size() - 1;  // the sink has none drawn
+  REQUIRE(static_cast<int>(t10.size()) >= classes);
+
+  // grind.png: three panels of 420 px, the third the classes' mean t10 as
+  // red discs on a log size axis. Each class's disc where the class's size
+  // and t10 put it: sizes on the √2 series are evenly spaced in x, and y
+  // is linear in t10, both read off the outermost classes' discs.
+  int w = 0, h = 0, ch = 0;
+  unsigned char* px = stbi_load((temp("t10_lab") / "grind.png").string().c_str(), &w, &h, &ch, 3);
+  REQUIRE(px != nullptr);
+  CHECK(h == 3 * 420);
+  const std::vector<Disc> found = discs(px, w, 2 * 420, h, 0xd6, 0x27, 0x28);
+  stbi_image_free(px);
+  // The legend's disc beside them: find the class 0's and the last class's
+  // disc as the pair whose evenly spaced series the most discs meet.
+  auto predicted = [&](const Disc& a, const Disc& b, int i) {
+    const double f = static_cast<double>(i) / (classes - 1);
+    const double g = (t10[i] - t10[0]) / (t10[classes - 1] - t10[0]);
+    return Disc{a.x + f * (b.x - a.x), a.y + g * (b.y - a.y), 1};
+  };
+  int best = -1;
+  double worst_px = 0;
+  for (const Disc& a : found)
+    for (const Disc& b : found) {
+      if (b.x >= a.x) continue;  // the finest class on the left
+      int met = 0;
+      double worst = 0;
+      for (int i = 0; i < classes; ++i) {
+        const Disc p = predicted(a, b, i);
+        double d = 1e9;
+        for (const Disc& q : found) d = std::min(d, std::hypot(q.x - p.x, q.y - p.y));
+        met += d < 1.5;
+        worst = std::max(worst, d);
+      }
+      if (met > best) best = met, worst_px = worst;
+    }
+  std::printf("t10 panel: %zu discs found, %d of %d classes where predicted, worst %.2f px\n", found.size(), best,
+              classes, worst_px);
+  CHECK(found.size() == static_cast<std::size_t>(classes) + 1);  // and the legend's
+  CHECK(best == classes);
+  CHECK(worst_px < 1.5);
+
+  // --scale-from: a "plant" with the lab's collisions each losing twice the
+  // normal energy (harder hits: finer progeny by t10) at the lab's power.
+  // The energy-specific side holds the lab's S^E and the lab's appearance,
+  // so at the same power and hold-up its products are the lab's own.
+  const fs::path plant = temp("t10_plant_run");
+  fs::remove_all(plant);
+  fs::create_directories(plant);
+  fs::copy_file(lab / "case.toml", plant / "case.toml");
+  fs::copy_file(lab / "summary.json", plant / "summary.json");
+  {
+    std::ifstream in(lab / "spectra.csv");
+    std::ofstream out(plant / "spectra.csv");
+    std::string line;
+    int col = -1;
+    while (std::getline(in, line)) {
+      std::vector<std::string> f;
+      std::stringstream ss(line);
+      for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+      if (col < 0) {
+        col = static_cast<int>(std::find(f.begin(), f.end(), "normal_spectrum_W") - f.begin());
+        REQUIRE(col < static_cast<int>(f.size()));
+      } else {
+        char twice[32];
+        std::snprintf(twice, sizeof twice, "%.17g", 2 * std::stod(f[col]));
+        f[col] = twice;
+      }
+      for (std::size_t k = 0; k < f.size(); ++k) out << (k ? "," : "") << f[k];
+      out << "\n";
+    }
+  }
+  const nlohmann::json there = grind(plant, temp("t10_plant"), true);
+  const auto& p = there["products"];
+  REQUIRE(p.size() == 6);
+  for (int k = 0; k < 3; ++k) {
+    const double lab_p80 = here["products"][k]["P80_um"].get<double>();
+    INFO(p[k + 3]["label"] << " " << p[k + 3]["P80_um"] << " um, the lab's " << lab_p80 << " um");
+    CHECK(p[k + 3]["P80_um"].get<double>() == Approx(lab_p80).epsilon(1e-9));
+    std::printf("batch %d: P80 %.1f um in the plant by its spectrum, %.1f um by H&F from the lab (the lab's %.1f)\n",
+                k, p[k]["P80_um"].get<double>(), p[k + 3]["P80_um"].get<double>(), lab_p80);
+    CHECK(p[k]["P80_um"].get<double>() < 0.97 * lab_p80);  // harder hits grind faster
+  }
+  // The whole product, class by class (grind.csv, 8 digits): the H&F
+  // columns are the lab's own.
+  auto columns = [&](const fs::path& csv) {
+    std::ifstream in(csv);
+    std::string line;
+    std::getline(in, line);  // the header
+    std::vector<std::vector<double>> cols;
+    while (std::getline(in, line)) {
+      std::stringstream ss(line);
+      std::vector<double> row;
+      for (std::string x; std::getline(ss, x, ',');) row.push_back(std::stod(x));
+      if (cols.empty()) cols.resize(row.size());
+      REQUIRE(row.size() == cols.size());
+      for (std::size_t k = 0; k < row.size(); ++k) cols[k].push_back(row[k]);
+    }
+    return cols;
+  };
+  const auto lab_csv = columns(temp("t10_lab") / "grind.csv"), plant_csv = columns(temp("t10_plant") / "grind.csv");
+  REQUIRE(lab_csv.size() == 5);  // size, feed, 3 products
+  REQUIRE(plant_csv.size() == 8);
+  double off = 0;
+  for (int k = 0; k < 3; ++k)
+    for (std::size_t i = 0; i < lab_csv[0].size(); ++i) off = std::max(off, std::fabs(plant_csv[5 + k][i] - lab_csv[2 + k][i]));
+  // The check can fail: the lab's S^E with the plant's appearance (harder
+  // hits, higher t10) gives another product.
+  const mc::io::Run lab_run = mc::io::read_run(lab, true), plant_run = mc::io::read_run(plant, true);
+  const double H = here["holdup_kg"].get<double>();
+  const MillRates rates = mill_rates(o, lab_run.normal, lab_run.power_W, H);
+  auto product_after_4_min = [&](const mc::io::Run& appearance_of) {
+    return passing(batch_grind(o.feed, rates.S_per_min, appearance_matrix(o, appearance_of.normal), 4));
+  };
+  const std::vector<double> with_lab_b = product_after_4_min(lab_run), with_plant_b = product_after_4_min(plant_run);
+  double apart = 0, lab_vs_csv = 0;
+  for (std::size_t i = 0; i < with_lab_b.size(); ++i) {
+    apart = std::max(apart, std::fabs(with_plant_b[i] - with_lab_b[i]));
+    lab_vs_csv = std::max(lab_vs_csv, std::fabs(with_lab_b[i] - lab_csv[4][i]));
+  }
+  std::printf("--scale-from with t10: H&F passing against the lab's, worst %.1e; with the plant's appearance %.2e "
+              "apart\n",
+              off, apart);
+  CHECK(off < 1e-8);
+  CHECK(lab_vs_csv < 1e-8);
+  CHECK(apart > 1e-3);
+  for (const char* d : {"t10_lab", "t10_plant", "t10_plant_run"}) fs::remove_all(temp(d));
 }

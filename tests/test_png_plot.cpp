@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -72,6 +73,23 @@ bool near(Rgb c, std::uint32_t rgb, int tol) {
 bool white(Rgb c) { return c.r >= 250 && c.g >= 250 && c.b >= 250; }
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The ink of a line plot's title: pixels off white above the plot area's
+// frame (the first row more than half dark from the top), in the middle half
+// of the width, where a centred title lies and no tick label reaches.
+int title_ink(const Image& im) {
+  int frame = -1;
+  for (int y = 0; y < im.h && frame < 0; ++y) {
+    int dark = 0;
+    for (int x = 0; x < im.w; ++x) dark += im.at(x, y).r < 160;
+    if (dark > im.w / 2) frame = y;
+  }
+  REQUIRE(frame > 0);
+  int ink = 0;
+  for (int y = 0; y < frame - 1; ++y)
+    for (int x = im.w / 4; x < im.w * 3 / 4; ++x) ink += !white(im.at(x, y));
+  return ink;
+}
 
 }  // namespace
 
@@ -334,6 +352,15 @@ TEST_CASE("the plot font is built in: MILLCHARGE_FONT that cannot be read is a w
   write_line_plot_png(dir.path / "builtin.png", plot);
   const std::string builtin = bytes(dir.path / "builtin.png");
   REQUIRE(builtin.size() > 1000);
+  // Text drawn: the title's box holds ink (210 pixels for "font" at
+  // 17 px), and none when the title is empty, so the count can fail.
+  const int ink = title_ink(load(dir.path / "builtin.png"));
+  std::printf("the built-in font's title \"font\": %d pixels of ink\n", ink);
+  CHECK(ink > 100);  // measured 210
+  LinePlot untitled = plot;
+  untitled.title.clear();
+  write_line_plot_png(dir.path / "untitled.png", untitled);
+  CHECK(title_ink(load(dir.path / "untitled.png")) == 0);
 
   // A file that is not there, and one that is not a TrueType font: each is
   // named in a warning, and the picture is drawn in the built-in font, the

@@ -387,6 +387,8 @@ void print_run_results(const FinishedRun& r, const RunReport& rep) {
                         "spectra.png", "wear.csv", "lifter_wear.csv", "liner.vtp", "liner.png"}) {
     std::error_code ec;
     if (std::string(f) == "lifter_wear.csv" && c.lifter_rows == 0) continue;
+    // No snapshots asked for: no charge.pvd, and no warning about it either.
+    if (std::string(f) == "charge.pvd" && !(c.snapshot_interval > 0) && !fs::exists(out / f, ec)) continue;
     std::string& to = fs::is_regular_file(out / f, ec) ? wrote : missing;
     to += (to.empty() ? "" : ", ") + std::string(f);
   }
