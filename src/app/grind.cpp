@@ -77,6 +77,12 @@ BondResult run_bond(const GrindOptions& o, const Ore& bond_ore, const io::Run& r
   const auto b = appearance_matrix(bond_ore, run.normal);
   const BondResult bond =
       bond_test(bond_ore.sizes, bond_ore.feed, r.S_per_min, b, run.speed_rpm, charge, o.bond_p1_um * 1e-6);
+  if (!bond.steady)
+    throw std::invalid_argument(fmt::format(
+        "--bond {:g}: no work index: Bond's test did not reach its equilibrium in {} cycles (circulating load {:.0f} "
+        "%, not 250 %: the revolutions a cycle needs lie outside the test's 10 to 5000); the ore grinds too slowly "
+        "or too fast in this mill for the test",
+        o.bond_p1_um, bond.cycles, 100 * bond.circulating_load));
   if (!std::isfinite(bond.wi_kWh_t) || !(bond.wi_kWh_t > 0))
     throw std::invalid_argument(fmt::format(
         "--bond {:g}: no work index: the test's product has P80 {} um and Gbp {:.4g} g/rev (more sizes.classes "

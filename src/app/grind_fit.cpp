@@ -174,7 +174,9 @@ int fit_batch(const GrindOptions& o) {
   for (const FittedParameter& p : fit.parameters) j["parameters"].push_back(parameter_json(p));
   j["free_parameters"] = fit.free;
   j["rms_residual_pp"] = fit.rms_pp;
-  j["within_twice_noise"] = fit.rms_pp <= 2 * tf.test.noise_pp;
+  // With nothing free the residual says how far the ore as it stands is
+  // from the test, not how well a fit did: no verdict then.
+  j["within_twice_noise"] = fit.free > 0 ? nlohmann::json(fit.rms_pp <= 2 * tf.test.noise_pp) : nlohmann::json();
   j["iterations"] = fit.iterations;
   j["evaluations"] = fit.evaluations;
   j["refits"] = fit.refits;

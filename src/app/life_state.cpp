@@ -218,11 +218,14 @@ StageResult read_stage_result(const fs::path& dir, int profiles) {
   const int c_p = t.column("profile"), c_s = t.column("station"), c_w = t.column("wear_m3_per_s");
   r.station_m3_s.assign(profiles, std::vector<double>(kWearStations, 0.0));
   for (std::size_t k = 0; k < t.rows.size(); ++k) {
-    const int p = static_cast<int>(t.number(k, c_p)), s = static_cast<int>(t.number(k, c_s));
-    if (p < 0 || p >= profiles || s < 0 || s >= kWearStations)
-      throw std::invalid_argument(t.where(k) + ": profile " + std::to_string(p) + ", station " + std::to_string(s) +
+    const double pf = t.number(k, c_p), sf = t.number(k, c_s), w = t.number(k, c_w);
+    if (!(pf >= 0 && pf < profiles && pf == std::floor(pf) && sf >= 0 && sf < kWearStations && sf == std::floor(sf)))
+      throw std::invalid_argument(t.where(k) + ": profile " + t.rows[k][c_p] + ", station " + t.rows[k][c_s] +
                                   " is not one of this case's");
-    r.station_m3_s[p][s] = t.number(k, c_w);
+    if (!(std::isfinite(w) && w >= 0))
+      throw std::invalid_argument(t.where(k) + ": wear_m3_per_s " + t.rows[k][c_w] +
+                                  " is not a wear rate (finite, >= 0); the file is damaged");
+    r.station_m3_s[static_cast<int>(pf)][static_cast<int>(sf)] = w;
   }
   return r;
 }

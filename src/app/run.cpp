@@ -481,8 +481,8 @@ int cmd_run(const RunOptions& o) {
   const FinishedRun done{r.p.c,        r.p.d,        r.p.scene,     s,         *r.solver, r.ctx->info().label(),
                          r.out,        *files.pvd,   files.t_series, files.p_torque, files.p_diss};
   const RunReport report = report_of(done);
-  write_run_results(done, report);
-  print_run_results(done, report);
+  const std::vector<std::string> not_written = write_run_results(done, report);
+  print_run_results(done, report, not_written);
   return 0;
 }
 

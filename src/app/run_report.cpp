@@ -136,7 +136,8 @@ RunReport report_of(const FinishedRun& r) {
   return rep;
 }
 
-void write_run_results(const FinishedRun& r, const RunReport& rep) {
+std::vector<std::string> write_run_results(const FinishedRun& r, const RunReport& rep) {
+  std::vector<std::string> not_written;
   const MillCase& c = r.c;
   const MillDerived& d = r.d;
   const RunSummary& s = r.s;
@@ -265,7 +266,8 @@ void write_run_results(const FinishedRun& r, const RunReport& rep) {
                      "mean torque power " + io::value_with_error(s.torque_power_W, err.power.sem, "W")},
                     {s.dissipation_power_W, s.window_from_s, s.window_to_s, 0x7a1014, true,
                      "mean dissipation " + io::value_with_error(s.dissipation_power_W, err.dissipation.sem, "W")}};
-  io::draw_or_warn(out / "power.png", [&] { io::write_line_plot_png(out / "power.png", plot); });
+  if (!io::draw_or_warn(out / "power.png", [&] { io::write_line_plot_png(out / "power.png", plot); }))
+    not_written.push_back("power.png");
   io::EndView view;
   view.title = c.name + " at t = " + std::to_string(s.turning_s).substr(0, 5) + " s";
   view.shell_radius = 0.5 * c.diameter;
@@ -279,13 +281,17 @@ void write_run_results(const FinishedRun& r, const RunReport& rep) {
   const Observables now = r.solver.observe(false);
   view.com_x = now.com_x_m;
   view.com_y = now.com_y_m;
-  io::draw_or_warn(out / "charge.png", [&] { io::write_end_view_png(out / "charge.png", view); });
-  io::draw_or_warn(out / "liner.png", [&] { io::write_liner_png(out / "liner.png", c.name, layout, liner); });
-  io::draw_or_warn(out / "spectra.png", [&] { io::write_spectra_png(out / "spectra.png", c.name, spectra); });
+  if (!io::draw_or_warn(out / "charge.png", [&] { io::write_end_view_png(out / "charge.png", view); }))
+    not_written.push_back("charge.png");
+  if (!io::draw_or_warn(out / "liner.png", [&] { io::write_liner_png(out / "liner.png", c.name, layout, liner); }))
+    not_written.push_back("liner.png");
+  if (!io::draw_or_warn(out / "spectra.png", [&] { io::write_spectra_png(out / "spectra.png", c.name, spectra); }))
+    not_written.push_back("spectra.png");
   // The liner in the mill frame, and beside each snapshot turned to the
   // mill's angle then (part 1 of the same times in charge.pvd).
-  io::write_or_warn(out / "liner.vtp",
-                    [&] { io::write_mesh_vtp(out / "liner.vtp", io::liner_mesh(layout, &liner, 0.0, s.turning_s)); });
+  if (!io::write_or_warn(out / "liner.vtp",
+                         [&] { io::write_mesh_vtp(out / "liner.vtp", io::liner_mesh(layout, &liner, 0.0, s.turning_s)); }))
+    not_written.push_back("liner.vtp");
   {
     const std::vector<double> times = r.pvd.times();
     for (std::size_t k = 0; k < times.size(); ++k) {
@@ -297,14 +303,16 @@ void write_run_results(const FinishedRun& r, const RunReport& rep) {
       if (!written) {  // the rest would fail alike: one warning is enough
         std::fprintf(stderr, "warning: the liner beside the %zu later snapshots not written either\n",
                      times.size() - k - 1);
+        not_written.push_back("snapshots/liner_*.vtp from " + std::string(name + 10));
         break;
       }
       r.pvd.add(times[k], name, 1);
     }
   }
+  return not_written;
 }
 
-void print_run_results(const FinishedRun& r, const RunReport& rep) {
+void print_run_results(const FinishedRun& r, const RunReport& rep, const std::vector<std::string>& not_written) {
   const MillCase& c = r.c;
   const MillDerived& d = r.d;
   const RunSummary& s = r.s;
@@ -381,17 +389,17 @@ void print_run_results(const FinishedRun& r, const RunReport& rep) {
               "particle-updates/s\n",
               thousands(s.steps).c_str(), s.wall_s, s.settle_s, s.settle_wall_s,
               s.wall_s > 0 ? 100 * s.settle_wall_s / s.wall_s : 0.0, s.updates_per_s);
-  // What is there: a picture or mesh that could not be written was a warning.
+  // What this run wrote; a picture or mesh that could not be written was a
+  // warning, and is named again here.
   std::string wrote, missing;
   for (const char* f : {"summary.json", "timeseries.csv", "charge.pvd", "power.png", "charge.png", "spectra.csv",
                         "spectra.png", "wear.csv", "lifter_wear.csv", "liner.vtp", "liner.png"}) {
-    std::error_code ec;
     if (std::string(f) == "lifter_wear.csv" && c.lifter_rows == 0) continue;
-    // No snapshots asked for: no charge.pvd, and no warning about it either.
-    if (std::string(f) == "charge.pvd" && !(c.snapshot_interval > 0) && !fs::exists(out / f, ec)) continue;
-    std::string& to = fs::is_regular_file(out / f, ec) ? wrote : missing;
-    to += (to.empty() ? "" : ", ") + std::string(f);
+    if (std::string(f) == "charge.pvd" && !(c.snapshot_interval > 0)) continue;  // no snapshots asked for
+    if (std::find(not_written.begin(), not_written.end(), f) != not_written.end()) continue;
+    wrote += (wrote.empty() ? "" : ", ") + std::string(f);
   }
+  for (const std::string& f : not_written) missing += (missing.empty() ? "" : ", ") + f;
   std::printf("wrote           %s/{%s}%s\n", out.string().c_str(), wrote.c_str(),
               missing.empty() ? "" : ("; not written (see the warnings): " + missing).c_str());
 }

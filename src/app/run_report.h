@@ -63,9 +63,10 @@ RunReport report_of(const FinishedRun& r);
 // spectra.csv, wear.csv, lifter_wear.csv and summary.json first, then the
 // pictures, liner.vtp and the liner beside each snapshot (a warning each
 // where one cannot be written).
-void write_run_results(const FinishedRun& r, const RunReport& rep);
+// Returns the files that could not be written (each was a warning).
+std::vector<std::string> write_run_results(const FinishedRun& r, const RunReport& rep);
 // The result lines: power, per metre, convergence, angles, collisions,
 // liner, impact point, Morrell, speed, the files.
-void print_run_results(const FinishedRun& r, const RunReport& rep);
+void print_run_results(const FinishedRun& r, const RunReport& rep, const std::vector<std::string>& not_written);
 
 }  // namespace mc::app

@@ -218,6 +218,11 @@ std::vector<double> reid_batch(const std::vector<double>& m0, const std::vector<
     for (std::size_t j = 0; j < i; ++j) {
       double c = 0;
       for (std::size_t k = j; k < i; ++k) c += S[k] * b[i][k] * a[k][j];
+      // Reid's coefficients divide by the rates' differences: rates alike to
+      // 1e-6 lose every digit (batch_grind's exact solve has no such limit).
+      if (std::fabs(S[i] - S[j]) <= 1e-6 * std::max(std::fabs(S[i]), std::fabs(S[j])) && c != 0)
+        throw std::invalid_argument("reid_batch: classes " + std::to_string(j) + " and " + std::to_string(i) +
+                                    " break at rates alike to 1e-6: Reid's solution has no digits left there");
       a[i][j] = c / (S[i] - S[j]);
       sum += a[i][j];
     }
@@ -344,9 +349,28 @@ std::vector<double> feed_masses(const SizeSeries& s, const std::vector<double>& 
   const int n = s.size();
   // A test's passing may rise a little toward the finer sieves (within its
   // noise); differenced as it stands, the class masses would sum past 1.
-  // The running minimum makes it monotone first.
+  // It is made monotone first by pooling adjacent violators (each run of
+  // sieves that rises replaced by its mean: the least-squares non-increasing
+  // curve), none above the coarsest sieve's passing.
   std::vector<double> pass(pass_given);
-  for (std::size_t k = 1; k < pass.size(); ++k) pass[k] = std::min(pass[k], pass[k - 1]);
+  if (!pass.empty()) {
+    std::vector<double> value;
+    std::vector<int> count;
+    for (std::size_t k = 1; k < pass.size(); ++k) {
+      value.push_back(std::min(pass[k], pass[0]));
+      count.push_back(1);
+      while (value.size() >= 2 && value[value.size() - 2] < value.back()) {
+        const std::size_t b = value.size() - 1;
+        value[b - 1] = (value[b - 1] * count[b - 1] + value[b] * count[b]) / (count[b - 1] + count[b]);
+        count[b - 1] += count[b];
+        value.pop_back();
+        count.pop_back();
+      }
+    }
+    std::size_t k = 1;
+    for (std::size_t b = 0; b < value.size(); ++b)
+      for (int c = 0; c < count[b]; ++c) pass[k++] = value[b];
+  }
   auto at = [&](double x) {
     if (x >= sieve_m.front()) return 1.0;
     for (std::size_t k = 0; k + 1 < sieve_m.size(); ++k)

@@ -125,7 +125,7 @@ double passing_size(const SizeSeries& s, const std::vector<double>& m, double p)
 
 // Class masses of a feed given as cumulative passing at sieve sizes
 // (descending sizes, passing in 0..1, the first sieve passing 1): the
-// passing made monotone (a running minimum toward the finer sieves), then
+// passing made monotone (adjacent violators pooled toward the finer sieves), then
 // interpolated log-linearly at the class tops; the masses sum to 1.
 std::vector<double> feed_masses(const SizeSeries& s, const std::vector<double>& sieve_m,
                                 const std::vector<double>& passing);

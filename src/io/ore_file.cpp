@@ -261,7 +261,7 @@ grind::Ore read_ore(const fs::path& path) {
     o.fracture.phi = r.number(rt, "rates.", "phi", 0, 5, "0 to 5");
     o.fracture.sigma = r.number(rt, "rates.", "sigma", 0.05, 3, "0.05 to 3");
     o.fracture.emax_ratio = r.number(rt, "rates.", "emax_ratio", 1.01, 1e3, "1.01 to 1000", 10.0);
-    o.packing = r.number(rt, "rates.", "packing", 0.05, 1.0, "0.05 to 1 (the share of a square lattice's sites that the caught monolayer fills; its area fraction is pi/4 of that)", 0.6);
+    o.packing = r.number(rt, "rates.", "packing", 0.05, 1.1547, "0.05 to 1.1547 (the share of a square lattice's sites that the caught monolayer fills; its area fraction is pi/4 of that, and 1.1547 = 2/sqrt(3) is a hexagonal layer's 0.907)", 0.6);
     o.efficiency = r.number(rt, "rates.", "efficiency", 1e-4, 1, "1e-4 to 1", 1.0);
   } else {
     r.fail("rates.model", mn, "must be \"austin\", \"energy\" or \"spectrum\"" +
