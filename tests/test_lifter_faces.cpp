@@ -128,6 +128,26 @@ TEST_CASE("every outline the reader accepts gives three faces of positive length
       faces += e.area_m2 / (e.z1 - e.z0);
     }
     CHECK(faces == Approx(path.to - path.from).epsilon(1e-9));
+    // The top holds the summit, and lies above half the height; the leading
+    // face starts at the leading foot, ahead of where the trailing face ends.
+    auto height = [&](const Vec3& p) {
+      const double c = std::cos(0.3), sn = std::sin(0.3);
+      return kR - (p.x * c + p.y * sn);
+    };
+    double summit = 0, top_max = 0, top_min = 1e300;
+    for (int f = 0; f < 3; ++f)
+      for (const Vec3& p : L.elements[L.first_lifter + f * L.axial_bins].outline) {
+        summit = std::max(summit, height(p));
+        if (f == 1) top_max = std::max(top_max, height(p)), top_min = std::min(top_min, height(p));
+      }
+    CHECK(top_max == Approx(summit).epsilon(1e-9));
+    CHECK(top_min >= 0.5 * summit * (1 - 1e-9));
+    const auto& lead = L.elements[L.first_lifter].outline;
+    const auto& trail = L.elements[L.first_lifter + 2 * L.axial_bins].outline;
+    const double ahead_lead = -lead.front().x * std::sin(0.3) + lead.front().y * std::cos(0.3);
+    const Vec3& trail_foot = trail[trail.size() / 2 - 1];  // its strip's last point at z0
+    const double ahead_trail = -trail_foot.x * std::sin(0.3) + trail_foot.y * std::cos(0.3);
+    CHECK(ahead_lead > ahead_trail);
   }
   CHECK(accepted > 200);
 }
@@ -152,11 +172,19 @@ TEST_CASE("the kernels book a collision on the face it strikes, however far the 
   const std::vector<Target> targets = {{{0.01 + 0.015 * tn, 0.015}, {cs, sn}, static_cast<int>(LifterFace::leading)},
                                        {{0.0, 0.03}, {0, 1}, static_cast<int>(LifterFace::top)},
                                        {{-0.01 - 0.015 * tn, 0.015}, {-cs, sn}, static_cast<int>(LifterFace::trailing)}};
-  for (const Target& t : targets) {
+  // And a triangle whose sides lay back 50 degrees: its tip is its top.
+  LifterProfile tri = points({{0.03, 0}, {0.0, 0.03 / std::tan(50 * M_PI / 180)}, {-0.03, 0}});
+  const double apex = tri.points[1].y;
+  const std::vector<std::pair<LifterProfile, Target>> shots = {
+      {p, targets[0]}, {p, targets[1]}, {p, targets[2]},
+      {tri, {{0.015, 0.5 * apex}, {cs, sn}, static_cast<int>(LifterFace::leading)}},
+      {tri, {{0.0, apex}, {0, 1}, static_cast<int>(LifterFace::top)}},
+      {tri, {{-0.015, 0.5 * apex}, {-cs, sn}, static_cast<int>(LifterFace::trailing)}}};
+  for (const auto& [bar_profile, t] : shots) {
     Scene sc = bare_scene(steel, steel, in, ContactLaw::linear);
     sc.walls.shell_radius = kR;
     sc.walls.length = 0.1;
-    sc.walls.lifters = lifter_rows(kR, 8, {p}, 0.0);
+    sc.walls.lifters = lifter_rows(kR, 8, {bar_profile}, 0.0);
     sc.numerics.dt = 1e-5;
     // Bar frame (x, y) to the mill frame: (R − y, x).
     const Vec2 c{t.at.x + (r + 0.001) * t.normal.x, t.at.y + (r + 0.001) * t.normal.y};
