@@ -1,5 +1,6 @@
 // An ore fitted to a batch test, least squares, identification (fit.h).
 #include "grind/fit.h"
+#include "core/edit_distance.h"
 
 #include <algorithm>
 #include <cctype>
@@ -100,21 +101,6 @@ std::string lower(std::string s) {
   return s;
 }
 
-// Levenshtein's edit distance.
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
-}
 
 }  // namespace
 
