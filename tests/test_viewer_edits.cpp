@@ -19,6 +19,10 @@
 #include <sstream>
 #include <string>
 
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb_image.h>
+
 #include "core/mill_case.h"
 #include "io/case_file.h"
 
@@ -268,5 +272,35 @@ TEST_CASE("view: a blow-up after an edit goes back to the state before it, and t
   const mc::MillDerived d = lab({"mill.length=0.05"});
   CHECK(a.rev == Approx((a.turn_to - a.turn_from) / d.revolution_s).margin(1.5e-4));
   CHECK(a.turn_to == Approx(39 * 500 * d.dt).margin(1e-4));  // 40 frames, one of them thrown away
+  fs::remove_all(dir);
+}
+
+TEST_CASE("view: the speed colours follow a speed edit", "[viewer]") {
+  REQUIRE(std::system("command -v xvfb-run > /dev/null 2>&1") == 0);
+  const fs::path dir = fresh_dir("view_colour_range");
+  // From 50 % to 150 % of critical: the balls on the shell move at about
+  // the new tip speed (3.2 m/s), past the old range's top (twice the tip
+  // speed at 50 %, 2.1 m/s), well inside the new one (6.4 m/s).
+  const Out o = millcharge(dir, "fast", "view --set mill.length=0.05 --set mill.speed_fraction=0.5 --frames 60 "
+                                        "--steps-per-frame 500 --edit 20:mill.speed_fraction=1.5 --no-panel");
+  INFO(o.out << o.err);
+  REQUIRE(o.status == 0);
+  int w = 0, h = 0, n = 0;
+  unsigned char* rgb = stbi_load((dir / "fast.png").string().c_str(), &w, &h, &n, 3);
+  REQUIRE(rgb != nullptr);
+  // Ball pixels are saturated (grey mill and background are not); the hot
+  // end of the ramp is red (0.90, 0.15, 0.10) shaded.
+  long balls = 0, hot = 0;
+  for (long k = 0; k < static_cast<long>(w) * h; ++k) {
+    const int r = rgb[3 * k], g = rgb[3 * k + 1], b = rgb[3 * k + 2];
+    if (std::max({r, g, b}) - std::min({r, g, b}) <= 40) continue;
+    ++balls;
+    if (r > 2 * g && r > 2 * b) ++hot;
+  }
+  stbi_image_free(rgb);
+  REQUIRE(balls > 10000);
+  const double share = static_cast<double>(hot) / balls;
+  std::printf("speed colours after 50 -> 150 %%: %.3f of the ball pixels at the hot end\n", share);
+  CHECK(share < 0.1);
   fs::remove_all(dir);
 }
