@@ -1,6 +1,7 @@
 // The viewer's state and loop (Dear ImGui's example_glfw_opengl3 loop: poll,
 // skip while iconified, step, new frame, widgets, render, swap). viewer.cpp
-// runs the simulation and applies edits; panel.cpp draws the ImGui panel.
+// runs the simulation, edits.cpp applies edits; panel.cpp draws the ImGui
+// panel.
 #pragma once
 
 #include <chrono>
@@ -56,14 +57,16 @@ class App {
   void install_solver(Scene scene, bool settle, double settle_damping = 0);
   void step_frame();
   bool advance(int steps);  // the solver's steps; false: a blow-up after an edit reverted it
-  void keep_undo();                    // the state before an edit, for a revert
-  bool revert_edit(const std::string& why);
-  void restart_averages();             // after an applied edit
-  void set_colour_ranges();            // from the case as now
+  void set_colour_ranges();  // from the case as now
+  // edits.cpp
   void apply_case(const MillCase& next);  // the panel's or a script's new case
   void reset();                           // the current case from a fresh packing
   void scripted_edits();
   void set_speed_fraction(double fraction);
+  void keep_undo();                          // the state before an edit, for a revert
+  bool revert_edit(const std::string& why);  // after a blow-up
+  void restart_averages();                   // after an applied edit
+  // viewer.cpp
   void render();
   void handle_input();
   void open_checkpoint(const io::Checkpoint& cp);  // view --from
