@@ -43,7 +43,9 @@ void App::set_speed_fraction(double fraction) {
     edit_.speed_fraction = fraction;
     edit_.speed_rpm = 0;
     if (!settling_) {
-      keep_undo();
+      // A slider dragged over several frames is one edit: the state before
+      // the drag is the one to go back to.
+      if (last_edit_frame_ < frames_ - 1) keep_undo();
       solver_->set_mill_omega(derived_.omega);
       restart_averages();
     }
@@ -90,7 +92,6 @@ void App::keep_undo() {
 bool App::revert_edit(const std::string& why) {
   if (!undo_ || settling_) return false;
   std::unique_ptr<Undo> u = std::move(undo_);
-  const std::string was = io::case_to_toml(case_);
   try {
     auto next = make_solver(*ctx_, u->scene);
     next->restore_state(u->state);
@@ -119,8 +120,10 @@ bool App::revert_edit(const std::string& why) {
   instances_stale_ = true;
   set_colour_ranges();
   restart_averages();
-  message_ = "the solver blew up after the edit (" + why + "); the edit is undone: the state before it, at t = " +
-             std::to_string(sim_time()).substr(0, 6) + " s, turns on";
+  char at[48];
+  std::snprintf(at, sizeof at, "%.4f s", sim_time());
+  message_ = "the solver blew up after the edit (" + why + "); the edit is undone: the state before it, at t = " + at +
+             ", turns on";
   std::fprintf(stderr, "millcharge view: %s\n", message_.c_str());
   return true;
 }
