@@ -149,6 +149,10 @@ int cmd_view(const ViewOptions& o) {
     const long frame = colon == std::string::npos ? -1 : std::strtol(e.c_str(), &end, 10);
     if (colon == std::string::npos || end != e.c_str() + colon || frame < 0 || e.find('=', colon) == std::string::npos)
       throw std::invalid_argument("--edit " + e + ": expected FRAME:KEY=VALUE, e.g. --edit 100:charge.filling=0.35");
+    if (o.frames > 0 && frame >= o.frames)
+      throw std::invalid_argument("--edit " + e + ": frame " + std::to_string(frame) + " is past the last of --frames " +
+                                  std::to_string(o.frames) + " (frames 0 to " + std::to_string(o.frames - 1) +
+                                  "), so it would never apply");
     v.edits.emplace_back(frame, e.substr(colon + 1));
   }
   if (!o.screenshot.empty() && o.frames <= 0)

@@ -241,18 +241,30 @@ ChargeEditResult edit_charge(const MillCase& c, const MillDerived& d, std::vecto
       return a.p.y + 0.5 * pitch * a.jitter < b.p.y + 0.5 * pitch * b.jitter;
     });
     BallGrid grid(2 * rmax + 2 * gap, kept, s.walls.periodic ? s.walls.length : 0.0);
-    std::size_t next_site = 0;
+    // A site too small for one ball may still take a smaller one: each site
+    // keeps the smallest radius that did not fit there (balls only come, so
+    // nothing that large fits later either), and is passed over for good
+    // once taken or too small for the smallest ball.
+    std::vector<double> fails_from(sites.size(), 1e300);
+    std::vector<char> taken(sites.size(), 0);
+    std::size_t first_open = 0;
     for (Ball& b : to_add) {
       // Relocated balls keep their ids until the renumbering; new ones have −1.
       bool placed = false;
-      while (!placed && next_site < sites.size()) {
-        const Vec3 p = sites[next_site++].p;
-        if (walls.clearance(p, b.radius) < gap || !grid.clear(kept, p, b.radius, gap)) continue;
+      for (std::size_t i = first_open; !placed && i < sites.size(); ++i) {
+        if (taken[i] || b.radius >= fails_from[i]) continue;
+        const Vec3 p = sites[i].p;
+        if (walls.clearance(p, b.radius) < gap || !grid.clear(kept, p, b.radius, gap)) {
+          fails_from[i] = b.radius;
+          continue;
+        }
+        taken[i] = 1;
         b.position = p;
         kept.push_back(b);
         grid.insert(static_cast<int>(kept.size()) - 1, b);
         placed = true;
       }
+      while (first_open < sites.size() && (taken[first_open] || fails_from[first_open] <= rmin)) ++first_open;
       if (!placed) ++res.removed;
       else if (b.id >= 0) ++res.moved;
       else ++res.added;

@@ -1,6 +1,7 @@
 // The viewer's state and loop (Dear ImGui's example_glfw_opengl3 loop: poll,
 // skip while iconified, step, new frame, widgets, render, swap). viewer.cpp
-// runs the simulation and applies edits; panel.cpp draws the ImGui panel.
+// runs the simulation, edits.cpp applies edits; panel.cpp draws the ImGui
+// panel.
 #pragma once
 
 #include <chrono>
@@ -51,12 +52,21 @@ class App {
  private:
   // viewer.cpp
   void make_context();
-  void install_solver(Scene scene, bool settle);
+  // With `settle` the mill stands and the balls' velocities are damped at
+  // `settle_damping` (1/s, run.settle_damping) until the charge is at rest.
+  void install_solver(Scene scene, bool settle, double settle_damping = 0);
   void step_frame();
+  bool advance(int steps);  // the solver's steps; false: a blow-up after an edit reverted it
+  void set_colour_ranges();  // from the case as now
+  // edits.cpp
   void apply_case(const MillCase& next);  // the panel's or a script's new case
   void reset();                           // the current case from a fresh packing
   void scripted_edits();
   void set_speed_fraction(double fraction);
+  void keep_undo();                          // the state before an edit, for a revert
+  bool revert_edit(const std::string& why);  // after a blow-up
+  void restart_averages();                   // after an applied edit
+  // viewer.cpp
   void render();
   void handle_input();
   void open_checkpoint(const io::Checkpoint& cp);  // view --from
@@ -106,6 +116,26 @@ class App {
   float slab_centre_ = 0, slab_width_ = 0;
 
   // simulation
+  // After every applied edit nothing is plotted or averaged until the mill
+  // has turned this much (the start-up jolt: tangential springs dropped,
+  // moved or added balls at rest, the charge taking its new shape).
+  static constexpr double kSettleInRev = 0.25;
+  static constexpr double kStartHoldRev = 0.05;  // the power, after the mill starts from rest
+  double revolutions_ = 0;           // turned in the window: the sum of ω·dt over 2π
+  double hold_until_rev_ = 0;        // power and profiles held before this
+  double hold_power_until_rev_ = 0;  // the power alone held before this
+  long last_edit_frame_ = -1;        // the last applied edit, for the report
+  double last_edit_s_ = -1;
+  // The state before the last edit: a blow-up after it goes back there.
+  struct Undo {
+    MillCase c;
+    MillDerived d;
+    Scene scene;  // walls, pairs and the balls then
+    SolverState state;
+    double time_offset = 0, revolutions = 0;
+    long step_offset = 0;
+  };
+  std::unique_ptr<Undo> undo_;
   bool settling_ = true;
   double settle_from_ = 0;   // viewer time when settling began
   double time_offset_ = 0;   // simulated time of earlier solvers
@@ -137,6 +167,7 @@ class App {
   // --from), empty for a fresh packing of the case
   std::string source_;
   double source_time_ = 0;   // simulated time of the checkpoint
+  bool opened_turning_ = false;  // the checkpoint's mill turned
   double first_frame_s_ = -1, first_turning_frame_s_ = -1;  // wall s from the command
 
   // messages

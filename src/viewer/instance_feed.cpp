@@ -41,7 +41,23 @@ void InstanceFeed::update(Solver& solver, BallRenderer& balls) {
     try {
       glFinish();  // GL is done with the buffer before OpenCL takes it
       shared_->acquire();
+      // Released however the kernel ends: a buffer still acquired must not
+      // be destroyed (the fall-back below, or the feed's end).
+      struct Release {
+        compute::GLBuffer& b;
+        compute::Context& ctx;
+        bool done = false;
+        ~Release() {
+          if (done) return;
+          try {
+            b.release();
+            ctx.finish();
+          } catch (...) {  // already failing: the first error is the one reported
+          }
+        }
+      } guard{*shared_, ctx_};
       solver.write_instances(shared_->device());
+      guard.done = true;
       shared_->release();
       ctx_.finish();  // the kernel is done before GL draws
       return;

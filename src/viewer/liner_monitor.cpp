@@ -18,9 +18,9 @@ void LinerMonitor::clear() {
   ++version_;
 }
 
-void LinerMonitor::after_steps(Solver& solver, double time_s, bool turning, const std::vector<long>& profile,
+void LinerMonitor::after_steps(Solver& solver, double time_s, bool turning, bool held, const std::vector<long>& profile,
                                const ChargeAngles& angles) {
-  if (!turning) {
+  if (!turning || held) {
     if (since_ >= 0) clear();
     return;
   }

@@ -25,8 +25,9 @@ class LinerMonitor {
   void set_scene(const Scene& scene);  // the layout and materials (after an edit)
   void clear();
   // After each frame that stepped; the charge's contact profile and its toe
-  // and shoulder now.
-  void after_steps(Solver& solver, double time_s, bool turning, const std::vector<long>& profile,
+  // and shoulder now. While `held` (the settle-in after an edit) nothing is
+  // booked: the window starts again after it.
+  void after_steps(Solver& solver, double time_s, bool turning, bool held, const std::vector<long>& profile,
                    const ChargeAngles& angles);
 
   const LinerLayout& layout() const { return layout_; }

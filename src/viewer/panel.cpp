@@ -84,8 +84,10 @@ void App::panel_stats() {
   if (settling_)
     ImGui::TextColored({1, 0.8f, 0.3f, 1}, "settling %.3f s (mill at rest)", t - settle_from_);
   else
-    ImGui::Text("turning %.3f s, %.2f rev (t %.3f s, dt %.3g s)", t - turning_from_,
-                (t - turning_from_) / derived_.revolution_s, t, solver_->dt());
+    ImGui::Text("turning %.3f s, %.2f rev (t %.3f s, dt %.3g s)", t - turning_from_, revolutions_, t, solver_->dt());
+  if (!settling_ && revolutions_ < hold_until_rev_)
+    ImGui::TextColored({1, 0.8f, 0.3f, 1}, "edited: averages from %.2f rev (%.2f rev of settle-in)", hold_until_rev_,
+                       kSettleInRev);
   if (source_.empty())
     ImGui::TextWrapped("state: a fresh packing of %s", case_.name.c_str());
   else
@@ -246,6 +248,8 @@ void App::panel_view() {
     const LinerReport& r = liner_.report();
     ImGui::Text("impact point %.0f deg, on the %s; %.0f %% of impact power on bare liner", r.impact_point_deg,
                 r.impact_point_on_liner ? "bare liner" : "toe", 100 * r.bare_liner_impact_share);
+  } else if (liner_colour_ != 0 && liner_.ready()) {
+    ImGui::TextDisabled("impact point: not yet (too few impacts)");
   }
   ImGui::Checkbox("shell", &show_shell_);
   ImGui::SameLine();
@@ -261,20 +265,40 @@ void App::panel_plots() {
   for (float v : ds) hi = std::max(hi, v);
   hi *= 1.1f;
   const float w = ImGui::GetContentRegionAvail().x;
-  char label[96];
-  std::snprintf(label, sizeof label, "torque power, mean %.0f W", monitor_.mean_torque_power());
+  // Each applied edit as a vertical line in the plot just drawn, where the
+  // first point after it lies.
+  auto marks = [](const std::vector<int>& at, std::size_t n) {
+    if (n < 2) return;
+    const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+    const ImVec2 pad = ImGui::GetStyle().FramePadding;
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    for (int k : at) {
+      const float x = lo.x + pad.x + (hi.x - lo.x - 2 * pad.x) * static_cast<float>(k) / static_cast<float>(n - 1);
+      dl->AddLine({x, lo.y + 1}, {x, hi.y - 1}, IM_COL32(255, 70, 200, 255), 2.0f);
+    }
+  };
+  char label[128];
+  const MeanWithError p = monitor_.mean_torque_power();
+  const bool held = !settling_ && revolutions_ < hold_until_rev_;
+  if (held) std::snprintf(label, sizeof label, "torque power: edited, held %.2f rev", kSettleInRev);
+  else if (p.error >= 0) std::snprintf(label, sizeof label, "torque power, mean %.0f +- %.0f W", p.mean, p.error);
+  else std::snprintf(label, sizeof label, "torque power, mean %.0f W", p.mean);
   ImGui::PlotLines("##torque", tq.data(), static_cast<int>(tq.size()), 0, label, 0, hi, {w, 48});
+  marks(monitor_.power_marks(), tq.size());
   std::snprintf(label, sizeof label, "dissipation, mean %.0f W", monitor_.mean_dissipation_power());
   ImGui::PlotLines("##dissipation", ds.data(), static_cast<int>(ds.size()), 0, label, 0, hi, {w, 48});
+  marks(monitor_.power_marks(), ds.size());
   const ChargeAngles& a = monitor_.angles();
   if (a.found) std::snprintf(label, sizeof label, "toe %.0f deg", a.toe_deg);
   else std::snprintf(label, sizeof label, "toe (no band yet)");
   ImGui::PlotLines("##toe", monitor_.toe().data(), static_cast<int>(monitor_.toe().size()), 0, label, FLT_MAX,
                    FLT_MAX, {w, 36});
+  marks(monitor_.angle_marks(), monitor_.toe().size());
   if (a.found) std::snprintf(label, sizeof label, "shoulder %.0f deg", a.shoulder_deg);
   else std::snprintf(label, sizeof label, "shoulder (no band yet)");
   ImGui::PlotLines("##shoulder", monitor_.shoulder().data(), static_cast<int>(monitor_.shoulder().size()), 0, label,
                    FLT_MAX, FLT_MAX, {w, 36});
+  marks(monitor_.angle_marks(), monitor_.shoulder().size());
 }
 
 void App::panel_output() {

@@ -13,7 +13,6 @@
 #include <imgui_impl_glfw.h>
 #include <imgui_impl_opengl3.h>
 
-#include "core/charge_edit.h"
 #include "io/atomic_file.h"
 #include "io/case_file.h"
 #include "io/checkpoint.h"
@@ -158,16 +157,8 @@ App::App(const MillCase& c, const MillDerived& d, Scene scene, const ViewOptions
   }
   style_.colour_by = colour_from(opt_.colour);
   liner_colour_ = opt_.liner == "impact" ? 1 : opt_.liner == "wear" ? 2 : 0;
-  // Colour ranges: speed up to twice the tip speed (balls falling from the
-  // shoulder), the case's radii, 1 mW to 30 W dissipated.
-  colour_hi_[0] = static_cast<float>(2 * d.tip_speed);
-  double rmin = 1e300, rmax = 0;
-  for (const SizeClass& s : c.sizes) rmin = std::min(rmin, 0.5 * s.diameter_min), rmax = std::max(rmax, 0.5 * s.diameter_max);
-  colour_lo_[1] = static_cast<float>(rmin);
-  colour_hi_[1] = static_cast<float>(rmax > rmin ? rmax : 1.2 * rmin);
-  colour_lo_[3] = -3.0f;
-  colour_hi_[3] = 1.5f;
-  install_solver(std::move(scene), !opt_.from);
+  set_colour_ranges();
+  install_solver(std::move(scene), !opt_.from, d.settle_damping);
   if (opt_.from) open_checkpoint(*opt_.from);
   slab_centre_ = static_cast<float>(0.5 * c.length);
   slab_width_ = static_cast<float>(std::min(c.length, 2.5 * derived_.largest_ball_diameter));
@@ -219,6 +210,19 @@ void App::make_context() {
   }
 }
 
+// Colour ranges: speed up to twice the tip speed (balls falling from the
+// shoulder), the case's radii, 1 mW to 30 W dissipated. Again after each
+// edit: a new speed or ball size moves them.
+void App::set_colour_ranges() {
+  colour_hi_[0] = static_cast<float>(2 * derived_.tip_speed);
+  double rmin = 1e300, rmax = 0;
+  for (const SizeClass& s : case_.sizes) rmin = std::min(rmin, 0.5 * s.diameter_min), rmax = std::max(rmax, 0.5 * s.diameter_max);
+  colour_lo_[1] = static_cast<float>(rmin);
+  colour_hi_[1] = static_cast<float>(rmax > rmin ? rmax : 1.2 * rmin);
+  colour_lo_[3] = -3.0f;
+  colour_hi_[3] = 1.5f;
+}
+
 double App::sim_time() const { return time_offset_ + (solver_ ? solver_->time_s() : 0.0); }
 
 int App::scene_width() const { return std::max(1, opt_.width - static_cast<int>(panel_width_)); }
@@ -236,29 +240,38 @@ void App::open_checkpoint(const io::Checkpoint& cp) {
   time_offset_ = 0;
   step_offset_ = 0;
   const RunState& r = cp.run;
-  settling_ = r.phase < 2;
+  // A state saved by the window once the mill turned is "settled" in phase
+  // 1 (run --resume starts the mill at once): it turns on here too.
+  settling_ = r.phase < 2 && !(r.phase == 1 && r.settled);
   if (settling_) {
     settle_from_ = r.phase == 1 ? r.settle_start_s : solver_->time_s();
     solver_->set_mill_omega(0);
+    solver_->set_velocity_damping(derived_.settle_damping);
   } else {
-    turning_from_ = r.turn_start_s;
+    turning_from_ = r.turn_start_s > 0 || r.phase >= 2 ? r.turn_start_s : solver_->time_s();
+    // The revolutions before, at the case's speed (a checkpoint holds no
+    // history of speeds).
+    revolutions_ = (solver_->time_s() - turning_from_) * derived_.omega / (2 * M_PI);
     solver_->set_mill_omega(derived_.omega);
+    solver_->set_velocity_damping(0);
   }
   solver_->observe(true);  // the sums start here
   solver_->take_contact_profile();
   monitor_.clear();
   source_ = opt_.from_dir;
   source_time_ = solver_->time_s();
+  opened_turning_ = !settling_;
   instances_stale_ = true;
 }
 
 // A new solver for `scene`; the old one's time carries on. With `settle` the
 // mill stands still until the charge is at rest (as `run` settles it).
-void App::install_solver(Scene scene, bool settle) {
+void App::install_solver(Scene scene, bool settle, double settle_damping) {
   const double t = sim_time();
   const long steps = step_offset_ + (solver_ ? solver_->steps() : 0);
   if (settle) scene.mill_omega = 0;
   auto next = make_solver(*ctx_, scene);  // the old solver stays if this throws
+  next->set_velocity_damping(settle ? settle_damping : 0.0);
   solver_ = std::move(next);
   time_offset_ = t;
   step_offset_ = steps;
@@ -281,18 +294,15 @@ void App::install_solver(Scene scene, bool settle) {
   instances_stale_ = true;
 }
 
-void App::set_speed_fraction(double fraction) {
-  MillCase next = case_;
-  next.speed_fraction = fraction;
-  next.speed_rpm = 0;
+// The steps; a blow-up (the solver throws) after an edit takes the state
+// before the edit back, once. One with no edit to undo ends the session.
+bool App::advance(int steps) {
   try {
-    derived_ = derive(next);
-    case_ = next;
-    edit_.speed_fraction = fraction;
-    edit_.speed_rpm = 0;
-    if (!settling_) solver_->set_mill_omega(derived_.omega);
-  } catch (const std::invalid_argument& e) {
-    message_ = e.what();
+    solver_->advance(steps);
+    return true;
+  } catch (const std::runtime_error& e) {
+    if (dynamic_cast<const compute::Error*>(&e) || !revert_edit(e.what())) throw;
+    return false;
   }
 }
 
@@ -321,14 +331,15 @@ void App::step_frame() {
   advance_s_ = 0;
   if (steps > 0) {
     const auto t0 = Clock::now();
-    solver_->advance(steps);
+    if (advance(steps) && !settling_) revolutions_ += steps * solver_->dt() * derived_.omega / (2 * M_PI);
     const double s = std::chrono::duration<double>(Clock::now() - t0).count();
     const double per = s / steps;
     s_per_step_ = s_per_step_ > 0 ? 0.8 * s_per_step_ + 0.2 * per : per;
     advance_s_ = s;
     feed_->update(*solver_, *balls_);
-    monitor_.after_steps(*solver_, sim_time(), !settling_);
-    liner_.after_steps(*solver_, sim_time(), !settling_, monitor_.profile(), monitor_.angles());
+    const bool held = revolutions_ < hold_until_rev_;
+    monitor_.after_steps(*solver_, sim_time(), !settling_, held || revolutions_ < hold_power_until_rev_, held);
+    liner_.after_steps(*solver_, sim_time(), !settling_, held, monitor_.profile(), monitor_.angles());
     steps_ += steps;
     window_steps_ += steps;
     instances_stale_ = false;
@@ -340,112 +351,19 @@ void App::step_frame() {
       if (at_rest || in_settle >= max_settle - 0.5 * solver_->dt()) {
         settling_ = false;
         turning_from_ = sim_time();
+        revolutions_ = 0;
+        hold_until_rev_ = 0;
+        hold_power_until_rev_ = kStartHoldRev;  // as run's power.png leaves the start-up jolt out
         solver_->set_mill_omega(derived_.omega);
+        solver_->set_velocity_damping(0);
         solver_->observe(true);
         solver_->take_contact_profile();
         monitor_.clear();
-        monitor_.hold_power_until(turning_from_ + 0.05 * derived_.revolution_s);
       }
     }
   } else if (instances_stale_) {
     feed_->update(*solver_, *balls_);
     instances_stale_ = false;
-  }
-}
-
-namespace {
-
-bool same_sizes(const MillCase& a, const MillCase& b) {
-  if (a.sizes.size() != b.sizes.size() || a.number_fractions != b.number_fractions || a.seed != b.seed ||
-      a.materials.size() != b.materials.size())
-    return false;
-  for (std::size_t k = 0; k < a.sizes.size(); ++k)
-    if (a.sizes[k].diameter_min != b.sizes[k].diameter_min || a.sizes[k].diameter_max != b.sizes[k].diameter_max ||
-        a.sizes[k].material != b.sizes[k].material || a.sizes[k].fraction != b.sizes[k].fraction)
-      return false;
-  for (std::size_t k = 0; k < a.materials.size(); ++k)
-    if (a.materials[k].name != b.materials[k].name || a.materials[k].density != b.materials[k].density) return false;
-  return a.diameter == b.diameter && a.length == b.length && a.periodic == b.periodic;
-}
-
-}  // namespace
-
-// A new case from the panel or a script. Speed alone is a new ω; anything
-// else is a new scene made from the balls as they are (core/charge_edit),
-// except a new charge (sizes, materials, mill size), which is packed afresh
-// and settles. On a bad value the old case stays and the panel says why.
-void App::apply_case(const MillCase& next) {
-  try {
-    const MillDerived nd = derive(next);
-    MillCase speed_only = case_;
-    speed_only.speed_fraction = next.speed_fraction;
-    speed_only.speed_rpm = next.speed_rpm;
-    if (io::case_to_toml(speed_only) == io::case_to_toml(next)) {
-      case_ = next;
-      derived_ = nd;
-      if (!settling_) solver_->set_mill_omega(derived_.omega);
-      char buf[96];
-      std::snprintf(buf, sizeof buf, "speed %.1f %% of critical, %.2f rpm", 100 * nd.speed_fraction, nd.speed_rpm);
-      message_ = buf;
-      return;
-    }
-    if (!same_sizes(case_, next) || !scene_.bodies.empty()) {  // clumps are packed afresh
-      Scene s = build_scene(next, nd);
-      s.mill_angle = solver_->mill_angle();
-      install_solver(std::move(s), true);
-      message_ = "new charge: " + std::to_string(n_balls_) + " balls packed afresh; they settle, then the mill turns";
-    } else {
-      const std::vector<BallState> now = solver_->balls();
-      std::vector<Ball> balls(now.size());
-      for (std::size_t k = 0; k < now.size(); ++k)
-        balls[k] = Ball{now[k].id, now[k].material, now[k].radius, now[k].position, now[k].velocity, now[k].omega};
-      ChargeEditOptions o;
-      o.match_counts = next.filling != case_.filling || next.porosity != case_.porosity;
-      o.mill_angle = solver_->mill_angle();
-      o.mill_omega = settling_ ? 0.0 : nd.omega;
-      o.previous_walls = &scene_.walls;
-      o.seed = ++edit_seed_;
-      ChargeEditResult r = edit_charge(next, nd, std::move(balls), o);
-      install_solver(std::move(r.scene), false);
-      char buf[160];
-      std::snprintf(buf, sizeof buf, "applied: %d balls (%ld added, %ld removed, %ld moved out of lifters)",
-                    n_balls_, r.added, r.removed, r.moved);
-      message_ = buf;
-    }
-    case_ = next;
-    derived_ = nd;
-  } catch (const std::invalid_argument& e) {
-    message_ = std::string("not applied: ") + e.what();
-  } catch (const compute::Error& e) {
-    message_ = std::string("not applied (OpenCL): ") + e.what();
-  }
-  edit_ = case_;
-}
-
-void App::reset() {
-  try {
-    Scene s = build_scene(case_, derived_);
-    install_solver(std::move(s), true);
-    time_offset_ = settle_from_ = 0;  // the clock starts again
-    step_offset_ = 0;
-    message_ = "reset: a fresh charge settles";
-    source_.clear();
-  } catch (const std::exception& e) {
-    message_ = std::string("reset failed: ") + e.what();
-  }
-}
-
-// --edit FRAME:KEY=VALUE: the case with that --set applied, as if from the panel.
-void App::scripted_edits() {
-  for (const auto& [frame, kv] : opt_.edits) {
-    if (frame != frames_) continue;
-    try {
-      apply_case(io::parse_case(io::case_to_toml(case_), case_.name + ".toml", {kv}));
-    } catch (const std::invalid_argument& e) {
-      message_ = std::string("not applied: ") + e.what();
-    }
-    std::printf("millcharge view: frame %ld: %s: %s\n", frames_, kv.c_str(), message_.c_str());
-    std::fflush(stdout);
   }
 }
 
@@ -593,7 +511,8 @@ bool App::save_state(const std::string& dir_in) {
   state.time_s += time_offset_;
   state.observed_since += time_offset_;
   state.steps += step_offset_;
-  const RunState run = run_state_from(sim_time(), !settling_, settle_from_, saved);
+  RunState run = run_state_from(sim_time(), !settling_, settle_from_, saved);
+  if (!settling_) run.turn_start_s = turning_from_;  // the window turns on from it; run --resume starts its own
   io::write_checkpoint(dir / io::kCheckpointFile, io::Checkpoint{saved.name, case_text, run, std::move(state)});
   char when[48];
   std::snprintf(when, sizeof when, " at t = %.3f s", sim_time());
@@ -609,6 +528,7 @@ int App::run() {
     glfwPollEvents();
     if (!scripted_ && glfwGetWindowAttrib(w, GLFW_ICONIFIED)) {
       glfwWaitEventsTimeout(0.1);
+      last = Clock::now();  // the time iconified is no frame's: the pacing goes on as before
       continue;
     }
     int ww = 0, wh = 0;
@@ -686,19 +606,44 @@ int App::run() {
         100 * derived_.speed_fraction, n_balls_);
     if (liner_.ready()) {
       const LinerReport& r = liner_.report();
-      std::printf("millcharge view: liner over the last %.2f s: impact %.4g W, shear %.4g W, wear %.3g kg/h; impact point "
-                  "%.0f deg (%.0f %% of the impact power on bare liner)\n",
-                  r.window_s, r.impact_W, r.shear_W, r.wear_kg_per_h, r.impact_point_deg,
-                  100 * r.bare_liner_impact_share);
+      char point[96] = "impact point not yet (too few impacts)";
+      if (std::isfinite(r.impact_point_deg))
+        std::snprintf(point, sizeof point, "impact point %.0f deg (%.0f %% of the impact power on bare liner)",
+                      r.impact_point_deg, 100 * r.bare_liner_impact_share);
+      std::printf("millcharge view: liner over the last %.2f s: impact %.4g W, shear %.4g W, wear %.3g kg/h; %s\n",
+                  r.window_s, r.impact_W, r.shear_W, r.wear_kg_per_h, point);
     }
     if (opt_.from)
       std::printf("millcharge view: state from %s at t = %.4f s (%s)\n", opt_.from_dir.c_str(), source_time_,
-                  opt_.from->run.phase >= 2 ? "turning" : "settling");
+                  opened_turning_ ? "turning" : "settling");
+    if (!settling_)
+      std::printf("millcharge view: turned %.4f rev from t = %.4f s to %.4f s (the sum of omega dt)\n", revolutions_,
+                  turning_from_, sim_time());
+    char since[160] = "window";
+    if (last_edit_frame_ >= 0 && last_edit_s_ > turning_from_)
+      std::snprintf(since, sizeof since, "window since the edit before frame %ld (t = %.4f s) and its %.2f rev of settle-in",
+                    last_edit_frame_, last_edit_s_, kSettleInRev);
     const ChargeAngles all = monitor_.all_angles();
-    if (all.found)
+    if (all.found) {
+      const MeanWithError toe = monitor_.toe_mean(), shoulder = monitor_.shoulder_mean();
+      char batches[160] = "";
+      if (toe.error >= 0)
+        std::snprintf(batches, sizeof batches, "; batches of %.1f s: toe %.2f +- %.2f, shoulder %.2f +- %.2f deg (%d batches)",
+                      ChargeMonitor::kProfileWindow * ChargeMonitor::kProfileEvery, toe.mean, toe.error, shoulder.mean,
+                      shoulder.error, toe.batches);
       std::printf("millcharge view: toe %.2f deg, shoulder %.2f deg from the contact profile of the %.3f s turned in the "
-                  "window\n",
-                  all.toe_deg, all.shoulder_deg, monitor_.all_span_s());
+                  "%s%s\n",
+                  all.toe_deg, all.shoulder_deg, monitor_.all_span_s(), since, batches);
+    }
+    if (monitor_.mean_span_s() > 0) {
+      const MeanWithError p = monitor_.mean_torque_power();
+      char error[64] = " (no standard error: fewer than 3 batches)";
+      if (p.error >= 0) std::snprintf(error, sizeof error, " +- %.2f", p.error);
+      std::printf("millcharge view: torque power %.2f W%s, dissipation %.2f W over the %.3f s turned in the %s "
+                  "(%d batches of %.1f s)\n",
+                  p.mean, error, monitor_.mean_dissipation_power(), monitor_.mean_span_s(), since, p.batches,
+                  ChargeMonitor::kPowerBatch * ChargeMonitor::kPowerEvery);
+    }
   }
   return 0;
 }
