@@ -410,17 +410,22 @@ TEST_CASE("view --from a run still being written opens on its last whole checkpo
     if (written < 0) ::usleep(100000);
   }
   REQUIRE(written > 0);
+  // The run paused (alive, mid-run): its last whole checkpoint is the one on
+  // disk now, and the window must open on that one, not an earlier one.
+  ::kill(pid, SIGSTOP);
+  ::usleep(200000);
+  const double last = mc::io::read_checkpoint(run / mc::io::kCheckpointFile).solver.time_s;
   const Shot s = shoot(dir, "live", 3, "--from '" + run.string() + "'", 20);
   INFO(s.out << s.err);
   int st = 0;
   const bool still_running = ::waitpid(pid, &st, WNOHANG) == 0;
+  ::kill(pid, SIGCONT);
   ::kill(pid, SIGTERM);
   ::waitpid(pid, &st, 0);
   CHECK(still_running);
-  // The state of a checkpoint written while the window started: no earlier
-  // than the one seen above, on the run's 0.02 s grid of checkpoints.
+  CHECK(last >= written);
   const double from = number_after(s.out, "state from " + run.string() + " at t = ");
-  CHECK(from >= written - 1e-4);
+  CHECK(from == Approx(last).margin(1e-4));
   CHECK(s.out.find("(turning)") != std::string::npos);
   const ChargeShape c = measure(s);
   CHECK(c.covered > 0.2);
