@@ -117,9 +117,9 @@ void calibrate(Study& st, const LifeOptions& o, double length) {
     const double span = span_for_loss(last, k, length, left);
     if (!(span > 0))
       throw std::invalid_argument(fmt::format(
-          "--calibrate-loss {:g}: the wear of stage {} does not lower the lifters (profile {}, {:.1f} mm high): their "
-          "tops wear no faster than the shell under them, so no hours bring the loss measured; give "
-          "--calibrate-rate, or check the case's wear coefficients",
+          "--calibrate-loss {:g}: the wear of stage {} does not lower the lifters (profile {}, {:.1f} mm high) by the "
+          "rest of the loss before it wears them through (a shell that wears faster than their tops raises them), "
+          "so no hours bring the loss measured; give --calibrate-rate, or check the case's wear coefficients",
           o.calibrate_loss_mm, last.index, k, height_of(last, k) * 1000));
     at = last.case_hours + span;
     how = "extrapolated at the last stage's wear (the study has not reached it yet)";
@@ -433,8 +433,9 @@ int cmd_life(const LifeOptions& o) {
       else span = span_for_loss(s, st.tallest, length, (h_now - o.until_height_mm) / std::max(1, o.stages - i));
       if (stopped.empty() && !(span > 0))
         throw std::invalid_argument(fmt::format(
-            "--until-height {:g}: the wear of stage {} ({}) does not lower the lifters (profile {}, {:.1f} mm high): "
-            "their tops wear no faster than the shell under them; give --hours",
+            "--until-height {:g}: the wear of stage {} ({}) does not lower the lifters (profile {}, {:.1f} mm high) by "
+            "this stage's share before it wears them through (a shell that wears faster than their tops raises them); "
+            "give --hours",
             o.until_height_mm, i, dir.string(), st.tallest, h_now));
     }
     if (!stopped.empty()) {
