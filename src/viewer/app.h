@@ -120,6 +120,7 @@ class App {
   // has turned this much (the start-up jolt: tangential springs dropped,
   // moved or added balls at rest, the charge taking its new shape).
   static constexpr double kSettleInRev = 0.25;
+  static constexpr double kUndoRev = 1.0;  // revolutions after the settle-in an edit stays undoable
   static constexpr double kStartHoldRev = 0.05;  // the power, after the mill starts from rest
   double revolutions_ = 0;           // turned in the window: the sum of ω·dt over 2π
   double hold_until_rev_ = 0;        // power and profiles held before this

@@ -38,14 +38,16 @@ void App::set_speed_fraction(double fraction) {
   next.speed_fraction = fraction;
   next.speed_rpm = 0;
   try {
-    derived_ = derive(next);
+    const MillDerived nd = derive(next);
+    // The state before the edit, its speed too, is what a blow-up goes back
+    // to; a slider dragged over several frames is one edit: the state before
+    // the drag.
+    if (!settling_ && last_edit_frame_ < frames_ - 1) keep_undo();
+    derived_ = nd;
     case_ = next;
     edit_.speed_fraction = fraction;
     edit_.speed_rpm = 0;
     if (!settling_) {
-      // A slider dragged over several frames is one edit: the state before
-      // the drag is the one to go back to.
-      if (last_edit_frame_ < frames_ - 1) keep_undo();
       solver_->set_mill_omega(derived_.omega);
       restart_averages();
     }

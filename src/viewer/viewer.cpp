@@ -331,14 +331,19 @@ void App::step_frame() {
   advance_s_ = 0;
   if (steps > 0) {
     const auto t0 = Clock::now();
+    const double rev_before = revolutions_;  // a frame that starts in a hold is held whole
     if (advance(steps) && !settling_) revolutions_ += steps * solver_->dt() * derived_.omega / (2 * M_PI);
     const double s = std::chrono::duration<double>(Clock::now() - t0).count();
     const double per = s / steps;
     s_per_step_ = s_per_step_ > 0 ? 0.8 * s_per_step_ + 0.2 * per : per;
     advance_s_ = s;
     feed_->update(*solver_, *balls_);
-    const bool held = revolutions_ < hold_until_rev_;
-    monitor_.after_steps(*solver_, sim_time(), !settling_, held || revolutions_ < hold_power_until_rev_, held);
+    const bool held = rev_before < hold_until_rev_;
+    monitor_.after_steps(*solver_, sim_time(), !settling_, held || rev_before < hold_power_until_rev_, held);
+    // An edit stays undoable for a revolution after its settle-in: a blow-up
+    // later than that is not the edit's, and going back would throw away
+    // all the turning since.
+    if (undo_ && revolutions_ > hold_until_rev_ + kUndoRev) undo_.reset();
     liner_.after_steps(*solver_, sim_time(), !settling_, held, monitor_.profile(), monitor_.angles());
     steps_ += steps;
     window_steps_ += steps;
