@@ -1,5 +1,7 @@
 #include "viewer/charge_monitor.h"
 
+#include "sim/batch_means.h"
+
 #include <cmath>
 #include <numeric>
 
@@ -56,10 +58,11 @@ MeanWithError ChargeMonitor::batch_mean(const std::vector<double>& batches) {
   m.batches = static_cast<int>(batches.size());
   if (batches.empty()) return m;
   m.mean = std::accumulate(batches.begin(), batches.end(), 0.0) / batches.size();
-  if (batches.size() < 3) return m;
-  double ss = 0;
-  for (double b : batches) ss += (b - m.mean) * (b - m.mean);
-  m.error = std::sqrt(ss / (batches.size() - 1) / batches.size());
+  // The run's own rule (sim/batch_means.h): neighbouring batches merged
+  // while their means are correlated; an error from three batches or more
+  // left, and none while they are still correlated (it would be too small).
+  const BatchMeans b = batch_means(batches);
+  if (b.batches >= 3 && !b.correlated && std::isfinite(b.sem)) m.error = b.sem;
   return m;
 }
 
