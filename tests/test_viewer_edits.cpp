@@ -25,19 +25,13 @@
 
 #include "core/mill_case.h"
 #include "io/case_file.h"
+#include "text_file.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 struct Out {
   int status = -1;

@@ -50,21 +50,6 @@ json request_of(const LifeOptions& o, const Prepared& p) {
           {"calibrate_rate_kg_h", o.calibrate_rate_kg_h}};
 }
 
-// The rate (mm per hour at the case's coefficient) at which a profile's
-// top wears: its stations there (centre above 90 % of the height).
-double top_rate_mm_h(const std::vector<Vec2>& outline, double R, double length, const std::vector<double>& m3_s) {
-  const std::vector<StationPlace> places = station_places(outline, R);
-  const double h = measure_profile(outline).height;
-  double sum = 0, best_y = -1, at_best = 0;
-  int n = 0;
-  for (int j = 0; j < kWearStations; ++j) {
-    const double rate = places[j].length > 0 ? m3_s[j] / (places[j].length * length) * 3.6e6 : 0.0;  // mm/h
-    if (places[j].centre.y >= 0.9 * h) sum += rate, ++n;
-    if (places[j].centre.y > best_y) best_y = places[j].centre.y, at_best = rate;
-  }
-  return n > 0 ? sum / n : at_best;
-}
-
 // The case hours in which stage s's wear takes `loss` mm off profile k's
 // height above the shell (core/liner_wear.h hours_to_lose); negative when
 // that wear does not lower it.
@@ -163,7 +148,8 @@ void write_table(const fs::path& out, const Study& st, double length) {
     if (!s.ran) break;
     for (std::size_t k = 0; k < s.outlines.size(); ++k) {
       const ProfileMeasures m = measure_profile(s.outlines[k]);
-      const double top = top_rate_mm_h(s.outlines[k], 0.5 * s.diameter, length, s.r.station_m3_s[k]);
+      const double top =  // mm per hour
+          top_wear_m_per_h(s.outlines[k], 0.5 * s.diameter, BarWearRates{s.r.station_m3_s[k], length}) * 1000;
       const bool carried = s.span_case_hours > 0;
       t += fmt::format(
           "{},{:.6g},{:.6g},{},{:.4f},{:.4f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f},{:.6f},{:.6g},{:.4g},{:.3f},{:.3f},{:.3f},"

@@ -409,18 +409,23 @@ WornLifter wear_for_hours(const std::vector<Vec2>& outline, double R, const BarW
   return wear_lifter(outline, R, area, rates.shell_m_per_h * hours);
 }
 
+double top_wear_m_per_h(const std::vector<Vec2>& outline, double R, const BarWearRates& rates) {
+  const std::vector<StationPlace> places = station_places(outline, R);
+  const double h = measure_profile(outline).height;
+  double sum = 0, best_y = -1, at_best = 0;
+  int n = 0;
+  for (int j = 0; j < kWearStations && j < static_cast<int>(rates.station_m3_s.size()); ++j) {
+    const double rate =
+        places[j].length > 0 ? rates.station_m3_s[j] * 3600 / (places[j].length * rates.length) : 0.0;
+    if (places[j].centre.y >= 0.9 * h) sum += rate, ++n;
+    if (places[j].centre.y > best_y) best_y = places[j].centre.y, at_best = rate;
+  }
+  return n > 0 ? sum / n : at_best;
+}
+
 double hours_to_lose(const std::vector<Vec2>& outline, double R, const BarWearRates& rates, double loss) {
   const double h0 = measure_profile(outline).height;
-  // The top's own rate, the shell standing still: where the search starts.
-  const std::vector<StationPlace> places = station_places(outline, R);
-  double top = 0;
-  int n = 0;
-  for (int j = 0; j < kWearStations && j < static_cast<int>(rates.station_m3_s.size()); ++j)
-    if (places[j].centre.y >= 0.9 * h0 && places[j].length > 0) {
-      top += rates.station_m3_s[j] * 3600 / (places[j].length * rates.length);
-      ++n;
-    }
-  if (n > 0) top /= n;
+  const double top = top_wear_m_per_h(outline, R, rates);  // where the search starts
   if (!(top > 0) || !(loss > 0)) return -1;
   auto lost = [&](double hours) {
     const WornLifter w = wear_for_hours(outline, R, rates, hours);

@@ -59,6 +59,11 @@ struct BarWearRates {
 // worn as wear_lifter wears it.
 WornLifter wear_for_hours(const std::vector<Vec2>& outline, double R, const BarWearRates& rates, double hours);
 
+// How fast those rates wear the bar's top back (m per hour): the mean over
+// its stations whose centre lies above 90 % of its height (the highest
+// station's where none does).
+double top_wear_m_per_h(const std::vector<Vec2>& outline, double R, const BarWearRates& rates);
+
 // The hours in which those rates take `loss` (m) off the bar's height above
 // the shell: the height it actually loses as it wears (its top rounds, its
 // faces lay back, the shell falls away under it), found by bisection on

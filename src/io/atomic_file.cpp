@@ -60,12 +60,12 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view data)
   }
 }
 
-bool write_or_warn(const std::filesystem::path& path, const std::function<void()>& write) {
+bool write_or_warn(const std::filesystem::path& path, const std::function<void()>& write, const char* verb) {
   try {
     write();
     return true;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "warning: %s not written: %s\n", path.string().c_str(), e.what());
+    std::fprintf(stderr, "warning: %s not %s: %s\n", path.string().c_str(), verb, e.what());
     return false;
   }
 }

@@ -15,6 +15,8 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view data)
 // Writes a file that comes after a run's results (a mesh, a picture's data)
 // with `write`; one that cannot be written is a warning on stderr naming the
 // file and why, never an end to the command. Returns whether it was written.
-bool write_or_warn(const std::filesystem::path& path, const std::function<void()>& write);
+// `verb` names what failed ("written", "drawn").
+bool write_or_warn(const std::filesystem::path& path, const std::function<void()>& write,
+                   const char* verb = "written");
 
 }  // namespace mc::io

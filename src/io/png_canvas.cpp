@@ -1,5 +1,7 @@
 #include "io/png_canvas.h"
 
+#include "io/atomic_file.h"
+
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -300,13 +302,7 @@ std::string plot_font_in_use() {
 }
 
 bool draw_or_warn(const std::filesystem::path& file, const std::function<void()>& draw) {
-  try {
-    draw();
-    return true;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "warning: %s not drawn: %s\n", file.string().c_str(), e.what());
-    return false;
-  }
+  return write_or_warn(file, draw, "drawn");
 }
 
 std::string plot_font_warning() {

@@ -55,6 +55,7 @@ class App {
   // With `settle` the mill stands and the balls' velocities are damped at
   // `settle_damping` (1/s, run.settle_damping) until the charge is at rest.
   void install_solver(Scene scene, bool settle, double settle_damping = 0);
+  void show_scene();  // walls, liner and ball buffer from scene_ and the solver
   void step_frame();
   bool advance(int steps);  // the solver's steps; false: a blow-up after an edit reverted it
   void set_colour_ranges();  // from the case as now

@@ -113,13 +113,7 @@ bool App::revert_edit(const std::string& why) {
   solver_->set_velocity_damping(0);
   solver_->observe(true);
   solver_->take_contact_profile();
-  mill_->set_walls(scene_.walls);
-  liner_.set_scene(scene_);
-  mill_->set_liner(liner_.layout());
-  liner_drawn_ = -1;
-  balls_->resize(n_balls_);
-  feed_->attach(*balls_);
-  instances_stale_ = true;
+  show_scene();
   set_colour_ranges();
   restart_averages();
   char at[48];

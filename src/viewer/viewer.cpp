@@ -285,6 +285,12 @@ void App::install_solver(Scene scene, bool settle, double settle_damping) {
     monitor_.clear();
     source_.clear();
   }
+  show_scene();
+}
+
+// The walls, the liner and the balls' buffer drawn from scene_ and the
+// solver now in hand.
+void App::show_scene() {
   mill_->set_walls(scene_.walls);
   liner_.set_scene(scene_);
   mill_->set_liner(liner_.layout());
