@@ -255,30 +255,34 @@ MC_FN void store_partner_side(MC_GLOBAL real* slot, ContactGeom g, ContactOut c,
 /* A pair that opened: its collision joins the spectra, the entry holds no
  * record (an index left behind would differ from run to run, as records
  * are taken in whatever order the threads come), and its reaction is gone. */
-MC_FN void pair_opened(int k, int j, int mat_i, MC_GLOBAL const SimParams* sp, MC_GLOBAL const int2* info,
-                       MC_GLOBAL int* neigh_index, MC_GLOBAL int* neigh_rec,
+MC_FN void pair_opened(int k, int j, int mat_i, real m_eff, real r_eff, MC_GLOBAL const SimParams* sp,
+                       MC_GLOBAL const int2* info, MC_GLOBAL int* neigh_index, MC_GLOBAL int* neigh_rec,
                        MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out, Books* books) {
-  record_close(books, neigh_rec[k], ball_pair_type(mat_i, info[j].y, sp->n_materials));
+  record_close(books, neigh_rec[k], ball_pair_type(mat_i, info[j].y, sp->n_materials), m_eff, r_eff);
   neigh_index[k] = j;
   neigh_rec[k] = MC_NO_RECORD;
   MC_GLOBAL real* slot = pair_out + MC_SLOT_REALS * neigh_rev[k];
   for (int r = 0; r < MC_SLOT_REALS; ++r) slot[r] = R(0.0);
 }
 
-/* List entry k of a ball at p with radius r and material mat: whether the
- * pair touches now. A pair that touched and no longer does is opened here
- * (pair_opened). The entry's link and the partner's position (its nearest
+/* List entry k of a ball at p with radius r, inverse mass inv_m and
+ * material mat: whether the pair touches now. A pair that touched and no
+ * longer does is opened here (pair_opened). The entry's link and the partner's position (its nearest
  * image in a periodic slice, periodic.h) are left in *link and *pj4 for
  * pair_contact. */
-MC_FN int entry_touches(int k, v3 p, real r, int mat, MC_GLOBAL const SimParams* sp, MC_GLOBAL const real4* pos,
-                        MC_GLOBAL const int2* info, MC_GLOBAL int* neigh_index, MC_GLOBAL int* neigh_rec,
-                        MC_GLOBAL const int* neigh_rev, MC_GLOBAL real* pair_out, Books* books, int* link,
-                        real4* pj4) {
+MC_FN int entry_touches(int k, v3 p, real r, real inv_m, int mat, MC_GLOBAL const SimParams* sp,
+                        MC_GLOBAL const real4* pos, MC_GLOBAL const real4* vel, MC_GLOBAL const int2* info,
+                        MC_GLOBAL int* neigh_index, MC_GLOBAL int* neigh_rec, MC_GLOBAL const int* neigh_rev,
+                        MC_GLOBAL real* pair_out, Books* books, int* link, real4* pj4) {
   *link = neigh_index[k];
   const int j = MC_LINK_PARTNER(*link);
   *pj4 = image_of(sp, pos[j], p.z); /* across the seam of a slice, its nearest image */
   if (pair_touches(p, r, v3_of(xyz_of(*pj4)), (*pj4).w)) return 1;
-  if (MC_LINK_TOUCHING(*link)) pair_opened(k, j, mat, sp, info, neigh_index, neigh_rec, neigh_rev, pair_out, books);
+  if (MC_LINK_TOUCHING(*link)) {
+    const real rj = (*pj4).w; /* m* and R* as pair_geometry has them */
+    pair_opened(k, j, mat, R(1.0) / (inv_m + vel[j].w), r * rj / (r + rj), sp, info, neigh_index, neigh_rec,
+                neigh_rev, pair_out, books);
+  }
   return 0;
 }
 
@@ -416,7 +420,8 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
     for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s)
       if (ws.old_key[s] != MC_WALL_NONE && !ws.renewed[s])
         record_close(books, ws.old_rec[s],
-                     wall_type_pair(mat_i, wall_type_of(meshes, ws.old_key[s]), sp->n_materials));
+                     wall_type_pair(mat_i, wall_type_of(meshes, ws.old_key[s]), sp->n_materials),
+                     R(1.0) / vi.w, pi4.w);
   if (any_old || ws.n_new > 0)
     for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s) {
       wall_key[s * n + i] = ws.new_key[s];
@@ -476,8 +481,8 @@ MC_FN void ball_forces(
   for (int k = start; k < start + count; ++k) {
     int link;
     real4 pj4;
-    if (entry_touches(k, p, pi4.w, mat_i, sp, pos, info, neigh_index, neigh_rec, neigh_rev, pair_out, books, &link,
-                      &pj4))
+    if (entry_touches(k, p, pi4.w, vi.w, mat_i, sp, pos, vel, info, neigh_index, neigh_rec, neigh_rev, pair_out,
+                      books, &link, &pj4))
       pair_contact(pi4, vi, wi, mat_i, k, link, pj4, sp, pairs, vel, omega, info, neigh_index, neigh_rec,
                    neigh_rev, pair_out, books, law, &s);
   }

@@ -103,8 +103,20 @@ MC_FN MC_GLOBAL uint* spectra_cell(Books* b, int type, int bin) {
   return b->spectra + 2 * MC_SPECTRA_FIELDS * (type * MC_SPECTRA_BINS + bin);
 }
 
-/* A collision that ended: its record into the histograms of its type. */
-MC_FN void record_close(Books* b, int rec, int type) {
+/* A collision's energy e (J) into the severity fields from `field`
+ * (count, energy, radius) of its type's bin of e · R_ref / r_eff. */
+MC_FN void severity_book(Books* b, int type, int field, real e, real r_eff) {
+  const real x = e * R(MC_SPECTRA_R_REF) / r_eff;
+  const int bin = spectra_bin(x);
+  MC_GLOBAL uint* cell = spectra_cell(b, type, bin);
+  add_u64(cell + 2 * field, 1);
+  add_u64(cell + 2 * (field + 1), fixed_of(e, R(MC_SPECTRA_SCALE) / spectra_edge(bin)));
+  add_u64(cell + 2 * (field + 2), fixed_of(r_eff, R(MC_SPECTRA_SCALE) / R(MC_SPECTRA_R_REF)));
+}
+
+/* A collision that ended: its record into the histograms of its type;
+ * m_eff and r_eff are the pair's m* and R* (pair_geometry's, a wall's). */
+MC_FN void record_close(Books* b, int rec, int type, real m_eff, real r_eff) {
 #if MC_ENERGY_BOOKS
   if (rec < 0) return;
   const real4 head = b->records[2 * rec];
@@ -123,6 +135,12 @@ MC_FN void record_close(Books* b, int rec, int type) {
   MC_GLOBAL uint* cell_n = spectra_cell(b, type, bin_n);
   add_u64(cell_n + 2 * MC_SPECTRA_BY_NORMAL, 1);
   add_u64(cell_n + 2 * MC_SPECTRA_BY_NORMAL_ENERGY, fixed_of(lost.x, R(MC_SPECTRA_SCALE) / spectra_edge(bin_n)));
+  /* By severity: the impact energy at first touch, and the normal loss. */
+  severity_book(b, type, MC_SPECTRA_IMPACT, R(0.5) * m_eff * head.w * head.w, r_eff);
+  severity_book(b, type, MC_SPECTRA_LOSS, lost.x, r_eff);
+#else
+  (void)m_eff;
+  (void)r_eff;
 #endif
 }
 

@@ -206,8 +206,8 @@ void forces_grouped(__global const SimParams* sp,
     for (int k = start; k < start + count; ++k) {
       int link;
       real4 pj4;
-      if (!entry_touches(k, p, pi4.w, info[i].y, sp, pos, info, neigh_index, neigh_rec, neigh_rev, pair_out,
-                         &books, &link, &pj4))
+      if (!entry_touches(k, p, pi4.w, vel[i].w, info[i].y, sp, pos, vel, info, neigh_index, neigh_rec, neigh_rev,
+                         pair_out, &books, &link, &pj4))
         continue;
       if (nq < MC_FG_QUEUE) {
         queue[lid * MC_FG_QUEUE + nq++] = k;

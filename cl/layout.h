@@ -69,13 +69,21 @@
  * and rolling losses (J, in units of the bin's lower edge · 2^-24), impact
  * speeds (units of 2^-24 m/s) and steps in contact. The last two fields
  * bin the same collisions a second time, by their normal loss alone (the
- * normal energy spectrum that breakage models take): the collisions whose
- * normal loss falls in the bin, and those losses (units as above). */
+ * normal energy spectrum): the collisions whose normal loss falls in the
+ * bin, and those losses (units as above). The last six bin each collision
+ * by its severity, energy over its own effective radius R* (r_i r_j /
+ * (r_i + r_j) for two balls, the ball's radius on a wall), which sets the
+ * specific energy a breakage model gives the particles it catches: the bin
+ * of x = E · MC_SPECTRA_R_REF / R*, the energy of as severe a collision
+ * with R* = 1 cm. Twice: E the impact energy at first touch (1/2 m* vn^2,
+ * vn the approach speed), then E the normal loss. Each holds the
+ * collisions, their E (units of the bin's lower edge · 2^-24) and their R*
+ * (units of MC_SPECTRA_R_REF · 2^-24). */
 #define MC_SPECTRA_DECADES 12
 #define MC_SPECTRA_PER_DECADE 10
 #define MC_SPECTRA_LOG_MIN (-9)
 #define MC_SPECTRA_BINS (MC_SPECTRA_DECADES * MC_SPECTRA_PER_DECADE + 2)
-#define MC_SPECTRA_FIELDS 8
+#define MC_SPECTRA_FIELDS 14
 #define MC_SPECTRA_COUNT 0
 #define MC_SPECTRA_NORMAL 1
 #define MC_SPECTRA_TANGENTIAL 2
@@ -84,6 +92,13 @@
 #define MC_SPECTRA_STEPS 5
 #define MC_SPECTRA_BY_NORMAL 6
 #define MC_SPECTRA_BY_NORMAL_ENERGY 7
+#define MC_SPECTRA_IMPACT 8          /* by impact severity: collisions */
+#define MC_SPECTRA_IMPACT_ENERGY 9   /*   their impact energy, J */
+#define MC_SPECTRA_IMPACT_RADIUS 10  /*   their R*, m */
+#define MC_SPECTRA_LOSS 11           /* by loss severity: collisions */
+#define MC_SPECTRA_LOSS_ENERGY 12    /*   their normal loss, J */
+#define MC_SPECTRA_LOSS_RADIUS 13    /*   their R*, m */
+#define MC_SPECTRA_R_REF 0.01        /* m: the R* a severity bin is named for */
 #define MC_SPECTRA_SCALE 16777216.0 /* 2^24 */
 /* Wall pair types after the ball–ball ones: per ball material. */
 #define MC_WALL_TYPE_SHELL 0

@@ -415,49 +415,63 @@ TEST_CASE("a state saved before the contact records, with half or full lists, re
   }
 }
 
-TEST_CASE("a state saved before the normal energy spectrum loads: its spectra kept, the normal one from zero",
+TEST_CASE("a state saved before the normal or the severity spectra loads: its spectra kept, the new ones from zero",
           "[checkpoint][books]") {
   DrumSpec spec;
   spec.n_balls = 200;
   const Scene sc = make_drum(spec);
   auto a = make_solver(test::context(), sc);
   a->advance(6000);
-  SolverState old = a->save_state();
+  const SolverState saved = a->save_state();
   const BookSums before = a->read_books();
-  // Today's eight fields a cell cut back to the first six.
-  for (auto& [key, bytes] : old.arrays) {
-    if (key != "spectra") continue;
-    const std::size_t cell_new = 2 * MC_SPECTRA_FIELDS * 4, cell_old = 2 * 6 * 4, cells = bytes.size() / cell_new;
-    std::vector<unsigned char> cut(cells * cell_old);
-    for (std::size_t c = 0; c < cells; ++c)
-      std::memcpy(cut.data() + c * cell_old, bytes.data() + c * cell_new, cell_old);
-    bytes = cut;
-  }
-  auto b = make_solver(test::context(), sc);
-  b->restore_state(old);
-  const BookSums after = b->read_books();
-  double count_before = 0, count_after = 0, normal_after = 0, by_normal_after = 0;
-  for (int t = 0; t < before.n_types; ++t)
-    for (int k = 0; k < MC_SPECTRA_BINS; ++k) {
-      count_before += before.at(t, k, MC_SPECTRA_COUNT);
-      count_after += after.at(t, k, MC_SPECTRA_COUNT);
-      normal_after += after.at(t, k, MC_SPECTRA_NORMAL) - before.at(t, k, MC_SPECTRA_NORMAL);
-      by_normal_after += after.at(t, k, MC_SPECTRA_BY_NORMAL);
+  // Six fields a cell (before the normal spectrum) and eight (before the
+  // severity spectra): today's cut back to them.
+  for (const int kept : {6, 8}) {
+    INFO(kept << " fields a cell");
+    SolverState old = saved;
+    for (auto& [key, bytes] : old.arrays) {
+      if (key != "spectra") continue;
+      const std::size_t cell_new = 2 * MC_SPECTRA_FIELDS * 4, cell_old = 2 * kept * 4, cells = bytes.size() / cell_new;
+      std::vector<unsigned char> cut(cells * cell_old);
+      for (std::size_t c = 0; c < cells; ++c)
+        std::memcpy(cut.data() + c * cell_old, bytes.data() + c * cell_new, cell_old);
+      bytes = cut;
     }
-  CHECK(count_before > 100);
-  CHECK(count_after == count_before);
-  CHECK(normal_after == 0);
-  CHECK(by_normal_after == 0);
-  // It runs on, and the normal spectrum books what closes from then on.
-  b->advance(2000);
-  const BookSums later = b->read_books();
-  double closed = 0, by_normal = 0;
-  for (int t = 0; t < later.n_types; ++t)
-    for (int k = 0; k < MC_SPECTRA_BINS; ++k)
-      closed += later.at(t, k, MC_SPECTRA_COUNT) - after.at(t, k, MC_SPECTRA_COUNT),
-          by_normal += later.at(t, k, MC_SPECTRA_BY_NORMAL);
-  CHECK(closed > 10);
-  CHECK(by_normal == closed);
+    auto b = make_solver(test::context(), sc);
+    b->restore_state(old);
+    const BookSums after = b->read_books();
+    double count_before = 0, count_after = 0, normal_after = 0, by_normal_after = 0, by_normal_before = 0,
+           severity_after = 0;
+    for (int t = 0; t < before.n_types; ++t)
+      for (int k = 0; k < MC_SPECTRA_BINS; ++k) {
+        count_before += before.at(t, k, MC_SPECTRA_COUNT);
+        count_after += after.at(t, k, MC_SPECTRA_COUNT);
+        normal_after += after.at(t, k, MC_SPECTRA_NORMAL) - before.at(t, k, MC_SPECTRA_NORMAL);
+        by_normal_after += after.at(t, k, MC_SPECTRA_BY_NORMAL);
+        by_normal_before += before.at(t, k, MC_SPECTRA_BY_NORMAL);
+        for (int f = MC_SPECTRA_IMPACT; f < MC_SPECTRA_FIELDS; ++f) severity_after += after.at(t, k, f);
+      }
+    CHECK(count_before > 100);
+    CHECK(count_after == count_before);
+    CHECK(normal_after == 0);
+    CHECK(by_normal_after == (kept == 8 ? by_normal_before : 0.0));
+    CHECK(severity_after == 0);
+    // It runs on, and the new spectra book what closes from then on.
+    b->advance(2000);
+    const BookSums later = b->read_books();
+    double closed = 0, by_normal = 0, impacts = 0, losses = 0;
+    for (int t = 0; t < later.n_types; ++t)
+      for (int k = 0; k < MC_SPECTRA_BINS; ++k) {
+        closed += later.at(t, k, MC_SPECTRA_COUNT) - after.at(t, k, MC_SPECTRA_COUNT);
+        by_normal += later.at(t, k, MC_SPECTRA_BY_NORMAL) - after.at(t, k, MC_SPECTRA_BY_NORMAL);
+        impacts += later.at(t, k, MC_SPECTRA_IMPACT);
+        losses += later.at(t, k, MC_SPECTRA_LOSS);
+      }
+    CHECK(closed > 10);
+    CHECK(by_normal == closed);
+    CHECK(impacts == closed);
+    CHECK(losses == closed);
+  }
 }
 
 TEST_CASE("a finished run extended with --resume --duration equals an unbroken run row for row", "[checkpoint]") {

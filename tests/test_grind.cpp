@@ -458,7 +458,7 @@ TEST_CASE("grind refuses bad ore files and run folders by name, writing nothing"
   refuses(edited_ore("density = 2700", "density = -1"), run, "density");
   refuses(edited_ore("phi = 0.55", "phi = 0.55\nchi = 1"), run, "breakage.chi: unknown key");
   refuses(ore_file("example_energy.toml"), run / "snapshots", "summary.json: missing");
-  // A run from before the normal energy spectrum.
+  // A run from before the severity spectra (eight columns fewer).
   const fs::path old = out.string() + "-old-run";
   fs::remove_all(old);
   fs::create_directories(old);
@@ -467,11 +467,11 @@ TEST_CASE("grind refuses bad ore files and run folders by name, writing nothing"
     std::ifstream in(run / "spectra.csv");
     std::ofstream o(old / "spectra.csv");
     for (std::string l; std::getline(in, l);) {
-      for (int k = 0; k < 2; ++k) l = l.substr(0, l.rfind(','));
+      for (int k = 0; k < 8; ++k) l = l.substr(0, l.rfind(','));
       o << l << '\n';
     }
   }
-  refuses(ore_file("example_spectrum.toml"), old, "has no normal energy spectrum");
+  refuses(ore_file("example_spectrum.toml"), old, "has no impact severity spectrum");
   // A run resumed from an older checkpoint: its normal spectrum holds part
   // of the collisions only.
   {
@@ -484,7 +484,7 @@ TEST_CASE("grind refuses bad ore files and run folders by name, writing nothing"
       std::vector<std::string> f;
       std::stringstream ss(l);
       for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
-      f[f.size() - 2] = std::to_string(0.5 * std::stod(f[f.size() - 2]));
+      f[f.size() - 6] = std::to_string(0.5 * std::stod(f[f.size() - 6]));  // impact_collisions_per_s
       for (std::size_t k = 0; k < f.size(); ++k) o << (k ? "," : "") << f[k];
       o << '\n';
     }

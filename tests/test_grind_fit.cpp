@@ -106,7 +106,7 @@ BatchTest synthetic_test(const Ore& ore, const mc::io::Run& run, double holdup_k
   t.times_min = {0.5, 1, 2, 4, 8};
   t.holdup_kg = holdup_kg;
   t.noise_pp = std::max(noise_pp, 0.1);
-  t.passing = batch_test_products(ore, run.normal, run.power_W, holdup_kg, t);
+  t.passing = batch_test_products(ore, run.spectrum, run.power_W, holdup_kg, t);
   Scatter s(seed);
   for (auto& row : t.passing)
     for (std::size_t k = 1; k < row.size(); ++k) row[k] = std::clamp(row[k] + noise_pp / 100 * s.next(), 0.0, 1.0);
@@ -172,7 +172,7 @@ namespace {
 // fitted from `start` by the parameters `names`: each comes back to 1e-6.
 BatchFit check_round_trip(const mc::io::Run& run, const Ore& truth, const Ore& start,
                           const std::vector<std::string>& names, const BatchTest& t, const char* label) {
-  const BatchFit f = fit_batch_test(start, run.normal, run.power_W, 1.2, t, names);
+  const BatchFit f = fit_batch_test(start, run.spectrum, run.power_W, 1.2, t, names);
   std::printf("%s round trip, no noise: %d iterations, %d evaluations, rms %.2e pp\n", label, f.iterations,
               f.evaluations, f.rms_pp);
   CHECK(f.rms_pp < 1e-6);
@@ -201,7 +201,7 @@ TEST_CASE("grind --fit round trip: five parameters of a known ore back to 1e-6 w
   const std::vector<std::string> names = {"efficiency", "e_inf_J_kg", "d0_mm", "rates.phi", "sigma"};
   check_round_trip(run, truth, start, names, t, "spectrum");
   // The same fit cut at two iterations has not converged: said, no ore.
-  CHECK_THROWS_WITH(fit_batch_test(start, run.normal, run.power_W, 1.2, t, names, 2),
+  CHECK_THROWS_WITH(fit_batch_test(start, run.spectrum, run.power_W, 1.2, t, names, 2),
                     Catch::Contains("--fit: the fit did not converge in 2 iterations") &&
                         Catch::Contains("nothing written"));
 }
@@ -218,10 +218,10 @@ TEST_CASE("grind --fit round trip: Tavares' t10 (A, b') and the efficiency back 
   start.t10.b_prime = 0.2;
   check_round_trip(run, truth, start, {"efficiency", "breakage.t10_max_percent", "breakage.b_prime"}, t, "t10");
   // Austin's B is not this ore's appearance function, nor t10 Austin's ore's.
-  CHECK_THROWS_WITH(fit_batch_test(start, run.normal, run.power_W, 1.2, t, {"breakage.phi"}),
+  CHECK_THROWS_WITH(fit_batch_test(start, run.spectrum, run.power_W, 1.2, t, {"breakage.phi"}),
                     Catch::Contains("--fit-params breakage.phi: not a parameter of the ore's appearance function"));
   const Ore austin = mc::io::read_ore(ore_file("example_spectrum.toml"));
-  CHECK_THROWS_WITH(fit_batch_test(austin, run.normal, run.power_W, 1.2, t, {"breakage.b_prime"}),
+  CHECK_THROWS_WITH(fit_batch_test(austin, run.spectrum, run.power_W, 1.2, t, {"breakage.b_prime"}),
                     Catch::Contains("breakage.model"));
 }
 
@@ -245,7 +245,7 @@ TEST_CASE("grind --fit round trip: with ±1 pp of scatter the parameters come ba
   // suite's usual draw (seed 0) lands at 0.45 and 0.11.
   double sum_z2 = 0, max_z = 0;
   for (std::uint64_t seed = 0; seed < 16; ++seed) {
-    const BatchFit f = fit_batch_test(start, run.normal, run.power_W, H, synthetic_test(truth, run, H, 1.0, seed), names);
+    const BatchFit f = fit_batch_test(start, run.spectrum, run.power_W, H, synthetic_test(truth, run, H, 1.0, seed), names);
     REQUIRE(f.parameters.size() == 2);
     INFO("seed " << seed);
     // Uniform scatter of ±1 pp has a standard deviation of 1/√3 pp.
@@ -280,7 +280,7 @@ TEST_CASE("grind --fit: a parameter the data cannot fix is said to be unidentifi
   const BatchTest t = synthetic_test(truth, run, 1.2, 0);
   Ore start = truth;
   start.energy.s1e_t_per_kWh = 0.9;
-  const BatchFit f = fit_batch_test(start, run.normal, run.power_W, 1.2, t,
+  const BatchFit f = fit_batch_test(start, run.spectrum, run.power_W, 1.2, t,
                                     {"s1e_t_per_kWh", "x1_mm", "zeta1", "zeta2"});
   int unidentified = 0;
   for (const FittedParameter& p : f.parameters) {
@@ -304,11 +304,11 @@ TEST_CASE("grind --fit with nothing left free reports the starting ore's residua
   Ore start = truth;
   start.energy.s1e_t_per_kWh = 0.9;
   start.breakage.beta = start.breakage.gamma;
-  const BatchFit f = fit_batch_test(start, run.normal, run.power_W, 1.2, t, {"breakage.phi"});
+  const BatchFit f = fit_batch_test(start, run.spectrum, run.power_W, 1.2, t, {"breakage.phi"});
   REQUIRE(f.parameters.size() == 1);
   CHECK(!f.parameters[0].identified);
   CHECK(f.free == 0);
-  const auto pred = batch_test_products(start, run.normal, run.power_W, 1.2, t);
+  const auto pred = batch_test_products(start, run.spectrum, run.power_W, 1.2, t);
   double ssr = 0;
   int n = 0;
   for (std::size_t i = 0; i < t.times_min.size(); ++i)
@@ -325,7 +325,7 @@ TEST_CASE("grind --fit: a parameter on its bound has no standard error, a value'
   const mc::io::Run run = mc::io::read_run(bond_run(), true);
   const Ore truth = mc::io::read_ore(ore_file("example_spectrum.toml"));
   const BatchTest t = synthetic_test(truth, run, 1.2, 0);
-  const BatchFit f = fit_batch_test(truth, run.normal, run.power_W, 3.0, t, {"efficiency"});
+  const BatchFit f = fit_batch_test(truth, run.spectrum, run.power_W, 3.0, t, {"efficiency"});
   REQUIRE(f.parameters.size() == 1);
   CHECK(f.parameters[0].at_bound);
   CHECK(f.parameters[0].value == Approx(1.0).epsilon(1e-9));
@@ -352,7 +352,7 @@ TEST_CASE("grind --fit-params: an unknown name gets the one it most likely meant
   const Ore ore = mc::io::read_ore(ore_file("example_spectrum.toml"));
   const BatchTest t = synthetic_test(ore, run, 1.2, 0);
   try {
-    fit_batch_test(ore, run.normal, run.power_W, 1.2, t, {"EFFICIENCY"});
+    fit_batch_test(ore, run.spectrum, run.power_W, 1.2, t, {"EFFICIENCY"});
     FAIL("EFFICIENCY accepted");
   } catch (const std::invalid_argument& e) {
     const std::string m = e.what();
@@ -450,12 +450,12 @@ TEST_CASE("grind --fit-wi: one rate scale set so that Bond's test gives a measur
   // The work index of the ore at efficiency 0.4, then fitted back from 1.
   ore.efficiency = 0.4;
   const double charge = bond_charge_kg(ore);
-  const MillRates r = mill_rates(ore, run.normal, run.power_W, charge);
+  const MillRates r = mill_rates(ore, run.spectrum, run.power_W, charge);
   const BondResult known = bond_test(ore.sizes, ore.feed, r.S_per_min, breakage_matrix(ore.sizes, ore.breakage),
                                      run.speed_rpm, charge, 150e-6);
   REQUIRE(known.steady);
   ore.efficiency = 1;
-  const WiFit w = fit_work_index(ore, run.normal, run.power_W, run.speed_rpm, 150e-6, known.wi_kWh_t, "efficiency");
+  const WiFit w = fit_work_index(ore, run.spectrum, run.power_W, run.speed_rpm, 150e-6, known.wi_kWh_t, "efficiency");
   CHECK(w.bond.wi_kWh_t == Approx(known.wi_kWh_t).epsilon(1e-4));
   CHECK(w.value == Approx(0.4).epsilon(2e-3));
   CHECK(w.dvalue_dwi < 0);  // a harder ore: fewer collisions that break
@@ -531,7 +531,7 @@ passing = [1.0, 0.9, 0.70, 0.50, 0.35]
   refuses("", "", "8 parameters for 8 data",
           {"efficiency", "e_inf_J_kg", "d0_mm", "rates.phi", "sigma", "breakage.phi", "breakage.gamma",
            "breakage.beta"});
-  // A run without the normal energy spectrum.
+  // A run without the severity spectra.
   const fs::path old = temp("old_run");
   fs::remove_all(old);
   fs::create_directories(old);
@@ -540,7 +540,7 @@ passing = [1.0, 0.9, 0.70, 0.50, 0.35]
     std::ifstream in(run_dir / "spectra.csv");
     std::ofstream o(old / "spectra.csv");
     for (std::string l; std::getline(in, l);) {
-      for (int k = 0; k < 2; ++k) l = l.substr(0, l.rfind(','));
+      for (int k = 0; k < 8; ++k) l = l.substr(0, l.rfind(','));
       o << l << '\n';
     }
   }
@@ -553,7 +553,7 @@ passing = [1.0, 0.9, 0.70, 0.50, 0.35]
     o.fit_test = p.string();
     o.out = out.string();
     o.quiet = true;
-    CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains("has no normal energy spectrum"));
+    CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains("has no impact severity spectrum"));
     CHECK(!fs::exists(out));
     // Fit options with products to make: refused.
     o.run_dir = run_dir.string();
@@ -760,7 +760,7 @@ TEST_CASE("grind with Tavares' t10 off the Schuhmann family: the t10 panel of gr
       std::stringstream ss(line);
       for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
       if (col < 0) {
-        col = static_cast<int>(std::find(f.begin(), f.end(), "normal_spectrum_W") - f.begin());
+        col = static_cast<int>(std::find(f.begin(), f.end(), "impact_W") - f.begin());
         REQUIRE(col < static_cast<int>(f.size()));
       } else {
         char twice[32];
@@ -809,9 +809,9 @@ TEST_CASE("grind with Tavares' t10 off the Schuhmann family: the t10 panel of gr
   // hits, higher t10) gives another product.
   const mc::io::Run lab_run = mc::io::read_run(lab, true), plant_run = mc::io::read_run(plant, true);
   const double H = here["holdup_kg"].get<double>();
-  const MillRates rates = mill_rates(o, lab_run.normal, lab_run.power_W, H);
+  const MillRates rates = mill_rates(o, lab_run.spectrum, lab_run.power_W, H);
   auto product_after_4_min = [&](const mc::io::Run& appearance_of) {
-    return passing(batch_grind(o.feed, rates.S_per_min, appearance_matrix(o, appearance_of.normal), 4));
+    return passing(batch_grind(o.feed, rates.S_per_min, appearance_matrix(o, appearance_of.spectrum), 4));
   };
   const std::vector<double> with_lab_b = product_after_4_min(lab_run), with_plant_b = product_after_4_min(plant_run);
   double apart = 0, lab_vs_csv = 0;

@@ -73,8 +73,8 @@ void check_bond(const GrindOptions& o, const Ore& bond_ore, const io::Run& run) 
 // hold-up and the ore's own series.
 BondResult run_bond(const GrindOptions& o, const Ore& bond_ore, const io::Run& run) {
   const double charge = bond_charge_kg(bond_ore);
-  const MillRates r = mill_rates(bond_ore, run.normal, run.power_W, charge);
-  const auto b = appearance_matrix(bond_ore, run.normal);
+  const MillRates r = mill_rates(bond_ore, run.spectrum, run.power_W, charge);
+  const auto b = appearance_matrix(bond_ore, run.spectrum);
   const BondResult bond =
       bond_test(bond_ore.sizes, bond_ore.feed, r.S_per_min, b, run.speed_rpm, charge, o.bond_p1_um * 1e-6);
   if (!bond.steady)
@@ -295,7 +295,7 @@ ScaleUp scale_up(const GrindOptions& o, const Ore& ore, const io::Run& plant, co
                                 "scale-up; the ore's rates.model must be \"spectrum\"");
   if (o.bond_p1_um > 0) throw std::invalid_argument("--scale-from with --bond: give one");
   ScaleUp up;
-  up.lab = io::read_run(o.scale_from, true);
+  up.lab = io::read_run(o.scale_from, true, ore.energy_basis);
   // The two runs' spectra are comparable under one contact only.
   up.contact_changed = contact_mismatch(up.lab.contact, plant.contact);
   if (!up.contact_changed.empty())
@@ -304,11 +304,11 @@ ScaleUp scale_up(const GrindOptions& o, const Ore& ore, const io::Run& plant, co
                  "the two models then differ by the contact too\n",
                  o.scale_from.c_str(), up.contact_changed.c_str());
   const double lab_holdup = mill_holdup_kg(ore, up.lab.porosity, up.lab.filling, up.lab.mill_volume);
-  up.SE_t_per_kWh = mill_rates(ore, up.lab.normal, up.lab.power_W, lab_holdup).SE_t_per_kWh;
+  up.SE_t_per_kWh = mill_rates(ore, up.lab.spectrum, up.lab.power_W, lab_holdup).SE_t_per_kWh;
   Circuit he = c;
   // The energy-specific scale-up holds the laboratory's appearance too: with
   // Tavares' t10, that of the laboratory mill's collisions.
-  if (ore.appearance == Appearance::t10) he.b = appearance_matrix(ore, up.lab.normal);
+  if (ore.appearance == Appearance::t10) he.b = appearance_matrix(ore, up.lab.spectrum);
   for (std::size_t i = 0; i < he.S_per_min.size(); ++i)
     he.S_per_min[i] = up.SE_t_per_kWh[i] * c.power_kW / c.holdup_t / 60;
   try {
@@ -396,7 +396,7 @@ int cmd_grind(const GrindOptions& o) {
   Ore bond_ore = ore;
   if (o.bond_p1_um > 0) put_sieve_on_class_top(bond_ore, o.bond_p1_um * 1e-6);
   check_classifier(o, ore);
-  const io::Run run = io::read_run(o.run_dir, ore.model == RateModel::spectrum);
+  const io::Run run = io::read_run(o.run_dir, ore.model == RateModel::spectrum, ore.energy_basis);
   if (o.bond_p1_um > 0) check_bond(o, bond_ore, run);
   // A run still settling into its motion: its torque also lifts the charge
   // (the energy-specific and Austin rates take the torque's power, the
@@ -419,12 +419,12 @@ int cmd_grind(const GrindOptions& o) {
 
   // The mill: the ore in it, the rates, the circuit.
   const double holdup_kg = mill_holdup_kg(ore, run.porosity, run.filling, run.mill_volume);
-  const MillRates rates = mill_rates(ore, run.normal, run.power_W, holdup_kg);
+  const MillRates rates = mill_rates(ore, run.spectrum, run.power_W, holdup_kg);
   Circuit c;
   c.sizes = ore.sizes;
   c.feed = ore.feed;
   c.S_per_min = rates.S_per_min;
-  c.b = appearance_matrix(ore, run.normal, &c.t10_mean);
+  c.b = appearance_matrix(ore, run.spectrum, &c.t10_mean);
   c.power_kW = run.power_W / 1000;
   c.holdup_t = holdup_kg / 1000;
   c.tanks = o.tanks > 0 ? o.tanks : ore.tanks;

@@ -59,6 +59,7 @@ void check_fit_options(const GrindOptions& o) {
 ContactRecord record(const io::Run& run, const std::string& test, const std::string& run_dir,
                      const std::vector<std::string>& names, double rms_pp) {
   ContactRecord c = run.contact;
+  c.energy_basis = grind::basis_name(run.basis);
   c.test = test;
   c.run = run_dir;
   for (const std::string& n : names) c.parameters += (c.parameters.empty() ? "" : ",") + n;
@@ -141,12 +142,12 @@ int fit_batch(const GrindOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   const Ore start = io::read_ore(o.ore);
   const io::BatchTestFile tf = io::read_batch_test(o.fit_test);
-  const io::Run run = io::read_run(o.run_dir, start.model == RateModel::spectrum);
+  const io::Run run = io::read_run(o.run_dir, start.model == RateModel::spectrum, start.energy_basis);
   const double holdup_kg = tf.test.holdup_kg > 0 ? tf.test.holdup_kg
                                                  : mill_holdup_kg(start, run.porosity, run.filling, run.mill_volume);
   const std::vector<std::string> names =
       o.fit_params.empty() ? std::vector<std::string>{default_parameter(start.model)} : o.fit_params;
-  BatchFit fit = fit_batch_test(start, run.normal, run.power_W, holdup_kg, tf.test, names);
+  BatchFit fit = fit_batch_test(start, run.spectrum, run.power_W, holdup_kg, tf.test, names);
   fit.ore.fitted_under = record(run, o.fit_test, o.run_dir, names, fit.rms_pp);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -231,10 +232,10 @@ int fit_wi(const GrindOptions& o) {
     throw std::invalid_argument(fmt::format("--bond {:g}: the closing sieve must lie below the feed's F80 ({:.1f} um)",
                                             o.bond_p1_um, on_p1.f80_m * 1e6));
   check_bond_sieve(on_p1.sizes, o.bond_p1_um * 1e-6);
-  const io::Run run = io::read_run(o.run_dir, start.model == RateModel::spectrum);
+  const io::Run run = io::read_run(o.run_dir, start.model == RateModel::spectrum, start.energy_basis);
   if (!(run.speed_rpm > 0)) throw std::invalid_argument(o.run_dir + "/summary.json: speed_rpm missing");
   const std::string name = o.fit_params.empty() ? default_parameter(start.model) : o.fit_params.front();
-  const WiFit w = fit_work_index(on_p1, run.normal, run.power_W, run.speed_rpm, o.bond_p1_um * 1e-6, o.fit_wi_kWh_t,
+  const WiFit w = fit_work_index(on_p1, run.spectrum, run.power_W, run.speed_rpm, o.bond_p1_um * 1e-6, o.fit_wi_kWh_t,
                                  name);
   Ore fitted = start;
   find_ore_parameter(name)->set(fitted, w.value);

@@ -15,6 +15,11 @@ enum class RateModel { austin, energy, spectrum };
 // The appearance function of broken material: Austin's B, or Tavares'
 // energy-dependent t10 (the spectrum model only).
 enum class Appearance { austin, t10 };
+// The collision energy the spectrum model's fracture parameters are set
+// against: the impact energy at first touch (1/2 m* vn^2, what a drop-weight
+// test or load cell delivers) or the normal energy the collision loses.
+enum class EnergyBasis { impact, loss };
+inline const char* basis_name(EnergyBasis b) { return b == EnergyBasis::impact ? "impact" : "loss"; }
 
 // The contact law and parameters of the DEM run an ore was fitted through
 // (the [fitted] table of an ore file): the normal energy spectrum, and so
@@ -25,6 +30,9 @@ struct ContactRecord {
   double stiffness_N_m = 0;      // linear law
   double youngs_modulus_Pa = 0;  // hertz: the balls' material
   std::string pairs;  // the case's [[contact.pair]] overrides, as text ("" : none)
+  // The spectrum the ore was fitted on: "impact" or "loss" (an ore fitted
+  // before the impact spectrum was booked: "loss").
+  std::string energy_basis;
   // What else the ore file's [fitted] table says (not compared).
   std::string test, run, parameters;
   double rms_residual_pp = 0;
@@ -50,6 +58,7 @@ struct Ore {
   EnergyRates energy;
   Fracture fracture;
   double packing = 0.6, efficiency = 1.0;
+  EnergyBasis energy_basis = EnergyBasis::impact;
   int tanks = 1;
   ContactRecord fitted_under;
 };

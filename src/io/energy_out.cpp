@@ -29,6 +29,10 @@ nlohmann::ordered_json rates_json(const CollisionRates& c) {
   j["mean_energy_J"] = num(c.mean_energy_J);
   j["mean_impact_speed_m_s"] = num(c.mean_impact_speed_m_s);
   j["mean_contact_s"] = num(c.mean_contact_s);
+  // The impact energy at first touch (1/2 m* vn^2) beside the normal loss.
+  j["impact_W"] = num(c.impact_W);
+  j["mean_impact_energy_J"] = num(c.impact_collisions_per_s > 0 ? c.impact_W / c.impact_collisions_per_s : 0.0);
+  j["mean_r_eff_m"] = num(c.impact_r_eff_m);
   return j;
 }
 
@@ -46,14 +50,20 @@ const char* face_name(int f) {
 void write_spectra_csv(const std::filesystem::path& path, const SpectraReport& r) {
   std::string t =
       "pair,bin,energy_from_J,energy_to_J,collisions_per_s,power_W,normal_W,tangential_W,rolling_W,"
-      "mean_impact_speed_m_s,mean_contact_s,normal_spectrum_collisions_per_s,normal_spectrum_W\n";
-  char line[512];
+      "mean_impact_speed_m_s,mean_contact_s,normal_spectrum_collisions_per_s,normal_spectrum_W,"
+      "severity_from_J_per_m,severity_to_J_per_m,impact_collisions_per_s,impact_W,impact_r_eff_m,"
+      "loss_collisions_per_s,loss_W,loss_r_eff_m\n";
+  char line[768];
   for (const SpectraBin& b : r.bins) {
-    std::snprintf(line, sizeof line, "%s,%d,%.6g,%.6g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.9g,%.9g\n",
-                  b.rates.pair.c_str(), b.bin, b.energy_from_J, b.energy_to_J, b.rates.collisions_per_s,
-                  b.rates.power_W, b.rates.normal_W, b.rates.tangential_W, b.rates.rolling_W,
-                  b.rates.mean_impact_speed_m_s, b.rates.mean_contact_s, b.rates.by_normal_collisions_per_s,
-                  b.rates.by_normal_W);
+    const CollisionRates& q = b.rates;
+    std::snprintf(line, sizeof line,
+                  "%s,%d,%.6g,%.6g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.9g,%.9g,%.6g,%.6g,%.9g,%.9g,%.9g,%.9g,%.9g,"
+                  "%.9g\n",
+                  q.pair.c_str(), b.bin, b.energy_from_J, b.energy_to_J, q.collisions_per_s, q.power_W, q.normal_W,
+                  q.tangential_W, q.rolling_W, q.mean_impact_speed_m_s, q.mean_contact_s,
+                  q.by_normal_collisions_per_s, q.by_normal_W, b.severity_from_J_m, b.severity_to_J_m,
+                  q.impact_collisions_per_s, q.impact_W, q.impact_r_eff_m, q.loss_collisions_per_s, q.loss_W,
+                  q.loss_r_eff_m);
     t += line;
   }
   write_file_atomic(path, t);

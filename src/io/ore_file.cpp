@@ -74,7 +74,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // [fitted]: the contact the ore was fitted under (grind::ContactRecord).
 void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   r.knows(ft, "fitted.", {"contact_law", "restitution", "friction", "rolling_friction", "stiffness_N_m",
-                          "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp"});
+                          "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp",
+                          "energy_basis"});
   auto text = [&](const std::string& key) {
     const toml::node* n = ft.get(key);
     if (!n) return std::string();
@@ -90,6 +91,9 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   if (c.law == "linear") c.stiffness_N_m = r.number(ft, "fitted.", "stiffness_N_m", 0, kInf, "N/m > 0");
   if (c.law == "hertz") c.youngs_modulus_Pa = r.number(ft, "fitted.", "youngs_modulus_Pa", 0, kInf, "Pa > 0");
   c.pairs = text("pairs");
+  c.energy_basis = ft.get("energy_basis") ? text("energy_basis") : "loss";  // fits before the impact spectrum
+  if (c.energy_basis != "impact" && c.energy_basis != "loss")
+    r.fail("fitted.energy_basis", ft.get("energy_basis"), "must be \"impact\" or \"loss\"");
   c.test = text("test");
   c.run = text("run");
   c.parameters = text("parameters");
@@ -255,7 +259,8 @@ grind::Ore read_ore(const fs::path& path) {
     o.energy.zeta2 = r.number(rt, "rates.", "zeta2", -5, 5, "-5 to 5", 0.0);
   } else if (model == "spectrum") {
     o.model = RateModel::spectrum;
-    r.knows(rt, "rates.", {"model", "e_inf_J_kg", "d0_mm", "phi", "sigma", "emax_ratio", "packing", "efficiency"});
+    r.knows(rt, "rates.",
+            {"model", "e_inf_J_kg", "d0_mm", "phi", "sigma", "emax_ratio", "packing", "efficiency", "energy_basis"});
     o.fracture.e_inf_J_kg = r.number(rt, "rates.", "e_inf_J_kg", 1e-3, 1e5, "J/kg, 0.001 to 1e5");
     o.fracture.d0_m = r.number(rt, "rates.", "d0_mm", 1e-4, 1e3, "mm, 1e-4 to 1000") * 1e-3;
     o.fracture.phi = r.number(rt, "rates.", "phi", 0, 5, "0 to 5");
@@ -272,6 +277,27 @@ grind::Ore read_ore(const fs::path& path) {
            "\"t10\" takes each collision's energy from the run's normal spectrum: it needs rates.model = "
            "\"spectrum\" (with another rate model give Austin's B: phi, gamma, beta)");
   if (const toml::table* ft = r.table("fitted", false)) read_fitted(r, *ft, o.fitted_under);
+  if (o.model == RateModel::spectrum) {
+    // The energy the fracture parameters are set against: as the file says,
+    // else as the fit it records, else the impact energy (Tavares' drop-
+    // weight energies are energies delivered).
+    const toml::node* bn = rt.get("energy_basis");
+    const std::string fitted = o.fitted_under.energy_basis;
+    std::string basis = fitted.empty() ? "impact" : fitted;
+    if (bn) {
+      if (!bn->is_string() || (*bn->value<std::string>() != "impact" && *bn->value<std::string>() != "loss"))
+        r.fail("rates.energy_basis", bn,
+               "must be \"impact\" (the energy at first touch, as drop-weight tests deliver) or \"loss\" (the "
+               "normal energy the collision loses)");
+      basis = *bn->value<std::string>();
+      if (!fitted.empty() && basis != fitted)
+        r.fail("rates.energy_basis", bn,
+               "is \"" + basis + "\" but the ore was fitted on the " + fitted +
+                   " spectrum ([fitted] energy_basis; an ore fitted before the impact spectrum was booked has "
+                   "none and was fitted on the loss): set it to \"" + fitted + "\" or fit the ore again");
+    }
+    o.energy_basis = basis == "loss" ? grind::EnergyBasis::loss : grind::EnergyBasis::impact;
+  }
   return o;
 }
 
@@ -315,7 +341,8 @@ std::string ore_toml(const grind::Ore& o, const std::string& header) {
   if (o.model == RateModel::spectrum)
     s += "model = \"spectrum\"\ne_inf_J_kg = " + g(o.fracture.e_inf_J_kg) + "\nd0_mm = " + g(o.fracture.d0_m * 1e3) +
          "\nphi = " + g(o.fracture.phi) + "\nsigma = " + g(o.fracture.sigma) + "\nemax_ratio = " +
-         g(o.fracture.emax_ratio) + "\npacking = " + g(o.packing) + "\nefficiency = " + g(o.efficiency) + "\n";
+         g(o.fracture.emax_ratio) + "\npacking = " + g(o.packing) + "\nefficiency = " + g(o.efficiency) +
+         "\nenergy_basis = " + quoted(grind::basis_name(o.energy_basis)) + "\n";
   const ContactRecord& f = o.fitted_under;
   if (!f.law.empty()) {
     s += "\n[fitted]                # the run the ore was fitted through: its parameters hold under this contact\n";
@@ -325,6 +352,7 @@ std::string ore_toml(const grind::Ore& o, const std::string& header) {
     if (f.law == "linear") s += "stiffness_N_m = " + g(f.stiffness_N_m) + "\n";
     if (f.law == "hertz") s += "youngs_modulus_Pa = " + g(f.youngs_modulus_Pa) + "\n";
     if (!f.pairs.empty()) s += "pairs = " + quoted(f.pairs) + "\n";
+    if (!f.energy_basis.empty()) s += "energy_basis = " + quoted(f.energy_basis) + "\n";
     if (!f.test.empty()) s += "test = " + quoted(f.test) + "\n";
     if (!f.run.empty()) s += "run = " + quoted(f.run) + "\n";
     if (!f.parameters.empty()) s += "parameters = " + quoted(f.parameters) + "\n";

@@ -21,7 +21,7 @@ namespace mc::io {
 namespace fs = std::filesystem;
 using grind::SpectrumBin;
 
-Run read_run(const fs::path& dir, bool need_spectrum) {
+Run read_run(const fs::path& dir, bool need_spectrum, grind::EnergyBasis basis) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw std::invalid_argument(dir.string() + ": not a run folder");
   const fs::path sj = dir / "summary.json";
@@ -68,12 +68,14 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
   const fs::path sc = dir / "spectra.csv";
   const CsvTable t = read_csv_strict(sc, "the spectrum model needs the run's collision spectra");
   const std::string older = "the run is from an older millcharge; run it again";
-  if (!t.has("normal_spectrum_collisions_per_s") || !t.has("normal_spectrum_W") || !t.has("pair"))
-    throw std::invalid_argument(sc.string() +
-                                ": has no normal energy spectrum (columns normal_spectrum_collisions_per_s, "
-                                "normal_spectrum_W): " + older);
-  const int c_pair = t.column("pair"), c_bin = t.column("bin"), c_n = t.column("normal_spectrum_collisions_per_s"),
-            c_w = t.column("normal_spectrum_W");
+  r.basis = basis;
+  const std::string kind = grind::basis_name(basis);
+  const std::string col_n = kind + "_collisions_per_s", col_w = kind + "_W", col_r = kind + "_r_eff_m";
+  if (!t.has(col_n) || !t.has(col_w) || !t.has(col_r) || !t.has("pair"))
+    throw std::invalid_argument(sc.string() + ": has no " + kind + " severity spectrum (columns " + col_n + ", " +
+                                col_w + ", " + col_r + "): " + older);
+  const int c_pair = t.column("pair"), c_bin = t.column("bin"), c_n = t.column(col_n), c_w = t.column(col_w),
+            c_r = t.column(col_r);
   const int c_all = t.has("collisions_per_s") ? t.column("collisions_per_s") : -1;
   // Each pair's bins 0, 1, ... in order, every pair with as many: a file
   // cut at a line's end, or with rows lost, is refused by its line.
@@ -135,22 +137,21 @@ Run read_run(const fs::path& dir, bool need_spectrum) {
     normal_collisions += b.collisions_per_s;
     const double w = t.number(k, c_w);
     if (b.collisions_per_s <= 0 || w <= 0) continue;
+    // The bin's mean energy and mean R*: its caught mass is that of its
+    // collisions together, and the specific energy their R*-weighted mean.
     b.energy_J = w / b.collisions_per_s;
-    const std::string& pair = t.rows[k][c_pair];
-    auto ends = [&](const std::string& tail) {
-      return pair.size() > tail.size() && pair.compare(pair.size() - tail.size(), tail.size(), tail) == 0;
-    };
-    const bool wall = ends("-shell") || ends("-lifter") || ends("-end plate") || ends("-ends");
-    // Equal balls meet with half a radius; a ball meets a wall with its own.
-    b.r_eff_m = wall ? r.ball_radius_m : 0.5 * r.ball_radius_m;
-    r.normal.push_back(b);
+    b.r_eff_m = t.number(k, c_r);
+    if (!(b.r_eff_m > 0))
+      throw std::invalid_argument(fmt::format("{}: {} is {} where the bin holds collisions; the file is damaged",
+                                              t.where(k), col_r, t.rows[k][c_r]));
+    r.spectrum.push_back(b);
   }
   if (c_all >= 0 && all_collisions > 0 && std::fabs(normal_collisions - all_collisions) > 0.01 * all_collisions)
     throw std::invalid_argument(fmt::format(
-        "{}: the normal energy spectrum holds {:.1f} % of the collisions (a run resumed from an older millcharge's "
+        "{}: the {} severity spectrum holds {:.1f} % of the collisions (a run resumed from an older millcharge's "
         "checkpoint); run it again",
-        sc.string(), 100 * normal_collisions / all_collisions));
-  if (r.normal.empty()) throw std::invalid_argument(sc.string() + ": no collisions in the normal energy spectrum");
+        sc.string(), kind, 100 * normal_collisions / all_collisions));
+  if (r.spectrum.empty()) throw std::invalid_argument(sc.string() + ": no collisions in the " + kind + " spectrum");
   return r;
 }
 

@@ -17,7 +17,11 @@ namespace mc::io {
 struct Run {
   double speed_rpm = 0;
   double power_W = 0, filling = 0, mill_volume = 0, porosity = 0.4, ball_radius_m = 0;
-  std::vector<grind::SpectrumBin> normal;  // the normal energy spectrum
+  // The severity spectrum the grind reads (cl/layout.h): collisions binned
+  // by energy over their own R*, each bin with its mean energy and mean R*;
+  // the energy at first touch or the normal loss (`basis`).
+  std::vector<grind::SpectrumBin> spectrum;
+  grind::EnergyBasis basis = grind::EnergyBasis::impact;
   std::string title;
   // The power's books over the averaging window (summary.json): a run whose
   // torque and dissipation differ is not yet in steady motion.
@@ -29,7 +33,9 @@ struct Run {
   int pair_overrides = 0;
 };
 
-// `need_spectrum`: read spectra.csv too (the spectrum rate model).
-Run read_run(const std::filesystem::path& dir, bool need_spectrum);
+// `need_spectrum`: read spectra.csv too (the spectrum rate model), its
+// severity spectrum of `basis`.
+Run read_run(const std::filesystem::path& dir, bool need_spectrum,
+             grind::EnergyBasis basis = grind::EnergyBasis::impact);
 
 }  // namespace mc::io

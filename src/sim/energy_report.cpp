@@ -16,7 +16,14 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Collision sums of one spectra cell (or a sum of cells) into rates.
 struct CellSums {
   double count = 0, normal = 0, tangential = 0, rolling = 0, speed = 0, steps = 0, by_normal = 0, by_normal_e = 0;
+  double impact = 0, impact_e = 0, impact_r = 0, loss = 0, loss_e = 0, loss_r = 0;
   void add(const BookSums& b, int row, int bin) {
+    impact += b.at(row, bin, MC_SPECTRA_IMPACT);
+    impact_e += b.at(row, bin, MC_SPECTRA_IMPACT_ENERGY);
+    impact_r += b.at(row, bin, MC_SPECTRA_IMPACT_RADIUS);
+    loss += b.at(row, bin, MC_SPECTRA_LOSS);
+    loss_e += b.at(row, bin, MC_SPECTRA_LOSS_ENERGY);
+    loss_r += b.at(row, bin, MC_SPECTRA_LOSS_RADIUS);
     count += b.at(row, bin, MC_SPECTRA_COUNT);
     normal += b.at(row, bin, MC_SPECTRA_NORMAL);
     tangential += b.at(row, bin, MC_SPECTRA_TANGENTIAL);
@@ -29,6 +36,8 @@ struct CellSums {
   void add(const CellSums& o) {
     count += o.count, normal += o.normal, tangential += o.tangential, rolling += o.rolling, speed += o.speed,
         steps += o.steps, by_normal += o.by_normal, by_normal_e += o.by_normal_e;
+    impact += o.impact, impact_e += o.impact_e, impact_r += o.impact_r, loss += o.loss, loss_e += o.loss_e,
+        loss_r += o.loss_r;
   }
   CollisionRates rates(double window_s, double dt) const {
     CollisionRates r;
@@ -43,6 +52,12 @@ struct CellSums {
     r.mean_contact_s = count > 0 ? steps * dt / count : 0;
     r.by_normal_collisions_per_s = by_normal / w;
     r.by_normal_W = by_normal_e / w;
+    r.impact_collisions_per_s = impact / w;
+    r.impact_W = impact_e / w;
+    r.impact_r_eff_m = impact > 0 ? impact_r / impact : 0;
+    r.loss_collisions_per_s = loss / w;
+    r.loss_W = loss_e / w;
+    r.loss_r_eff_m = loss > 0 ? loss_r / loss : 0;
     return r;
   }
 };
@@ -87,6 +102,8 @@ SpectraReport spectra_report(const Scene& scene, const BookSums& books, double w
       sb.bin = b;
       sb.energy_from_J = b == 0 ? 0.0 : spectra_edge_J(b);
       sb.energy_to_J = b == MC_SPECTRA_BINS - 1 ? std::numeric_limits<double>::infinity() : spectra_edge_J(b + 1);
+      sb.severity_from_J_m = sb.energy_from_J / MC_SPECTRA_R_REF;
+      sb.severity_to_J_m = sb.energy_to_J / MC_SPECTRA_R_REF;
       sb.rates = cell.rates(window_s, dt);
       sb.rates.pair = pair_type_name(scene, t);
       sb.rates.wall = pair_type_is_wall(nm, t);

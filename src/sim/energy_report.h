@@ -28,12 +28,20 @@ struct CollisionRates {
   // (not the whole) falls in it, and those normal losses; over a pair type
   // or all bins they are the collisions and normal_W again.
   double by_normal_collisions_per_s = 0, by_normal_W = 0;
+  // The severity spectra (cl/layout.h): in a bin, the collisions whose
+  // energy over their own R* falls in it, that energy's rate and their mean
+  // R*. Impact: the energy at first touch, 1/2 m* vn^2; loss: the normal
+  // loss. Over a pair type or all bins: the collisions again, the impact
+  // power and normal_W.
+  double impact_collisions_per_s = 0, impact_W = 0, impact_r_eff_m = 0;
+  double loss_collisions_per_s = 0, loss_W = 0, loss_r_eff_m = 0;
 };
 
 struct SpectraBin {
   int type = 0;                 // pair type (core/liner.h)
   int bin = 0;
   double energy_from_J = 0, energy_to_J = 0;  // bin 0: from 0 (and losses <= 0)
+  double severity_from_J_m = 0, severity_to_J_m = 0;  // E / R*, the severity spectra's bin
   CollisionRates rates;
 };
 

@@ -69,9 +69,13 @@ BookSums SolverImpl<Real>::read_books() {
       for (int f = 0; f < MC_SPECTRA_FIELDS; ++f) {
         const std::size_t q = (static_cast<std::size_t>(r) * MC_SPECTRA_BINS + b) * MC_SPECTRA_FIELDS + f;
         const double v = static_cast<double>(u64_at(spectra_.host, q));
-        out.spectra[q] = f == MC_SPECTRA_COUNT || f == MC_SPECTRA_STEPS || f == MC_SPECTRA_BY_NORMAL ? v
-                         : f == MC_SPECTRA_SPEED                        ? v / MC_SPECTRA_SCALE
-                                                                        : v * e_unit;
+        const bool count = f == MC_SPECTRA_COUNT || f == MC_SPECTRA_STEPS || f == MC_SPECTRA_BY_NORMAL ||
+                           f == MC_SPECTRA_IMPACT || f == MC_SPECTRA_LOSS;
+        const bool radius = f == MC_SPECTRA_IMPACT_RADIUS || f == MC_SPECTRA_LOSS_RADIUS;
+        out.spectra[q] = count                    ? v
+                         : f == MC_SPECTRA_SPEED ? v / MC_SPECTRA_SCALE
+                         : radius                ? v * (MC_SPECTRA_R_REF / MC_SPECTRA_SCALE)
+                                                 : v * e_unit;
       }
     }
   auto liner_value = [&](std::size_t q) {

@@ -20,22 +20,25 @@ bool has_array(const SolverState& st, const char* name) {
   return false;
 }
 
-// The spectra of a checkpoint written before the normal energy spectrum
-// (six fields a cell) widen to today's eight: the normal spectrum's fields
-// start at zero, so it holds only the collisions that close after the load
-// (millcharge grind checks that it covers them all).
-constexpr int kSpectraFieldsBefore = 6;
+// The spectra of a checkpoint written by an older millcharge widen to
+// today's fields a cell: before the normal energy spectrum six, before the
+// severity spectra eight. The fields it lacked start at zero, so they hold
+// only the collisions that close after the load (millcharge grind checks
+// that the spectrum it reads covers them all).
 bool widen_old_spectra(const SolverState& st, compute::Buffer<std::uint32_t>& b) {
   for (const auto& [key, bytes] : st.arrays) {
     if (key != "spectra") continue;
     const std::size_t cells = b.size() / (2 * MC_SPECTRA_FIELDS);
-    if (bytes.size() != cells * 2 * kSpectraFieldsBefore * sizeof(std::uint32_t)) return false;
-    std::fill(b.host.begin(), b.host.end(), 0u);
-    for (std::size_t c = 0; c < cells; ++c)
-      std::memcpy(b.host.data() + c * 2 * MC_SPECTRA_FIELDS, bytes.data() + c * 2 * kSpectraFieldsBefore * 4,
-                  2 * kSpectraFieldsBefore * sizeof(std::uint32_t));
-    b.write_to_device();
-    return true;
+    for (const std::size_t before : {std::size_t{6}, std::size_t{8}}) {
+      if (bytes.size() != cells * 2 * before * sizeof(std::uint32_t)) continue;
+      std::fill(b.host.begin(), b.host.end(), 0u);
+      for (std::size_t c = 0; c < cells; ++c)
+        std::memcpy(b.host.data() + c * 2 * MC_SPECTRA_FIELDS, bytes.data() + c * 2 * before * 4,
+                    2 * before * sizeof(std::uint32_t));
+      b.write_to_device();
+      return true;
+    }
+    return false;
   }
   return false;
 }
