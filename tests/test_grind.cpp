@@ -664,7 +664,7 @@ TEST_CASE("grind reads a run's spectra.csv strictly: a cut or damaged or foreign
   const std::string path = (bad / "spectra.csv").string();
   // The issue's file: a third of the rows, then "0.1,abc".
   refuses(first(third) + "0.1,abc", path + ":" + std::to_string(third + 1) + ": the last line ends without a newline");
-  refuses(first(third) + "0.1,abc\n", path + ":" + std::to_string(third + 1) + ": 2 fields, the header has 13");
+  refuses(first(third) + "0.1,abc\n", path + ":" + std::to_string(third + 1) + ": 2 fields, the header has 21");
   // Cut inside a line.
   refuses(text.substr(0, text.size() / 3), "the file was cut short");
   // A number that is not one, by its line and column.
