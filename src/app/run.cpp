@@ -46,19 +46,22 @@ class ProgressPrinter {
   explicit ProgressPrinter(bool quiet) : quiet_(quiet), tty_(::isatty(2) == 1) {}
   void operator()(const RunProgress& p) {
     if (quiet_) return;
-    char line[256];
-    if (p.phase == "settle")
-      std::snprintf(line, sizeof line, "settling  t %.3f s  %s steps  %.3g steps/s  %.3g updates/s", p.simulated_s,
-                    thousands(p.steps).c_str(), p.steps_per_s, p.updates_per_s);
-    else if (p.relative_error >= 0)  // an auto run: its power's error so far, and the time left to its cap
-      std::snprintf(line, sizeof line,
-                    "turning   t %.3f s  rev %.2f  power \u00b1%.2f %%  %.3g steps/s  %.3g updates/s  %s left at most",
-                    p.simulated_s, p.revolutions, 100 * p.relative_error, p.steps_per_s, p.updates_per_s,
-                    duration_text(p.eta_s).c_str());
+    char line[256], speed[96];
+    // The speed over the last report's interval: none yet at the first.
+    if (p.steps_per_s > 0)
+      std::snprintf(speed, sizeof speed, "%.3g steps/s  %.3g updates/s", p.steps_per_s, p.updates_per_s);
     else
-      std::snprintf(line, sizeof line, "turning   t %.3f s  rev %.2f  %3.0f %%  %.3g steps/s  %.3g updates/s  %s left",
-                    p.simulated_s, p.revolutions, 100 * p.done, p.steps_per_s, p.updates_per_s,
-                    duration_text(p.eta_s).c_str());
+      std::snprintf(speed, sizeof speed, "speed from the next line");
+    const std::string left = p.steps_per_s > 0 ? duration_text(p.eta_s) : std::string("?");
+    if (p.phase == "settle")
+      std::snprintf(line, sizeof line, "settling  t %.3f s  %s steps  %s", p.simulated_s, thousands(p.steps).c_str(),
+                    speed);
+    else if (p.relative_error >= 0)  // an auto run: its power's error so far, and the time left to its cap
+      std::snprintf(line, sizeof line, "turning   t %.3f s  rev %.2f  power \u00b1%.2f %%  %s  %s left at most",
+                    p.simulated_s, p.revolutions, 100 * p.relative_error, speed, left.c_str());
+    else
+      std::snprintf(line, sizeof line, "turning   t %.3f s  rev %.2f  %3.0f %%  %s  %s left", p.simulated_s,
+                    p.revolutions, 100 * p.done, speed, left.c_str());
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     if (tty_) {
       std::fprintf(stderr, "\r\033[K%s", line);

@@ -1,5 +1,7 @@
 #include "app/run_report.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -254,8 +256,7 @@ std::vector<std::string> write_run_results(const FinishedRun& r, const RunReport
 
   // Pictures: power against time, and the end view with toe and shoulder.
   io::LinePlot plot;
-  plot.title = c.name + ": power draw, " + std::to_string(static_cast<int>(std::lround(100 * d.speed_fraction))) +
-               "% of critical";
+  plot.title = fmt::format("{}: power draw, {:.4g} % of critical", c.name, 100 * d.speed_fraction);
   plot.x_label = "time since the mill started (s)";
   plot.y_label = "power (W)";
   plot.series = {{"torque power", r.t_series, r.p_torque, 0x1f77b4}, {"dissipation", r.t_series, r.p_diss, 0xd62728}};

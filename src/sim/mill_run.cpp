@@ -191,7 +191,7 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   const TurnPlan plan = plan_turning(c, d, dt, st.window_floor_step, st.stop_step);
   const double rev_steps = plan.rev_steps;
   long turn_steps = plan.turn_steps;
-  const long window_start = plan.window_start, revs = plan.revolutions;
+  const long window_start = plan.window_start;
   sum.whole_revolutions = plan.whole;
   const int per_rev = std::max(1, st.batches_per_revolution);
   const long n_batches = window_batches(plan, per_rev);

@@ -297,15 +297,17 @@ void MillRenderer::draw_near_shell(const glm::mat4& view, const glm::mat4& proje
 
 void MillRenderer::draw_marks(const glm::mat4& view, const glm::mat4& projection, const MillMarks& marks) {
   if (!marks.show) return;
-  // Wedges from 1.07 R to 1.22 R at the front end, drawn over everything.
+  // Wedges at the front end, drawn over everything: toe and shoulder from
+  // 1.07 R to 1.22 R, the impact point outside them (1.24 R to 1.36 R), so
+  // that an impact point on the toe hides neither.
   std::vector<Vertex> quads;
   const float R = radius_, z = length_;
   const glm::vec3 n{0, 0, 1};
-  auto wedge = [&](float deg) {
+  auto wedge = [&](float deg, float from = 1.07f, float to = 1.22f) {
     const float a = deg * kPi / 180.0f, h = 0.9f * kPi / 180.0f;
     auto at = [&](float r, float b) { return glm::vec3(r * std::cos(b), r * std::sin(b), z); };
-    const Vertex i0{at(1.07f * R, a - h), n}, i1{at(1.07f * R, a + h), n}, o0{at(1.22f * R, a - h), n},
-        o1{at(1.22f * R, a + h), n};
+    const Vertex i0{at(from * R, a - h), n}, i1{at(from * R, a + h), n}, o0{at(to * R, a - h), n},
+        o1{at(to * R, a + h), n};
     quads.insert(quads.end(), {i0, o0, o1, i0, o1, i1});
   };
   shader_.use();
@@ -326,7 +328,7 @@ void MillRenderer::draw_marks(const glm::mat4& view, const glm::mat4& projection
   marks_.draw();
   if (marks.impact) {
     quads.clear();
-    wedge(marks.impact_deg);
+    wedge(marks.impact_deg, 1.24f, 1.36f);
     marks_.upload(quads);
     shader_.set("base_colour", glm::vec4(1.0f, 0.2f, 0.85f, 1.0f));  // impact point: magenta
     marks_.draw();

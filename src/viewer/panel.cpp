@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include <imgui.h>
 
 #include "io/case_file.h"
 #include "viewer/app.h"
+#include "viewer/label_layout.h"
 
 namespace mc::viewer {
 
@@ -83,11 +85,23 @@ void App::panel_stats() {
   const double t = sim_time();
   if (settling_)
     ImGui::TextColored({1, 0.8f, 0.3f, 1}, "settling %.3f s (mill at rest)", t - settle_from_);
-  else
-    ImGui::Text("turning %.3f s, %.2f rev (t %.3f s, dt %.3g s)", t - turning_from_, revolutions_, t, solver_->dt());
+  else {
+    ImGui::Text("turning %.3f s, %.2f rev", t - turning_from_, revolutions_);
+    ImGui::Text("t %.3f s, dt %.3g s", t, solver_->dt());
+  }
   if (!settling_ && revolutions_ < hold_until_rev_)
     ImGui::TextColored({1, 0.8f, 0.3f, 1}, "edited: averages from %.2f rev (%.2f rev of settle-in)", hold_until_rev_,
                        kSettleInRev);
+  // What the balls' colours mean, where it is always in sight (the View
+  // section below sets it).
+  if (style_.colour_by != ColourBy::material) {
+    const char* names[] = {"speed, m/s", "radius, m", "", "impact energy: log10 W dissipated"};
+    const int mode = static_cast<int>(style_.colour_by);
+    ImGui::Text("colour: %s", names[mode]);
+    colour_bar(colour_lo_[mode], colour_hi_[mode], "");
+  } else {
+    ImGui::TextUnformatted("colour: material");
+  }
   if (source_.empty())
     ImGui::TextWrapped("state: a fresh packing of %s", case_.name.c_str());
   else
@@ -319,22 +333,28 @@ void App::draw_labels() {
   if (!show_marks_ || settling_ || !monitor_.angles().found) return;
   ImDrawList* dl = ImGui::GetForegroundDrawList();
   const float R = static_cast<float>(0.5 * case_.diameter), z = static_cast<float>(case_.length);
-  auto label = [&](double deg, const char* name, ImU32 colour) {
+  std::vector<LabelBox> taken;
+  auto label = [&](double deg, const char* name, ImU32 colour, float radius) {
     const float a = static_cast<float>(deg * M_PI / 180.0);
-    const glm::vec2 p = to_pixels({1.27f * R * std::cos(a), 1.27f * R * std::sin(a), z});
     char text[48];
     std::snprintf(text, sizeof text, "%s %.0f", name, deg);
     const ImVec2 size = ImGui::CalcTextSize(text);
-    // Inside the picture, whatever the zoom.
-    const float x = std::clamp(p.x - 0.5f * size.x, panel_width_ + 2, static_cast<float>(opt_.width) - size.x - 2);
-    const float y = std::clamp(p.y - 0.5f * size.y, 2.0f, static_cast<float>(opt_.height) - size.y - 2);
-    dl->AddRectFilled({x - 3, y - 1}, {x + size.x + 3, y + size.y + 1}, IM_COL32(28, 31, 36, 220), 3.0f);
-    dl->AddText({x, y}, colour, text);
+    // Beside its mark, inside the picture whatever the zoom; a label that
+    // would cover one already drawn moves outward along its ray.
+    auto along = [&](float r) {
+      const glm::vec2 p = to_pixels({r * R * std::cos(a), r * R * std::sin(a), z});
+      return std::pair<float, float>(p.x, p.y);
+    };
+    const LabelBox b = place_label(along, size.x, size.y, radius, 0.07f, 8, panel_width_ + 2,
+                                   static_cast<float>(opt_.width) - 2, 2.0f, static_cast<float>(opt_.height) - 2, taken);
+    taken.push_back(b);
+    dl->AddRectFilled({b.x0 - 3, b.y0 - 1}, {b.x1 + 3, b.y1 + 1}, IM_COL32(28, 31, 36, 220), 3.0f);
+    dl->AddText({b.x0, b.y0}, colour, text);
   };
-  label(monitor_.angles().toe_deg, "toe", IM_COL32(255, 115, 25, 255));
-  label(monitor_.angles().shoulder_deg, "shoulder", IM_COL32(50, 230, 255, 255));
+  label(monitor_.angles().toe_deg, "toe", IM_COL32(255, 115, 25, 255), 1.27f);
+  label(monitor_.angles().shoulder_deg, "shoulder", IM_COL32(50, 230, 255, 255), 1.27f);
   if (liner_.ready() && std::isfinite(liner_.report().impact_point_deg))
-    label(liner_.report().impact_point_deg, "impact", IM_COL32(255, 50, 215, 255));
+    label(liner_.report().impact_point_deg, "impact", IM_COL32(255, 50, 215, 255), 1.42f);
 }
 
 }  // namespace mc::viewer
