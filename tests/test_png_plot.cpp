@@ -482,3 +482,37 @@ TEST_CASE("a value with its standard error", "[png]") {
   CHECK(value_with_error(871.66, kNaN, "W") == "871.7 W");
   CHECK(value_with_error(871.66, 0, "W") == "871.7 W");
 }
+
+TEST_CASE("heat map: coloured marks over the cells, and a curve on the map's y axis", "[png]") {
+  // One row of cells of one value (the colour bar's top), a mark in cyan
+  // at x = 0.5, a curve along y = 0.5 in ink. The mark's colour stands in
+  // a column the height of the map; the curve adds a row of ink across it.
+  TempDir dir;
+  auto map = [](bool marks, bool curve) {
+    HeatMap m;
+    m.title = "strip";
+    m.y_label = "covered";
+    m.unit = "W/deg";
+    for (int k = 0; k < 100; ++k) m.cells.push_back({k / 100.0, (k + 1) / 100.0, 0, 1, 1.0, false});
+    if (marks) m.marks_x.push_back({0.5, "toe", 0x1ca3c4});
+    if (curve)
+      for (int k = 0; k <= 100; ++k) m.curve.push_back({k / 100.0, 0.5});
+    return m;
+  };
+  auto count = [&](const fs::path& p, std::uint32_t rgb, int tol) {
+    const Image im = load(p);
+    int n = 0;
+    for (int y = 0; y < im.h; ++y)
+      for (int x = 0; x < im.w; ++x) n += near(im.at(x, y), rgb, tol);
+    return n;
+  };
+  write_heat_maps_png(dir.path / "bare.png", {map(false, false)}, BarChart{}, 800);
+  write_heat_maps_png(dir.path / "marked.png", {map(true, false)}, BarChart{}, 800);
+  write_heat_maps_png(dir.path / "curved.png", {map(false, true)}, BarChart{}, 800);
+  const int cyan_bare = count(dir.path / "bare.png", 0x1ca3c4, 20), cyan = count(dir.path / "marked.png", 0x1ca3c4, 20);
+  const int ink_bare = count(dir.path / "bare.png", 0x222222, 30), ink = count(dir.path / "curved.png", 0x222222, 30);
+  INFO("cyan pixels " << cyan_bare << " -> " << cyan << ", ink " << ink_bare << " -> " << ink);
+  // (The colour bar's ramp passes near cyan.)
+  CHECK(cyan - cyan_bare >= 2 * 150);  // a 3 px line the map's height (at least 150 px), and its label
+  CHECK(ink - ink_bare >= 500);  // a 2 px curve across a map over 500 px wide
+}

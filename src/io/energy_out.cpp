@@ -328,25 +328,32 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
     wear.cells.push_back({c.x0, c.x1, c.z0, c.z1, c.wear / c.count, c.outline});
   }
   // Where the liner is struck, in the lab frame: impact power per degree.
+  // The colour is the impact power of each degree (grey: none); the curve
+  // on the y axis is the share of that degree's liner under the charge.
   HeatMap strike;
-  strike.title = "impact power on the shell and lifters by angle, lab frame";
+  strike.title = "impact power on the shell and lifters per degree, lab frame (grey: no impacts)";
   strike.unit = "W/deg";
   strike.x_label = "degrees counter-clockwise from 3 o'clock (the mill turns counter-clockwise)";
+  strike.y_label = "liner covered";
   strike.x_lo = 0;
   strike.x_hi = 360;
   strike.y_lo = 0;
   strike.y_hi = 1;
-  for (std::size_t b = 0; b < r.impact_W_per_deg.size(); ++b)
-    strike.cells.push_back({b * 360.0 / r.impact_W_per_deg.size(), (b + 1) * 360.0 / r.impact_W_per_deg.size(), 0, 1,
-                            r.impact_W_per_deg[b], false});
+  const std::size_t nb = r.impact_W_per_deg.size();
+  for (std::size_t b = 0; b < nb; ++b)
+    strike.cells.push_back({b * 360.0 / nb, (b + 1) * 360.0 / nb, 0, 1, r.impact_W_per_deg[b], false});
+  for (std::size_t b = 0; b < r.coverage.size(); ++b)
+    strike.curve.push_back({(b + 0.5) * 360.0 / r.coverage.size(), r.coverage[b]});
+  strike.curve_label = "curve: share of the liner the charge covers";
   if (std::isfinite(r.impact_point_deg)) {
     char s[96];
     std::snprintf(s, sizeof s, "impact point %.0f, %.0f %% on bare liner", r.impact_point_deg,
                   100 * r.bare_liner_impact_share);
-    strike.marks_x.push_back({r.impact_point_deg, s});
+    strike.marks_x.push_back({r.impact_point_deg, s, 0xc51b8a});
   }
-  strike.marks_x.push_back({r.shoulder_deg, "shoulder"});
-  strike.marks_x.push_back({r.toe_deg, "toe"});
+  // The viewer's colours: shoulder cyan, toe orange, impact magenta.
+  strike.marks_x.push_back({r.shoulder_deg, "shoulder", 0x1ca3c4});
+  strike.marks_x.push_back({r.toe_deg, "toe", 0xf07018});
   BarChart bars;
   bars.title = "mean wear rate of each part (mm per 1000 h)";
   for (const LinerPartRates& p : r.parts) bars.bars.push_back({p.name, p.mean_wear_mm_per_1000h});

@@ -100,14 +100,24 @@ void draw_heat_map(Canvas& cv, const HeatMap& m, int x, int y, int w, int h) {
     }
   // The marks, then their labels over them, one under the other so that
   // near marks stay legible.
-  for (const auto& [mx, label] : m.marks_x)
-    if (std::isfinite(mx)) cv.line({X(mx), double(T)}, {X(mx), double(B)}, 0xc51b8a, 2);
+  for (std::size_t k = 1; k < m.curve.size(); ++k)
+    cv.line({X(m.curve[k - 1].first), Y(m.curve[k - 1].second)}, {X(m.curve[k].first), Y(m.curve[k].second)},
+            kInk, 2);
+  for (const HeatMap::Mark& mk : m.marks_x)
+    if (std::isfinite(mk.x)) {  // in its colour, edged in ink so that it shows on any cell
+      cv.line({X(mk.x), double(T)}, {X(mk.x), double(B)}, kInk, 6);
+      cv.line({X(mk.x), double(T)}, {X(mk.x), double(B)}, mk.rgb, 3);
+    }
   int nth = 0;
-  for (const auto& [mx, label] : m.marks_x) {
-    if (!std::isfinite(mx)) continue;
-    const double tw = cv.text_width(label, kNotePx);
-    const double tx = X(mx) + 6 + tw > R - 4 ? X(mx) - 6 - tw : X(mx) + 6;
-    cv.label(tx, T + 10 + 22 * nth++, label, 0xc51b8a, kNotePx);
+  for (const HeatMap::Mark& mk : m.marks_x) {
+    if (!std::isfinite(mk.x)) continue;
+    const double tw = cv.text_width(mk.label, kNotePx);
+    const double tx = X(mk.x) + 6 + tw > R - 4 ? X(mk.x) - 6 - tw : X(mk.x) + 6;
+    cv.label(tx, T + 10 + 22 * nth++, mk.label, mk.rgb, kNotePx);
+  }
+  if (!m.curve.empty() && !m.curve_label.empty()) {
+    const double tw = cv.text_width(m.curve_label, kNotePx);
+    cv.label(R - 8 - tw, B - 18, m.curve_label, kInk, kNotePx);
   }
   cv.unclip();
   cv.fill_rect(L, T, R, T + 1, kFrame), cv.fill_rect(L, B - 1, R, B, kFrame);

@@ -107,7 +107,16 @@ struct HeatMap {
   double x_lo = 0, x_hi = 1, y_lo = 0, y_hi = 1;
   std::vector<HeatCell> cells;
   double decades = 3;
-  std::vector<std::pair<double, std::string>> marks_x;  // labelled vertical lines
+  struct Mark {
+    double x = 0;
+    std::string label;
+    std::uint32_t rgb = 0xc51b8a;
+  };
+  std::vector<Mark> marks_x;  // labelled vertical lines
+  // A curve over the map on its own y axis (the map's y range), drawn in
+  // ink and named in the panel's corner; none where empty.
+  std::vector<std::pair<double, double>> curve;
+  std::string curve_label;
 };
 
 // Bars with their values written above them.
