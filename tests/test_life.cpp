@@ -71,7 +71,9 @@ double num(const std::map<std::string, std::string>& r, const std::string& key) 
 
 TEST_CASE("a life study of the lab mill removes what its runs booked and resumes after a kill", "[life][cli]") {
   const fs::path a = scratch("unbroken"), b = scratch("killed");
-  const std::string study = " --stages 2 --hours 200000" + kShort;
+  // Stages of 2,000 h at the default wear coefficient (5e-12: the bars
+  // lose a few mm a stage).
+  const std::string study = " --stages 2 --hours 4000" + kShort;
   std::string err;
   const int first = life(study + " --out '" + a.string() + "'", &err);
   INFO(err);
@@ -84,9 +86,9 @@ TEST_CASE("a life study of the lab mill removes what its runs booked and resumes
   for (std::size_t i = 0; i < rows.size(); ++i) {
     INFO("stage " << i);
     CHECK(num(rows[i], "stage") == i);
-    CHECK(num(rows[i], "hours") == Approx(100000.0 * i));
+    CHECK(num(rows[i], "hours") == Approx(2000.0 * i));
     if (i + 1 < rows.size()) {
-      CHECK(num(rows[i], "stage_hours") == Approx(100000.0));
+      CHECK(num(rows[i], "stage_hours") == Approx(2000.0));
       CHECK(num(rows[i], "booked_mm2") > 1.0);
       CHECK(num(rows[i], "removed_mm2") == Approx(num(rows[i], "booked_mm2")).epsilon(2e-5));  // 6 digits
       // The top wears back (its height above the new shell's line falls);
@@ -98,7 +100,24 @@ TEST_CASE("a life study of the lab mill removes what its runs booked and resumes
             Approx(num(rows[i], "worn_area_mm2") + num(rows[i], "removed_mm2")).epsilon(1e-3));
     }
     CHECK(num(rows[i], "power_W") > 500);
-    CHECK(num(rows[i], "liner_wear_kg_per_h") > 0);
+    // The shell and lifters' wear (not the end plates'): the stage run's
+    // parts of that name, and its g/kWh over the run's power; uncalibrated
+    // at the default coefficient, so relative.
+    const nlohmann::json summary =
+        nlohmann::json::parse(read_text(a / ("stage-0" + std::to_string(i)) / "summary.json"));
+    double kg_h = 0, plates = 0;
+    for (const auto& part : summary.at("liner").at("parts")) {
+      const std::string name = part.at("part");
+      if (name == "shell" || name.rfind("lifter", 0) == 0) kg_h += part.at("wear_kg_per_h").get<double>();
+      if (name == "end plates") plates += part.at("wear_kg_per_h").get<double>();
+    }
+    REQUIRE(kg_h > 0);
+    CHECK(plates > 0);
+    CHECK(num(rows[i], "shell_lifters_wear_kg_per_h") == Approx(kg_h).epsilon(1e-5));  // 6 digits
+    CHECK(summary.at("liner").at("wear_kg_per_h").get<double>() == Approx(kg_h + plates).epsilon(1e-9));
+    const double watts = summary.at("power_W").at("torque").get<double>();
+    CHECK(num(rows[i], "shell_lifters_g_per_kWh") == Approx(kg_h * 1e6 / watts).epsilon(1e-5));
+    CHECK(rows[i].at("wear_basis") == "relative");
   }
   CHECK(num(rows[0], "height_mm") == Approx(25.0).epsilon(1e-6));
   CHECK(num(rows[0], "diameter_m") == Approx(0.9).epsilon(1e-9));
@@ -154,7 +173,9 @@ TEST_CASE("a life study of the lab mill removes what its runs booked and resumes
   CHECK(worn.lifter_pattern[0].points.size() >= 4);
   CHECK(worn.diameter == Approx(num(rows[2], "diameter_m")).epsilon(1e-5));
   const nlohmann::json j = nlohmann::json::parse(read_text(a / "life.json"));
-  CHECK(j.at("stopped").get<std::string>().find("200000 operating hours reached") != std::string::npos);
+  CHECK(j.at("stopped").get<std::string>().find("4000 hours (relative: wear coefficient not calibrated) reached") !=
+        std::string::npos);
+  CHECK(j.at("calibration").at("hours_and_wear_rates") == "relative");
   CHECK(fs::exists(a / "life.png"));
   CHECK(fs::exists(a / "stage-02" / "liner.vtp"));
   const std::string pvd = read_text(a / "life.pvd");
@@ -183,7 +204,7 @@ TEST_CASE("a life study of the lab mill removes what its runs booked and resumes
 
   // The same folder with another request is refused, and left as it was.
   const std::string table = read_text(a / "life.csv");
-  CHECK(life(" --stages 2 --hours 300000" + kShort + " --out '" + a.string() + "'", &err) == 2);
+  CHECK(life(" --stages 2 --hours 6000" + kShort + " --out '" + a.string() + "'", &err) == 2);
   CHECK(err.find("holds a life study of another case or options") != std::string::npos);
   CHECK(read_text(a / "life.csv") == table);
   fs::remove_all(a);
@@ -225,6 +246,16 @@ TEST_CASE("bad life study requests are refused by name, status 2 and nothing wri
        "--calibrate-loss 30: more than the new lifters' height"},
       {"--stages 2 --hours 10 --calibrate-loss 10 --calibrate-hours 100 --calibrate-rate 1",
        "--calibrate-rate and --calibrate-loss: give one measured figure"},
+      {"--stages 2 --hours 10 --calibrate-consumption 0", "--calibrate-consumption: must be > 0 g/kWh, got 0"},
+      {"--stages 2 --hours 10 --calibrate-consumption -2", "--calibrate-consumption: must be > 0 g/kWh, got -2"},
+      {"--stages 2 --hours 10 --calibrate-consumption nan",
+       "--calibrate-consumption: must be a number > 0 g/kWh, got \"nan\""},
+      {"--stages 2 --hours 10 --calibrate-consumption inf",
+       "--calibrate-consumption: must be a number > 0 g/kWh, got \"inf\""},
+      {"--stages 2 --hours 10 --calibrate-consumption 4 --calibrate-rate 1",
+       "--calibrate-consumption and --calibrate-rate: give one measured figure"},
+      {"--stages 2 --hours 10 --calibrate-consumption 4 --calibrate-loss 10 --calibrate-hours 100",
+       "--calibrate-consumption and --calibrate-loss: give one measured figure"},
       {"--stages 2 --hours 10 --set lifters.rows=0", "lifters.rows = 0: a life study wears lifter bars"},
       {"--stages 2 --hours 10 --set lifters.profile.0.height=0.5", "lifters.profile[0].height"},
       {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10",

@@ -27,6 +27,7 @@
 #include "app/life_state.h"
 #include "core/mill_case.h"
 #include "io/case_file.h"
+#include "core/scene.h"
 #include "io/csv_read.h"
 #include "io/json_read.h"
 #include "text_file.h"
@@ -38,7 +39,7 @@ namespace {
 
 // Two stages (the new liner and one worn) of 0.15 s turned each.
 const std::string kStudy =
-    " --stages 1 --hours 100000 --quiet --set run.duration=0.15 --set run.settle=0.05 --set run.warmup=0.05"
+    " --stages 1 --hours 2000 --quiet --set run.duration=0.15 --set run.settle=0.05 --set run.warmup=0.05"
     " --set run.checkpoint_interval=0.05 --set run.snapshot_interval=0";
 
 fs::path scratch(const std::string& name) {
@@ -158,8 +159,8 @@ TEST_CASE("life.json's state is read whole and strictly, each fault named by sta
   write_text(dir / "life.json", good.dump(1));
   const mc::app::life::LifeState st = mc::app::life::read_life_state(dir / "life.json", shape);
   REQUIRE(st.stages.size() == 2);
-  CHECK(st.stages[1].case_hours == Approx(100000.0));
-  CHECK(st.stopped.find("100000 operating hours reached") != std::string::npos);
+  CHECK(st.stages[1].case_hours == Approx(2000.0));
+  CHECK(st.stopped.find("2000 hours (relative: wear coefficient not calibrated) reached") != std::string::npos);
   const std::string file = (dir / "life.json").string();
   auto refused = [&](const std::function<void(json&)>& damage, const std::string& said) {
     json d = good;
@@ -176,8 +177,15 @@ TEST_CASE("life.json's state is read whole and strictly, each fault named by sta
   refused([](json& d) { d["stages"][0]["ran"] = "yes"; }, "stage 0: ran: expected true or false, found a string, \"yes\"");
   refused([](json& d) { d["stages"][0].erase("wear"); }, "stage 0: wear: missing, yet stage 1 follows");
   refused([](json& d) { d["stages"] = json::array(); }, "stages: empty list: the study holds no stage");
+  refused([](json& d) { d["calibration"]["hours_and_wear_rates"] = "absolute"; },
+          "calibration.hours_and_wear_rates: \"absolute\", not one of \"calibrated\", \"relative\", "
+          "\"case_coefficient\"");
+  refused([](json& d) { d["calibration"]["wear_coefficient_m3_per_N_m"] = 0; },
+          "calibration.wear_coefficient_m3_per_N_m: must be > 0");
+  CHECK(good.at("calibration").at("hours_and_wear_rates") == "relative");
+  CHECK(good.at("calibration").at("case_wear_coefficient_m3_per_N_m").get<double>() == mc::kDefaultWearCoefficient);
   refused([](json& d) { d["format"] = "millcharge life 0"; },
-          "format: \"millcharge life 0\", this millcharge reads \"millcharge life 1\"");
+          "format: \"millcharge life 0\", this millcharge reads \"millcharge life 2\"");
   write_text(dir / "life.json", good.dump(1).substr(0, 500));
   CHECK_THROWS_WITH(mc::app::life::read_life_state(dir / "life.json", shape),
                     file + ": cut short after 500 bytes; the file is damaged");

@@ -67,6 +67,7 @@ struct LifeOptions {
   double calibrate_loss_mm = 0; // --calibrate-loss MM with --calibrate-hours H: the
   double calibrate_hours = 0;   //   lifters lost MM of height in H operating hours
   double calibrate_rate_kg_h = 0;  // --calibrate-rate KG/H: the new shell liner's wear rate
+  double calibrate_consumption_g_kWh = 0;  // --calibrate-consumption G_PER_KWH: the new shell and lifters' g/kWh
   bool force = false;           // --force: start again in an --out that holds another study
   bool quiet = false;
 };

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "app/commands.h"
+#include "app/life_picture.h"
 #include "app/life_state.h"
 #include "app/prepare.h"
 #include "core/lifters.h"
@@ -26,6 +27,7 @@
 #include "io/case_file.h"
 #include "io/csv_read.h"
 #include "io/png_plot.h"
+#include "core/scene.h"
 
 namespace mc::app {
 
@@ -50,6 +52,14 @@ json request_of(const LifeOptions& o, const Prepared& p) {
           {"calibrate_rate_kg_h", o.calibrate_rate_kg_h}};
 }
 
+// The request with --calibrate-consumption where it was given (a study
+// started before the option resumes with the request it wrote).
+json request_with_consumption(const LifeOptions& o, const Prepared& p) {
+  json r = request_of(o, p);
+  if (o.calibrate_consumption_g_kWh > 0) r["calibrate_consumption_g_per_kWh"] = o.calibrate_consumption_g_kWh;
+  return r;
+}
+
 // The case hours in which stage s's wear takes `loss` mm off profile k's
 // height above the shell (core/liner_wear.h hours_to_lose); negative when
 // that wear does not lower it.
@@ -63,6 +73,13 @@ struct Study {
   double factor = 1;           // calibrated hours = case hours / factor
   std::string calibration;     // how the factor was found
   int tallest = 0;             // the profile the height figures follow
+  double wear_coefficient = 0; // the case's (the liner material's)
+  bool calibrated = false;     // by a measured figure (--calibrate-...)
+  // Hours and wear rates are relative: the default wear coefficient, not
+  // calibrated (core/scene.h kWearRelative).
+  bool relative() const { return !calibrated && wear_coefficient_is_default(wear_coefficient); }
+  // life.csv's wear_basis: what its hours and wear rates stand on.
+  const char* basis() const { return calibrated ? "calibrated" : relative() ? "relative" : "case_coefficient"; }
 };
 
 double height_of(const Stage& s, int k) { return measure_profile(s.outlines[k]).height; }
@@ -70,6 +87,20 @@ double height_of(const Stage& s, int k) { return measure_profile(s.outlines[k]).
 // The calibration factor from the stages so far.
 void calibrate(Study& st, const LifeOptions& o, double length) {
   const Stage& s0 = st.stages.front();
+  st.calibrated = o.calibrate_rate_kg_h > 0 || o.calibrate_loss_mm > 0 || o.calibrate_consumption_g_kWh > 0;
+  if (o.calibrate_consumption_g_kWh > 0) {
+    const double g = grams_per_kWh(s0.r.liner_kg_h, s0.r.power_W);
+    if (!(g > 0))
+      throw std::invalid_argument(fmt::format(
+          "--calibrate-consumption {:g}: the new liner's run booked no wear on the shell and the lifters ({:.4g} kg/h at "
+          "{:.4g} W); nothing to set the measured consumption against",
+          o.calibrate_consumption_g_kWh, s0.r.liner_kg_h, s0.r.power_W));
+    st.factor = o.calibrate_consumption_g_kWh / g;
+    st.calibration = fmt::format("the new shell and lifters' consumption, {:.6g} g/kWh measured against {:.6g} g/kWh "
+                                 "at the case's wear coefficient",
+                                 o.calibrate_consumption_g_kWh, g);
+    return;
+  }
   if (o.calibrate_rate_kg_h > 0) {
     if (!(s0.r.liner_kg_h > 0))
       throw std::invalid_argument("--calibrate-rate: the new liner's run booked no wear on the shell and the lifters; "
@@ -82,7 +113,9 @@ void calibrate(Study& st, const LifeOptions& o, double length) {
   }
   if (!(o.calibrate_loss_mm > 0)) {
     st.factor = 1;
-    st.calibration = "none: the case's wear coefficient";
+    st.calibration = st.relative() ? std::string("none: the case's wear coefficient is the default stand-in; hours and "
+                                                 "wear rates are ") + kWearRelative
+                                   : "none: the case's wear coefficient";
     return;
   }
   // Height lost against case hours; where it reaches the measured loss.
@@ -135,14 +168,20 @@ MillCase stage_case(const Prepared& base, const Stage& s) {
 }
 
 void save(const fs::path& out, const json& request, const Study& st, const std::string& stopped) {
-  life::save_life_state(out, request, st.stages, st.factor, st.calibration, stopped);
+  life::Calibration cal;
+  cal.factor = st.factor;
+  cal.how = st.calibration;
+  cal.basis = st.basis();
+  cal.case_wear_coefficient = st.wear_coefficient;
+  life::save_life_state(out, request, st.stages, cal, stopped);
 }
 
 void write_table(const fs::path& out, const Study& st, double length) {
   std::string t =
       "stage,hours,case_hours,profile,height_mm,top_width_mm,leading_angle_deg,trailing_angle_deg,area_mm2,"
       "worn_area_mm2,shell_wear_mm,diameter_m,power_W,power_sem_W,toe_deg,shoulder_deg,impact_point_deg,"
-      "bare_liner_impact_share,liner_wear_kg_per_h,top_wear_mm_per_1000h,stage_hours,booked_mm2,removed_mm2\n";
+      "bare_liner_impact_share,shell_lifters_wear_kg_per_h,shell_lifters_g_per_kWh,top_wear_mm_per_1000h,stage_hours,"
+      "booked_mm2,removed_mm2,wear_basis\n";
   std::vector<double> worn(st.stages.front().outlines.size(), 0.0);
   for (const Stage& s : st.stages) {
     if (!s.ran) break;
@@ -153,12 +192,12 @@ void write_table(const fs::path& out, const Study& st, double length) {
       const bool carried = s.span_case_hours > 0;
       t += fmt::format(
           "{},{:.6g},{:.6g},{},{:.4f},{:.4f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f},{:.6f},{:.6g},{:.4g},{:.3f},{:.3f},{:.3f},"
-          "{:.4f},{:.6g},{:.6g},{},{},{}\n",
+          "{:.4f},{:.6g},{:.6g},{:.6g},{},{},{},{}\n",
           s.index, s.case_hours / st.factor, s.case_hours, k, m.height * 1000, m.top_width * 1000, m.leading_angle_deg,
           m.trailing_angle_deg, m.area * 1e6, worn[k], s.shell_wear_m * 1000, s.diameter, s.r.power_W, s.r.power_sem_W,
           s.r.toe_deg, s.r.shoulder_deg, s.r.impact_deg, s.r.bare_share, s.r.liner_kg_h * st.factor,
-          top * 1000 * st.factor, carried ? fmt::format("{:.6g}", s.span_case_hours / st.factor) : "",
-          carried ? fmt::format("{:.6g}", s.booked_mm2[k]) : "", carried ? fmt::format("{:.6g}", s.removed_mm2[k]) : "");
+          grams_per_kWh(s.r.liner_kg_h, s.r.power_W) * st.factor, top * 1000 * st.factor, carried ? fmt::format("{:.6g}", s.span_case_hours / st.factor) : "",
+          carried ? fmt::format("{:.6g}", s.booked_mm2[k]) : "", carried ? fmt::format("{:.6g}", s.removed_mm2[k]) : "", st.basis());
       if (carried) worn[k] += s.removed_mm2[k];
     }
   }
@@ -173,99 +212,26 @@ void write_table(const fs::path& out, const Study& st, double length) {
   io::write_file_atomic(out / "life.pvd", pvd);
 }
 
-std::uint32_t ramp(double t) {  // blue (new) to red (worn)
-  const auto mix = [&](int a, int b) { return static_cast<std::uint32_t>(std::lround(a + (b - a) * t)); };
-  return (mix(0x1f, 0xd6) << 16) | (mix(0x77, 0x27) << 8) | mix(0xb4, 0x28);
+// The new liner's consumption, and what the study's hours stand on.
+void print_new_liner(const Study& st) {
+  const Stage& s0 = st.stages.front();
+  const double g = grams_per_kWh(s0.r.liner_kg_h, s0.r.power_W);
+  std::printf("life            new liner: shell and lifters %.4g g/kWh (%.4g kg/h of %.4g W) at the case's wear "
+              "coefficient %g m3/(N m)%s\n",
+              g, s0.r.liner_kg_h, s0.r.power_W, st.wear_coefficient,
+              st.relative() ? (std::string("; hours and wear rates ") + kWearRelative).c_str() : "");
 }
 
-void write_picture(const fs::path& out, const std::string& name, const Study& st) {
-  std::vector<io::LinePlot> plots;
-  std::vector<const Stage*> ran;
-  for (const Stage& s : st.stages)
-    if (s.ran) ran.push_back(&s);
-  const int kinds = static_cast<int>(st.stages.front().outlines.size());
-  io::LinePlot prof;
-  prof.title = name + ": lifter profiles from new (blue) to worn (red), on the new shell's line";
-  prof.x_label = "along the shell (mm), leading face to the right";
-  prof.y_label = "height (mm)";
-  prof.equal_aspect = true;
-  double x_shift = 0;
-  for (int k = 0; k < kinds; ++k) {
-    double widest = 0;
-    for (const Stage* s : ran) {
-      io::PlotSeries ser;
-      const double t = ran.size() > 1 ? static_cast<double>(s - ran.front()) / (ran.back() - ran.front()) : 0.0;
-      ser.rgb = ramp(t);
-      for (const Vec2& v : s->outlines[k]) {
-        ser.x.push_back(v.x * 1000 + x_shift);
-        ser.y.push_back((v.y - s->shell_wear_m) * 1000);
-        widest = std::max(widest, std::fabs(v.x) * 1000);
-      }
-      if (k == 0 && (s == ran.front() || s == ran.back()))
-        ser.label = fmt::format("{:.0f} h: {:.1f} mm, face {:.1f} deg", s->case_hours / st.factor,
-                                measure_profile(s->outlines[k]).height * 1000,
-                                measure_profile(s->outlines[k]).leading_angle_deg);
-      prof.series.push_back(ser);
-    }
-    // The new and the most worn shell under the bar (arcs, dashed).
-    for (const Stage* s : {ran.front(), ran.back()}) {
-      io::PlotSeries arc;
-      arc.rgb = s == ran.front() ? 0x1f77b4 : 0xd62728;
-      arc.dashed = true;
-      const double R = 0.5 * s->diameter * 1000, w = 1.2 * widest;
-      for (int q = 0; q <= 40; ++q) {
-        const double x = -w + 2 * w * q / 40;
-        arc.x.push_back(x + x_shift);
-        // The shell rises towards the axis away from the bar's centre line
-        // (heights here are measured from its tangent there).
-        arc.y.push_back((R - std::sqrt(std::max(0.0, R * R - x * x))) - s->shell_wear_m * 1000);
-      }
-      if (k == 0) arc.label = s == ran.front() ? "new shell" : "worn shell";
-      prof.series.push_back(arc);
-      if (ran.size() == 1) break;
-    }
-    x_shift += 2.4 * widest;
-  }
-  plots.push_back(prof);
-  auto over_hours = [&](const std::string& title, const std::string& y_label) {
-    io::LinePlot p;
-    p.title = title;
-    p.x_label = "operating hours";
-    p.y_label = y_label;
-    p.pad_x = true;
-    return p;
-  };
-  auto series = [&](const std::string& label, std::uint32_t rgb, auto value) {
-    io::PlotSeries s;
-    s.label = label;
-    s.rgb = rgb;
-    s.markers = true;
-    for (const Stage* x : ran) {
-      s.x.push_back(x->case_hours / st.factor);
-      s.y.push_back(value(*x));
-    }
-    return s;
-  };
-  io::LinePlot power = over_hours(name + ": power draw", "power (W)");
-  power.series.push_back(series("torque power", 0x1f77b4, [](const Stage& s) { return s.r.power_W; }));
-  power.series.push_back(series("- 2 SE", 0x9ecae1, [](const Stage& s) { return s.r.power_W - 2 * s.r.power_sem_W; }));
-  power.series.back().dashed = true;
-  power.series.push_back(series("+ 2 SE", 0x9ecae1, [](const Stage& s) { return s.r.power_W + 2 * s.r.power_sem_W; }));
-  power.series.back().dashed = true;
-  plots.push_back(power);
-  io::LinePlot low = over_hours(name + ": where the charge lands", "angle (deg, from 3 o'clock)");
-  low.series.push_back(series("toe", 0x9467bd, [](const Stage& s) { return s.r.toe_deg; }));
-  low.series.push_back(series("impact point", 0xd62728, [](const Stage& s) { return s.r.impact_deg; }));
-  plots.push_back(low);
-  io::LinePlot high = over_hours(name + ": where the charge leaves the shell", "angle (deg, from 3 o'clock)");
-  high.series.push_back(series("shoulder", 0x2ca02c, [](const Stage& s) { return s.r.shoulder_deg; }));
-  plots.push_back(high);
-  io::LinePlot lifter = over_hours(name + ": the lifters (profile 0)", "mm or deg");
-  lifter.series.push_back(series("height (mm)", 0x1f77b4, [](const Stage& s) { return measure_profile(s.outlines[0]).height * 1000; }));
-  lifter.series.push_back(series("leading face angle (deg)", 0xd62728, [](const Stage& s) { return measure_profile(s.outlines[0]).leading_angle_deg; }));
-  lifter.series.push_back(series("trailing face angle (deg)", 0xff7f0e, [](const Stage& s) { return measure_profile(s.outlines[0]).trailing_angle_deg; }));
-  plots.push_back(lifter);
-  io::write_line_plots_png(out / "life.png", plots, 960, 400);
+// How the hours were set, when the study ends.
+void print_calibration(const Study& st) {
+  if (st.calibrated)
+    std::printf("life            calibrated on %s: the case's hours / %.6g; the wear coefficient that gives these "
+                "hours, %.4g m3/(N m), would make them the case's own\n",
+                st.calibration.c_str(), st.factor, st.wear_coefficient * st.factor);
+  else if (st.relative())
+    std::printf("life            hours and wear rates are %s: give --calibrate-consumption G_PER_KWH (or "
+                "--calibrate-rate, --calibrate-loss) to make them operating hours\n",
+                kWearRelative);
 }
 
 // The options' ranges are checked as they are parsed (main.cpp); here, how
@@ -276,6 +242,11 @@ void check_options(const LifeOptions& o) {
   if (by_hours == by_height)
     throw std::invalid_argument("give one of --hours H (operating hours the study covers) and --until-height MM");
   const bool loss = o.calibrate_loss_mm > 0 || o.calibrate_hours > 0, rate = o.calibrate_rate_kg_h > 0;
+  const bool use = o.calibrate_consumption_g_kWh > 0;
+  if (use && (rate || loss))
+    throw std::invalid_argument(std::string("--calibrate-consumption and ") +
+                                (rate ? "--calibrate-rate" : "--calibrate-loss") +
+                                ": give one measured figure (each alone sets the hours)");
   if (loss && rate) throw std::invalid_argument("--calibrate-rate and --calibrate-loss: give one measured figure");
   if (loss && !(o.calibrate_loss_mm > 0 && o.calibrate_hours > 0))
     throw std::invalid_argument("--calibrate-loss MM goes with --calibrate-hours H (the lifters lost MM in H hours)");
@@ -298,13 +269,14 @@ int cmd_life(const LifeOptions& o) {
   if (o.calibrate_rate_kg_h > 0 && c.periodic)
     throw std::invalid_argument(fmt::format(
         "--calibrate-rate {:g}: mill.ends = \"periodic\": the case is a {:g} m slice of a longer mill, and a whole "
-        "mill's kg/h (its ends and its full length) cannot be set against a slice's; calibrate a slice by the "
-        "height its lifters lost, --calibrate-loss MM --calibrate-hours H",
+        "mill's kg/h (its ends and its full length) cannot be set against a slice's; calibrate a slice by its "
+        "consumption, --calibrate-consumption G_PER_KWH, or by the height its lifters lost, --calibrate-loss MM "
+        "--calibrate-hours H",
         o.calibrate_rate_kg_h, c.length));
   if (!(base.scene.wall_material.wear_coefficient > 0))
     throw std::invalid_argument("materials." + c.liner + ".wear_coefficient is 0: a life study needs the liner's "
-                                "wear coefficient > 0 (its size sets only the hours; --calibrate-loss or "
-                                "--calibrate-rate fix those)");
+                                "wear coefficient > 0 (its size sets only the hours; --calibrate-consumption, "
+                                "--calibrate-loss or --calibrate-rate fix those)");
   const double h_new = [&] {
     double h = 0;
     for (const LifterProfile& p : c.lifter_pattern) h = std::max(h, measure_profile(profile_outline(p)).height);
@@ -318,8 +290,9 @@ int cmd_life(const LifeOptions& o) {
                                             o.calibrate_loss_mm, h_new * 1000));
 
   const fs::path out = o.out.empty() ? fs::path("runs") / (c.name + "-life") : fs::path(o.out);
-  const json request = request_of(o, base);
+  const json request = request_with_consumption(o, base);
   Study st;
+  st.wear_coefficient = base.scene.wall_material.wear_coefficient;
   for (std::size_t k = 0; k < c.lifter_pattern.size(); ++k)
     if (measure_profile(profile_outline(c.lifter_pattern[k])).height >
         measure_profile(profile_outline(c.lifter_pattern[st.tallest])).height)
@@ -392,7 +365,10 @@ int cmd_life(const LifeOptions& o) {
     calibrate(st, o, length);
     save(out, request, st, "");
     write_table(out, st, length);
-    io::draw_or_warn(out / "life.png", [&] { write_picture(out, c.name, st); });
+    if (s.index == 0 && !o.quiet) print_new_liner(st);
+    io::draw_or_warn(out / "life.png", [&] {
+      life::write_life_picture(out / "life.png", c.name, st.stages, {st.factor, st.relative(), length});
+    });
 
     // Stop, or plan the next stage's wear (in hours at the case's wear
     // coefficient: the shapes depend on those alone).
@@ -407,9 +383,10 @@ int cmd_life(const LifeOptions& o) {
       // until the study has worn that far): then stages are added, up to
       // three times those asked, until the hours are covered.
       const double step = o.hours / o.stages, left = o.hours - hours_now;
-      if (left <= 0.05 * step) stopped = fmt::format("{:g} operating hours reached", o.hours);
+      const std::string hours_words = life::hours_label(st.relative());
+      if (left <= 0.05 * step) stopped = fmt::format("{:g} {} reached", o.hours, hours_words);
       else if (i >= 3 * o.stages)
-        stopped = fmt::format("{} stages run; they cover {:.0f} of the {:g} operating hours asked", i, hours_now, o.hours);
+        stopped = fmt::format("{} stages run; they cover {:.0f} of the {:g} {} asked", i, hours_now, o.hours, hours_words);
       else span = std::min(step, left) * st.factor;
     } else {
       // Each stage takes an equal share of the height left: the hours in
@@ -426,6 +403,7 @@ int cmd_life(const LifeOptions& o) {
     }
     if (!stopped.empty()) {
       save(out, request, st, stopped);
+      print_calibration(st);
       std::printf("life            done: %s; %s/{life.csv, life.png, life.pvd}\n", stopped.c_str(), out.string().c_str());
       return 0;
     }

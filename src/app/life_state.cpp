@@ -144,6 +144,11 @@ LifeState read_life_state(const fs::path& file, const StateShape& shape) {
   const JsonAt cal = top["calibration"];
   if (!(cal["factor"].number() > 0)) cal["factor"].fail("must be > 0");
   (void)cal["how"].text();
+  const std::string basis = cal["hours_and_wear_rates"].text();
+  if (basis != "calibrated" && basis != "relative" && basis != "case_coefficient")
+    cal["hours_and_wear_rates"].fail("\"" + basis + "\", not one of \"calibrated\", \"relative\", \"case_coefficient\"");
+  if (!(cal["case_wear_coefficient_m3_per_N_m"].number() > 0)) cal["case_wear_coefficient_m3_per_N_m"].fail("must be > 0");
+  if (!(cal["wear_coefficient_m3_per_N_m"].number() > 0)) cal["wear_coefficient_m3_per_N_m"].fail("must be > 0");
   const JsonAt stages = top["stages"];
   const std::size_t n = stages.size();
   if (n == 0) stages.fail("empty list: the study holds no stage");
@@ -179,12 +184,16 @@ std::string request_difference(const json& there, const json& asked) {
   return "the request differs";
 }
 
-void save_life_state(const fs::path& out, const json& request, const std::vector<Stage>& stages, double factor,
-                     const std::string& calibration, const std::string& stopped) {
+void save_life_state(const fs::path& out, const json& request, const std::vector<Stage>& stages,
+                     const Calibration& cal, const std::string& stopped) {
   json j;
   j["format"] = kFormat;
   j["request"] = request;
-  j["calibration"] = {{"factor", factor}, {"how", calibration}};
+  j["calibration"] = {{"factor", cal.factor},
+                      {"how", cal.how},
+                      {"hours_and_wear_rates", cal.basis},
+                      {"case_wear_coefficient_m3_per_N_m", cal.case_wear_coefficient},
+                      {"wear_coefficient_m3_per_N_m", cal.case_wear_coefficient * cal.factor}};
   j["stages"] = json::array();
   for (const Stage& s : stages) j["stages"].push_back(stage_json(s));
   if (!stopped.empty()) j["stopped"] = stopped;

@@ -16,12 +16,13 @@
 
 namespace mc::app::life {
 
-inline constexpr const char* kFormat = "millcharge life 1";
+// 2: the calibration says what the hours stand on and the wear coefficients.
+inline constexpr const char* kFormat = "millcharge life 2";
 
 // What a stage's run reported (its summary.json and lifter_wear.csv).
 struct StageResult {
   double power_W = 0, power_sem_W = 0, toe_deg = NAN, shoulder_deg = NAN, impact_deg = NAN, bare_share = NAN;
-  double liner_kg_h = 0;          // shell and lifters, at the case's wear coefficient
+  double liner_kg_h = 0;          // shell and lifters (not the end plates), at the case's wear coefficient
   double shell_mm_per_1000h = 0;  // the shell's mean depth rate, likewise
   std::vector<std::vector<double>> station_m3_s;  // per profile, per station: one row's volume rate
 };
@@ -60,9 +61,19 @@ LifeState read_life_state(const std::filesystem::path& file, const StateShape& s
 // 2 there, 3 asked"); "" when they are the same.
 std::string request_difference(const nlohmann::json& there, const nlohmann::json& asked);
 
+// How a study's hours were set: calibrated hours = case hours / factor.
+struct Calibration {
+  double factor = 1;
+  std::string how;
+  // "calibrated" (by a measured figure), "relative" (the default wear
+  // coefficient: hours and wear rates are relative), "case_coefficient".
+  std::string basis;
+  double case_wear_coefficient = 0;  // m³/(N·m), the case's
+};
+
 // Writes life.json (atomically).
 void save_life_state(const std::filesystem::path& out, const nlohmann::json& request, const std::vector<Stage>& stages,
-                     double factor, const std::string& calibration, const std::string& stopped);
+                     const Calibration& calibration, const std::string& stopped);
 
 // A stage's run folder: its summary.json and lifter_wear.csv, checked.
 StageResult read_stage_result(const std::filesystem::path& dir, int profiles);

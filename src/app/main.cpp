@@ -149,6 +149,11 @@ int main(int argc, char** argv) {
                    "measured: the new shell liner (shell and lifters) wears KG/H (sets the hours)")
       ->check(mc::app::cli::positive("kg/h"))
       ->type_name("KG/H");
+  life->add_option("--calibrate-consumption", lo.calibrate_consumption_g_kWh,
+                   "measured: the new shell and lifters wear G_PER_KWH grams of steel per kWh the mill draws (sets "
+                   "the hours; end plates not counted)")
+      ->check(mc::app::cli::positive("g/kWh"))
+      ->type_name("G_PER_KWH");
   life->add_flag("--force", lo.force, "start the study again in an --out that holds one");
   life->add_flag("--quiet", lo.quiet, "no progress lines from the stages' runs");
 

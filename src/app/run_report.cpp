@@ -11,6 +11,7 @@
 
 #include "app/prepare.h"
 #include "core/lifters.h"
+#include "core/liner_wear.h"
 #include "core/version.h"
 #include "io/atomic_file.h"
 #include "io/energy_out.h"
@@ -31,6 +32,13 @@ std::vector<std::vector<Vec2>> lab_lifters(const Scene& scene, double mill_angle
   for (auto& poly : out)
     for (Vec2& v : poly) v = {c * v.x - s * v.y, s * v.x + c * v.y};
   return out;
+}
+
+// printf into a string (two numbers).
+std::string fmt_g(const char* format, double a, double b) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, format, a, b);
+  return buf;
 }
 
 double finite_or_nan(bool ok, double v) { return ok ? v : std::nan(""); }
@@ -62,6 +70,27 @@ std::string batch_words(int length, int per_rev) {
   return std::to_string(length / g) + "/" + std::to_string(per_rev / g) + " revolution";
 }
 
+// What the wear figures are: relative at the default wear coefficient.
+std::string wear_rates_words(bool relative) {
+  return relative ? std::string(kWearRelative) + " (the default stand-in; docs/liner-life.md#the-time-axis)"
+                  : "at the case's wear coefficient";
+}
+
+// summary.json's liner.consumption_g_per_kWh: each part's g/kWh and what
+// it is taken over.
+nlohmann::ordered_json consumption_json(const LinerConsumption& x) {
+  nlohmann::ordered_json j;
+  j["shell_and_lifters"] = number_or_null(x.shell_lifters_g_kWh);
+  if (x.has_end_plates) j["end_plates"] = number_or_null(x.end_plates_g_kWh);
+  if (x.has_meshes) j["mesh_walls"] = number_or_null(x.mesh_g_kWh);
+  j["all"] = number_or_null(x.all_g_kWh);
+  j["power_W"] = x.power_W;
+  j["what"] = "grams of liner worn per kWh the mill draws: each part's wear_kg_per_h x 1e6 / power_W (the torque "
+              "power); shell_and_lifters is what plants weigh as shell liners";
+  j["relative"] = x.relative;
+  return j;
+}
+
 Errors errors_of(const std::vector<WindowBatch>& revs) {
   auto of = [&](double WindowBatch::*field) {
     std::vector<double> v;
@@ -86,6 +115,23 @@ Errors errors_of(const std::vector<WindowBatch>& revs) {
 }
 
 }  // namespace
+
+LinerConsumption liner_consumption(const LinerReport& liner, double power_W, double wear_coefficient) {
+  LinerConsumption x;
+  x.power_W = power_W;
+  for (const LinerPartRates& p : liner.parts) {
+    if (p.name == "end plates") x.end_plates_kg_h += p.wear_kg_per_h, x.has_end_plates = p.area_m2 > 0;
+    else if (p.name == "mesh walls") x.mesh_kg_h += p.wear_kg_per_h, x.has_meshes = true;
+    else x.shell_lifters_kg_h += p.wear_kg_per_h;  // the shell and the lifters' faces and tops
+    x.all_kg_h += p.wear_kg_per_h;
+  }
+  x.shell_lifters_g_kWh = grams_per_kWh(x.shell_lifters_kg_h, power_W);
+  x.end_plates_g_kWh = grams_per_kWh(x.end_plates_kg_h, power_W);
+  x.mesh_g_kWh = grams_per_kWh(x.mesh_kg_h, power_W);
+  x.all_g_kWh = grams_per_kWh(x.all_kg_h, power_W);
+  x.relative = wear_coefficient_is_default(wear_coefficient);
+  return x;
+}
 
 RunReport report_of(const FinishedRun& r) {
   const MillCase& c = r.c;
@@ -135,6 +181,7 @@ RunReport report_of(const FinishedRun& r) {
   rep.layout = liner_layout(r.scene);
   rep.spectra = spectra_report(r.scene, s.books, s.window_s, s.open_loss_start_J, s.open_loss_end_J, s.dissipated_J);
   rep.liner = liner_report(r.scene, rep.layout, s.books, s.window_s, s.profile, s.angles);
+  rep.consumption = liner_consumption(rep.liner, s.torque_power_W, r.scene.wall_material.wear_coefficient);
   return rep;
 }
 
@@ -232,6 +279,8 @@ std::vector<std::string> write_run_results(const FinishedRun& r, const RunReport
   j["liner"]["impact_power_W_sem"] = number_or_null(err.impact.sem);
   j["liner"]["shear_power_W_sem"] = number_or_null(err.shear.sem);
   j["liner"]["wear_kg_per_h_sem"] = number_or_null(err.wear.sem);
+  j["liner"]["wear_rates"] = wear_rates_words(rep.consumption.relative);
+  j["liner"]["consumption_g_per_kWh"] = consumption_json(rep.consumption);
   j["per_metre"] = io::per_metre_json(c.length, s.torque_power_W, s.dissipation_power_W, s.torque_Nm, spectra, liner);
   j["contact_records_refused"] = r.solver.records_refused();
   j["wall_s"] = s.wall_s;
@@ -375,11 +424,28 @@ void print_run_results(const FinishedRun& r, const RunReport& rep, const std::ve
               plus_minus(spectra.all.collisions_per_s, err.collisions.sem, "").c_str(),
               plus_minus(spectra.all.power_W, err.collision_power.sem, " W").c_str(), spectra.all.normal_W,
               spectra.all.tangential_W, spectra.all.rolling_W, spectra.books_W, spectra.dissipation_W);
-  std::printf("liner           impact %s, shear %s, wear %s, worst %.3g mm per 1000 h (%s)\n",
+  const LinerConsumption& use = rep.consumption;
+  std::string parts = c.lifter_rows > 0 ? "shell, lifters" : "shell";
+  if (use.has_end_plates) parts += ", end plates";
+  if (use.has_meshes) parts += ", mesh walls";
+  std::printf("liner           impact %s, shear %s, wear %s (%s), worst %.3g mm per 1000 h (%s)\n",
               plus_minus(liner.impact_W, err.impact.sem, " W").c_str(),
               plus_minus(liner.shear_W, err.shear.sem, " W").c_str(),
-              plus_minus(liner.wear_kg_per_h, err.wear.sem, " kg/h").c_str(), liner.worst_wear_mm_per_1000h,
+              plus_minus(liner.wear_kg_per_h, err.wear.sem, " kg/h").c_str(), parts.c_str(),
+              liner.worst_wear_mm_per_1000h,
               liner.worst_element >= 0 ? io::element_name(layout, liner.worst_element).c_str() : "none");
+  std::string others;
+  if (use.has_end_plates)
+    others += fmt_g(", end plates %.3g g/kWh (%.3g kg/h)", use.end_plates_g_kWh, use.end_plates_kg_h);
+  if (use.has_meshes) others += fmt_g(", mesh walls %.3g g/kWh (%.3g kg/h)", use.mesh_g_kWh, use.mesh_kg_h);
+  std::printf("consumption     %s %.3g g/kWh (%.3g kg/h)%s, all %.3g g/kWh: liner steel worn per kWh of the %.4g W "
+              "drawn\n",
+              c.lifter_rows > 0 ? "shell and lifters" : "shell", use.shell_lifters_g_kWh, use.shell_lifters_kg_h,
+              others.c_str(), use.all_g_kWh, use.power_W);
+  if (use.relative)
+    std::printf("                the wear figures are %s (the default stand-in, %g m3/(N m)); calibrate: life "
+                "--calibrate-consumption G_PER_KWH, or materials.%s.wear_coefficient\n",
+                kWearRelative, r.scene.wall_material.wear_coefficient, c.liner.c_str());
   if (std::isfinite(liner.impact_point_deg))
     std::printf("impact point    %.0f deg, on the %s; %.3g W (%.0f %%) of the liner's impact power on bare liner\n",
                 liner.impact_point_deg, liner.impact_point_on_liner ? "bare liner above the toe" : "toe",

@@ -41,6 +41,21 @@ struct Errors {
   BatchMeans collisions, collision_power, impacts, impact, shear, wear;
 };
 
+// The liner's consumption: steel worn per kWh the mill draws (its torque
+// power), in grams, by what wears (core/liner_wear.h grams_per_kWh). The
+// shell and the lifter bars are what plants weigh as "shell liners"; the
+// end plates (and mesh walls, where the case has them) apart; `all` is
+// every part. `relative` where the liner's wear coefficient is the default
+// stand-in (core/scene.h): then the figures are relative, not a plant's.
+struct LinerConsumption {
+  double power_W = 0;
+  double shell_lifters_kg_h = 0, end_plates_kg_h = 0, mesh_kg_h = 0, all_kg_h = 0;
+  double shell_lifters_g_kWh = 0, end_plates_g_kWh = 0, mesh_g_kWh = 0, all_g_kWh = 0;
+  bool has_end_plates = false, has_meshes = false;
+  bool relative = false;
+};
+LinerConsumption liner_consumption(const LinerReport& liner, double power_W, double wear_coefficient);
+
 // What the files and the console share: the model beside the DEM, the
 // errors, the spectra and the liner over the window.
 struct RunReport {
@@ -57,6 +72,7 @@ struct RunReport {
   LinerLayout layout;
   SpectraReport spectra;
   LinerReport liner;
+  LinerConsumption consumption;
 };
 
 RunReport report_of(const FinishedRun& r);

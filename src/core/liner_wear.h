@@ -4,6 +4,7 @@
 // convex profile. No OpenCL.
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "core/lifters.h"
@@ -70,5 +71,12 @@ double top_wear_m_per_h(const std::vector<Vec2>& outline, double R, const BarWea
 // wear_for_hours to 1e-9; negative when that wear does not lower it (the
 // shell wears as fast as its top) or `loss` is not positive.
 double hours_to_lose(const std::vector<Vec2>& outline, double R, const BarWearRates& rates, double loss);
+
+// A liner's consumption as plants book it: grams of steel worn per kWh the
+// mill draws, from a wear rate (kg/h) and the mill's power (W): kg/h over
+// kW is kg/kWh, so g/kWh = 1e6 · kg/h / W. NaN without a positive power.
+inline double grams_per_kWh(double kg_per_h, double power_W) {
+  return power_W > 0 ? kg_per_h * 1e6 / power_W : NAN;
+}
 
 }  // namespace mc

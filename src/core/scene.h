@@ -15,11 +15,23 @@ namespace mc {
 enum class Precision { single, double_ };
 
 // Archard's dimensional wear coefficient of a liner, m³ of liner per N of
-// normal force and m slid (k/H): three-body abrasion of steel, Archard
-// k ≈ 1e-4 to 1e-3 (Rabinowicz, Friction and Wear of Materials, 2nd ed.
-// 1995, ch. 8), over the hardness of a 350 HB Cr–Mo liner steel, 3.5 GPa.
-// An order of magnitude to calibrate against measured liner profiles.
-inline constexpr double kDefaultWearCoefficient = 1.0e-13;
+// normal force and m slid (k/H). The default is a stand-in chosen from
+// plants' liner consumption: with it the lab mill (assets/cases/lab.toml)
+// wears about 4.5 g of shell and lifter steel per kWh drawn, within the
+// 2.6–5 g/kWh published for SAG shell liners (Orford et al., CMP 2003;
+// Burger et al., SAG 2011) and at the bottom of the 5–15 g/kWh that
+// Bond's ball-mill liner estimate gives for those duties (two to three
+// times them). It is 50 times the 1e-13 of clean three-body abrasion of a
+// 350 HB steel (Archard k ≈ 1e-4 to 1e-3 over 3.5 GPa; Rabinowicz,
+// Friction and Wear of Materials, 1995, ch. 8): it folds in what the model
+// lacks (impact wear, corrosion, the ore between ball and liner). Wear at
+// it is relative until calibrated (docs/liner-life.md#the-time-axis).
+inline constexpr double kDefaultWearCoefficient = 5.0e-12;
+
+// Wear at the default coefficient is relative: the words every output
+// that prints or draws such a wear rate or its hours uses.
+inline constexpr const char* kWearRelative = "relative: wear coefficient not calibrated";
+inline bool wear_coefficient_is_default(double k) { return k == kDefaultWearCoefficient; }
 
 struct Material {
   std::string name;

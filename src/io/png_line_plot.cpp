@@ -103,6 +103,8 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
       if (r.x_to > r.x_from && std::isfinite(r.x_from) && std::isfinite(r.x_to))
         x0 = std::min(x0, r.x_from), x1 = std::max(x1, r.x_to);
     }
+  if (std::isfinite(plot.y_cover_lo)) y0 = std::min(y0, plot.y_cover_lo), y1 = std::max(y1, plot.y_cover_lo);
+  if (std::isfinite(plot.y_cover_hi)) y0 = std::min(y0, plot.y_cover_hi), y1 = std::max(y1, plot.y_cover_hi);
   if (!(x0 <= x1)) x0 = 0, x1 = 1;
   if (!(y0 <= y1)) y0 = 0, y1 = 1;
   if (plot.equal_aspect && x1 > x0 && y1 > y0) {

@@ -5,6 +5,7 @@
 // stb_image_write through io/atomic_file.h.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -57,6 +58,9 @@ struct LinePlot {
   bool pad_x = false;  // leave room beside the first and last x (for markers)
   bool log_x = false;  // a log x axis (x <= 0 left out)
   bool equal_aspect = false;  // a unit as long on both axes (a shape drawn true)
+  // The y axis reaches at least these where they are finite (a span that
+  // keeps small changes small, or a zero to measure from).
+  double y_cover_lo = NAN, y_cover_hi = NAN;
 };
 
 // "874.4 ± 2.8 W": a value and its standard error to the error's second

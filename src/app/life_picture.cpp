@@ -1,0 +1,214 @@
+// life.png's panels (life_picture.h).
+#include "app/life_picture.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "core/lifters.h"
+#include "core/liner_wear.h"
+#include "core/scene.h"
+
+namespace mc::app::life {
+
+namespace {
+
+std::uint32_t ramp(double t) {  // blue (new) to red (worn)
+  const auto mix = [&](int a, int b) { return static_cast<std::uint32_t>(std::lround(a + (b - a) * t)); };
+  return (mix(0x1f, 0xd6) << 16) | (mix(0x77, 0x27) << 8) | mix(0xb4, 0x28);
+}
+
+// A colour per lifter profile (its height, its faces, its top's wear).
+std::uint32_t profile_colour(int k, int shade) {
+  static const std::uint32_t dark[] = {0x1f77b4, 0x2ca02c, 0x9467bd, 0x8c564b};
+  static const std::uint32_t light[] = {0xd62728, 0xff7f0e, 0xe377c2, 0x17becf};
+  return shade == 0 ? dark[k % 4] : light[k % 4];
+}
+
+// "a / b / c" of each profile's measure, to `digits` decimals.
+template <class F>
+std::string per_profile(const Stage& s, int digits, F measure) {
+  std::string t;
+  for (std::size_t k = 0; k < s.outlines.size(); ++k)
+    t += (k ? " / " : "") + fmt::format("{:.{}f}", measure(measure_profile(s.outlines[k])), digits);
+  return t;
+}
+
+// The stages whose profiles are drawn: all up to kProfilesDrawn, else the
+// first, the last and evenly between.
+std::vector<const Stage*> drawn_of(const std::vector<const Stage*>& ran) {
+  const int n = static_cast<int>(ran.size());
+  if (n <= kProfilesDrawn) return ran;
+  std::vector<const Stage*> out;
+  for (int q = 0; q < kProfilesDrawn; ++q) {
+    const int i = static_cast<int>(std::lround(static_cast<double>(q) * (n - 1) / (kProfilesDrawn - 1)));
+    if (out.empty() || out.back() != ran[i]) out.push_back(ran[i]);
+  }
+  return out;
+}
+
+io::LinePlot profiles_plot(const std::string& name, const std::vector<const Stage*>& ran, const LifeAxis& axis) {
+  const std::vector<const Stage*> drawn = drawn_of(ran);
+  const int kinds = static_cast<int>(ran.front()->outlines.size());
+  io::LinePlot prof;
+  prof.title = name + ": lifter profiles from new (blue) to worn (red), each on its own worn shell" +
+               (drawn.size() < ran.size() ? fmt::format(" ({} of {} stages)", drawn.size(), ran.size()) : "");
+  prof.x_label = kinds > 1 ? "along the shell (mm), leading face to the right; profiles 0 to " +
+                                 std::to_string(kinds - 1) + " left to right"
+                           : "along the shell (mm), leading face to the right";
+  prof.y_label = "height above the shell (mm)";
+  prof.equal_aspect = true;
+  const bool many = kinds > 1;
+  double x_shift = 0;
+  for (int k = 0; k < kinds; ++k) {
+    double widest = 0;
+    for (const Stage* s : drawn) {
+      io::PlotSeries ser;
+      const double t = drawn.size() > 1 ? static_cast<double>(s->index - drawn.front()->index) /
+                                              (drawn.back()->index - drawn.front()->index)
+                                        : 0.0;
+      ser.rgb = ramp(t);
+      // The bar's own frame: y from the tangent of the stage's (worn) shell
+      // under its centre, so that its top stands at the height measured.
+      for (const Vec2& v : s->outlines[k]) {
+        ser.x.push_back(v.x * 1000 + x_shift);
+        ser.y.push_back(v.y * 1000);
+        widest = std::max(widest, std::fabs(v.x) * 1000);
+      }
+      if (k == 0)  // one entry per stage: its colour is all its profiles'
+        ser.label = fmt::format("{:.4g} h: {} mm high, face {} deg{}", s->case_hours / axis.factor,
+                                per_profile(*s, 1, [](const ProfileMeasures& m) { return m.height * 1000; }),
+                                per_profile(*s, 1, [](const ProfileMeasures& m) { return m.leading_angle_deg; }),
+                                s->shell_wear_m > 0 ? fmt::format(", shell worn {:.1f} mm", s->shell_wear_m * 1000) : "");
+      prof.series.push_back(ser);
+    }
+    // The shell under the bar (the worn one's radius; each stage's shell
+    // touches the same line under the bar's centre).
+    io::PlotSeries arc;
+    arc.rgb = 0x7f7f7f;
+    arc.dashed = true;
+    const double R = 0.5 * drawn.back()->diameter * 1000, w = 1.2 * widest;
+    for (int q = 0; q <= 40; ++q) {
+      const double x = -w + 2 * w * q / 40;
+      arc.x.push_back(x + x_shift);
+      arc.y.push_back(R - std::sqrt(std::max(0.0, R * R - x * x)));  // it rises towards the axis off the centre line
+    }
+    if (k == 0) arc.label = many ? "the shell under each bar" : "the shell under the bar";
+    prof.series.push_back(arc);
+    x_shift += 2.4 * widest;
+  }
+  return prof;
+}
+
+}  // namespace
+
+std::string hours_label(bool relative) {
+  return relative ? std::string("hours (") + kWearRelative + ")" : "operating hours";
+}
+
+std::vector<io::LinePlot> life_plots(const std::string& name, const std::vector<Stage>& stages, const LifeAxis& axis) {
+  std::vector<const Stage*> ran;
+  for (const Stage& s : stages)
+    if (s.ran) ran.push_back(&s);
+  std::vector<io::LinePlot> plots;
+  if (ran.empty()) return plots;
+  const int kinds = static_cast<int>(ran.front()->outlines.size());
+  plots.push_back(profiles_plot(name, ran, axis));
+
+  auto over_hours = [&](const std::string& title, const std::string& y_label) {
+    io::LinePlot p;
+    p.title = name + ": " + title;
+    p.x_label = hours_label(axis.relative);
+    p.y_label = y_label;
+    p.pad_x = true;
+    return p;
+  };
+  auto series = [&](const std::string& label, std::uint32_t rgb, auto value) {
+    io::PlotSeries s;
+    s.label = label;
+    s.rgb = rgb;
+    s.markers = true;
+    for (const Stage* x : ran) {
+      s.x.push_back(x->case_hours / axis.factor);
+      s.y.push_back(value(*x));
+    }
+    return s;
+  };
+  auto named = [&](const std::string& what, int k) {
+    return kinds > 1 ? what + " (profile " + std::to_string(k) + ")" : what;
+  };
+
+  // The power: its axis at least ±5 % of the mean, so that the noise of a
+  // stage's window (a percent or so) does not fill the panel.
+  io::LinePlot power = over_hours("power draw", "power (W), axis at least \u00b15 % of mean");
+  double mean = 0;
+  bool any_se = false;
+  for (const Stage* s : ran) {
+    mean += s->r.power_W / ran.size();
+    any_se = any_se || (std::isfinite(s->r.power_sem_W) && s->r.power_sem_W > 0);
+  }
+  power.y_cover_lo = 0.95 * mean, power.y_cover_hi = 1.05 * mean;
+  power.series.push_back(series("torque power", 0x1f77b4, [](const Stage& s) { return s.r.power_W; }));
+  if (any_se) {  // a band only where a stage has a standard error; one legend entry for both edges
+    power.series.push_back(series("\u00b1 2 standard errors", 0x9ecae1, [](const Stage& s) { return s.r.power_W + 2 * s.r.power_sem_W; }));
+    power.series.back().dashed = true;
+    power.series.push_back(series("", 0x9ecae1, [](const Stage& s) { return s.r.power_W - 2 * s.r.power_sem_W; }));
+    power.series.back().dashed = true;
+  }
+  plots.push_back(power);
+
+  io::LinePlot low = over_hours("where the charge lands", "angle (deg, from 3 o'clock)");
+  low.series.push_back(series("toe", 0x9467bd, [](const Stage& s) { return s.r.toe_deg; }));
+  low.series.push_back(series("impact point", 0xd62728, [](const Stage& s) { return s.r.impact_deg; }));
+  plots.push_back(low);
+  io::LinePlot high = over_hours("where the charge leaves the shell", "angle (deg, from 3 o'clock)");
+  high.series.push_back(series("shoulder", 0x2ca02c, [](const Stage& s) { return s.r.shoulder_deg; }));
+  plots.push_back(high);
+
+  io::LinePlot height = over_hours("the lifters' height", "height above the shell (mm)");
+  io::LinePlot faces = over_hours("the lifters' face angles", "face angle from the radial line (deg)");
+  for (int k = 0; k < kinds; ++k) {
+    height.series.push_back(series(named("height", k), profile_colour(k, 0), [k](const Stage& s) {
+      return measure_profile(s.outlines[k]).height * 1000;
+    }));
+    faces.series.push_back(series(named("leading face", k), profile_colour(k, 1), [k](const Stage& s) {
+      return measure_profile(s.outlines[k]).leading_angle_deg;
+    }));
+    faces.series.push_back(series(named("trailing face", k), profile_colour(k, 0), [k](const Stage& s) {
+      return measure_profile(s.outlines[k]).trailing_angle_deg;
+    }));
+  }
+  plots.push_back(height);
+  plots.push_back(faces);
+
+  // The reline criteria of docs/liner-life.md beside the bars' height: how
+  // much of the charge's impact lands on bare liner, and how fast the bars'
+  // tops and the shell wear.
+  io::LinePlot bare = over_hours("reline criterion: impact power on bare liner (not on the toe)",
+                                 "share of the liner's impact power (%)");
+  bare.y_cover_lo = 0, bare.y_cover_hi = 100;
+  bare.series.push_back(series("on bare liner", 0xd62728, [](const Stage& s) { return 100 * s.r.bare_share; }));
+  plots.push_back(bare);
+  io::LinePlot rate = over_hours("reline criterion: wear rate",
+                                 axis.relative ? "mm per 1000 h (relative)" : "mm per 1000 operating hours");
+  rate.y_cover_lo = 0;
+  for (int k = 0; k < kinds; ++k)
+    rate.series.push_back(series(named("lifter top", k), profile_colour(k, 0), [&axis, k](const Stage& s) {
+      const BarWearRates r{s.r.station_m3_s[k], axis.length};
+      return top_wear_m_per_h(s.outlines[k], 0.5 * s.diameter, r) * 1e6 * axis.factor;
+    }));
+  rate.series.push_back(series("shell (mean)", 0x7f7f7f, [&axis](const Stage& s) {
+    return s.r.shell_mm_per_1000h * axis.factor;
+  }));
+  plots.push_back(rate);
+  return plots;
+}
+
+void write_life_picture(const std::filesystem::path& file, const std::string& name, const std::vector<Stage>& stages,
+                        const LifeAxis& axis) {
+  io::write_line_plots_png(file, life_plots(name, stages, axis), 960, 380);
+}
+
+}  // namespace mc::app::life
