@@ -71,6 +71,7 @@ MC_FN v3 record_spring(Books* b, int rec) {
  * ten a decade, the last above 1e3 J. */
 MC_FN int spectra_bin(real e) {
   if (!(e > R(1e-9))) return 0;
+  if (!(e < R(1e3))) return MC_SPECTRA_BINS - 1; /* also an infinite energy of a run that blew up */
   const real u = (log10(e) - R(MC_SPECTRA_LOG_MIN)) * R(MC_SPECTRA_PER_DECADE);
   const int k = (int)floor(u) + 1;
   return k < MC_SPECTRA_BINS - 1 ? k : MC_SPECTRA_BINS - 1;

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "app/commands.h"
+#include "app/grind.h"
 #include "grind/circuit.h"
 #include "io/ore_file.h"
 #include "io/run_folder.h"
@@ -53,27 +54,32 @@ const char* kFitted =
 }  // namespace
 
 TEST_CASE("the ore says which energy its fracture parameters were measured on", "[grind][basis]") {
-  CHECK(mc::io::read_ore(ore_with("plain", "")).energy_basis == EnergyBasis::impact);
+  const Ore plain = mc::io::read_ore(ore_with("plain", ""));
+  CHECK(plain.energy_basis == EnergyBasis::impact);
+  CHECK_FALSE(plain.energy_basis_given);
   CHECK(mc::io::read_ore(ore_with("loss", "energy_basis = \"loss\"")).energy_basis == EnergyBasis::loss);
   CHECK(mc::io::read_ore(ore_with("impact", "energy_basis = \"impact\"")).energy_basis == EnergyBasis::impact);
+  CHECK(mc::io::read_ore(ore_with("one", "energy_basis = \"loss_one_radius\"")).energy_basis ==
+        EnergyBasis::loss_one_radius);
   CHECK_THROWS_WITH(mc::io::read_ore(ore_with("bad", "energy_basis = \"kinetic\"")),
                     Catch::Contains("rates.energy_basis") && Catch::Contains("\"impact\""));
   CHECK_THROWS_WITH(mc::io::read_ore(ore_with("num", "energy_basis = 1")), Catch::Contains("rates.energy_basis"));
-  // An ore fitted before the impact spectrum: its [fitted] table has no
-  // basis, and it was fitted on the loss.
+  // An ore fitted before the severity spectra: its [fitted] table has no
+  // basis; it was fitted on the normal loss with one radius, and reads so.
   const Ore old = mc::io::read_ore(ore_with("old_fit", "", kFitted));
-  CHECK(old.energy_basis == EnergyBasis::loss);
-  CHECK(old.fitted_under.energy_basis == "loss");
-  CHECK_THROWS_WITH(mc::io::read_ore(ore_with("old_fit_impact", "energy_basis = \"impact\"", kFitted)),
-                    Catch::Contains("rates.energy_basis") && Catch::Contains("fitted on the loss spectrum"));
+  CHECK(old.energy_basis == EnergyBasis::loss_one_radius);
+  CHECK(old.fitted_under.energy_basis == "loss_one_radius");
+  // A file that says one basis and records a fit on another reads (a new
+  // fit replaces the record); grind refuses it where it makes products.
+  const Ore clash = mc::io::read_ore(ore_with("old_fit_impact", "energy_basis = \"impact\"", kFitted));
+  CHECK(clash.energy_basis == EnergyBasis::impact);
+  CHECK(clash.energy_basis_given);
   const std::string fitted_impact = std::string(kFitted) + "energy_basis = \"impact\"\n";
   CHECK(mc::io::read_ore(ore_with("new_fit", "", fitted_impact)).energy_basis == EnergyBasis::impact);
-  CHECK_THROWS_WITH(mc::io::read_ore(ore_with("new_fit_loss", "energy_basis = \"loss\"", fitted_impact)),
-                    Catch::Contains("fitted on the impact spectrum"));
   CHECK_THROWS_WITH(mc::io::read_ore(ore_with("bad_fit", "", std::string(kFitted) + "energy_basis = \"x\"\n")),
                     Catch::Contains("fitted.energy_basis"));
   // Written and read back, the basis and the record stay.
-  for (const char* b : {"impact", "loss"}) {
+  for (const char* b : {"impact", "loss", "loss_one_radius"}) {
     const Ore o = mc::io::read_ore(ore_with(std::string("rt_") + b, std::string("energy_basis = \"") + b + "\"",
                                             std::string(kFitted) + "energy_basis = \"" + b + "\"\n"));
     const fs::path back = temp(std::string("back_") + b + ".toml");
@@ -82,6 +88,17 @@ TEST_CASE("the ore says which energy its fracture parameters were measured on", 
     CHECK(again.energy_basis == o.energy_basis);
     CHECK(again.fitted_under.energy_basis == b);
   }
+  // Another rate model records no basis.
+  std::string energy;
+  {
+    std::ifstream in(fs::path(MC_ASSET_DIR) / "ores" / "example_energy.toml");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    energy = ss.str() + "\n" + kFitted;
+  }
+  const fs::path ep = temp("energy_fitted.toml");
+  std::ofstream(ep) << energy;
+  CHECK(mc::io::read_ore(ep).fitted_under.energy_basis.empty());
 }
 
 TEST_CASE("grind reads the severity spectrum of the ore's basis, each bin with its collisions' own R*",
@@ -133,6 +150,8 @@ TEST_CASE("grind reads the severity spectrum of the ore's basis, each bin with i
     if (n <= 0) continue;
     const bool wall = f[0] != "steel-steel";
     INFO(line);
+    // A ball on a wall (the shell's concave cylinder too) meets it with
+    // its own radius.
     if (wall) {
       CHECK(r >= 0.00775 * (1 - 1e-6));
       CHECK(r <= 0.0184 * (1 + 1e-6));
@@ -186,6 +205,12 @@ TEST_CASE("grind reads the severity spectrum of the ore's basis, each bin with i
     }
     const mc::io::Run& run = basis == EnergyBasis::impact ? impact : loss;
     const MillRates rates = mill_rates(ore, run.spectrum, run.power_W, 1.0);
+    if (basis == EnergyBasis::loss) {
+      // The legacy reading gives what one radius for all gives by hand.
+      const mc::io::Run legacy = mc::io::read_run(dir, true, EnergyBasis::loss_one_radius);
+      const MillRates lr = mill_rates(ore, legacy.spectrum, legacy.power_W, 1.0);
+      CHECK(lr.S_per_min[0] == Approx(60 * one_radius).epsilon(1e-9));
+    }
     std::printf("S(%.2f mm) on the %s: %.6g /min by grind, %.6g /min by hand", 1e3 * d, kind.c_str(),
                 rates.S_per_min[0], 60 * by_hand);
     if (basis == EnergyBasis::loss)
@@ -194,6 +219,50 @@ TEST_CASE("grind reads the severity spectrum of the ore's basis, each bin with i
     std::printf("\n");
     INFO(kind);
     CHECK(rates.S_per_min[0] == Approx(60 * by_hand).epsilon(1e-6));
+  }
+  // End to end: grind with each basis writes the rates of that basis, and
+  // refuses an ore that says one basis and records a fit on another.
+  for (const char* b : {"impact", "loss", "loss_one_radius"}) {
+    mc::app::GrindOptions g;
+    g.run_dir = dir.string();
+    g.ore = ore_with(std::string("e2e_") + b, std::string("energy_basis = \"") + b + "\"").string();
+    g.out = temp(std::string("grind_") + b).string();
+    g.times_min = {1};
+    g.quiet = true;
+    REQUIRE(mc::app::cmd_grind(g) == 0);
+    std::ifstream rc(fs::path(g.out) / "rates.csv");
+    std::getline(rc, line);
+    std::getline(rc, line);  // class 0
+    const double s0 = std::stod(line.substr(line.rfind(',', line.rfind(',') - 1) + 1));
+    Ore ob = ore;
+    const EnergyBasis eb = std::string(b) == "impact" ? EnergyBasis::impact
+                           : std::string(b) == "loss" ? EnergyBasis::loss
+                                                      : EnergyBasis::loss_one_radius;
+    const mc::io::Run rb = mc::io::read_run(dir, true, eb);
+    const double holdup = mill_holdup_kg(ob, rb.porosity, rb.filling, rb.mill_volume);
+    INFO(b);
+    CHECK(s0 == Approx(mill_rates(ob, rb.spectrum, rb.power_W, holdup).S_per_min[0]).epsilon(1e-6));
+  }
+  {
+    mc::app::GrindOptions g;
+    g.run_dir = dir.string();
+    g.ore = ore_with("clash", "energy_basis = \"impact\"", kFitted).string();
+    g.out = temp("grind_clash").string();
+    g.times_min = {1};
+    g.quiet = true;
+    CHECK_THROWS_WITH(mc::app::cmd_grind(g), Catch::Contains("rates.energy_basis is \"impact\"") &&
+                                                 Catch::Contains("fitted on \"loss_one_radius\""));
+    CHECK(!fs::exists(g.out));
+    // Fitted again on the impact (a work index), the ore records the new
+    // basis and grinds without the clash.
+    g.out = temp("refit").string();
+    g.times_min.clear();
+    g.bond_p1_um = 150;
+    g.fit_wi_kWh_t = 40;  // above the 29.7 kWh/t that eta 1 gives in this short run
+    REQUIRE(mc::app::cmd_grind(g) == 0);
+    const Ore refit = mc::io::read_ore(fs::path(g.out) / "ore_fitted.toml");
+    CHECK(refit.energy_basis == EnergyBasis::impact);
+    CHECK(refit.fitted_under.energy_basis == "impact");
   }
   fs::remove_all(dir);
 }

@@ -57,7 +57,9 @@ TEST_CASE("two unequal balls book 1/2 m* vn^2 at first touch and (1 - e^2) of it
       in.mu_roll = 0;
       in.kn = 1e6;
       Scene sc = bare_scene(steel, steel, in, law, Precision::double_);
-      const double ra = 0.0184, rb = 0.00775;  // the Bond charge's largest and smallest balls
+      for (const bool small_first : {false, true}) {
+      INFO("the small ball is ball " << (small_first ? 0 : 1));
+      const double ra = small_first ? 0.00775 : 0.0184, rb = small_first ? 0.0184 : 0.00775;  // Bond's extremes
       const double ma = sphere_mass(7800, ra), mb = sphere_mass(7800, rb);
       const double m_eff = ma * mb / (ma + mb), r_eff = ra * rb / (ra + rb);
       const double va = 0.5, vb = -1.5, vn = va - vb;
@@ -95,15 +97,20 @@ TEST_CASE("two unequal balls book 1/2 m* vn^2 at first touch and (1 - e^2) of it
       CHECK(lo.count == 1);
       CHECK(severity_bin(books, MC_SPECTRA_IMPACT, bin_i).count == 1);
       CHECK(severity_bin(books, MC_SPECTRA_LOSS, bin_l).count == 1);
-      CHECK(im.energy == Approx(impact).epsilon(2e-3));       // vn at first touch: one step's worth of force
-      CHECK(im.radius == Approx(r_eff).epsilon(1e-6));         // its own R*, not the charge's mean
-      CHECK(lo.energy == Approx(lost).epsilon(2e-3));          // the loss is what the balls lost
-      CHECK(lo.energy == Approx((1 - e * e) * impact).epsilon(0.02));  // and (1 - e^2) of the impact
+      // vn at the first step in contact, before any force: exact to rounding.
+      CHECK(im.energy == Approx(impact).epsilon(1e-5));
+      CHECK(im.radius == Approx(r_eff).epsilon(1e-6));  // its own R*, not the charge's mean
+      CHECK(lo.energy == Approx(lost).epsilon(2e-3));   // the loss is what the balls lost
+      // and (1 - e^2) of the impact: the linear law's clipped end rebounds a
+      // little slower than e (0.4-0.5 % more loss at 100 steps a contact),
+      // Hertz's to 1e-3.
+      CHECK(lo.energy == Approx((1 - e * e) * impact).epsilon(law == ContactLaw::linear ? 6e-3 : 1e-3));
       // The pair's row holds them; summary.json's rates say the same.
       const SpectraReport rep = spectra_report(sc, books, 1.0, 0, 0, 0);
       CHECK(rep.all.impact_W == Approx(im.energy).epsilon(1e-12));
       CHECK(rep.all.impact_r_eff_m == Approx(r_eff).epsilon(1e-6));
       CHECK(rep.all.loss_W == Approx(rep.all.normal_W).epsilon(1e-6));
+      }
     }
 }
 

@@ -288,6 +288,22 @@ struct ScaleUp {
 };
 constexpr const char* kScaleTag = " [H&F from lab]";
 
+// An ore that says it reads one energy but records a fit on another: its
+// fitted parameters (η above all) hold on the energy it was fitted on.
+// Refused where products are made; a new fit replaces the record.
+void check_energy_basis(const std::string& path, const Ore& ore) {
+  const std::string& fitted = ore.fitted_under.energy_basis;
+  if (ore.model != RateModel::spectrum || !ore.energy_basis_given || fitted.empty() ||
+      fitted == basis_name(ore.energy_basis))
+    return;
+  throw std::invalid_argument(path + ": rates.energy_basis is \"" + basis_name(ore.energy_basis) +
+                              "\" but the ore was fitted on \"" + fitted +
+                              "\" ([fitted] energy_basis; a fit from before the severity spectra names none and "
+                              "read the loss with one radius): set rates.energy_basis = \"" + fitted +
+                              "\", or fit the ore again on the new basis (grind --fit or --fit-wi replaces the "
+                              "[fitted] table)");
+}
+
 ScaleUp scale_up(const GrindOptions& o, const Ore& ore, const io::Run& plant, const Circuit& c,
                  const std::vector<double>& times) {
   if (ore.model != RateModel::spectrum)
@@ -396,7 +412,20 @@ int cmd_grind(const GrindOptions& o) {
   Ore bond_ore = ore;
   if (o.bond_p1_um > 0) put_sieve_on_class_top(bond_ore, o.bond_p1_um * 1e-6);
   check_classifier(o, ore);
+  check_energy_basis(o.ore, ore);
   const io::Run run = io::read_run(o.run_dir, ore.model == RateModel::spectrum, ore.energy_basis);
+  if (ore.model == RateModel::spectrum && ore.energy_basis == EnergyBasis::impact && run.clumps)
+    throw std::invalid_argument(
+        o.ore + ": rates.energy_basis \"impact\" with a charge of clumps (" + o.run_dir +
+        "): two bodies touching at several spheres book the whole encounter's impact energy at each, with the "
+        "bodies' masses, so the impact spectrum overstates it; set rates.energy_basis = \"loss\" (the loss is "
+        "split between the contacts: docs/energy.md)");
+  if (ore.model == RateModel::spectrum && ore.energy_basis == EnergyBasis::loss_one_radius && !o.quiet)
+    std::fprintf(stderr,
+                 "millcharge: note: %s: read on the normal loss with one radius for every collision, as it was "
+                 "fitted (its [fitted] table names no energy_basis); fit it again to read each collision's own "
+                 "radius and the impact energy (docs/grinding.md)\n",
+                 o.ore.c_str());
   if (o.bond_p1_um > 0) check_bond(o, bond_ore, run);
   // A run still settling into its motion: its torque also lifts the charge
   // (the energy-specific and Austin rates take the torque's power, the

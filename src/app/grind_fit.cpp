@@ -59,7 +59,7 @@ void check_fit_options(const GrindOptions& o) {
 ContactRecord record(const io::Run& run, const std::string& test, const std::string& run_dir,
                      const std::vector<std::string>& names, double rms_pp) {
   ContactRecord c = run.contact;
-  c.energy_basis = grind::basis_name(run.basis);
+  c.energy_basis = run.spectrum.empty() ? "" : grind::basis_name(run.basis);  // the spectrum model's only
   c.test = test;
   c.run = run_dir;
   for (const std::string& n : names) c.parameters += (c.parameters.empty() ? "" : ",") + n;

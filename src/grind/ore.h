@@ -17,9 +17,15 @@ enum class RateModel { austin, energy, spectrum };
 enum class Appearance { austin, t10 };
 // The collision energy the spectrum model's fracture parameters are set
 // against: the impact energy at first touch (1/2 m* vn^2, what a drop-weight
-// test or load cell delivers) or the normal energy the collision loses.
-enum class EnergyBasis { impact, loss };
-inline const char* basis_name(EnergyBasis b) { return b == EnergyBasis::impact ? "impact" : "loss"; }
+// test or load cell delivers) or the normal energy the collision loses,
+// each over the collision's own R*; or, for an ore fitted before those were
+// booked, the normal loss with one radius for every collision (half the
+// charge's number-mean radius between balls, the radius on walls), as it
+// was fitted.
+enum class EnergyBasis { impact, loss, loss_one_radius };
+inline const char* basis_name(EnergyBasis b) {
+  return b == EnergyBasis::impact ? "impact" : b == EnergyBasis::loss ? "loss" : "loss_one_radius";
+}
 
 // The contact law and parameters of the DEM run an ore was fitted through
 // (the [fitted] table of an ore file): the normal energy spectrum, and so
@@ -30,8 +36,9 @@ struct ContactRecord {
   double stiffness_N_m = 0;      // linear law
   double youngs_modulus_Pa = 0;  // hertz: the balls' material
   std::string pairs;  // the case's [[contact.pair]] overrides, as text ("" : none)
-  // The spectrum the ore was fitted on: "impact" or "loss" (an ore fitted
-  // before the impact spectrum was booked: "loss").
+  // The spectrum the ore was fitted on: "impact", "loss" or
+  // "loss_one_radius" (an ore fitted before the severity spectra were
+  // booked, whose [fitted] table has none); "" for other rate models.
   std::string energy_basis;
   // What else the ore file's [fitted] table says (not compared).
   std::string test, run, parameters;
@@ -59,6 +66,7 @@ struct Ore {
   Fracture fracture;
   double packing = 0.6, efficiency = 1.0;
   EnergyBasis energy_basis = EnergyBasis::impact;
+  bool energy_basis_given = false;  // rates.energy_basis in the file
   int tanks = 1;
   ContactRecord fitted_under;
 };

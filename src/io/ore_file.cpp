@@ -91,9 +91,10 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   if (c.law == "linear") c.stiffness_N_m = r.number(ft, "fitted.", "stiffness_N_m", 0, kInf, "N/m > 0");
   if (c.law == "hertz") c.youngs_modulus_Pa = r.number(ft, "fitted.", "youngs_modulus_Pa", 0, kInf, "Pa > 0");
   c.pairs = text("pairs");
-  c.energy_basis = ft.get("energy_basis") ? text("energy_basis") : "loss";  // fits before the impact spectrum
-  if (c.energy_basis != "impact" && c.energy_basis != "loss")
-    r.fail("fitted.energy_basis", ft.get("energy_basis"), "must be \"impact\" or \"loss\"");
+  c.energy_basis = text("energy_basis");  // none: a fit from before the severity spectra (set below)
+  if (ft.get("energy_basis") && c.energy_basis != "impact" && c.energy_basis != "loss" &&
+      c.energy_basis != "loss_one_radius")
+    r.fail("fitted.energy_basis", ft.get("energy_basis"), "must be \"impact\", \"loss\" or \"loss_one_radius\"");
   c.test = text("test");
   c.run = text("run");
   c.parameters = text("parameters");
@@ -279,24 +280,29 @@ grind::Ore read_ore(const fs::path& path) {
   if (const toml::table* ft = r.table("fitted", false)) read_fitted(r, *ft, o.fitted_under);
   if (o.model == RateModel::spectrum) {
     // The energy the fracture parameters are set against: as the file says,
-    // else as the fit it records, else the impact energy (Tavares' drop-
-    // weight energies are energies delivered).
-    const toml::node* bn = rt.get("energy_basis");
-    const std::string fitted = o.fitted_under.energy_basis;
+    // else as the fit it records (a fit from before the severity spectra:
+    // the normal loss with one radius), else the impact energy (Tavares'
+    // drop-weight energies are energies delivered). A file that says one
+    // and records a fit on another is refused where its products are made
+    // (grind), not here: a new fit replaces the record.
+    std::string& fitted = o.fitted_under.energy_basis;
+    if (!o.fitted_under.law.empty() && fitted.empty()) fitted = "loss_one_radius";
     std::string basis = fitted.empty() ? "impact" : fitted;
-    if (bn) {
-      if (!bn->is_string() || (*bn->value<std::string>() != "impact" && *bn->value<std::string>() != "loss"))
+    if (const toml::node* bn = rt.get("energy_basis")) {
+      const auto v = bn->value<std::string>();
+      if (!bn->is_string() || (*v != "impact" && *v != "loss" && *v != "loss_one_radius"))
         r.fail("rates.energy_basis", bn,
-               "must be \"impact\" (the energy at first touch, as drop-weight tests deliver) or \"loss\" (the "
-               "normal energy the collision loses)");
-      basis = *bn->value<std::string>();
-      if (!fitted.empty() && basis != fitted)
-        r.fail("rates.energy_basis", bn,
-               "is \"" + basis + "\" but the ore was fitted on the " + fitted +
-                   " spectrum ([fitted] energy_basis; an ore fitted before the impact spectrum was booked has "
-                   "none and was fitted on the loss): set it to \"" + fitted + "\" or fit the ore again");
+               "must be \"impact\" (the energy at first touch, as drop-weight tests deliver), \"loss\" (the "
+               "normal energy the collision loses) or \"loss_one_radius\" (the normal loss with one radius for "
+               "every collision, as ores were fitted before the severity spectra)");
+      basis = *v;
+      o.energy_basis_given = true;
     }
-    o.energy_basis = basis == "loss" ? grind::EnergyBasis::loss : grind::EnergyBasis::impact;
+    o.energy_basis = basis == "loss"              ? grind::EnergyBasis::loss
+                     : basis == "loss_one_radius" ? grind::EnergyBasis::loss_one_radius
+                                                  : grind::EnergyBasis::impact;
+  } else {
+    o.fitted_under.energy_basis.clear();  // a basis means nothing to the other rate models
   }
   return o;
 }

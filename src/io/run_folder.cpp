@@ -52,6 +52,7 @@ Run read_run(const fs::path& dir, bool need_spectrum, grind::EnergyBasis basis) 
     sum_r += d.class_counts[k] * 0.25 * (c.sizes[k].diameter_min + c.sizes[k].diameter_max);
   }
   r.ball_radius_m = n > 0 ? sum_r / n : 0;
+  for (const SizeClass& sc : c.sizes) r.clumps = r.clumps || (!sc.shape.empty() && sc.shape != "sphere");
   r.contact.law = c.law == ContactLaw::hertz ? "hertz" : "linear";
   r.contact.restitution = c.contact.restitution;
   r.contact.friction = c.contact.mu_slide;
@@ -69,13 +70,18 @@ Run read_run(const fs::path& dir, bool need_spectrum, grind::EnergyBasis basis) 
   const CsvTable t = read_csv_strict(sc, "the spectrum model needs the run's collision spectra");
   const std::string older = "the run is from an older millcharge; run it again";
   r.basis = basis;
-  const std::string kind = grind::basis_name(basis);
-  const std::string col_n = kind + "_collisions_per_s", col_w = kind + "_W", col_r = kind + "_r_eff_m";
-  if (!t.has(col_n) || !t.has(col_w) || !t.has(col_r) || !t.has("pair"))
-    throw std::invalid_argument(sc.string() + ": has no " + kind + " severity spectrum (columns " + col_n + ", " +
-                                col_w + ", " + col_r + "): " + older);
+  // The legacy reading (an ore fitted before the severity spectra): the
+  // normal energy spectrum, binned by the loss alone, with one radius.
+  const bool legacy = basis == grind::EnergyBasis::loss_one_radius;
+  const std::string kind = legacy ? std::string("normal") : grind::basis_name(basis);
+  const std::string col_n = legacy ? "normal_spectrum_collisions_per_s" : kind + "_collisions_per_s",
+                    col_w = legacy ? "normal_spectrum_W" : kind + "_W", col_r = kind + "_r_eff_m";
+  if (!t.has(col_n) || !t.has(col_w) || (!legacy && !t.has(col_r)) || !t.has("pair"))
+    throw std::invalid_argument(sc.string() + ": has no " + kind + (legacy ? " energy" : " severity") +
+                                " spectrum (columns " + col_n + ", " + col_w + (legacy ? "" : ", " + col_r) +
+                                "): " + older);
   const int c_pair = t.column("pair"), c_bin = t.column("bin"), c_n = t.column(col_n), c_w = t.column(col_w),
-            c_r = t.column(col_r);
+            c_r = legacy ? -1 : t.column(col_r);
   const int c_all = t.has("collisions_per_s") ? t.column("collisions_per_s") : -1;
   // Each pair's bins 0, 1, ... in order, every pair with as many: a file
   // cut at a line's end, or with rows lost, is refused by its line.
@@ -140,6 +146,17 @@ Run read_run(const fs::path& dir, bool need_spectrum, grind::EnergyBasis basis) 
     // The bin's mean energy and mean R*: its caught mass is that of its
     // collisions together, and the specific energy their R*-weighted mean.
     b.energy_J = w / b.collisions_per_s;
+    if (legacy) {
+      // Equal balls meet with half a radius; a ball meets a wall with its own.
+      const std::string& pair = t.rows[k][c_pair];
+      auto ends = [&](const std::string& tail) {
+        return pair.size() > tail.size() && pair.compare(pair.size() - tail.size(), tail.size(), tail) == 0;
+      };
+      const bool wall = ends("-shell") || ends("-lifter") || ends("-end plate") || ends("-ends");
+      b.r_eff_m = wall ? r.ball_radius_m : 0.5 * r.ball_radius_m;
+      r.spectrum.push_back(b);
+      continue;
+    }
     b.r_eff_m = t.number(k, c_r);
     if (!(b.r_eff_m > 0))
       throw std::invalid_argument(fmt::format("{}: {} is {} where the bin holds collisions; the file is damaged",
@@ -148,7 +165,7 @@ Run read_run(const fs::path& dir, bool need_spectrum, grind::EnergyBasis basis) 
   }
   if (c_all >= 0 && all_collisions > 0 && std::fabs(normal_collisions - all_collisions) > 0.01 * all_collisions)
     throw std::invalid_argument(fmt::format(
-        "{}: the {} severity spectrum holds {:.1f} % of the collisions (a run resumed from an older millcharge's "
+        "{}: the {} spectrum holds {:.1f} % of the collisions (a run resumed from an older millcharge's "
         "checkpoint); run it again",
         sc.string(), kind, 100 * normal_collisions / all_collisions));
   if (r.spectrum.empty()) throw std::invalid_argument(sc.string() + ": no collisions in the " + kind + " spectrum");

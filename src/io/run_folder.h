@@ -22,6 +22,7 @@ struct Run {
   // the energy at first touch or the normal loss (`basis`).
   std::vector<grind::SpectrumBin> spectrum;
   grind::EnergyBasis basis = grind::EnergyBasis::impact;
+  bool clumps = false;  // the charge holds clumps of spheres
   std::string title;
   // The power's books over the averaging window (summary.json): a run whose
   // torque and dissipation differ is not yet in steady motion.
