@@ -23,12 +23,16 @@ TEST_CASE("a label whose mark lies on another's moves out along its ray, clear o
   for (float impact : {262.0f, 265.0f, 268.0f, 275.0f}) {
     INFO("toe 265, impact " << impact);
     std::vector<LabelBox> taken;
-    taken.push_back(place_label(ray(265), 60, 14, 1.27f, 0.07f, 8, 362, 1278, 2, 798, {}));
-    taken.push_back(place_label(ray(30), 80, 14, 1.27f, 0.07f, 8, 362, 1278, 2, 798, taken));
-    // Without the move, the impact label at 1.27 R would cover the toe's.
-    const LabelBox naive = place_label(ray(impact), 60, 14, 1.27f, 0.07f, 1, 362, 1278, 2, 798, {});
+    const float r0 = mc::viewer::kMarkLabelRadius, dr = mc::viewer::kMarkLabelStep;
+    taken.push_back(place_label(ray(265), 60, 14, r0, dr, 8, 362, 1278, 2, 798, {}));
+    taken.push_back(place_label(ray(30), 80, 14, r0, dr, 8, 362, 1278, 2, 798, taken));
+    // At the picture's bottom edge the toe's label is clamped: moving out
+    // does nothing there, the label must move in.
+    CHECK(taken[0].y1 == Approx(798));
+    // Without the move, the impact label would cover the toe's.
+    const LabelBox naive = place_label(ray(impact), 60, 14, r0, dr, 1, 362, 1278, 2, 798, {});
     if (std::fabs(impact - 265) < 5) CHECK(naive.overlaps(taken[0]));
-    const LabelBox b = place_label(ray(impact), 60, 14, 1.27f, 0.07f, 8, 362, 1278, 2, 798, taken);
+    const LabelBox b = place_label(ray(impact), 60, 14, r0, dr, 8, 362, 1278, 2, 798, taken);
     CHECK_FALSE(b.overlaps(taken[0]));
     CHECK_FALSE(b.overlaps(taken[1]));
     CHECK(b.x0 >= 362);

@@ -109,7 +109,8 @@ TEST_CASE("life.png: every stage's profile is labelled with the height it is dra
         heights += (k ? " / " : "") + std::string(b);
       }
       CHECK_THAT(s.label, Catch::Contains(heights + " mm high"));
-      CHECK_THAT(s.label, Catch::StartsWith(std::to_string(1000 * i) + " h:"));
+      // The hours in full (not 1.2e+04), relative at the default coefficient.
+      CHECK_THAT(s.label, Catch::StartsWith(std::to_string(1000 * i) + " h (relative):"));
       if (i > 0) CHECK_THAT(s.label, Catch::Contains("shell worn " + std::to_string(2 * i) + ".0 mm"));
     }
     CHECK_FALSE(prof.series[3].label.empty());  // the shell
@@ -134,6 +135,15 @@ TEST_CASE("life.png: each axis one quantity, the reline criteria drawn, uncalibr
   CHECK(height->series.size() == 2);
   CHECK(height->series[1].y[2] == Approx(16.0).margin(1e-9));
   CHECK(faces->series.size() == 4);
+  // Small changes do not fill a panel: the height from the shell up, the
+  // angles over at least 10 degrees about their middle.
+  CHECK(height->y_cover_lo == 0);
+  CHECK(faces->y_cover_hi - faces->y_cover_lo >= 10 - 1e-9);
+  for (const char* angles : {"where the charge lands", "leaves the shell"}) {
+    const auto* p = panel(rel, angles);
+    REQUIRE(p);
+    CHECK(p->y_cover_hi - p->y_cover_lo >= 10 - 1e-9);
+  }
   const auto* bare = panel(rel, "bare liner");
   REQUIRE(bare);
   CHECK(bare->series[0].y == std::vector<double>{88, 80, 70});

@@ -93,6 +93,11 @@ TEST_CASE("a study calibrated on a measured loss reaches it at the measured hour
   // them: each stage revises an extrapolated calibration, and with it the
   // hours of the stages before.)
   CHECK(rows.back().hours >= 1000 - 0.05 * 500);
+  // ... and not by more than a stage: the revision moves the hours of the
+  // stages run, not how many there are (two, and at most the third the
+  // revision calls for).
+  CHECK(rows.back().hours <= 1000 + 500);
+  CHECK(rows.size() <= 4);
   // Where the table's height falls past 24.4 mm, interpolated between its rows.
   double at = -1;
   for (std::size_t i = 1; i < rows.size() && at < 0; ++i)

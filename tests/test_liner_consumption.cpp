@@ -147,6 +147,14 @@ TEST_CASE("life --calibrate-consumption sets the new liner's g/kWh to the plant'
   const double g0 = shell_and_lifters_kg_h(s0) * 1e6 / P;
   REQUIRE(g0 > 0);
   CHECK(std::fabs(g0 * factor - kTarget) <= 1e-6 * kTarget);
+  // The run's own figure is the one life calibrates (one definition of
+  // what plants weigh as shell liners).
+  CHECK(s0.at("liner").at("consumption_g_per_kWh").at("shell_and_lifters").get<double>() ==
+        Approx(g0).epsilon(1e-9));
+  // The calibration scales the wear applied: the stage's 500 h are 500 x
+  // factor hours at the case's coefficient.
+  const mc::io::CsvTable tc = mc::io::read_csv_strict(out / "life.csv");
+  CHECK(tc.number(1, tc.column("case_hours")) == Approx(500 * factor).epsilon(1e-5));
   // The wear coefficient it implies: the case's times the factor.
   CHECK(cal.at("wear_coefficient_m3_per_N_m").get<double>() ==
         Approx(mc::kDefaultWearCoefficient * factor).epsilon(1e-12));

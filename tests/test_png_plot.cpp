@@ -496,7 +496,7 @@ TEST_CASE("heat map: coloured marks over the cells, and a curve on the map's y a
     for (int k = 0; k < 100; ++k) m.cells.push_back({k / 100.0, (k + 1) / 100.0, 0, 1, 1.0, false});
     if (marks) m.marks_x.push_back({0.5, "toe", 0x1ca3c4});
     if (curve)
-      for (int k = 0; k <= 100; ++k) m.curve.push_back({k / 100.0, 0.5});
+      for (int k = 0; k <= 100; ++k) m.curve.push_back({k / 100.0, 0.25});
     return m;
   };
   auto count = [&](const fs::path& p, std::uint32_t rgb, int tol) {
@@ -515,4 +515,69 @@ TEST_CASE("heat map: coloured marks over the cells, and a curve on the map's y a
   // (The colour bar's ramp passes near cyan.)
   CHECK(cyan - cyan_bare >= 2 * 150);  // a 3 px line the map's height (at least 150 px), and its label
   CHECK(ink - ink_bare >= 500);  // a 2 px curve across a map over 500 px wide
+  // Where they are: in a column at 30 % of the picture's width the map's
+  // cells run from its top to its bottom, and the curve at y = 0.25 lies a
+  // quarter of the way up; the mark's column is at the map's middle.
+  const Image bare = load(dir.path / "bare.png"), curved = load(dir.path / "curved.png"),
+              marked = load(dir.path / "marked.png");
+  const int col = bare.w * 3 / 10;
+  const Rgb cell = bare.at(col, bare.h / 2);
+  int top = -1, bottom = -1, ink_row = -1;
+  for (int y = 0; y < bare.h; ++y)
+    if (near(bare.at(col, y), (cell.r << 16) | (cell.g << 8) | cell.b, 10)) {
+      if (top < 0) top = y;
+      bottom = y;
+    }
+  for (int y = top; y <= bottom && ink_row < 0; ++y)
+    if (near(curved.at(col, y), 0x222222, 40)) ink_row = y;
+  REQUIRE(top >= 0);
+  REQUIRE(ink_row >= 0);
+  INFO("map rows " << top << " to " << bottom << ", curve at row " << ink_row);
+  CHECK((bottom - ink_row) / double(bottom - top) == Approx(0.25).margin(0.02));
+  int left = -1, right = -1;
+  for (int x = 0; x < marked.w; ++x)
+    if (near(marked.at(x, (top + bottom) / 2), 0x1ca3c4, 20)) {
+      if (left < 0) left = x;
+      right = x;
+    }
+  int map_left = -1, map_right = -1;
+  for (int x = 0; x < bare.w; ++x)
+    if (near(bare.at(x, (top + bottom) / 2), (cell.r << 16) | (cell.g << 8) | cell.b, 10)) {
+      if (map_left < 0) map_left = x;
+      map_right = x;
+    }
+  REQUIRE(left >= 0);
+  CHECK(0.5 * (left + right) == Approx(0.5 * (map_left + map_right)).margin(3));
+}
+
+TEST_CASE("end view: an impact point beside the toe is labelled clear of the toe's label", "[png]") {
+  // Toe at 232 deg, impact point at 234: their labels would lie on each
+  // other; each must keep as much ink as when the impact point is far off.
+  TempDir dir;
+  auto ink = [&](double impact, std::uint32_t rgb) {
+    EndView view;
+    view.shell_radius = 1.0;
+    view.toe_deg = 232;
+    view.shoulder_deg = 40;
+    view.impact_deg = impact;
+    const fs::path f = dir.path / ("v" + std::to_string(static_cast<int>(impact)) + ".png");
+    write_end_view_png(f, view, 600);
+    const Image im = load(f);
+    // Outside the shell (the marks' lines end at it): the labels.
+    int n = 0;
+    for (int y = 0; y < im.h; ++y)
+      for (int x = 0; x < im.w; ++x) {
+        const double dx = x - im.w / 2.0, dy = y - im.h / 2.0;
+        if (std::hypot(dx, dy) > 0.42 * im.w) n += near(im.at(x, y), rgb, 60);
+      }
+    return n;
+  };
+  const int toe_near = ink(234, 0xd62728), toe_far = ink(320, 0xd62728);
+  const int impact_near = ink(234, 0xc51b8a), impact_far = ink(320, 0xc51b8a);
+  INFO("toe label ink " << toe_near << " (impact far: " << toe_far << "), impact " << impact_near << " ("
+                        << impact_far << ")");
+  REQUIRE(toe_far > 20);
+  REQUIRE(impact_far > 20);
+  CHECK(toe_near >= 0.85 * toe_far);
+  CHECK(impact_near >= 0.85 * impact_far);
 }

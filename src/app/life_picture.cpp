@@ -15,6 +15,20 @@ namespace mc::app::life {
 
 namespace {
 
+// A panel's y axis covers at least `half` either side of its values' middle,
+// so that a change smaller than that does not fill the panel.
+void at_least(io::LinePlot& p, double half) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (const io::PlotSeries& s : p.series)
+    for (double v : s.y)
+      if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+  if (!(lo <= hi)) return;
+  const double mid = 0.5 * (lo + hi);
+  p.y_cover_lo = std::min(lo, mid - half);
+  p.y_cover_hi = std::max(hi, mid + half);
+}
+
+
 std::uint32_t ramp(double t) {  // blue (new) to red (worn)
   const auto mix = [&](int a, int b) { return static_cast<std::uint32_t>(std::lround(a + (b - a) * t)); };
   return (mix(0x1f, 0xd6) << 16) | (mix(0x77, 0x27) << 8) | mix(0xb4, 0x28);
@@ -78,7 +92,8 @@ io::LinePlot profiles_plot(const std::string& name, const std::vector<const Stag
         widest = std::max(widest, std::fabs(v.x) * 1000);
       }
       if (k == 0)  // one entry per stage: its colour is all its profiles'
-        ser.label = fmt::format("{:.4g} h: {} mm high, face {} deg{}", s->case_hours / axis.factor,
+        ser.label = fmt::format("{:.0f} h{}: {} mm high, face {} deg{}", s->case_hours / axis.factor,
+                                axis.relative ? " (relative)" : "",
                                 per_profile(*s, 1, [](const ProfileMeasures& m) { return m.height * 1000; }),
                                 per_profile(*s, 1, [](const ProfileMeasures& m) { return m.leading_angle_deg; }),
                                 s->shell_wear_m > 0 ? fmt::format(", shell worn {:.1f} mm", s->shell_wear_m * 1000) : "");
@@ -162,9 +177,11 @@ std::vector<io::LinePlot> life_plots(const std::string& name, const std::vector<
   io::LinePlot low = over_hours("where the charge lands", "angle (deg, from 3 o'clock)");
   low.series.push_back(series("toe", 0x9467bd, [](const Stage& s) { return s.r.toe_deg; }));
   low.series.push_back(series("impact point", 0xd62728, [](const Stage& s) { return s.r.impact_deg; }));
+  at_least(low, 5);
   plots.push_back(low);
   io::LinePlot high = over_hours("where the charge leaves the shell", "angle (deg, from 3 o'clock)");
   high.series.push_back(series("shoulder", 0x2ca02c, [](const Stage& s) { return s.r.shoulder_deg; }));
+  at_least(high, 5);
   plots.push_back(high);
 
   io::LinePlot height = over_hours("the lifters' height", "height above the shell (mm)");
@@ -180,6 +197,10 @@ std::vector<io::LinePlot> life_plots(const std::string& name, const std::vector<
       return measure_profile(s.outlines[k]).trailing_angle_deg;
     }));
   }
+  // The height from the shell up (a few mm lost shows as a few mm), the
+  // angles over at least 10 deg.
+  height.y_cover_lo = 0;
+  at_least(faces, 5);
   plots.push_back(height);
   plots.push_back(faces);
 

@@ -137,6 +137,11 @@ LifeState read_life_state(const fs::path& file, const StateShape& shape) {
   const JsonAt top(doc, file.string());
   top.object();
   const std::string format = top["format"].text();
+  if (format == "millcharge life 1")
+    top["format"].fail("\"" + format + "\": a study started by a millcharge whose default wear coefficient was "
+                       "1e-13 and whose life.csv named its kg/h otherwise; this one reads \"" + kFormat +
+                       "\". Finish it with the millcharge that started it, or start it again here with --force (its "
+                       "stages run again)");
   if (format != kFormat) top["format"].fail("\"" + format + "\", this millcharge reads \"" + kFormat + "\"");
   LifeState st;
   top["request"].object();

@@ -86,7 +86,9 @@ nlohmann::ordered_json consumption_json(const LinerConsumption& x) {
   j["all"] = number_or_null(x.all_g_kWh);
   j["power_W"] = x.power_W;
   j["what"] = "grams of liner worn per kWh the mill draws: each part's wear_kg_per_h x 1e6 / power_W (the torque "
-              "power); shell_and_lifters is what plants weigh as shell liners";
+              "power at the shell, not the motor's); shell_and_lifters is what plants weigh as shell liners (worn "
+              "steel only, not what is scrapped at relining); a mesh wall counts with the part its case names "
+              "(shell and lifters, or ends), mesh_walls is the meshes' own sum";
   j["relative"] = x.relative;
   return j;
 }
@@ -125,6 +127,12 @@ LinerConsumption liner_consumption(const LinerReport& liner, double power_W, dou
     else x.shell_lifters_kg_h += p.wear_kg_per_h;  // the shell and the lifters' faces and tops
     x.all_kg_h += p.wear_kg_per_h;
   }
+  // A mesh counts with what its case says it stands for: a mesh liner's
+  // shell and lifters with the shell and lifters, cone heads with the ends.
+  const double* m = liner.mesh_wear_kg_per_h_by_part;
+  x.shell_lifters_kg_h += m[static_cast<int>(MeshPart::shell)] + m[static_cast<int>(MeshPart::lifters)];
+  x.end_plates_kg_h += m[static_cast<int>(MeshPart::ends)];
+  x.has_end_plates = x.has_end_plates || m[static_cast<int>(MeshPart::ends)] > 0;
   x.shell_lifters_g_kWh = grams_per_kWh(x.shell_lifters_kg_h, power_W);
   x.end_plates_g_kWh = grams_per_kWh(x.end_plates_kg_h, power_W);
   x.mesh_g_kWh = grams_per_kWh(x.mesh_kg_h, power_W);
@@ -333,7 +341,8 @@ std::vector<std::string> write_run_results(const FinishedRun& r, const RunReport
   view.com_y = now.com_y_m;
   if (!io::draw_or_warn(out / "charge.png", [&] { io::write_end_view_png(out / "charge.png", view); }))
     not_written.push_back("charge.png");
-  if (!io::draw_or_warn(out / "liner.png", [&] { io::write_liner_png(out / "liner.png", c.name, layout, liner); }))
+  if (!io::draw_or_warn(out / "liner.png", [&] { io::write_liner_png(out / "liner.png", c.name, layout, liner,
+                                                                        wear_coefficient_is_default(r.scene.wall_material.wear_coefficient)); }))
     not_written.push_back("liner.png");
   if (!io::draw_or_warn(out / "spectra.png", [&] { io::write_spectra_png(out / "spectra.png", c.name, spectra); }))
     not_written.push_back("spectra.png");
@@ -437,10 +446,15 @@ void print_run_results(const FinishedRun& r, const RunReport& rep, const std::ve
   std::string others;
   if (use.has_end_plates)
     others += fmt_g(", end plates %.3g g/kWh (%.3g kg/h)", use.end_plates_g_kWh, use.end_plates_kg_h);
-  if (use.has_meshes) others += fmt_g(", mesh walls %.3g g/kWh (%.3g kg/h)", use.mesh_g_kWh, use.mesh_kg_h);
+  if (use.has_meshes)
+    others += fmt_g(" (mesh walls, counted in these by the part each stands for: %.3g g/kWh, %.3g kg/h)",
+                    use.mesh_g_kWh, use.mesh_kg_h);
   std::printf("consumption     %s %.3g g/kWh (%.3g kg/h)%s, all %.3g g/kWh: liner steel worn per kWh of the %.4g W "
               "drawn\n",
-              c.lifter_rows > 0 ? "shell and lifters" : "shell", use.shell_lifters_g_kWh, use.shell_lifters_kg_h,
+              c.lifter_rows > 0 || liner.mesh_wear_kg_per_h_by_part[static_cast<int>(MeshPart::lifters)] > 0
+                  ? "shell and lifters"
+                  : "shell",
+              use.shell_lifters_g_kWh, use.shell_lifters_kg_h,
               others.c_str(), use.all_g_kWh, use.power_W);
   if (use.relative)
     std::printf("                the wear figures are %s (the default stand-in, %g m3/(N m)); calibrate: life "

@@ -31,7 +31,12 @@ inline constexpr double kDefaultWearCoefficient = 5.0e-12;
 // Wear at the default coefficient is relative: the words every output
 // that prints or draws such a wear rate or its hours uses.
 inline constexpr const char* kWearRelative = "relative: wear coefficient not calibrated";
-inline bool wear_coefficient_is_default(double k) { return k == kDefaultWearCoefficient; }
+// The default before it, 1e-13 (clean steel's three-body abrasion), which
+// cases of that time wrote out: a stand-in as much.
+inline constexpr double kFormerDefaultWearCoefficient = 1.0e-13;
+inline bool wear_coefficient_is_default(double k) {
+  return k == kDefaultWearCoefficient || k == kFormerDefaultWearCoefficient;
+}
 
 struct Material {
   std::string name;

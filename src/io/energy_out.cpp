@@ -185,7 +185,12 @@ nlohmann::ordered_json per_metre_json(double length_m, double torque_power_W, do
   j["collision_power_W"] = num(spectra.all.power_W / L);
   j["liner_impact_power_W"] = num(liner.impact_W / L);
   j["liner_shear_power_W"] = num(liner.shear_W / L);
-  j["wear_kg_per_h"] = num(liner.wear_kg_per_h / L);
+  // The wear that scales with the length: the shell and the lifters (a
+  // mesh by the part it stands for), not the end plates.
+  double shell_lifters = liner.mesh_wear_kg_per_h_by_part[0] + liner.mesh_wear_kg_per_h_by_part[1];
+  for (const LinerPartRates& p : liner.parts)
+    if (p.name != "end plates" && p.name != "mesh walls") shell_lifters += p.wear_kg_per_h;
+  j["shell_lifters_wear_kg_per_h"] = num(shell_lifters / L);
   // The parts' power per metre: a whole mill's end plates against its
   // shell and lifters (a slice has no end plates).
   j["parts"] = nlohmann::json::array();
@@ -256,7 +261,7 @@ void write_spectra_png(const std::filesystem::path& path, const std::string& tit
 }
 
 void write_liner_png(const std::filesystem::path& path, const std::string& title, const LinerLayout& layout,
-                     const LinerReport& r) {
+                     const LinerReport& r, bool relative) {
   // Over whole revolutions every row of a steady mill sees the same cycle,
   // so the map is one repeat of the lifter pattern (rows whose bars cover
   // the same arc of shell), averaged over its repeats: x the angle from
@@ -277,7 +282,7 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
   const int repeats = nl > 0 ? nl / period : 1;
   HeatMap impact, wear;
   impact.title = title + ": impact power on the liner";
-  wear.title = "wear rate";
+  wear.title = relative ? "wear rate (relative: wear coefficient not calibrated)" : "wear rate";
   impact.unit = "W/m\u00b2";
   wear.unit = "mm/1000 h";
   for (HeatMap* m : {&impact, &wear}) {
@@ -334,7 +339,7 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
   strike.title = "impact power on the shell and lifters per degree, lab frame (grey: no impacts)";
   strike.unit = "W/deg";
   strike.x_label = "degrees counter-clockwise from 3 o'clock (the mill turns counter-clockwise)";
-  strike.y_label = "liner covered";
+  strike.y_label = "contact / peak";
   strike.x_lo = 0;
   strike.x_hi = 360;
   strike.y_lo = 0;
@@ -344,18 +349,20 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
     strike.cells.push_back({b * 360.0 / nb, (b + 1) * 360.0 / nb, 0, 1, r.impact_W_per_deg[b], false});
   for (std::size_t b = 0; b < r.coverage.size(); ++b)
     strike.curve.push_back({(b + 0.5) * 360.0 / r.coverage.size(), r.coverage[b]});
-  strike.curve_label = "curve: share of the liner the charge covers";
+  strike.curve_label = "curve: the charge's contact with the liner, over its most-contacted degree";
   if (std::isfinite(r.impact_point_deg)) {
     char s[96];
     std::snprintf(s, sizeof s, "impact point %.0f, %.0f %% on bare liner", r.impact_point_deg,
                   100 * r.bare_liner_impact_share);
     strike.marks_x.push_back({r.impact_point_deg, s, 0xc51b8a});
   }
-  // The viewer's colours: shoulder cyan, toe orange, impact magenta.
-  strike.marks_x.push_back({r.shoulder_deg, "shoulder", 0x1ca3c4});
-  strike.marks_x.push_back({r.toe_deg, "toe", 0xf07018});
+  // charge.png's colours, and the viewer's: toe red, shoulder orange,
+  // impact magenta.
+  strike.marks_x.push_back({r.shoulder_deg, "shoulder", 0xe6700a});
+  strike.marks_x.push_back({r.toe_deg, "toe", 0xd62728});
   BarChart bars;
-  bars.title = "mean wear rate of each part (mm per 1000 h)";
+  bars.title = relative ? "mean wear rate of each part (mm per 1000 h, relative: not calibrated)"
+                       : "mean wear rate of each part (mm per 1000 h)";
   for (const LinerPartRates& p : r.parts) bars.bars.push_back({p.name, p.mean_wear_mm_per_1000h});
   write_heat_maps_png(path, {impact, wear, strike}, bars);
 }

@@ -37,11 +37,12 @@ PolyMesh liner_mesh(const LinerLayout& layout, const LinerReport* r, double mill
 // collision rate per bin.
 void write_spectra_png(const std::filesystem::path& path, const std::string& title, const SpectraReport& r);
 
-// liner.png: the liner unrolled (mill-frame angle × axial position), impact
+// liner.png (`relative`: wear at the default stand-in coefficient, said
+// so on its wear axes): the liner unrolled (mill-frame angle × axial position), impact
 // power and wear rate per element with the lifter rows outlined, and the
 // mean wear of each part.
 void write_liner_png(const std::filesystem::path& path, const std::string& title, const LinerLayout& layout,
-                     const LinerReport& r);
+                     const LinerReport& r, bool relative = false);
 
 // "shell gap 3 bin 1, axial 2" and the like.
 std::string element_name(const LinerLayout& layout, int element);

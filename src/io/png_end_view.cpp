@@ -4,6 +4,7 @@
 #include "io/png_plot.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
@@ -90,17 +91,29 @@ void write_end_view_png(const std::filesystem::path& path, const EndView& view, 
   }
   cv.ring(centre, rpx, 3, kShell);
 
-  // Toe and shoulder: radius from the centre to the shell, labelled outside.
+  // Toe and shoulder: radius from the centre to the shell, labelled outside;
+  // a label that would cover one already placed moves along its ray (out,
+  // then in), as the viewer's do (viewer/label_layout.h).
+  std::vector<std::array<double, 4>> taken;  // x0, y0, x1, y1
   auto mark = [&](double deg, const char* name, std::uint32_t rgb) {
     if (!(deg >= 0) || !std::isfinite(deg)) return;
     const double a = deg * (3.14159265358979323846 / 180), ca = std::cos(a), sa = std::sin(a);
     cv.line(centre, map(shell * ca, shell * sa), rgb, 2.5);
     const std::string s = std::string(name) + " " + format("%.0f", deg) + "\u00b0";
     const double tw = cv.text_width(s, kNotePx), th = cv.cap_height(kNotePx);
-    const P p{centre.x + (rpx + 12) * ca, centre.y - (rpx + 12) * sa};
-    double x = ca > 0.3 ? p.x : ca < -0.3 ? p.x - tw : p.x - tw / 2;
-    double y = sa > 0.3 ? p.y - th : sa < -0.3 ? p.y : p.y - th / 2;
-    x = std::clamp(x, 6.0, size - 6 - tw), y = std::clamp(y, 6.0, size - 8 - th);
+    double x = 0, y = 0;
+    for (int k = 0; k < 9; ++k) {
+      const double out = 12 + 14.0 * (k % 2 == 1 ? (k + 1) / 2 : -(k / 2) * 0.5);
+      const P p{centre.x + (rpx + out) * ca, centre.y - (rpx + out) * sa};
+      x = ca > 0.3 ? p.x : ca < -0.3 ? p.x - tw : p.x - tw / 2;
+      y = sa > 0.3 ? p.y - th : sa < -0.3 ? p.y : p.y - th / 2;
+      x = std::clamp(x, 6.0, size - 6 - tw), y = std::clamp(y, 6.0, size - 8 - th);
+      bool clear = true;
+      for (const auto& t : taken)
+        clear = clear && (x + tw + 6 < t[0] || t[2] < x - 6 || y + th + 6 < t[1] || t[3] < y - 6);
+      if (clear) break;
+    }
+    taken.push_back({x, y, x + tw, y + th});
     cv.label(x, y, s, rgb, kNotePx);
   };
   mark(view.toe_deg, "toe", kToe);

@@ -157,6 +157,8 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
     }
     x.wear_kg_per_h = x.wear_m3_per_s * (el.density > 0 ? el.density : density) * 3600.0;
     const int part = el.part == LinerPart::shell ? 0 : el.part == LinerPart::plate ? 4 : el.part == LinerPart::mesh ? 5 : 1 + el.bin;
+    if (el.part == LinerPart::mesh && el.row >= 0 && el.row < static_cast<int>(scene.walls.meshes.size()))
+      r.mesh_wear_kg_per_h_by_part[static_cast<int>(scene.walls.meshes[el.row].part)] += x.wear_kg_per_h;
     LinerPartRates& pr = r.parts[part];
     pr.area_m2 += el.area_m2;
     pr.impacts_per_s += x.impacts_per_s;

@@ -78,6 +78,9 @@ struct LinerReport {
   double window_s = 0;
   std::vector<LinerElementRates> elements;  // in layout order
   std::vector<LinerPartRates> parts;
+  // The mesh walls' wear (in the part "mesh walls") by what each mesh stands
+  // for (core/scene.h MeshPart order: shell, lifters, ends), kg/h.
+  double mesh_wear_kg_per_h_by_part[3] = {0, 0, 0};
   double impacts_per_s = 0, impact_W = 0, shear_W = 0, wear_kg_per_h = 0;
   int worst_element = -1;
   double worst_wear_mm_per_1000h = 0;

@@ -9,6 +9,11 @@
 
 namespace mc::viewer {
 
+// The mark labels' first radius, in shell radii (outside the marks'
+// wedges, which reach 1.36 R), and their step along the ray.
+inline constexpr float kMarkLabelRadius = 1.45f;
+inline constexpr float kMarkLabelStep = 0.07f;
+
 struct LabelBox {
   float x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // pixels
   bool overlaps(const LabelBox& o, float gap_x = 4, float gap_y = 2) const {

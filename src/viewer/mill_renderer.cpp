@@ -319,12 +319,12 @@ void MillRenderer::draw_marks(const glm::mat4& view, const glm::mat4& projection
   glDisable(GL_DEPTH_TEST);
   wedge(marks.toe_deg);
   marks_.upload(quads);
-  shader_.set("base_colour", glm::vec4(1.0f, 0.45f, 0.1f, 1.0f));  // toe: orange
+  shader_.set("base_colour", glm::vec4(0.92f, 0.24f, 0.24f, 1.0f));  // toe: red, as in charge.png
   marks_.draw();
   quads.clear();
   wedge(marks.shoulder_deg);
   marks_.upload(quads);
-  shader_.set("base_colour", glm::vec4(0.2f, 0.9f, 1.0f, 1.0f));  // shoulder: cyan
+  shader_.set("base_colour", glm::vec4(0.96f, 0.55f, 0.12f, 1.0f));  // shoulder: orange
   marks_.draw();
   if (marks.impact) {
     quads.clear();

@@ -95,10 +95,11 @@ void App::panel_stats() {
   // What the balls' colours mean, where it is always in sight (the View
   // section below sets it).
   if (style_.colour_by != ColourBy::material) {
-    const char* names[] = {"speed, m/s", "radius, m", "", "impact energy: log10 W dissipated"};
+    const char* names[] = {"speed", "size", "", "impact energy"};
+    const char* units[] = {"m/s", "m (radius)", "", "log10 W dissipated"};
     const int mode = static_cast<int>(style_.colour_by);
     ImGui::Text("colour: %s", names[mode]);
-    colour_bar(colour_lo_[mode], colour_hi_[mode], "");
+    colour_bar(colour_lo_[mode], colour_hi_[mode], units[mode]);
   } else {
     ImGui::TextUnformatted("colour: material");
   }
@@ -253,9 +254,12 @@ void App::panel_view() {
   if (liner_colour_ != 0) {
     if (!liner_.ready()) ImGui::TextDisabled("(the liner's sums come once the mill turns)");
     else {
-      colour_bar(liner_max_ / 1000, liner_max_, liner_colour_ == 1 ? "W/m^2, log" : "mm per 1000 h, log");
+      const bool relative = wear_coefficient_is_default(scene_.wall_material.wear_coefficient);
+      colour_bar(liner_max_ / 1000, liner_max_,
+                 liner_colour_ == 1 ? "W/m^2, log" : relative ? "mm per 1000 h, log, relative" : "mm per 1000 h, log");
       const LinerReport& r = liner_.report();
-      ImGui::Text("liner: impact %.3g W, shear %.3g W, wear %.3g kg/h", r.impact_W, r.shear_W, r.wear_kg_per_h);
+      ImGui::TextWrapped("liner: impact %.3g W, shear %.3g W, wear %.3g kg/h (shell, lifters, ends)%s", r.impact_W,
+                         r.shear_W, r.wear_kg_per_h, relative ? ", relative: wear coefficient not calibrated" : "");
     }
   }
   if (liner_.ready() && std::isfinite(liner_.report().impact_point_deg)) {
@@ -345,16 +349,18 @@ void App::draw_labels() {
       const glm::vec2 p = to_pixels({r * R * std::cos(a), r * R * std::sin(a), z});
       return std::pair<float, float>(p.x, p.y);
     };
-    const LabelBox b = place_label(along, size.x, size.y, radius, 0.07f, 8, panel_width_ + 2,
+    const LabelBox b = place_label(along, size.x, size.y, radius, kMarkLabelStep, 8, panel_width_ + 2,
                                    static_cast<float>(opt_.width) - 2, 2.0f, static_cast<float>(opt_.height) - 2, taken);
     taken.push_back(b);
     dl->AddRectFilled({b.x0 - 3, b.y0 - 1}, {b.x1 + 3, b.y1 + 1}, IM_COL32(28, 31, 36, 220), 3.0f);
     dl->AddText({b.x0, b.y0}, colour, text);
   };
-  label(monitor_.angles().toe_deg, "toe", IM_COL32(255, 115, 25, 255), 1.27f);
-  label(monitor_.angles().shoulder_deg, "shoulder", IM_COL32(50, 230, 255, 255), 1.27f);
+  // Outside every wedge (mill_renderer.cpp: out to 1.36 R), in the marks'
+  // colours (charge.png's: toe red, shoulder orange, impact magenta).
+  label(monitor_.angles().toe_deg, "toe", IM_COL32(235, 60, 60, 255), kMarkLabelRadius);
+  label(monitor_.angles().shoulder_deg, "shoulder", IM_COL32(245, 140, 30, 255), kMarkLabelRadius);
   if (liner_.ready() && std::isfinite(liner_.report().impact_point_deg))
-    label(liner_.report().impact_point_deg, "impact", IM_COL32(255, 50, 215, 255), 1.42f);
+    label(liner_.report().impact_point_deg, "impact", IM_COL32(255, 50, 215, 255), kMarkLabelRadius);
 }
 
 }  // namespace mc::viewer

@@ -621,8 +621,13 @@ int App::run() {
       if (std::isfinite(r.impact_point_deg))
         std::snprintf(point, sizeof point, "impact point %.0f deg (%.0f %% of the impact power on bare liner)",
                       r.impact_point_deg, 100 * r.bare_liner_impact_share);
-      std::printf("millcharge view: liner over the last %.2f s: impact %.4g W, shear %.4g W, wear %.3g kg/h; %s\n",
-                  r.window_s, r.impact_W, r.shear_W, r.wear_kg_per_h, point);
+      std::printf("millcharge view: liner over the last %.2f s: impact %.4g W, shear %.4g W, wear %.3g kg/h (shell, "
+                  "lifters, ends%s); %s\n",
+                  r.window_s, r.impact_W, r.shear_W, r.wear_kg_per_h,
+                  wear_coefficient_is_default(scene_.wall_material.wear_coefficient) ? "; relative: wear coefficient "
+                                                                                      "not calibrated"
+                                                                                    : "",
+                  point);
     }
     if (opt_.from)
       std::printf("millcharge view: state from %s at t = %.4f s (%s)\n", opt_.from_dir.c_str(), source_time_,
