@@ -54,16 +54,23 @@ SHORT_RUN = ['--duration', '0.2', '--set', 'run.warmup=0.05', '--set', 'run.sett
 
 
 def commands_of(path):
-    """(line number, command) for each command line of the page's code blocks."""
+    """(line number, command, what the page shows it print) for each command
+    line of the page's code blocks; a transcript's ($ command) output is the
+    lines after it up to the next prompt or the block's end."""
     out, block, pending, start = [], False, '', 0
+    shown = None  # the output lines of the last transcript command
     for k, line in enumerate(open(path, encoding='utf-8'), 1):
         if line.startswith('```'):
             block = not block
             pending = ''
+            shown = None
             continue
         if not block:
             continue
         text = line.rstrip('\n')
+        if shown is not None and not pending and not text.strip().startswith('$ '):
+            shown.append(text)
+            continue
         if pending:
             pending += ' ' + text.strip()
         elif text.strip().startswith(PREFIXES):
@@ -80,9 +87,19 @@ def commands_of(path):
         if pending.endswith('\\'):
             pending = pending[:-1].rstrip()
             continue
-        out.append((start, pending))
+        shown = [] if lines_transcript(path, start) else None
+        out.append((start, pending, shown))
         pending = ''
     return out
+
+
+def lines_transcript(path, number):
+    """Whether line `number` of the page is a transcript's prompt ($ ...)."""
+    with open(path, encoding='utf-8') as f:
+        for k, line in enumerate(f, 1):
+            if k == number:
+                return line.strip().startswith('$ ')
+    return False
 
 
 def split(command):
@@ -178,6 +195,8 @@ class Runner:
                 folder = option(rest, '--resume')
                 if not os.path.isdir(os.path.join(cwd, folder)):
                     return None, f'{folder} is not made on this page'
+                if '--duration' not in rest and os.path.exists(os.path.join(cwd, folder, 'summary.json')):
+                    return None, f'a resume after Ctrl-C: the shortened run in {folder} finished'
                 if '--duration' in rest:
                     drop(rest, '--duration')
                     rest += ['--duration', '0.3']
@@ -188,6 +207,11 @@ class Runner:
                 return [self.binary, 'check'] + self.case_args(rest), None
             return [self.binary, 'run'] + rest + SHORT_RUN + ['--quiet'], None
         if sub == 'life':
+            # One stage of the page's length: its hours over its stages.
+            stages, hours = option(rest, '--stages'), option(rest, '--hours')
+            if stages and hours:
+                at = rest.index('--hours')
+                rest[at + 1] = repr(float(hours) / int(stages))
             drop(rest, '--stages')
             drop(rest, '--duration')
             n = self.balls(cwd, self.case_args(rest))
@@ -241,7 +265,7 @@ class Runner:
         for d in ('assets', 'scripts', 'build'):
             os.symlink(os.path.join(self.root, d), os.path.join(cwd, d))
         try:
-            for line, command in cmds:
+            for line, command, shown in cmds:
                 words, tail = split(command)
                 if not words:
                     continue
@@ -259,10 +283,20 @@ class Runner:
                     continue
                 # (A glob stays for the shell to expand.)
                 shell = ' '.join(a if '*' in a else shlex.quote(a) for a in argv) + (' ' + ' '.join(tail) if tail else '')
-                p = subprocess.run(['bash', '-o', 'pipefail', '-c', shell], cwd=cwd, capture_output=True, text=True,
+                # (A pipe into head ends its writer early: no pipefail there.)
+                pipefail = ['-o', 'pipefail'] if '| head' not in command else []
+                p = subprocess.run(['bash'] + pipefail + ['-c', shell], cwd=cwd, capture_output=True, text=True,
                                    timeout=900)
                 status = 'ok' if p.returncode == 0 else 'FAILED'
                 detail = '' if p.returncode == 0 else f'exit {p.returncode}: ' + (p.stderr or p.stdout).strip()[-600:]
+                # A transcript that shows the command refusing its input: the
+                # refusal it shows, word for word, with exit status 2.
+                first = next((x.strip() for x in (shown or []) if x.strip()), '')
+                if p.returncode != 0 and first.startswith('millcharge: '):
+                    if p.returncode == 2 and first in p.stderr:
+                        status, detail = 'ok', '(the refusal the page shows)'
+                    else:
+                        detail += f'\n        the page shows: {first}'
                 self.results.append((name, line, command, status, (shell if shell != command else '') + detail))
                 print(f'{status:7s} {name}:{line}: {command}' + (f'\n        ran: {shell}' if shell != command else '')
                       + (f'\n        {detail}' if detail else ''), flush=True)
