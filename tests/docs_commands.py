@@ -59,7 +59,7 @@ def commands_of(path):
     """(line number, command, what the page shows it print) for each command
     line of the page's code blocks; a transcript's ($ command) output is the
     lines after it up to the next prompt or the block's end."""
-    out, block, pending, start = [], False, '', 0
+    out, block, pending, start, prompt = [], False, '', 0, False
     shown = None  # the output lines of the last transcript command
     for k, line in enumerate(open(path, encoding='utf-8'), 1):
         if line.startswith('```'):
@@ -77,7 +77,8 @@ def commands_of(path):
             pending += ' ' + text.strip()
         elif text.strip().startswith(PREFIXES):
             first = text.strip()
-            if first.startswith('$ '):  # a transcript: the command after the prompt
+            prompt = first.startswith('$ ')
+            if prompt:  # a transcript: the command after the prompt
                 first = first[2:]
                 if 'millcharge' not in first:
                     continue
@@ -89,19 +90,10 @@ def commands_of(path):
         if pending.endswith('\\'):
             pending = pending[:-1].rstrip()
             continue
-        shown = [] if lines_transcript(path, start) else None
+        shown = [] if prompt else None
         out.append((start, pending, shown))
         pending = ''
     return out
-
-
-def lines_transcript(path, number):
-    """Whether line `number` of the page is a transcript's prompt ($ ...)."""
-    with open(path, encoding='utf-8') as f:
-        for k, line in enumerate(f, 1):
-            if k == number:
-                return line.strip().startswith('$ ')
-    return False
 
 
 def split(command):

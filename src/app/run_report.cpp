@@ -123,16 +123,15 @@ LinerConsumption liner_consumption(const LinerReport& liner, double power_W, dou
   x.power_W = power_W;
   for (const LinerPartRates& p : liner.parts) {
     if (p.name == "end plates") x.end_plates_kg_h += p.wear_kg_per_h, x.has_end_plates = p.area_m2 > 0;
-    else if (p.name == "mesh walls") x.mesh_kg_h += p.wear_kg_per_h, x.has_meshes = true;
-    else x.shell_lifters_kg_h += p.wear_kg_per_h;  // the shell and the lifters' faces and tops
+    if (p.name == "mesh walls") x.mesh_kg_h += p.wear_kg_per_h, x.has_meshes = true;
     x.all_kg_h += p.wear_kg_per_h;
   }
   // A mesh counts with what its case says it stands for: a mesh liner's
   // shell and lifters with the shell and lifters, cone heads with the ends.
-  const double* m = liner.mesh_wear_kg_per_h_by_part;
-  x.shell_lifters_kg_h += m[static_cast<int>(MeshPart::shell)] + m[static_cast<int>(MeshPart::lifters)];
-  x.end_plates_kg_h += m[static_cast<int>(MeshPart::ends)];
-  x.has_end_plates = x.has_end_plates || m[static_cast<int>(MeshPart::ends)] > 0;
+  x.shell_lifters_kg_h = shell_lifters_wear_kg_per_h(liner);
+  const double mesh_ends = liner.mesh_wear_kg_per_h_by_part[static_cast<int>(MeshPart::ends)];
+  x.end_plates_kg_h += mesh_ends;
+  x.has_end_plates = x.has_end_plates || mesh_ends > 0;
   x.shell_lifters_g_kWh = grams_per_kWh(x.shell_lifters_kg_h, power_W);
   x.end_plates_g_kWh = grams_per_kWh(x.end_plates_kg_h, power_W);
   x.mesh_g_kWh = grams_per_kWh(x.mesh_kg_h, power_W);

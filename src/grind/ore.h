@@ -26,6 +26,12 @@ enum class EnergyBasis { impact, loss, loss_one_radius };
 inline const char* basis_name(EnergyBasis b) {
   return b == EnergyBasis::impact ? "impact" : b == EnergyBasis::loss ? "loss" : "loss_one_radius";
 }
+// The basis a name gives; false for a name that is none.
+inline bool basis_of(const std::string& name, EnergyBasis* b) {
+  for (EnergyBasis x : {EnergyBasis::impact, EnergyBasis::loss, EnergyBasis::loss_one_radius})
+    if (name == basis_name(x)) return *b = x, true;
+  return false;
+}
 
 // The contact law and parameters of the DEM run an ore was fitted through
 // (the [fitted] table of an ore file): the normal energy spectrum, and so

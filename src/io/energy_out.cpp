@@ -185,12 +185,7 @@ nlohmann::ordered_json per_metre_json(double length_m, double torque_power_W, do
   j["collision_power_W"] = num(spectra.all.power_W / L);
   j["liner_impact_power_W"] = num(liner.impact_W / L);
   j["liner_shear_power_W"] = num(liner.shear_W / L);
-  // The wear that scales with the length: the shell and the lifters (a
-  // mesh by the part it stands for), not the end plates.
-  double shell_lifters = liner.mesh_wear_kg_per_h_by_part[0] + liner.mesh_wear_kg_per_h_by_part[1];
-  for (const LinerPartRates& p : liner.parts)
-    if (p.name != "end plates" && p.name != "mesh walls") shell_lifters += p.wear_kg_per_h;
-  j["shell_lifters_wear_kg_per_h"] = num(shell_lifters / L);
+  j["shell_lifters_wear_kg_per_h"] = num(shell_lifters_wear_kg_per_h(liner) / L);  // what scales with the length
   // The parts' power per metre: a whole mill's end plates against its
   // shell and lifters (a slice has no end plates).
   j["parts"] = nlohmann::json::array();

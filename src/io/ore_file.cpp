@@ -92,8 +92,8 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   if (c.law == "hertz") c.youngs_modulus_Pa = r.number(ft, "fitted.", "youngs_modulus_Pa", 0, kInf, "Pa > 0");
   c.pairs = text("pairs");
   c.energy_basis = text("energy_basis");  // none: a fit from before the severity spectra (set below)
-  if (ft.get("energy_basis") && c.energy_basis != "impact" && c.energy_basis != "loss" &&
-      c.energy_basis != "loss_one_radius")
+  grind::EnergyBasis b;
+  if (ft.get("energy_basis") && !grind::basis_of(c.energy_basis, &b))
     r.fail("fitted.energy_basis", ft.get("energy_basis"), "must be \"impact\", \"loss\" or \"loss_one_radius\"");
   c.test = text("test");
   c.run = text("run");
@@ -287,20 +287,16 @@ grind::Ore read_ore(const fs::path& path) {
     // (grind), not here: a new fit replaces the record.
     std::string& fitted = o.fitted_under.energy_basis;
     if (!o.fitted_under.law.empty() && fitted.empty()) fitted = "loss_one_radius";
-    std::string basis = fitted.empty() ? "impact" : fitted;
+    o.energy_basis = grind::EnergyBasis::impact;
+    if (!fitted.empty()) grind::basis_of(fitted, &o.energy_basis);
     if (const toml::node* bn = rt.get("energy_basis")) {
-      const auto v = bn->value<std::string>();
-      if (!bn->is_string() || (*v != "impact" && *v != "loss" && *v != "loss_one_radius"))
+      if (!bn->is_string() || !grind::basis_of(*bn->value<std::string>(), &o.energy_basis))
         r.fail("rates.energy_basis", bn,
                "must be \"impact\" (the energy at first touch, as drop-weight tests deliver), \"loss\" (the "
                "normal energy the collision loses) or \"loss_one_radius\" (the normal loss with one radius for "
                "every collision, as ores were fitted before the severity spectra)");
-      basis = *v;
       o.energy_basis_given = true;
     }
-    o.energy_basis = basis == "loss"              ? grind::EnergyBasis::loss
-                     : basis == "loss_one_radius" ? grind::EnergyBasis::loss_one_radius
-                                                  : grind::EnergyBasis::impact;
   } else {
     o.fitted_under.energy_basis.clear();  // a basis means nothing to the other rate models
   }

@@ -52,7 +52,7 @@ Run read_run(const fs::path& dir, bool need_spectrum, grind::EnergyBasis basis) 
     sum_r += d.class_counts[k] * 0.25 * (c.sizes[k].diameter_min + c.sizes[k].diameter_max);
   }
   r.ball_radius_m = n > 0 ? sum_r / n : 0;
-  for (const SizeClass& sc : c.sizes) r.clumps = r.clumps || (!sc.shape.empty() && sc.shape != "sphere");
+  for (const SizeClass& sc : c.sizes) r.clumps = r.clumps || !sc.shape.empty();  // the reader clears "sphere"
   r.contact.law = c.law == ContactLaw::hertz ? "hertz" : "linear";
   r.contact.restitution = c.contact.restitution;
   r.contact.friction = c.contact.mu_slide;

@@ -70,6 +70,14 @@ bool on_arc(double a, double from, double to) {
 
 }  // namespace
 
+double shell_lifters_wear_kg_per_h(const LinerReport& r) {
+  double kg_h = r.mesh_wear_kg_per_h_by_part[static_cast<int>(MeshPart::shell)] +
+                r.mesh_wear_kg_per_h_by_part[static_cast<int>(MeshPart::lifters)];
+  for (const LinerPartRates& p : r.parts)
+    if (p.name != "end plates" && p.name != "mesh walls") kg_h += p.wear_kg_per_h;
+  return kg_h;
+}
+
 SpectraReport spectra_report(const Scene& scene, const BookSums& books, double window_s, double open_start_J,
                              double open_end_J, double dissipated_J) {
   SpectraReport r;

@@ -118,6 +118,11 @@ std::vector<LifterStation> lifter_stations(const BookSums& books, double window_
                                            const std::vector<std::vector<Vec2>>& outlines, double shell_radius,
                                            double length);
 
+// The wear of the shell and the lifters (a mesh counted by the part it
+// stands for), kg/h: what plants weigh as shell liners, and what scales
+// with the mill's length; not the end plates.
+double shell_lifters_wear_kg_per_h(const LinerReport& r);
+
 SpectraReport spectra_report(const Scene& scene, const BookSums& books, double window_s, double open_start_J,
                              double open_end_J, double dissipated_J);
 

@@ -27,6 +27,9 @@ std::string si(double v, const char* unit) {
   return buf;
 }
 
+// The units of the balls' colours, by ColourBy (material: none).
+constexpr const char* kColourUnits[] = {"m/s", "m (radius)", "", "log10 W dissipated"};
+
 // A colour bar with the shader's ramp (shaders/balls.vert).
 void colour_bar(float lo, float hi, const char* unit) {
   const ImVec4 stops[5] = {{0.15f, 0.30f, 0.95f, 1}, {0.05f, 0.75f, 0.90f, 1}, {0.25f, 0.85f, 0.25f, 1},
@@ -96,10 +99,9 @@ void App::panel_stats() {
   // section below sets it).
   if (style_.colour_by != ColourBy::material) {
     const char* names[] = {"speed", "size", "", "impact energy"};
-    const char* units[] = {"m/s", "m (radius)", "", "log10 W dissipated"};
     const int mode = static_cast<int>(style_.colour_by);
     ImGui::Text("colour: %s", names[mode]);
-    colour_bar(colour_lo_[mode], colour_hi_[mode], units[mode]);
+    colour_bar(colour_lo_[mode], colour_hi_[mode], kColourUnits[mode]);
   } else {
     ImGui::TextUnformatted("colour: material");
   }
@@ -240,9 +242,8 @@ void App::panel_view() {
   int mode = static_cast<int>(style_.colour_by);
   if (ImGui::Combo("colour by", &mode, modes, 4)) style_.colour_by = static_cast<ColourBy>(mode);
   if (style_.colour_by != ColourBy::material) {
-    const char* units[] = {"m/s", "m (radius)", "", "log10 W dissipated"};
     ImGui::DragFloatRange2("range", &colour_lo_[mode], &colour_hi_[mode], 0.01f);
-    colour_bar(colour_lo_[mode], colour_hi_[mode], units[mode]);
+    colour_bar(colour_lo_[mode], colour_hi_[mode], kColourUnits[mode]);
   }
   ImGui::Checkbox("axial slab", &style_.slab);
   if (style_.slab) {
