@@ -95,6 +95,7 @@ typedef struct {
   int turning;  /* 1: the wall turns with the mill; 0: it stands still
                    (no velocity, no torque on the mill) */
   real wear_k;  /* Archard's coefficient of its material, m³/(N·m) */
+  real strike_k; /* its material's strike threshold speed, m/s */
 } WallRef;
 
 /* The reference of a shell, end-plate or lifter contact. */
@@ -105,6 +106,7 @@ MC_FN WallRef analytic_wall(int key, Books* books) {
   w.type = key == MC_WALL_SHELL ? MC_WALL_TYPE_SHELL : key >= MC_WALL_LIFTER0 ? MC_WALL_TYPE_LIFTER : MC_WALL_TYPE_PLATE;
   w.turning = 1;
   w.wear_k = books->bp->wear_k;
+  w.strike_k = books->bp->strike_speed;
   return w;
 }
 
@@ -157,10 +159,14 @@ MC_FN void wall_contact(WallRef wr, real3 n, real overlap, real3 p, real4 vel, r
   const int on_bar = wr.element < 0 && wr.key >= MC_WALL_LIFTER0 && wr.key < MC_WALL_MESH0;
   const real along = on_bar ? lifter_path_place(&lifters[wr.key - MC_WALL_LIFTER0], make_real2(rm.x, rm.y)) : R(0.0);
   if (element < 0) element = liner_element(books->bp, sp, lifters, wr.key, rm, along);
-  liner_step(books, element, fresh, c, wr.wear_k, wr.type != MC_WALL_TYPE_PLATE, atan2_fast(rc.y, rc.x));
+  /* The strike energy at first touch (Bitter's deformation wear): the
+   * ball's mass and its approach speed above the material's threshold. */
+  const real over = fmax(-v3_dot(g.v_rel, g.normal), R(0.0)) - wr.strike_k;
+  const real strike = fresh && over > R(0.0) ? R(0.5) * g.m_eff * over * over : R(0.0);
+  liner_step(books, element, fresh, c, wr.wear_k, strike, wr.type != MC_WALL_TYPE_PLATE, atan2_fast(rc.y, rc.x));
   if (on_bar) { /* where on the bar: its wear station */
     const int k = wr.key - MC_WALL_LIFTER0;
-    liner_step(books, lifter_station(books->bp, &lifters[k], k, along), fresh, c, wr.wear_k, 0, R(0.0));
+    liner_step(books, lifter_station(books->bp, &lifters[k], k, along), fresh, c, wr.wear_k, strike, 0, R(0.0));
   }
 #endif
   if (ws->n_new < MC_MAX_WALL_CONTACTS) {
@@ -228,6 +234,7 @@ MC_FN void mesh_walls(const Meshes* m, real3 p, real4 vi, real4 wi, real ri, int
       wr.type = fi.y;
       wr.turning = turning;
       wr.wear_k = tr->a.w;
+      wr.strike_k = tr->b.w;
       const real3 nrm = turning ? rotate_z(hits[h].normal, c, s) : hits[h].normal;
       const PairParams pp = m->pairs[tr->pair_row + mat_i];
       wall_contact(wr, nrm, ri - hits[h].dist, p, vi, wi, ri, pp, mill, sp, lifters, law, ws,

@@ -258,10 +258,12 @@ MC_FN int lifter_station(MC_GLOBAL const BookParams* bp, MC_GLOBAL const LifterP
 }
 
 /* A wall contact's step on its element: an impact when it began, its normal
- * loss, its tangential loss and Archard's wear volume (coefficient wear_k);
- * on the shell and the lifters (`profile`) also the normal loss at its
- * lab-frame angle (`lab_angle`, rad). */
-MC_FN void liner_step(Books* b, int element, int fresh, ContactOut c, real wear_k, int profile, real lab_angle) {
+ * loss, its tangential loss, Archard's wear volume (coefficient wear_k) and
+ * its strike energy (J, nonzero only at first touch: wall_contact); on the
+ * shell and the lifters (`profile`) also the normal loss at its lab-frame
+ * angle (`lab_angle`, rad). */
+MC_FN void liner_step(Books* b, int element, int fresh, ContactOut c, real wear_k, real strike, int profile,
+                      real lab_angle) {
 #if MC_ENERGY_BOOKS
   MC_GLOBAL const BookParams* bp = b->bp;
   MC_GLOBAL uint* cell = b->liner + 2 * MC_LINER_FIELDS * element;
@@ -271,6 +273,7 @@ MC_FN void liner_step(Books* b, int element, int fresh, ContactOut c, real wear_
   add_u64(cell + 2 * MC_LINER_SHEAR, fixed_of(c.loss_tangential, inv_e));
   if (c.slide > R(0.0))
     add_u64(cell + 2 * MC_LINER_WEAR, fixed_of(wear_k * c.normal_force * c.slide, R(1.0) / bp->wear_unit));
+  if (strike > R(0.0)) add_u64(cell + 2 * MC_LINER_STRIKE, fixed_of(strike, inv_e));
   if (profile) {
     const real two_pi = R(6.283185307179586);
     real a = lab_angle < R(0.0) ? lab_angle + two_pi : lab_angle;

@@ -109,12 +109,16 @@
 /* Liner elements sum, as 64-bit integers like the spectra: impacts
  * (collisions that began on the element), impact energy (the normal loss,
  * J), shear energy (the tangential loss, J), both in units of energy_unit,
- * and Archard wear volume (units of wear_unit). */
-#define MC_LINER_FIELDS 4
+ * Archard's sliding wear volume (units of wear_unit), and the strike energy
+ * the impact wear reads (Bitter's deformation wear): at each contact's
+ * first touch ½ m (vn − K)² for an approach speed vn above the liner
+ * material's threshold K, m the ball's mass (J, units of energy_unit). */
+#define MC_LINER_FIELDS 5
 #define MC_LINER_IMPACTS 0
 #define MC_LINER_NORMAL 1
 #define MC_LINER_SHEAR 2
 #define MC_LINER_WEAR 3
+#define MC_LINER_STRIKE 4
 /* Faces of a lifter row, in element order. */
 #define MC_FACE_LEADING 0 /* the face ahead, counter-clockwise */
 #define MC_FACE_TOP 1
@@ -214,6 +218,8 @@ typedef struct {
   real wear_unit;       /* m³ per count of the liner's wear sums */
   real wear_k;          /* Archard: volume = wear_k · Fn · sliding distance, m³/(N·m) */
   real plate_ring_width; /* m, radial width of the end plates' rings */
+  real strike_speed;    /* m/s: the liner material's threshold K of the
+                           strike energy (MC_LINER_STRIKE) */
   int n_types;          /* pair types (the spectra's rows; one more row
                            holds the losses of contacts without a record) */
   int n_elements;       /* liner elements */
@@ -238,7 +244,8 @@ typedef struct {
 #define MC_MESH_SETS 2     /* set 0 turns with the mill, set 1 stands still */
 #define MC_MESH_HITS 16    /* candidate contacts of one ball with one set */
 typedef struct {
-  real4 a, b, c;   /* vertices, m; a.w: Archard wear coefficient, m³/(N·m) */
+  real4 a, b, c;   /* vertices, m; a.w: Archard wear coefficient, m³/(N·m);
+                      b.w: the strike threshold K of its material, m/s */
   real4 n;         /* unit normal towards the charge */
   int feat[6];     /* features of the edges ab, bc, ca and the vertices a, b, c */
   int pair_row;    /* its material's row of the mesh pair table (× n_materials) */

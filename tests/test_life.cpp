@@ -257,6 +257,18 @@ TEST_CASE("bad life study requests are refused by name, status 2 and nothing wri
       {"--stages 2 --hours 10 --calibrate-consumption 4 --calibrate-loss 10 --calibrate-hours 100",
        "--calibrate-consumption and --calibrate-loss: give one measured figure"},
       {"--stages 2 --hours 10 --set lifters.rows=0", "lifters.rows = 0: a life study wears lifter bars"},
+      {"--stages 2 --hours 10 --impact-share 1.5", "--impact-share: must be from 0 to 1, got 1.5"},
+      {"--stages 2 --hours 10 --impact-share -0.1", "--impact-share: must be from 0 to 1, got -0.1"},
+      {"--stages 2 --hours 10 --impact-share nan", "--impact-share: must be a number from 0 to 1, got \"nan\""},
+      {"--stages 2 --hours 10 --impact-share inf", "--impact-share: must be a number from 0 to 1, got \"inf\""},
+      {"--stages 2 --hours 10 --set materials.liner.impact_wear_coefficient=-1e-12",
+       "materials.liner.impact_wear_coefficient"},
+      {"--stages 2 --hours 10 --set materials.liner.impact_wear_coefficient=nan",
+       "materials.liner.impact_wear_coefficient"},
+      {"--stages 2 --hours 10 --set materials.liner.impact_wear_coefficient=inf",
+       "materials.liner.impact_wear_coefficient"},
+      {"--stages 2 --hours 10 --set materials.liner.impact_wear_threshold_speed=-1",
+       "materials.liner.impact_wear_threshold_speed"},
       {"--stages 2 --hours 10 --set lifters.profile.0.height=0.5", "lifters.profile[0].height"},
       {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10",
        "walls.mesh[0]: a life study wears the shell and the lifter bars of [lifters]; a mesh liner is not worn"},
@@ -313,4 +325,32 @@ TEST_CASE("a lab run with its bars given as points is the h x w x theta run bit 
   CHECK(read_text(dir / "trapezoid" / "wear.csv") == read_text(dir / "polygon" / "wear.csv"));
   CHECK(read_text(dir / "trapezoid" / "lifter_wear.csv") == read_text(dir / "polygon" / "lifter_wear.csv"));
   fs::remove_all(dir);
+}
+
+TEST_CASE("an impact share of 0 is the sliding study; a share of 1 wears by impact alone", "[life][cli][impact_wear]") {
+  // The new liner's wear is the same whatever the share (only how it is
+  // split); the shapes it wears to differ.
+  const fs::path none = scratch("share-none"), zero = scratch("share-0"), one = scratch("share-1");
+  const std::string study = " --stages 1 --hours 4000" + kShort;
+  REQUIRE(life(study + " --out '" + none.string() + "'") == 0);
+  REQUIRE(life(study + " --impact-share 0 --out '" + zero.string() + "'") == 0);
+  REQUIRE(life(study + " --impact-share 1 --out '" + one.string() + "'") == 0);
+  // The same runs, the same table: bit for bit.
+  CHECK(read_text(none / "life.csv") == read_text(zero / "life.csv"));
+  const auto a = read_csv(zero / "life.csv"), b = read_csv(one / "life.csv");
+  REQUIRE(a.size() == 2);
+  REQUIRE(b.size() == 2);
+  CHECK(num(a[0], "impact_wear_share") == 0);
+  CHECK(num(b[0], "impact_wear_share") == Approx(1).epsilon(1e-4));
+  // Stage 0 ran the same case: the same wear in kg/h at either share.
+  CHECK(num(b[0], "shell_lifters_wear_kg_per_h") ==
+        Approx(num(a[0], "shell_lifters_wear_kg_per_h")).epsilon(1e-5));
+  // The calibration block says what each coefficient came out at.
+  const nlohmann::json j = nlohmann::json::parse(read_text(one / "life.json"));
+  CHECK(j["calibration"]["impact_share"] == 1.0);
+  CHECK(j["calibration"]["wear_coefficient_m3_per_N_m"] == 0.0);
+  CHECK(j["calibration"]["impact_wear_coefficient_m3_per_J"].get<double>() > 0);
+  // Impact wear moves the liner otherwise: the worn bar differs.
+  CHECK(num(b[1], "leading_angle_deg") != num(a[1], "leading_angle_deg"));
+  for (const fs::path& p : {none, zero, one}) fs::remove_all(p);
 }

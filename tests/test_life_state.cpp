@@ -331,3 +331,43 @@ TEST_CASE("life.csv's top wear rate is the stations' at the lifter's top", "[lif
   CHECK(top > 0);
   CHECK(top == Approx(sum / n).epsilon(2e-3));
 }
+
+TEST_CASE("an impact share sets the two wear coefficients so that the new liner wears as much, S of it by impact",
+          "[life][impact_wear]") {
+  using mc::app::life::StageResult;
+  StageResult s0;
+  s0.liner_sliding_kg_h = 2.0;   // at the case's sliding coefficient
+  s0.liner_strike_W = 500.0;     // J/s of strike energy on the shell and lifters
+  s0.shell_sliding_mm_per_1000h = 10.0;
+  s0.shell_strike_W_m2 = 40.0;
+  s0.station_sliding_m3_s = {{1e-9, 2e-9}};
+  s0.station_strike_W = {{3.0, 0.0}};
+  s0.station_m3_s = {{0, 0}};
+  const double rho = 7800, k_case = 1e-11;
+  const double impact_kg_h = k_case * 500.0 * rho * 3600, total = 2.0 + impact_kg_h;
+  for (double share : {0.0, 0.25, 0.5, 1.0}) {
+    INFO("share " << share);
+    const mc::app::life::WearMix m = mc::app::life::mix_for_share(s0, share, k_case, rho);
+    StageResult r = s0;
+    mc::app::life::apply_mix(r, m, rho);
+    // The new liner: the same kg/h as at the case's coefficients, S of it
+    // by impact.
+    CHECK(r.liner_kg_h == Approx(total).epsilon(1e-12));
+    CHECK(m.impact * 500.0 * rho * 3600 / r.liner_kg_h == Approx(share).margin(1e-12));
+    CHECK(m.sliding == Approx((1 - share) * total / 2.0).margin(1e-12));
+    CHECK(r.shell_mm_per_1000h == Approx(m.sliding * 10.0 + m.impact * 40.0 * 3.6e9).epsilon(1e-12));
+    CHECK(r.station_m3_s[0][0] == Approx(m.sliding * 1e-9 + m.impact * 3.0).epsilon(1e-12));
+    CHECK(r.station_m3_s[0][1] == Approx(m.sliding * 2e-9).epsilon(1e-12));
+  }
+  // Where one wear is missing, the share that needs it is refused by name.
+  StageResult no_strike = s0;
+  no_strike.liner_strike_W = 0;
+  CHECK_THROWS_WITH(mc::app::life::mix_for_share(no_strike, 0.3, k_case, rho),
+                    Catch::Contains("--impact-share 0.3: the new liner's run booked no strike energy"));
+  CHECK_NOTHROW(mc::app::life::mix_for_share(no_strike, 0.0, k_case, rho));
+  StageResult no_slide = s0;
+  no_slide.liner_sliding_kg_h = 0;
+  CHECK_THROWS_WITH(mc::app::life::mix_for_share(no_slide, 0.5, k_case, rho),
+                    Catch::Contains("booked no sliding wear"));
+  CHECK_NOTHROW(mc::app::life::mix_for_share(no_slide, 1.0, k_case, rho));
+}

@@ -57,6 +57,7 @@ json request_of(const LifeOptions& o, const Prepared& p) {
 json request_with_consumption(const LifeOptions& o, const Prepared& p) {
   json r = request_of(o, p);
   if (o.calibrate_consumption_g_kWh > 0) r["calibrate_consumption_g_per_kWh"] = o.calibrate_consumption_g_kWh;
+  if (o.impact_share >= 0) r["impact_share"] = o.impact_share;
   return r;
 }
 
@@ -74,6 +75,9 @@ struct Study {
   std::string calibration;     // how the factor was found
   int tallest = 0;             // the profile the height figures follow
   double wear_coefficient = 0; // the case's (the liner material's)
+  double impact_coefficient = 0;  // the case's impact wear coefficient, m³/J
+  double density = 0;          // the liner's, kg/m³
+  life::WearMix mix;           // how the two wears add (life_state.h)
   bool calibrated = false;     // by a measured figure (--calibrate-...)
   // Hours and wear rates are relative: the default wear coefficient, not
   // calibrated (core/scene.h kWearRelative).
@@ -83,6 +87,21 @@ struct Study {
 };
 
 double height_of(const Stage& s, int k) { return measure_profile(s.outlines[k]).height; }
+
+// With --impact-share, the mix that gives the new liner that share, and
+// every stage's wear at it; else the case's own mix, as the runs wrote it.
+void mix_stages(Study& st, const LifeOptions& o) {
+  if (o.impact_share < 0) return;
+  st.mix = life::mix_for_share(st.stages.front().r, o.impact_share, st.impact_coefficient, st.density);
+  for (Stage& s : st.stages)
+    if (s.ran) life::apply_mix(s.r, st.mix, st.density);
+}
+
+// The share of a stage's shell and lifter wear that impact does, at the
+// study's mix.
+double impact_share_of(const Study& st, const StageResult& r) {
+  return r.liner_kg_h > 0 ? st.mix.impact * r.liner_strike_W * st.density * 3600.0 / r.liner_kg_h : 0.0;
+}
 
 // The calibration factor from the stages so far.
 void calibrate(Study& st, const LifeOptions& o, double length) {
@@ -173,6 +192,7 @@ void save(const fs::path& out, const json& request, const Study& st, const std::
   cal.how = st.calibration;
   cal.basis = st.basis();
   cal.case_wear_coefficient = st.wear_coefficient;
+  cal.mix = st.mix;
   life::save_life_state(out, request, st.stages, cal, stopped);
 }
 
@@ -181,7 +201,7 @@ void write_table(const fs::path& out, const Study& st, double length) {
       "stage,hours,case_hours,profile,height_mm,top_width_mm,leading_angle_deg,trailing_angle_deg,area_mm2,"
       "worn_area_mm2,shell_wear_mm,diameter_m,power_W,power_sem_W,toe_deg,shoulder_deg,impact_point_deg,"
       "bare_liner_impact_share,shell_lifters_wear_kg_per_h,shell_lifters_g_per_kWh,top_wear_mm_per_1000h,stage_hours,"
-      "booked_mm2,removed_mm2,wear_basis\n";
+      "booked_mm2,removed_mm2,wear_basis,impact_wear_share\n";
   std::vector<double> worn(st.stages.front().outlines.size(), 0.0);
   for (const Stage& s : st.stages) {
     if (!s.ran) break;
@@ -192,12 +212,13 @@ void write_table(const fs::path& out, const Study& st, double length) {
       const bool carried = s.span_case_hours > 0;
       t += fmt::format(
           "{},{:.6g},{:.6g},{},{:.4f},{:.4f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f},{:.6f},{:.6g},{:.4g},{:.3f},{:.3f},{:.3f},"
-          "{:.4f},{:.6g},{:.6g},{:.6g},{},{},{},{}\n",
+          "{:.4f},{:.6g},{:.6g},{:.6g},{},{},{},{},{:.4f}\n",
           s.index, s.case_hours / st.factor, s.case_hours, k, m.height * 1000, m.top_width * 1000, m.leading_angle_deg,
           m.trailing_angle_deg, m.area * 1e6, worn[k], s.shell_wear_m * 1000, s.diameter, s.r.power_W, s.r.power_sem_W,
           s.r.toe_deg, s.r.shoulder_deg, s.r.impact_deg, s.r.bare_share, s.r.liner_kg_h * st.factor,
           grams_per_kWh(s.r.liner_kg_h, s.r.power_W) * st.factor, top * 1000 * st.factor, carried ? fmt::format("{:.6g}", s.span_case_hours / st.factor) : "",
-          carried ? fmt::format("{:.6g}", s.booked_mm2[k]) : "", carried ? fmt::format("{:.6g}", s.removed_mm2[k]) : "", st.basis());
+          carried ? fmt::format("{:.6g}", s.booked_mm2[k]) : "", carried ? fmt::format("{:.6g}", s.removed_mm2[k]) : "", st.basis(),
+          impact_share_of(st, s.r));
       if (carried) worn[k] += s.removed_mm2[k];
     }
   }
@@ -216,18 +237,20 @@ void write_table(const fs::path& out, const Study& st, double length) {
 void print_new_liner(const Study& st) {
   const Stage& s0 = st.stages.front();
   const double g = grams_per_kWh(s0.r.liner_kg_h, s0.r.power_W);
-  std::printf("life            new liner: shell and lifters %.4g g/kWh (%.4g kg/h of %.4g W) at the case's wear "
-              "coefficient %g m3/(N m)%s\n",
-              g, s0.r.liner_kg_h, s0.r.power_W, st.wear_coefficient,
+  std::printf("life            new liner: shell and lifters %.4g g/kWh (%.4g kg/h of %.4g W) at wear coefficients "
+              "%.4g m3/(N m) sliding and %.4g m3/J impact (%.1f %% of it by impact)%s\n",
+              g, s0.r.liner_kg_h, s0.r.power_W, st.wear_coefficient * st.mix.sliding, st.mix.impact,
+              100 * impact_share_of(st, s0.r),
               st.relative() ? (std::string("; hours and wear rates ") + kWearRelative).c_str() : "");
 }
 
 // How the hours were set, when the study ends.
 void print_calibration(const Study& st) {
   if (st.calibrated)
-    std::printf("life            calibrated on %s: the case's hours / %.6g; the wear coefficient that gives these "
-                "hours, %.4g m3/(N m), would make them the case's own\n",
-                st.calibration.c_str(), st.factor, st.wear_coefficient * st.factor);
+    std::printf("life            calibrated on %s: the case's hours / %.6g; the wear coefficients that give these "
+                "hours, %.4g m3/(N m) sliding and %.4g m3/J impact, would make them the case's own\n",
+                st.calibration.c_str(), st.factor, st.wear_coefficient * st.mix.sliding * st.factor,
+                st.mix.impact * st.factor);
   else if (st.relative())
     std::printf("life            hours and wear rates are %s: give --calibrate-consumption G_PER_KWH (or "
                 "--calibrate-rate, --calibrate-loss) to make them operating hours\n",
@@ -273,10 +296,10 @@ int cmd_life(const LifeOptions& o) {
         "consumption, --calibrate-consumption G_PER_KWH, or by the height its lifters lost, --calibrate-loss MM "
         "--calibrate-hours H",
         o.calibrate_rate_kg_h, c.length));
-  if (!(base.scene.wall_material.wear_coefficient > 0))
+  if (!(base.scene.wall_material.wear_coefficient > 0) && !(base.scene.wall_material.impact_wear_coefficient > 0))
     throw std::invalid_argument("materials." + c.liner + ".wear_coefficient is 0: a life study needs the liner's "
-                                "wear coefficient > 0 (its size sets only the hours; --calibrate-consumption, "
-                                "--calibrate-loss or --calibrate-rate fix those)");
+                                "wear coefficient > 0, or its impact_wear_coefficient (their size sets only the hours; "
+                                "--calibrate-consumption, --calibrate-loss or --calibrate-rate fix those)");
   const double h_new = [&] {
     double h = 0;
     for (const LifterProfile& p : c.lifter_pattern) h = std::max(h, measure_profile(profile_outline(p)).height);
@@ -293,6 +316,9 @@ int cmd_life(const LifeOptions& o) {
   const json request = request_with_consumption(o, base);
   Study st;
   st.wear_coefficient = base.scene.wall_material.wear_coefficient;
+  st.impact_coefficient = base.scene.wall_material.impact_wear_coefficient;
+  st.density = base.scene.wall_material.density;
+  st.mix.impact = st.impact_coefficient;
   for (std::size_t k = 0; k < c.lifter_pattern.size(); ++k)
     if (measure_profile(profile_outline(c.lifter_pattern[k])).height >
         measure_profile(profile_outline(c.lifter_pattern[st.tallest])).height)
@@ -362,6 +388,7 @@ int cmd_life(const LifeOptions& o) {
       s.r = life::read_stage_result(dir, static_cast<int>(c.lifter_pattern.size()));
       s.ran = true;
     }
+    mix_stages(st, o);
     calibrate(st, o, length);
     save(out, request, st, "");
     write_table(out, st, length);

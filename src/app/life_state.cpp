@@ -43,7 +43,12 @@ json stage_json(const Stage& s) {
                    {"impact_point_deg", number_or_null(r.impact_deg)},
                    {"bare_liner_impact_share", number_or_null(r.bare_share)},
                    {"liner_wear_kg_per_h", r.liner_kg_h}, {"shell_wear_mm_per_1000h", r.shell_mm_per_1000h},
-                   {"station_wear_m3_per_s", r.station_m3_s}};
+                   {"station_wear_m3_per_s", r.station_m3_s},
+                   {"liner_sliding_wear_kg_per_h", r.liner_sliding_kg_h}, {"liner_strike_W", r.liner_strike_W},
+                   {"shell_sliding_wear_mm_per_1000h", r.shell_sliding_mm_per_1000h},
+                   {"shell_strike_W_per_m2", r.shell_strike_W_m2},
+                   {"station_sliding_wear_m3_per_s", r.station_sliding_m3_s},
+                   {"station_strike_W", r.station_strike_W}};
   }
   if (s.span_case_hours > 0)
     j["wear"] = {{"span_case_hours", s.span_case_hours}, {"shell_depth_m", s.shell_depth_m},
@@ -86,6 +91,29 @@ StageResult result_of(const JsonAt& r, std::size_t profiles) {
     x.station_m3_s.push_back(st[k].numbers(kWearStations, "wear stations"));
     for (int j = 0; j < kWearStations; ++j)
       if (x.station_m3_s[k][j] < 0) st[k][j].fail("a wear rate below 0");
+  }
+  // The parts, where the study wrote them; a study begun before impact
+  // wear holds sliding wear alone.
+  if (!r.has("station_sliding_wear_m3_per_s")) {
+    x.liner_sliding_kg_h = x.liner_kg_h;
+    x.shell_sliding_mm_per_1000h = x.shell_mm_per_1000h;
+    x.station_sliding_m3_s = x.station_m3_s;
+    x.station_strike_W.assign(profiles, std::vector<double>(kWearStations, 0.0));
+    return x;
+  }
+  x.liner_sliding_kg_h = r["liner_sliding_wear_kg_per_h"].number_at_least(0);
+  x.liner_strike_W = r["liner_strike_W"].number_at_least(0);
+  x.shell_sliding_mm_per_1000h = r["shell_sliding_wear_mm_per_1000h"].number_at_least(0);
+  x.shell_strike_W_m2 = r["shell_strike_W_per_m2"].number_at_least(0);
+  for (const auto& [key, into] : {std::pair{"station_sliding_wear_m3_per_s", &x.station_sliding_m3_s},
+                                  std::pair{"station_strike_W", &x.station_strike_W}}) {
+    const JsonAt a = r[key];
+    a.size(profiles, "profiles");
+    for (std::size_t k = 0; k < profiles; ++k) {
+      into->push_back(a[k].numbers(kWearStations, "wear stations"));
+      for (int j = 0; j < kWearStations; ++j)
+        if ((*into)[k][j] < 0) a[k][j].fail("below 0");
+    }
   }
   return x;
 }
@@ -153,7 +181,8 @@ LifeState read_life_state(const fs::path& file, const StateShape& shape) {
   if (basis != "calibrated" && basis != "relative" && basis != "case_coefficient")
     cal["hours_and_wear_rates"].fail("\"" + basis + "\", not one of \"calibrated\", \"relative\", \"case_coefficient\"");
   if (!(cal["case_wear_coefficient_m3_per_N_m"].number() > 0)) cal["case_wear_coefficient_m3_per_N_m"].fail("must be > 0");
-  if (!(cal["wear_coefficient_m3_per_N_m"].number() > 0)) cal["wear_coefficient_m3_per_N_m"].fail("must be > 0");
+  (void)cal["wear_coefficient_m3_per_N_m"].number_at_least(0);  // 0 where impact does all the wear
+  if (cal.has("impact_wear_coefficient_m3_per_J")) (void)cal["impact_wear_coefficient_m3_per_J"].number_at_least(0);
   const JsonAt stages = top["stages"];
   const std::size_t n = stages.size();
   if (n == 0) stages.fail("empty list: the study holds no stage");
@@ -198,7 +227,9 @@ void save_life_state(const fs::path& out, const json& request, const std::vector
                       {"how", cal.how},
                       {"hours_and_wear_rates", cal.basis},
                       {"case_wear_coefficient_m3_per_N_m", cal.case_wear_coefficient},
-                      {"wear_coefficient_m3_per_N_m", cal.case_wear_coefficient * cal.factor}};
+                      {"wear_coefficient_m3_per_N_m", cal.case_wear_coefficient * cal.mix.sliding * cal.factor},
+                      {"impact_wear_coefficient_m3_per_J", cal.mix.impact * cal.factor}};
+  if (std::isfinite(cal.mix.share)) j["calibration"]["impact_share"] = cal.mix.share;
   j["stages"] = json::array();
   for (const Stage& s : stages) j["stages"].push_back(stage_json(s));
   if (!stopped.empty()) j["stopped"] = stopped;
@@ -221,16 +252,32 @@ StageResult read_stage_result(const fs::path& dir, int profiles) {
     r.bare_share = l["bare_liner_impact_share"].number_or_nan();
     const JsonAt parts = l["parts"];
     for (std::size_t k = 0; k < parts.size(); ++k) {
-      const std::string name = parts[k]["part"].text();
-      if (name == "shell") r.shell_mm_per_1000h = parts[k]["mean_wear_mm_per_1000h"].number();
-      if (name == "shell" || name.rfind("lifter", 0) == 0) r.liner_kg_h += parts[k]["wear_kg_per_h"].number();
+      const JsonAt p = parts[k];
+      const std::string name = p["part"].text();
+      if (name != "shell" && name.rfind("lifter", 0) != 0) continue;
+      // A run before impact wear has sliding wear alone.
+      const bool split = p.has("sliding_wear_kg_per_h");
+      const double kg_h = p["wear_kg_per_h"].number(), sliding = split ? p["sliding_wear_kg_per_h"].number() : kg_h;
+      const double strike = split ? p["strike_power_W"].number() : 0.0;
+      r.liner_kg_h += kg_h;
+      r.liner_sliding_kg_h += sliding;
+      r.liner_strike_W += strike;
+      if (name == "shell") {
+        r.shell_mm_per_1000h = p["mean_wear_mm_per_1000h"].number();
+        r.shell_sliding_mm_per_1000h = kg_h > 0 ? r.shell_mm_per_1000h * sliding / kg_h : r.shell_mm_per_1000h;
+        const double area = p["area_m2"].number();
+        r.shell_strike_W_m2 = area > 0 ? strike / area : 0.0;
+      }
     }
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(e.what() + not_run);
   }
   const io::CsvTable t = io::read_csv_strict(dir / "lifter_wear.csv", "the stage's run wrote no lifter wear");
   const int c_p = t.column("profile"), c_s = t.column("station"), c_w = t.column("wear_m3_per_s");
+  const bool split = t.has("sliding_wear_m3_per_s");  // a run before impact wear has sliding wear alone
+  const int c_sl = split ? t.column("sliding_wear_m3_per_s") : c_w, c_st = split ? t.column("strike_W") : -1;
   r.station_m3_s.assign(profiles, std::vector<double>(kWearStations, 0.0));
+  r.station_sliding_m3_s = r.station_strike_W = r.station_m3_s;
   for (std::size_t k = 0; k < t.rows.size(); ++k) {
     const double pf = t.number(k, c_p), sf = t.number(k, c_s), w = t.number(k, c_w);
     if (!(pf >= 0 && pf < profiles && pf == std::floor(pf) && sf >= 0 && sf < kWearStations && sf == std::floor(sf)))
@@ -239,9 +286,46 @@ StageResult read_stage_result(const fs::path& dir, int profiles) {
     if (!(std::isfinite(w) && w >= 0))
       throw std::invalid_argument(t.where(k) + ": wear_m3_per_s " + t.rows[k][c_w] +
                                   " is not a wear rate (finite, >= 0); the file is damaged");
+    const double sl = t.number(k, c_sl), st = c_st >= 0 ? t.number(k, c_st) : 0.0;
+    if (!(std::isfinite(sl) && sl >= 0 && std::isfinite(st) && st >= 0))
+      throw std::invalid_argument(t.where(k) + ": sliding_wear_m3_per_s or strike_W is not a rate (finite, >= 0); "
+                                  "the file is damaged");
     r.station_m3_s[static_cast<int>(pf)][static_cast<int>(sf)] = w;
+    r.station_sliding_m3_s[static_cast<int>(pf)][static_cast<int>(sf)] = sl;
+    r.station_strike_W[static_cast<int>(pf)][static_cast<int>(sf)] = st;
   }
   return r;
+}
+
+WearMix mix_for_share(const StageResult& s0, double share, double case_impact, double density) {
+  WearMix m;
+  m.share = share;
+  const double kg_h_per_W = density * 3600.0;  // per m³/J of impact coefficient
+  const double impact_kg_h = case_impact * s0.liner_strike_W * kg_h_per_W;
+  const double total = s0.liner_sliding_kg_h + impact_kg_h;  // the new liner at the case's coefficients
+  if (share > 0 && !(s0.liner_strike_W > 0))
+    throw std::invalid_argument(fmt::format(
+        "--impact-share {:g}: the new liner's run booked no strike energy on the shell and the lifters, so impact "
+        "wear cannot take a share of its wear",
+        share));
+  if (share < 1 && !(s0.liner_sliding_kg_h > 0))
+    throw std::invalid_argument(fmt::format(
+        "--impact-share {:g}: the new liner's run booked no sliding wear on the shell and the lifters, so sliding "
+        "cannot take the rest; give --impact-share 1",
+        share));
+  if (!(total > 0))
+    throw std::invalid_argument(fmt::format("--impact-share {:g}: the new liner's run booked no wear at all", share));
+  m.sliding = share < 1 ? (1 - share) * total / s0.liner_sliding_kg_h : 0.0;
+  m.impact = share > 0 ? share * total / (s0.liner_strike_W * kg_h_per_W) : 0.0;
+  return m;
+}
+
+void apply_mix(StageResult& r, const WearMix& mix, double density) {
+  r.liner_kg_h = mix.sliding * r.liner_sliding_kg_h + mix.impact * r.liner_strike_W * density * 3600.0;
+  r.shell_mm_per_1000h = mix.sliding * r.shell_sliding_mm_per_1000h + mix.impact * r.shell_strike_W_m2 * 3.6e9;
+  for (std::size_t k = 0; k < r.station_m3_s.size(); ++k)
+    for (std::size_t j = 0; j < r.station_m3_s[k].size(); ++j)
+      r.station_m3_s[k][j] = mix.sliding * r.station_sliding_m3_s[k][j] + mix.impact * r.station_strike_W[k][j];
 }
 
 }  // namespace mc::app::life

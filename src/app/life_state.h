@@ -20,12 +20,39 @@ namespace mc::app::life {
 inline constexpr const char* kFormat = "millcharge life 2";
 
 // What a stage's run reported (its summary.json and lifter_wear.csv).
+// The wear figures are the sum of sliding and impact wear at the study's
+// coefficients (WearMix); the raw parts they are made of are kept beside
+// them, so that a study given an impact share mixes them again.
 struct StageResult {
   double power_W = 0, power_sem_W = 0, toe_deg = NAN, shoulder_deg = NAN, impact_deg = NAN, bare_share = NAN;
-  double liner_kg_h = 0;          // shell and lifters (not the end plates), at the case's wear coefficient
+  double liner_kg_h = 0;          // shell and lifters (not the end plates), at the study's coefficients
   double shell_mm_per_1000h = 0;  // the shell's mean depth rate, likewise
   std::vector<std::vector<double>> station_m3_s;  // per profile, per station: one row's volume rate
+  // The parts: sliding wear at the case's coefficient, and the strike
+  // energy (J/s) the impact wear reads (core/liner_wear.h WearMix).
+  double liner_sliding_kg_h = 0, liner_strike_W = 0;       // shell and lifters
+  double shell_sliding_mm_per_1000h = 0, shell_strike_W_m2 = 0;
+  std::vector<std::vector<double>> station_sliding_m3_s, station_strike_W;
 };
+
+// How a study mixes the two wears: volume = sliding · (Archard's volume at
+// the case's coefficient) + impact · (strike energy), impact in m³/J. The
+// case's own: sliding 1, impact its impact_wear_coefficient. Given an impact
+// share S of the new liner's shell and lifter wear (--impact-share), both
+// are set so that the new liner wears as much as at the case's own, S of it
+// by impact.
+struct WearMix {
+  double sliding = 1, impact = 0;
+  double share = NAN;  // the share asked for; NaN: the case's own mix
+};
+
+// The mix for share S from the new liner's result `s0` (liner density
+// `density`, kg/m³; the case's impact coefficient `case_impact`, m³/J);
+// std::invalid_argument naming --impact-share where it cannot be had.
+WearMix mix_for_share(const StageResult& s0, double share, double case_impact, double density);
+
+// The stage's wear figures at that mix, from their parts.
+void apply_mix(StageResult& r, const WearMix& mix, double density);
 
 struct Stage {
   int index = 0;
@@ -64,6 +91,7 @@ std::string request_difference(const nlohmann::json& there, const nlohmann::json
 // How a study's hours were set: calibrated hours = case hours / factor.
 struct Calibration {
   double factor = 1;
+  WearMix mix;
   std::string how;
   // "calibrated" (by a measured figure), "relative" (the default wear
   // coefficient: hours and wear rates are relative), "case_coefficient".

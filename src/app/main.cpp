@@ -154,6 +154,11 @@ int main(int argc, char** argv) {
                    "the hours; end plates not counted)")
       ->check(mc::app::cli::positive("g/kWh"))
       ->type_name("G_PER_KWH");
+  life->add_option("--impact-share", lo.impact_share,
+                   "the share S (0 to 1) of the new shell and lifters' wear that impact wear does, the rest sliding "
+                   "(sets both wear coefficients; the hours stay those of the case's, or a calibration's)")
+      ->check(mc::app::cli::between(0, 1))
+      ->type_name("S");
   life->add_flag("--force", lo.force, "start the study again in an --out that holds one");
   life->add_flag("--quiet", lo.quiet, "no progress lines from the stages' runs");
 

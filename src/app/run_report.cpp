@@ -281,7 +281,7 @@ std::vector<std::string> write_run_results(const FinishedRun& r, const RunReport
   j["spectra"] = io::spectra_json(spectra);
   j["spectra"]["total"]["collisions_per_s_sem"] = number_or_null(err.collisions.sem);
   j["spectra"]["total"]["power_W_sem"] = number_or_null(err.collision_power.sem);
-  j["liner"] = io::liner_json(layout, liner, r.scene.wall_material.wear_coefficient);
+  j["liner"] = io::liner_json(layout, liner, r.scene.wall_material);
   j["liner"]["impacts_per_s_sem"] = number_or_null(err.impacts.sem);
   j["liner"]["impact_power_W_sem"] = number_or_null(err.impact.sem);
   j["liner"]["shear_power_W_sem"] = number_or_null(err.shear.sem);
@@ -306,7 +306,8 @@ std::vector<std::string> write_run_results(const FinishedRun& r, const RunReport
     std::vector<std::vector<Vec2>> outlines;
     for (const LifterProfile& p : c.lifter_pattern) outlines.push_back(profile_outline(p));
     io::write_lifter_wear_csv(out / "lifter_wear.csv",
-                              lifter_stations(r.s.books, s.window_s, outlines, 0.5 * c.diameter, c.length));
+                              lifter_stations(r.s.books, s.window_s, outlines, 0.5 * c.diameter, c.length,
+                                              r.scene.wall_material.impact_wear_coefficient));
   }
   io::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
 

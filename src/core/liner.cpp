@@ -217,6 +217,7 @@ LinerLayout liner_layout(const Scene& scene) {
     e.bin = ref.triangle;
     e.still = !m.turning;
     e.density = m.material.density;
+    e.impact_wear_coefficient = m.material.impact_wear_coefficient;
     const Vec3 ab = t.v[1] - t.v[0], ac = t.v[2] - t.v[0];
     const Vec3 n{ab.y * ac.z - ab.z * ac.y, ab.z * ac.x - ab.x * ac.z, ab.x * ac.y - ab.y * ac.x};
     e.area_m2 = 0.5 * n.norm();

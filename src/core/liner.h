@@ -29,6 +29,7 @@ struct LinerElement {
   int axial = 0;    // shell and lifter: axial bin
   double area_m2 = 0;
   double density = 0;  // kg/m³ of its material, for wear in kg (0: the liner's)
+  double impact_wear_coefficient = -1;  // m³/J of its material (< 0: the liner's)
   bool still = false;  // a mesh triangle that stands still (its outline in the lab frame)
   // Where it lies, mill frame: angles (rad, counter-clockwise from +x at
   // mill angle 0), axial span, radii.

@@ -121,6 +121,10 @@ void validate(const Scene& scene) {
     if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5)) fail(where + ".poisson_ratio must be in (-1, 0.5)");
     if (!(m.wear_coefficient >= 0 && m.wear_coefficient < 1e-6))
       fail(where + ".wear_coefficient must be in [0, 1e-6) m^3/(N m)");
+    if (!(m.impact_wear_coefficient >= 0 && m.impact_wear_coefficient < 1e-6))
+      fail(where + ".impact_wear_coefficient must be in [0, 1e-6) m^3/J");
+    if (!(m.impact_wear_threshold_speed >= 0 && m.impact_wear_threshold_speed < 100))
+      fail(where + ".impact_wear_threshold_speed must be in [0, 100) m/s");
   };
   for (std::size_t k = 0; k < scene.materials.size(); ++k)
     check_material(scene.materials[k], "materials." + scene.materials[k].name);

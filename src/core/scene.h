@@ -44,6 +44,12 @@ struct Material {
   double youngs_modulus = 2.0e11;  // Pa
   double poisson_ratio = 0.3;
   double wear_coefficient = kDefaultWearCoefficient;  // m³/(N·m), as a liner
+  // Impact wear as a liner (Bitter's deformation wear, docs/liner-life.md):
+  // the volume a collision takes off is impact_wear_coefficient · ½ m
+  // (vn − K)², vn the ball's approach speed at first touch, K the threshold
+  // below which a strike only deforms elastically. 0: no impact wear.
+  double impact_wear_coefficient = 0;      // m³/J
+  double impact_wear_threshold_speed = 0;  // m/s
 };
 
 // How the liner is cut into elements for impact and wear sums

@@ -420,7 +420,8 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       const std::string mname(k.str());
       const toml::table* t = s.table(mname, true);
       Section m(r, *t, "materials." + mname);
-      m.knows({"density", "youngs_modulus", "poisson_ratio", "wear_coefficient"});
+      m.knows({"density", "youngs_modulus", "poisson_ratio", "wear_coefficient", "impact_wear_coefficient",
+               "impact_wear_threshold_speed"});
       Material mat;
       mat.name = mname;
       mat.density = m.number("density");
@@ -431,6 +432,15 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
       if (!(mat.wear_coefficient >= 0 && mat.wear_coefficient < 1e-6))
         r.fail("materials." + mname + ".wear_coefficient", m.node("wear_coefficient"),
                "must be in [0, 1e-6) m^3 per N per m slid (Archard's k over the hardness; about 1e-13 for liner steel)");
+      mat.impact_wear_coefficient = m.number("impact_wear_coefficient", 0.0);
+      if (!(mat.impact_wear_coefficient >= 0 && mat.impact_wear_coefficient < 1e-6))
+        r.fail("materials." + mname + ".impact_wear_coefficient", m.node("impact_wear_coefficient"),
+               "must be in [0, 1e-6) m^3 per J of strike energy (1 / the energy that removes a unit volume; 0: no "
+               "impact wear)");
+      mat.impact_wear_threshold_speed = m.number("impact_wear_threshold_speed", 0.0);
+      if (!(mat.impact_wear_threshold_speed >= 0 && mat.impact_wear_threshold_speed < 100))
+        r.fail("materials." + mname + ".impact_wear_threshold_speed", m.node("impact_wear_threshold_speed"),
+               "must be in [0, 100) m/s (the approach speed below which a strike wears nothing)");
       c.materials.push_back(mat);
     }
     if (c.materials.empty()) r.fail("materials", mt, "define at least one material, e.g. [materials.steel]");

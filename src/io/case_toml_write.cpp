@@ -97,11 +97,15 @@ std::string case_to_toml(const MillCase& c) {
   }
   root.insert("charge", charge);
   toml::table materials;
-  for (const Material& m : c.materials)
-    materials.insert(m.name, toml::table{{"density", m.density},
-                                         {"youngs_modulus", m.youngs_modulus},
-                                         {"poisson_ratio", m.poisson_ratio},
-                                         {"wear_coefficient", m.wear_coefficient}});
+  for (const Material& m : c.materials) {
+    toml::table t{{"density", m.density},
+                  {"youngs_modulus", m.youngs_modulus},
+                  {"poisson_ratio", m.poisson_ratio},
+                  {"wear_coefficient", m.wear_coefficient}};
+    if (m.impact_wear_coefficient > 0) t.insert("impact_wear_coefficient", m.impact_wear_coefficient);
+    if (m.impact_wear_threshold_speed > 0) t.insert("impact_wear_threshold_speed", m.impact_wear_threshold_speed);
+    materials.insert(m.name, std::move(t));
+  }
   root.insert("materials", materials);
   toml::table contact = interaction(c.contact, toml::table{{"law", c.law == ContactLaw::hertz ? "hertz" : "linear"}});
   toml::array pairs;

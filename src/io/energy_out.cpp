@@ -85,19 +85,26 @@ std::string element_name(const LinerLayout& layout, int e) {
   return b;
 }
 
+// A wear volume rate (m³/s) over an area (m²) as a depth, mm per 1000 h.
+static double depth_mm_per_1000h(double m3_per_s, double area_m2) { return area_m2 > 0 ? m3_per_s / area_m2 * 3.6e9 : 0.0; }
+
 void write_wear_csv(const std::filesystem::path& path, const LinerLayout& layout, const LinerReport& r) {
   std::string t =
       "element,part,row,face_or_bin,sector,axial,theta_from_deg,theta_to_deg,z_from_m,z_to_m,r_from_m,r_to_m,"
-      "area_m2,impacts_per_s,impact_W,shear_W,impact_W_per_m2,shear_W_per_m2,wear_mm_per_1000h,wear_kg_per_h\n";
+      "area_m2,impacts_per_s,impact_W,shear_W,impact_W_per_m2,shear_W_per_m2,wear_mm_per_1000h,wear_kg_per_h,"
+      "strike_W,sliding_wear_mm_per_1000h,impact_wear_mm_per_1000h\n";
   char line[768];
   for (std::size_t e = 0; e < layout.elements.size(); ++e) {
     const LinerElement& el = layout.elements[e];
     const LinerElementRates& x = r.elements.at(e);
     const std::string bin = el.part == LinerPart::lifter ? face_name(el.bin) : std::to_string(el.bin);
-    std::snprintf(line, sizeof line, "%zu,%s,%d,%s,%d,%d,%.4f,%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n",
+    std::snprintf(line, sizeof line,
+                  "%zu,%s,%d,%s,%d,%d,%.4f,%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,"
+                  "%.6g\n",
                   e, part_name(el.part), el.row, bin.c_str(), el.sector, el.axial, el.theta0 * kDeg,
                   el.theta1 * kDeg, el.z0, el.z1, el.r0, el.r1, el.area_m2, x.impacts_per_s, x.impact_W, x.shear_W,
-                  x.impact_W_m2, x.shear_W_m2, x.wear_mm_per_1000h, x.wear_kg_per_h);
+                  x.impact_W_m2, x.shear_W_m2, x.wear_mm_per_1000h, x.wear_kg_per_h, x.strike_W,
+                  depth_mm_per_1000h(x.sliding_m3_per_s, el.area_m2), depth_mm_per_1000h(x.impact_m3_per_s, el.area_m2));
     t += line;
   }
   write_file_atomic(path, t);
@@ -105,12 +112,13 @@ void write_wear_csv(const std::filesystem::path& path, const LinerLayout& layout
 
 void write_lifter_wear_csv(const std::filesystem::path& path, const std::vector<LifterStation>& stations) {
   std::string t =
-      "profile,station,x_mm,y_mm,length_mm,impacts_per_s,impact_W,shear_W,wear_m3_per_s,wear_mm_per_1000h\n";
+      "profile,station,x_mm,y_mm,length_mm,impacts_per_s,impact_W,shear_W,wear_m3_per_s,wear_mm_per_1000h,strike_W,"
+      "sliding_wear_m3_per_s,impact_wear_m3_per_s\n";
   char line[512];
   for (const LifterStation& s : stations) {
-    std::snprintf(line, sizeof line, "%d,%d,%.4f,%.4f,%.4f,%.6g,%.6g,%.6g,%.9g,%.6g\n", s.profile, s.station,
-                  s.x_m * 1000, s.y_m * 1000, s.length_m * 1000, s.impacts_per_s, s.impact_W, s.shear_W,
-                  s.wear_m3_per_s, s.wear_mm_per_1000h);
+    std::snprintf(line, sizeof line, "%d,%d,%.4f,%.4f,%.4f,%.6g,%.6g,%.6g,%.9g,%.6g,%.9g,%.9g,%.9g\n", s.profile,
+                  s.station, s.x_m * 1000, s.y_m * 1000, s.length_m * 1000, s.impacts_per_s, s.impact_W, s.shear_W,
+                  s.wear_m3_per_s, s.wear_mm_per_1000h, s.strike_W, s.sliding_m3_per_s, s.impact_m3_per_s);
     t += line;
   }
   write_file_atomic(path, t);
@@ -133,15 +141,20 @@ nlohmann::ordered_json spectra_json(const SpectraReport& r) {
   return j;
 }
 
-nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& r, double wear_coefficient) {
+nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& r, const Material& liner) {
   nlohmann::ordered_json j;
   j["window_s"] = num(r.window_s);
   j["elements"] = layout.size();
-  j["wear_coefficient_m3_per_N_m"] = wear_coefficient;
+  j["wear_coefficient_m3_per_N_m"] = liner.wear_coefficient;
+  j["impact_wear_coefficient_m3_per_J"] = liner.impact_wear_coefficient;
+  j["impact_wear_threshold_speed_m_s"] = liner.impact_wear_threshold_speed;
   j["impacts_per_s"] = num(r.impacts_per_s);
   j["impact_power_W"] = num(r.impact_W);
   j["shear_power_W"] = num(r.shear_W);
+  j["strike_power_W"] = num(r.strike_W);
   j["wear_kg_per_h"] = num(r.wear_kg_per_h);
+  j["sliding_wear_kg_per_h"] = num(r.sliding_kg_per_h);
+  j["impact_wear_kg_per_h"] = num(r.impact_kg_per_h);
   j["worst_wear_mm_per_1000h"] = num(r.worst_wear_mm_per_1000h);
   j["worst_element"] = r.worst_element >= 0 ? nlohmann::json(element_name(layout, r.worst_element)) : nlohmann::json();
   j["impact_point_deg"] = num(r.impact_point_deg);
@@ -167,6 +180,9 @@ nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& 
     q["impact_power_W"] = num(p.impact_W);
     q["shear_power_W"] = num(p.shear_W);
     q["wear_kg_per_h"] = num(p.wear_kg_per_h);
+    q["strike_power_W"] = num(p.strike_W);
+    q["sliding_wear_kg_per_h"] = num(p.sliding_kg_per_h);
+    q["impact_wear_kg_per_h"] = num(p.impact_kg_per_h);
     q["mean_wear_mm_per_1000h"] = num(p.mean_wear_mm_per_1000h);
     q["worst_wear_mm_per_1000h"] = num(p.worst_wear_mm_per_1000h);
     j["parts"].push_back(q);
@@ -368,6 +384,7 @@ PolyMesh liner_mesh(const LinerLayout& layout, const LinerReport* r, double mill
   const double c = std::cos(mill_angle), s = std::sin(mill_angle);
   const std::size_t n = layout.elements.size();
   std::vector<float> impact(n, 0), shear(n, 0), wear(n, 0), impacts(n, 0), kgh(n, 0), area(n, 0);
+  std::vector<float> sliding(n, 0), by_impact(n, 0);
   std::vector<int> part(n), row(n), bin(n);
   for (std::size_t e = 0; e < n; ++e) {
     const LinerElement& el = layout.elements[e];
@@ -386,6 +403,8 @@ PolyMesh liner_mesh(const LinerLayout& layout, const LinerReport* r, double mill
       wear[e] = static_cast<float>(x.wear_mm_per_1000h);
       impacts[e] = static_cast<float>(x.impacts_per_s);
       kgh[e] = static_cast<float>(x.wear_kg_per_h);
+      sliding[e] = static_cast<float>(depth_mm_per_1000h(x.sliding_m3_per_s, el.area_m2));
+      by_impact[e] = static_cast<float>(depth_mm_per_1000h(x.impact_m3_per_s, el.area_m2));
     }
     area[e] = static_cast<float>(el.area_m2);
     part[e] = static_cast<int>(el.part);
@@ -394,7 +413,8 @@ PolyMesh liner_mesh(const LinerLayout& layout, const LinerReport* r, double mill
   }
   m.cell_floats = {{"impact_power_W_per_m2", impact}, {"shear_power_W_per_m2", shear},
                    {"wear_mm_per_1000h", wear},       {"impacts_per_s", impacts},
-                   {"wear_kg_per_h", kgh},            {"area_m2", area}};
+                   {"wear_kg_per_h", kgh},            {"area_m2", area},
+                   {"sliding_wear_mm_per_1000h", sliding}, {"impact_wear_mm_per_1000h", by_impact}};
   m.cell_ints = {{"part", part}, {"row", row}, {"face_or_bin", bin}};
   return m;
 }

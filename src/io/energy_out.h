@@ -20,7 +20,7 @@ void write_wear_csv(const std::filesystem::path& path, const LinerLayout& layout
 void write_lifter_wear_csv(const std::filesystem::path& path, const std::vector<LifterStation>& stations);
 
 nlohmann::ordered_json spectra_json(const SpectraReport& r);
-nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& r, double wear_coefficient);
+nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& r, const Material& liner);
 // summary.json's `per_metre` block: a run's power, torque, collisions and
 // liner sums over its length (a periodic slice's, or a whole mill's between
 // its end plates), per metre of mill.

@@ -136,6 +136,15 @@ SpectraReport spectra_report(const Scene& scene, const BookSums& books, double w
   return r;
 }
 
+std::vector<double> liner_impact_coefficients(const Scene& scene) {
+  const LinerLayout layout = liner_layout(scene);
+  std::vector<double> k;
+  for (const LinerElement& el : layout.elements)
+    k.push_back(el.impact_wear_coefficient >= 0 ? el.impact_wear_coefficient
+                                                : scene.wall_material.impact_wear_coefficient);
+  return k;
+}
+
 LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const BookSums& books, double window_s,
                          const std::vector<long>& contact_profile, const ChargeAngles& angles) {
   LinerReport r;
@@ -157,13 +166,19 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
     x.impacts_per_s = books.liner_at(ei, MC_LINER_IMPACTS) / w;
     x.impact_W = books.liner_at(ei, MC_LINER_NORMAL) / w;
     x.shear_W = books.liner_at(ei, MC_LINER_SHEAR) / w;
-    x.wear_m3_per_s = books.liner_at(ei, MC_LINER_WEAR) / w;
+    x.sliding_m3_per_s = books.liner_at(ei, MC_LINER_WEAR) / w;
+    x.strike_W = books.liner_at(ei, MC_LINER_STRIKE) / w;
+    x.impact_m3_per_s =
+        x.strike_W * (el.impact_wear_coefficient >= 0 ? el.impact_wear_coefficient
+                                                      : scene.wall_material.impact_wear_coefficient);
+    x.wear_m3_per_s = x.sliding_m3_per_s + x.impact_m3_per_s;
     if (el.area_m2 > 0) {
       x.impact_W_m2 = x.impact_W / el.area_m2;
       x.shear_W_m2 = x.shear_W / el.area_m2;
       x.wear_mm_per_1000h = x.wear_m3_per_s / el.area_m2 * 1000.0 * 3600.0 * 1000.0;
     }
-    x.wear_kg_per_h = x.wear_m3_per_s * (el.density > 0 ? el.density : density) * 3600.0;
+    const double rho = el.density > 0 ? el.density : density;
+    x.wear_kg_per_h = x.wear_m3_per_s * rho * 3600.0;
     const int part = el.part == LinerPart::shell ? 0 : el.part == LinerPart::plate ? 4 : el.part == LinerPart::mesh ? 5 : 1 + el.bin;
     if (el.part == LinerPart::mesh && el.row >= 0 && el.row < static_cast<int>(scene.walls.meshes.size()))
       r.mesh_wear_kg_per_h_by_part[static_cast<int>(scene.walls.meshes[el.row].part)] += x.wear_kg_per_h;
@@ -173,11 +188,17 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
     pr.impact_W += x.impact_W;
     pr.shear_W += x.shear_W;
     pr.wear_kg_per_h += x.wear_kg_per_h;
+    pr.sliding_kg_per_h += x.sliding_m3_per_s * rho * 3600.0;
+    pr.impact_kg_per_h += x.impact_m3_per_s * rho * 3600.0;
+    pr.strike_W += x.strike_W;
     pr.worst_wear_mm_per_1000h = std::max(pr.worst_wear_mm_per_1000h, x.wear_mm_per_1000h);
     r.impacts_per_s += x.impacts_per_s;
     r.impact_W += x.impact_W;
     r.shear_W += x.shear_W;
     r.wear_kg_per_h += x.wear_kg_per_h;
+    r.sliding_kg_per_h += x.sliding_m3_per_s * rho * 3600.0;
+    r.impact_kg_per_h += x.impact_m3_per_s * rho * 3600.0;
+    r.strike_W += x.strike_W;
     if (r.worst_element < 0 || x.wear_mm_per_1000h > r.worst_wear_mm_per_1000h) {
       r.worst_element = ei;
       r.worst_wear_mm_per_1000h = x.wear_mm_per_1000h;
@@ -227,7 +248,8 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
 }
 
 std::vector<LifterStation> lifter_stations(const BookSums& books, double window_s,
-                                           const std::vector<std::vector<Vec2>>& outlines, double R, double length) {
+                                           const std::vector<std::vector<Vec2>>& outlines, double R, double length,
+                                           double impact_k) {
   std::vector<LifterStation> out;
   const int kinds = static_cast<int>(outlines.size());
   const int rows = books.n_stations / kWearStations;
@@ -248,13 +270,17 @@ std::vector<LifterStation> lifter_stations(const BookSums& books, double window_
         st.impacts_per_s += books.stations[at + MC_LINER_IMPACTS];
         st.impact_W += books.stations[at + MC_LINER_NORMAL];
         st.shear_W += books.stations[at + MC_LINER_SHEAR];
-        st.wear_m3_per_s += books.stations[at + MC_LINER_WEAR];
+        st.sliding_m3_per_s += books.stations[at + MC_LINER_WEAR];
+        st.strike_W += books.stations[at + MC_LINER_STRIKE];
       }
       const double per = 1.0 / (n_rows * window_s);
       st.impacts_per_s *= per;
       st.impact_W *= per;
       st.shear_W *= per;
-      st.wear_m3_per_s *= per;
+      st.sliding_m3_per_s *= per;
+      st.strike_W *= per;
+      st.impact_m3_per_s = st.strike_W * impact_k;
+      st.wear_m3_per_s = st.sliding_m3_per_s + st.impact_m3_per_s;
       const double area = st.length_m * length;
       st.wear_mm_per_1000h = area > 0 ? st.wear_m3_per_s / area * 3.6e9 : 0.0;
       out.push_back(st);

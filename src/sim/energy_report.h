@@ -61,6 +61,11 @@ struct LinerElementRates {
   double impacts_per_s = 0;
   double impact_W = 0, shear_W = 0;          // normal and tangential losses on it
   double impact_W_m2 = 0, shear_W_m2 = 0;
+  // Wear: sliding (Archard) and impact (Bitter's deformation wear, the
+  // strike energy times the material's impact wear coefficient), and their
+  // sum (wear_m3_per_s and what follows from it).
+  double sliding_m3_per_s = 0, impact_m3_per_s = 0;
+  double strike_W = 0;                       // the strike energy the impact wear reads, J/s
   double wear_m3_per_s = 0;
   double wear_mm_per_1000h = 0;              // depth worn, at this rate
   double wear_kg_per_h = 0;
@@ -71,6 +76,7 @@ struct LinerElementRates {
 struct LinerPartRates {
   std::string name;  // "shell", "lifter leading faces", "lifter tops", "lifter trailing faces", "end plates"
   double area_m2 = 0, impacts_per_s = 0, impact_W = 0, shear_W = 0, wear_kg_per_h = 0;
+  double sliding_kg_per_h = 0, impact_kg_per_h = 0, strike_W = 0;  // wear_kg_per_h = sliding + impact
   double mean_wear_mm_per_1000h = 0, worst_wear_mm_per_1000h = 0;
 };
 
@@ -82,6 +88,7 @@ struct LinerReport {
   // for (core/scene.h MeshPart order: shell, lifters, ends), kg/h.
   double mesh_wear_kg_per_h_by_part[3] = {0, 0, 0};
   double impacts_per_s = 0, impact_W = 0, shear_W = 0, wear_kg_per_h = 0;
+  double sliding_kg_per_h = 0, impact_kg_per_h = 0, strike_W = 0;
   int worst_element = -1;
   double worst_wear_mm_per_1000h = 0;
   // The lab frame: impact power on the shell and lifters per degree
@@ -109,19 +116,26 @@ struct LifterStation {
   int profile = 0, station = 0;
   double x_m = 0, y_m = 0, length_m = 0;
   double impacts_per_s = 0, impact_W = 0, shear_W = 0;
-  double wear_m3_per_s = 0;        // of one row over the mill's (or slice's) length
+  double strike_W = 0;             // the strike energy the impact wear reads, J/s
+  double sliding_m3_per_s = 0, impact_m3_per_s = 0;  // of one row over the mill's (or slice's) length
+  double wear_m3_per_s = 0;        // their sum
   double wear_mm_per_1000h = 0;    // depth, at this rate
 };
 // `outlines`: each profile's outline (core/lifters.h profile_outline);
-// `length` the mill's (or the slice's) length, m.
+// `length` the mill's (or the slice's) length, m; `impact_k` the liner's
+// impact wear coefficient, m³/J.
 std::vector<LifterStation> lifter_stations(const BookSums& books, double window_s,
                                            const std::vector<std::vector<Vec2>>& outlines, double shell_radius,
-                                           double length);
+                                           double length, double impact_k);
 
 // The wear of the shell and the lifters (a mesh counted by the part it
 // stands for), kg/h: what plants weigh as shell liners, and what scales
 // with the mill's length; not the end plates.
 double shell_lifters_wear_kg_per_h(const LinerReport& r);
+
+// Each liner element's impact wear coefficient (m³/J): its mesh's
+// material's, or the liner's.
+std::vector<double> liner_impact_coefficients(const Scene& scene);
 
 SpectraReport spectra_report(const Scene& scene, const BookSums& books, double window_s, double open_start_J,
                              double open_end_J, double dissipated_J);

@@ -411,6 +411,8 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   };
   // A batch ends: its means, and (auto, at a revolution's end) whether the
   // run stops here.
+  // Each liner element's impact wear coefficient, for the batches' wear.
+  const std::vector<double> impact_k = liner_impact_coefficients(scene);
   auto end_batch = [&]() {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     WindowBatch m;
@@ -432,7 +434,7 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
       impacts += books.liner_at(e, MC_LINER_IMPACTS);
       impact_J += books.liner_at(e, MC_LINER_NORMAL);
       shear_J += books.liner_at(e, MC_LINER_SHEAR);
-      wear_m3 += books.liner_at(e, MC_LINER_WEAR);
+      wear_m3 += books.liner_at(e, MC_LINER_WEAR) + impact_k[e] * books.liner_at(e, MC_LINER_STRIKE);
     }
     m.collisions_per_s = (all.collisions_per_s - rev.collisions) / span;
     m.collision_power_W = (all.power_W - rev.collision_J) / span;

@@ -18,6 +18,10 @@ double BookSums::at(int row, int bin, int field) const {
   return spectra[(static_cast<std::size_t>(row) * MC_SPECTRA_BINS + bin) * MC_SPECTRA_FIELDS + field];
 }
 
+double BookSums::liner_at(int element, int field) const {
+  return liner[static_cast<std::size_t>(element) * MC_LINER_FIELDS + field];
+}
+
 double BookSums::closed_loss_J() const {
   double e = 0;
   for (int r = 0; r <= n_types; ++r)

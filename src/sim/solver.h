@@ -56,7 +56,7 @@ struct BookSums {
   // impact speeds (m/s) and of their steps in contact
   std::vector<double> spectra;
   // liner[element · MC_LINER_FIELDS + field]: impacts, impact energy (J),
-  // shear energy (J), Archard wear volume (m³)
+  // shear energy (J), Archard wear volume (m³), strike energy (J)
   std::vector<double> liner;
   // stations[(row · MC_WEAR_STATIONS + station) · MC_LINER_FIELDS + field]:
   // the same sums per lifter row over its wear stations, along its exposed
@@ -65,7 +65,7 @@ struct BookSums {
   std::vector<double> stations;
   std::vector<double> impact_profile;  // J on the shell and lifters per degree, lab frame
   double at(int row, int bin, int field) const;
-  double liner_at(int element, int field) const { return liner[static_cast<std::size_t>(element) * 4 + field]; }
+  double liner_at(int element, int field) const;
   // Closed collisions' losses in all rows (J).
   double closed_loss_J() const;
 };

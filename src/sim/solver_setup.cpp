@@ -313,6 +313,7 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   bp.wear_unit = Real(tb.wear_unit);
   bp.wear_k = Real(tb.wear_k);
   bp.plate_ring_width = Real(tb.plate_ring_width);
+  bp.strike_speed = Real(tb.strike_speed);
   bp.n_types = tb.n_types;
   bp.n_elements = tb.n_elements;
   bp.shell_bins = tb.shell_bins;
@@ -472,7 +473,7 @@ void SolverImpl<Real>::setup_meshes(const SceneTables& t) {
     const f64::MeshTriangle& m = t.mesh_tris[k];
     auto& d = mesh_tris_.host[k];
     d.a = {Real(m.a.x), Real(m.a.y), Real(m.a.z), Real(m.a.w)};
-    d.b = {Real(m.b.x), Real(m.b.y), Real(m.b.z), Real(0)};
+    d.b = {Real(m.b.x), Real(m.b.y), Real(m.b.z), Real(m.b.w)};
     d.c = {Real(m.c.x), Real(m.c.y), Real(m.c.z), Real(0)};
     d.n = {Real(m.n.x), Real(m.n.y), Real(m.n.z), Real(0)};
     for (int f = 0; f < 6; ++f) d.feat[f] = m.feat[f];

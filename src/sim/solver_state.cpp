@@ -20,20 +20,23 @@ bool has_array(const SolverState& st, const char* name) {
   return false;
 }
 
-// The spectra of a checkpoint written by an older millcharge widen to
-// today's fields a cell: before the normal energy spectrum six, before the
-// severity spectra eight. The fields it lacked start at zero, so they hold
-// only the collisions that close after the load (millcharge grind checks
-// that the spectrum it reads covers them all).
-bool widen_old_spectra(const SolverState& st, compute::Buffer<std::uint32_t>& b) {
+// Books of a checkpoint written by an older millcharge widen to today's
+// fields a cell (`olds`: the widths it may have had): the spectra had six
+// before the normal energy spectrum and eight before the severity spectra,
+// the liner four before the strike energy. The fields it lacked start at
+// zero, so they hold only what happens after the load (millcharge grind
+// checks that the spectrum it reads covers every collision; a liner's
+// strike energy reads over the averaging window, which starts after it).
+bool widen_old(const SolverState& st, const char* name, compute::Buffer<std::uint32_t>& b, std::size_t fields,
+               std::initializer_list<std::size_t> olds) {
   for (const auto& [key, bytes] : st.arrays) {
-    if (key != "spectra") continue;
-    const std::size_t cells = b.size() / (2 * MC_SPECTRA_FIELDS);
-    for (const std::size_t before : {std::size_t{6}, std::size_t{8}}) {
+    if (key != name) continue;
+    const std::size_t cells = b.size() / (2 * fields);
+    for (const std::size_t before : olds) {
       if (bytes.size() != cells * 2 * before * sizeof(std::uint32_t)) continue;
       std::fill(b.host.begin(), b.host.end(), 0u);
       for (std::size_t c = 0; c < cells; ++c)
-        std::memcpy(b.host.data() + c * 2 * MC_SPECTRA_FIELDS, bytes.data() + c * 2 * before * 4,
+        std::memcpy(b.host.data() + c * 2 * fields, bytes.data() + c * 2 * before * 4,
                     2 * before * sizeof(std::uint32_t));
       b.write_to_device();
       return true;
@@ -172,8 +175,8 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
     records_.resize(2 * static_cast<std::size_t>(rec_capacity_));
     get_array(st, "records", records_, true);
     get_array(st, "rec_state", rec_state_, false);
-    if (!widen_old_spectra(st, spectra_)) get_array(st, "spectra", spectra_, false);
-    get_array(st, "liner", liner_, false);
+    if (!widen_old(st, "spectra", spectra_, MC_SPECTRA_FIELDS, {6, 8})) get_array(st, "spectra", spectra_, false);
+    if (!widen_old(st, "liner", liner_, MC_LINER_FIELDS, {4})) get_array(st, "liner", liner_, false);
     get_array(st, "impact_profile", impact_profile_, false);
   } else {
     restore_springs(st);

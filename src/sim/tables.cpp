@@ -39,7 +39,7 @@ void mesh_tables(const Scene& scene, const LinerLayout& liner, double r_max, Sce
     const Triangle& tri = m.triangles[order[k].triangle];
     f64::MeshTriangle d{};
     d.a = {tri.v[0].x, tri.v[0].y, tri.v[0].z, m.material.wear_coefficient};
-    d.b = {tri.v[1].x, tri.v[1].y, tri.v[1].z, 0};
+    d.b = {tri.v[1].x, tri.v[1].y, tri.v[1].z, m.material.impact_wear_threshold_speed};
     d.c = {tri.v[2].x, tri.v[2].y, tri.v[2].z, 0};
     const Vec3 n = triangle_unit_normal(tri);
     d.n = {n.x, n.y, n.z, 0};
@@ -172,6 +172,7 @@ SceneTables scene_tables(const Scene& scene) {
   bp.energy_unit = std::ldexp(lift, -44);
   bp.wear_k = scene.wall_material.wear_coefficient;
   bp.wear_unit = std::max(bp.wear_k, 1e-30) * bp.energy_unit;
+  bp.strike_speed = scene.wall_material.impact_wear_threshold_speed;
   bp.plate_ring_width = (w.shell_radius > 0 ? w.shell_radius : 1.0) / liner.plate_rings;
   bp.n_types = n_pair_types(nm);
   bp.n_elements = liner.size();

@@ -1,0 +1,117 @@
+// Impact wear (docs/liner-life.md): Bitter's deformation wear, a volume of
+// impact_wear_coefficient · ½ m (vn − K)² for each collision with the liner,
+// vn the approach speed at first touch and K the material's threshold.
+// Against the closed form: one ball striking a plate (the analytic end
+// plate and a mesh plate of another material) at known speed and angle.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "core/layout.hpp"
+#include "core/liner.h"
+#include "helpers.h"
+#include "sim/energy_report.h"
+
+using namespace mc;
+using namespace mc::test;
+
+namespace {
+
+const Material kSteel{"steel", 7800, 2e11, 0.3};
+
+// A ball of radius r a micrometre above the plate z = 0, moving at `speed`
+// at `angle_deg` to the plate's surface, no gravity; the liner (analytic
+// plate) or the mesh plate's material with the impact wear given.
+Scene strike_scene(double speed, double angle_deg, bool mesh, double k_impact, double threshold) {
+  Interaction in;
+  in.restitution = 0.5;
+  in.mu_slide = 0.3;
+  in.mu_roll = 0;
+  in.kn = 1e6;
+  Material liner = kSteel;
+  liner.impact_wear_coefficient = mesh ? 0 : k_impact;  // the mesh's own material carries it
+  liner.impact_wear_threshold_speed = mesh ? 0 : threshold;
+  Scene s = bare_scene(kSteel, liner, in, ContactLaw::linear, Precision::double_);
+  const double r = 0.01, m = sphere_mass(7800, r);
+  s.numerics.dt = kPi * std::sqrt(m / in.kn) / 60;
+  if (mesh) {
+    const Vec3 a{-1, -1, 0}, b{1, -1, 0}, c{1, 1, 0}, d{-1, 1, 0};
+    WallMesh w;
+    w.name = "plate";
+    w.triangles = {{{a, b, c}}, {{a, c, d}}};
+    w.material = kSteel;
+    w.material.name = "plate steel";
+    w.material.density = 7000;
+    w.material.impact_wear_coefficient = k_impact;
+    w.material.impact_wear_threshold_speed = threshold;
+    w.interactions = {s.interaction(0, s.wall_index())};
+    s.walls.meshes = {w};
+  } else {
+    s.walls.length = 1.0;  // the plate z = 0
+  }
+  const double a = angle_deg * kPi / 180;
+  Ball ball;
+  ball.radius = r;
+  ball.position = {0, 0, r + 1e-6};
+  ball.velocity = {speed * std::cos(a), 0, -speed * std::sin(a)};
+  s.balls = {ball};
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("a ball striking a plate books Bitter's deformation wear: k 1/2 m (V sin a - K)^2, apart from sliding",
+          "[books][physics][wear][impact_wear]") {
+  const double r = 0.01, m = sphere_mass(7800, r), k = 3e-11;
+  for (const bool mesh : {false, true})
+    for (const double angle : {90.0, 45.0, 20.0})
+      for (const double threshold : {0.0, 0.4, 2.5}) {
+        const double speed = 3.0;
+        Scene sc = strike_scene(speed, angle, mesh, k, threshold);
+        auto s = make_solver(context(), sc);
+        // Down, the contact (60 steps), back up and clear.
+        s->advance(400);
+        const BookSums books = s->read_books();
+        const LinerLayout layout = liner_layout(sc);
+        const LinerReport rep = liner_report(sc, layout, books, 1.0, {}, ChargeAngles{});
+        const double vn = speed * std::sin(angle * kPi / 180), over = std::max(vn - threshold, 0.0);
+        const double strike = 0.5 * m * over * over;
+        double booked = 0, sliding = 0, impacts = 0, kg_h = 0;
+        for (int e = 0; e < books.n_elements; ++e) booked += books.liner_at(e, MC_LINER_STRIKE);
+        for (const LinerElementRates& x : rep.elements) {
+          sliding += x.sliding_m3_per_s;
+          impacts += x.impacts_per_s;
+        }
+        for (const LinerPartRates& p : rep.parts) kg_h += p.impact_kg_per_h;
+        std::printf("%s, %2.0f deg, K %.1f m/s: strike %.9g J (closed form %.9g), impact wear %.6g m^3 (k E %.6g), "
+                    "sliding %.4g m^3\n",
+                    mesh ? "mesh plate" : "end plate ", angle, threshold, booked, strike,
+                    rep.impact_kg_per_h / ((mesh ? 7000 : 7800) * 3600.0), k * strike, sliding);
+        INFO((mesh ? "mesh" : "end plate") << " at " << angle << " deg, K " << threshold);
+        CHECK(impacts == 1);
+        CHECK(booked == Approx(strike).epsilon(1e-9).margin(1e-15));
+        // The volume, in kg/h of the element's material over a window of 1 s.
+        const double density = mesh ? 7000 : 7800;
+        CHECK(rep.impact_kg_per_h == Approx(k * strike * density * 3600).epsilon(1e-9).margin(1e-18));
+        CHECK(kg_h == Approx(rep.impact_kg_per_h).epsilon(1e-12).margin(1e-18));
+        // Sliding apart: nothing at normal incidence, something on the
+        // oblique strikes (friction slides the contact point).
+        if (angle == 90.0) CHECK(sliding == Approx(0).margin(1e-18));
+        else CHECK(sliding > 0);
+        CHECK(rep.wear_kg_per_h == Approx(rep.sliding_kg_per_h + rep.impact_kg_per_h).epsilon(1e-12));
+      }
+}
+
+TEST_CASE("impact wear off books the strike energy and adds nothing to the wear", "[books][wear][impact_wear]") {
+  Scene sc = strike_scene(2.0, 60.0, false, 0.0, 0.0);
+  auto s = make_solver(context(), sc);
+  s->advance(400);
+  const BookSums books = s->read_books();
+  const LinerReport rep = liner_report(sc, liner_layout(sc), books, 1.0, {}, ChargeAngles{});
+  const double vn = 2.0 * std::sin(60 * kPi / 180), m = sphere_mass(7800, 0.01);
+  CHECK(rep.strike_W == Approx(0.5 * m * vn * vn).epsilon(1e-9));
+  CHECK(rep.impact_kg_per_h == 0);
+  CHECK(rep.wear_kg_per_h == rep.sliding_kg_per_h);
+}
