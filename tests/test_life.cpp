@@ -331,7 +331,8 @@ TEST_CASE("an impact share of 0 is the sliding study; a share of 1 wears by impa
   // The new liner's wear is the same whatever the share (only how it is
   // split); the shapes it wears to differ.
   const fs::path none = scratch("share-none"), zero = scratch("share-0"), one = scratch("share-1");
-  const std::string study = " --stages 1 --hours 4000" + kShort;
+  // Long enough a window for two batches: its halves.
+  const std::string study = " --stages 1 --hours 4000" + kShort + " --set run.duration=0.6";
   REQUIRE(life(study + " --out '" + none.string() + "'") == 0);
   REQUIRE(life(study + " --impact-share 0 --out '" + zero.string() + "'") == 0);
   REQUIRE(life(study + " --impact-share 1 --out '" + one.string() + "'") == 0);
@@ -352,5 +353,25 @@ TEST_CASE("an impact share of 0 is the sliding study; a share of 1 wears by impa
   CHECK(j["calibration"]["impact_wear_coefficient_m3_per_J"].get<double>() > 0);
   // Impact wear moves the liner otherwise: the worn bar differs.
   CHECK(num(b[1], "leading_angle_deg") != num(a[1], "leading_angle_deg"));
+  // The halves of the window add up to the whole: each station's sliding
+  // wear and strike energy, rate times seconds.
+  const nlohmann::json sj = nlohmann::json::parse(read_text(zero / "stage-00" / "summary.json"));
+  REQUIRE(sj["liner"].contains("halves"));
+  const double t1 = sj["liner"]["halves"][0]["window_s"], t2 = sj["liner"]["halves"][1]["window_s"];
+  CHECK(t1 + t2 == Approx(sj["liner"]["window_s"].get<double>()).epsilon(1e-9));
+  double whole = 0, halves = 0, strike = 0, strike_halves = 0;
+  for (const auto& r : read_csv(zero / "stage-00" / "lifter_wear.csv")) {
+    whole += num(r, "sliding_wear_m3_per_s") * (t1 + t2);
+    halves += num(r, "first_half_sliding_wear_m3_per_s") * t1 + num(r, "second_half_sliding_wear_m3_per_s") * t2;
+    strike += num(r, "strike_W") * (t1 + t2);
+    strike_halves += num(r, "first_half_strike_W") * t1 + num(r, "second_half_strike_W") * t2;
+  }
+  CHECK(whole > 0);
+  CHECK(halves == Approx(whole).epsilon(1e-6));
+  CHECK(strike_halves == Approx(strike).epsilon(1e-6));
+  // The new liner is known exactly; the worn one carries the stage's noise.
+  CHECK(num(a[0], "height_mm_se") == 0);
+  CHECK(num(a[1], "leading_angle_deg_se") > 0);
+  CHECK(num(a[1], "leading_angle_deg_se") < 5);
   for (const fs::path& p : {none, zero, one}) fs::remove_all(p);
 }

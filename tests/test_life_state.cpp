@@ -336,12 +336,12 @@ TEST_CASE("an impact share sets the two wear coefficients so that the new liner 
           "[life][impact_wear]") {
   using mc::app::life::StageResult;
   StageResult s0;
-  s0.liner_sliding_kg_h = 2.0;   // at the case's sliding coefficient
-  s0.liner_strike_W = 500.0;     // J/s of strike energy on the shell and lifters
-  s0.shell_sliding_mm_per_1000h = 10.0;
-  s0.shell_strike_W_m2 = 40.0;
-  s0.station_sliding_m3_s = {{1e-9, 2e-9}};
-  s0.station_strike_W = {{3.0, 0.0}};
+  s0.parts.liner_sliding_kg_h = 2.0;   // at the case's sliding coefficient
+  s0.parts.liner_strike_W = 500.0;     // J/s of strike energy on the shell and lifters
+  s0.parts.shell_sliding_mm_per_1000h = 10.0;
+  s0.parts.shell_strike_W_m2 = 40.0;
+  s0.parts.station_sliding_m3_s = {{1e-9, 2e-9}};
+  s0.parts.station_strike_W = {{3.0, 0.0}};
   s0.station_m3_s = {{0, 0}};
   const double rho = 7800, k_case = 1e-11;
   const double impact_kg_h = k_case * 500.0 * rho * 3600, total = 2.0 + impact_kg_h;
@@ -361,13 +361,33 @@ TEST_CASE("an impact share sets the two wear coefficients so that the new liner 
   }
   // Where one wear is missing, the share that needs it is refused by name.
   StageResult no_strike = s0;
-  no_strike.liner_strike_W = 0;
+  no_strike.parts.liner_strike_W = 0;
   CHECK_THROWS_WITH(mc::app::life::mix_for_share(no_strike, 0.3, k_case, rho),
                     Catch::Contains("--impact-share 0.3: the new liner's run booked no strike energy"));
   CHECK_NOTHROW(mc::app::life::mix_for_share(no_strike, 0.0, k_case, rho));
   StageResult no_slide = s0;
-  no_slide.liner_sliding_kg_h = 0;
+  no_slide.parts.liner_sliding_kg_h = 0;
   CHECK_THROWS_WITH(mc::app::life::mix_for_share(no_slide, 0.5, k_case, rho),
                     Catch::Contains("booked no sliding wear"));
   CHECK_NOTHROW(mc::app::life::mix_for_share(no_slide, 1.0, k_case, rho));
+}
+
+TEST_CASE("the stages' standard errors add in quadrature; a stage without halves ends them", "[life][life_state]") {
+  using mc::app::life::Stage;
+  std::vector<Stage> st(4);
+  for (int i = 0; i < 4; ++i) {
+    st[i].index = i;
+    st[i].outlines = {{{0.01, 0}, {0, 0.01}, {-0.01, 0}}};
+    if (i < 3) st[i].span_case_hours = 100;
+  }
+  st[0].se_height_mm = {3}, st[0].se_leading_deg = {1}, st[0].se_trailing_deg = {0.5};
+  st[1].se_height_mm = {4}, st[1].se_leading_deg = {2}, st[1].se_trailing_deg = {0};
+  const auto e = mc::app::life::cumulative_se(st);
+  REQUIRE(e.size() == 4);
+  CHECK(e[0].height_mm[0] == 0);
+  CHECK(e[1].height_mm[0] == Approx(3));
+  CHECK(e[2].height_mm[0] == Approx(5));  // sqrt(3^2 + 4^2)
+  CHECK(e[2].leading_deg[0] == Approx(std::sqrt(5.0)));
+  CHECK(e[2].trailing_deg[0] == Approx(0.5));
+  CHECK(std::isnan(e[3].height_mm[0]));  // stage 2 had no halves
 }

@@ -100,7 +100,7 @@ void mix_stages(Study& st, const LifeOptions& o) {
 // The share of a stage's shell and lifter wear that impact does, at the
 // study's mix.
 double impact_share_of(const Study& st, const StageResult& r) {
-  return r.liner_kg_h > 0 ? st.mix.impact * r.liner_strike_W * st.density * 3600.0 / r.liner_kg_h : 0.0;
+  return r.liner_kg_h > 0 ? st.mix.impact * r.parts.liner_strike_W * st.density * 3600.0 / r.liner_kg_h : 0.0;
 }
 
 // The calibration factor from the stages so far.
@@ -201,8 +201,11 @@ void write_table(const fs::path& out, const Study& st, double length) {
       "stage,hours,case_hours,profile,height_mm,top_width_mm,leading_angle_deg,trailing_angle_deg,area_mm2,"
       "worn_area_mm2,shell_wear_mm,diameter_m,power_W,power_sem_W,toe_deg,shoulder_deg,impact_point_deg,"
       "bare_liner_impact_share,shell_lifters_wear_kg_per_h,shell_lifters_g_per_kWh,top_wear_mm_per_1000h,stage_hours,"
-      "booked_mm2,removed_mm2,wear_basis,impact_wear_share\n";
+      "booked_mm2,removed_mm2,wear_basis,impact_wear_share,height_mm_se,leading_angle_deg_se,"
+      "trailing_angle_deg_se\n";
   std::vector<double> worn(st.stages.front().outlines.size(), 0.0);
+  const std::vector<life::StageSe> errors = life::cumulative_se(st.stages);
+  auto se = [](double v) { return std::isfinite(v) ? fmt::format("{:.4f}", v) : std::string(); };
   for (const Stage& s : st.stages) {
     if (!s.ran) break;
     for (std::size_t k = 0; k < s.outlines.size(); ++k) {
@@ -212,13 +215,14 @@ void write_table(const fs::path& out, const Study& st, double length) {
       const bool carried = s.span_case_hours > 0;
       t += fmt::format(
           "{},{:.6g},{:.6g},{},{:.4f},{:.4f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f},{:.6f},{:.6g},{:.4g},{:.3f},{:.3f},{:.3f},"
-          "{:.4f},{:.6g},{:.6g},{:.6g},{},{},{},{},{:.4f}\n",
+          "{:.4f},{:.6g},{:.6g},{:.6g},{},{},{},{},{:.4f},{},{},{}\n",
           s.index, s.case_hours / st.factor, s.case_hours, k, m.height * 1000, m.top_width * 1000, m.leading_angle_deg,
           m.trailing_angle_deg, m.area * 1e6, worn[k], s.shell_wear_m * 1000, s.diameter, s.r.power_W, s.r.power_sem_W,
           s.r.toe_deg, s.r.shoulder_deg, s.r.impact_deg, s.r.bare_share, s.r.liner_kg_h * st.factor,
           grams_per_kWh(s.r.liner_kg_h, s.r.power_W) * st.factor, top * 1000 * st.factor, carried ? fmt::format("{:.6g}", s.span_case_hours / st.factor) : "",
           carried ? fmt::format("{:.6g}", s.booked_mm2[k]) : "", carried ? fmt::format("{:.6g}", s.removed_mm2[k]) : "", st.basis(),
-          impact_share_of(st, s.r));
+          impact_share_of(st, s.r), se(errors[s.index].height_mm[k]), se(errors[s.index].leading_deg[k]),
+          se(errors[s.index].trailing_deg[k]));
       if (carried) worn[k] += s.removed_mm2[k];
     }
   }
@@ -444,6 +448,9 @@ int cmd_life(const LifeOptions& o) {
     s.shell_depth_m = s.r.shell_mm_per_1000h * 1e-6 * span;  // mm per 1000 h to m per h, times the hours
     const double R = 0.5 * s.diameter;
     s.booked_mm2.clear(), s.removed_mm2.clear(), s.scale.clear(), s.spread.clear();
+    s.se_height_mm.clear(), s.se_leading_deg.clear(), s.se_trailing_deg.clear();
+    std::vector<life::MixedWear> halves;
+    for (const life::WearParts& h : s.r.halves) halves.push_back(life::mixed(h, st.mix, st.density));
     for (std::size_t k = 0; k < s.outlines.size(); ++k) {
       // As the plan wore it (span_for_loss): the same rates, the same hours.
       const WornLifter w =
@@ -462,6 +469,18 @@ int cmd_life(const LifeOptions& o) {
       s.scale.push_back(w.scale);
       s.spread.push_back(w.spread);
       next.outlines.push_back(w.outline);
+      if (halves.size() == 2) {  // the same hours at each half's rates
+        ProfileMeasures m[2];
+        for (int h = 0; h < 2; ++h)
+          m[h] = measure_profile(wear_for_hours(s.outlines[k], R,
+                                                BarWearRates{halves[h].station_m3_s[k], length,
+                                                             halves[h].shell_mm_per_1000h * 1e-6},
+                                                span)
+                                     .outline);
+        s.se_height_mm.push_back(0.5 * std::fabs(m[0].height - m[1].height) * 1000);
+        s.se_leading_deg.push_back(0.5 * std::fabs(m[0].leading_angle_deg - m[1].leading_angle_deg));
+        s.se_trailing_deg.push_back(0.5 * std::fabs(m[0].trailing_angle_deg - m[1].trailing_angle_deg));
+      }
     }
     next.diameter = s.diameter + 2 * s.shell_depth_m;
     next.shell_wear_m = s.shell_wear_m + s.shell_depth_m;

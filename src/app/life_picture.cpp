@@ -184,18 +184,30 @@ std::vector<io::LinePlot> life_plots(const std::string& name, const std::vector<
   at_least(high, 5);
   plots.push_back(high);
 
-  io::LinePlot height = over_hours("the lifters' height", "height above the shell (mm)");
-  io::LinePlot faces = over_hours("the lifters' face angles", "face angle from the radial line (deg)");
+  io::LinePlot height = over_hours("the lifters' height (bands: \u00b1 2 standard errors of the wear's noise)",
+                                   "height above the shell (mm)");
+  io::LinePlot faces = over_hours("the lifters' face angles (bands: \u00b1 2 standard errors)",
+                                  "face angle from the radial line (deg)");
+  const std::vector<StageSe> errors = cumulative_se(stages);
+  // A line and its band of ± 2 standard errors (from the halves of each
+  // stage's window, added up over the stages before).
+  auto with_band = [&](io::PlotSeries s, auto se_of) {
+    for (std::size_t i = 0; i < ran.size() && i < s.y.size(); ++i) {
+      const double e = 2 * se_of(errors[ran[i]->index]);
+      s.band_lo.push_back(s.y[i] - e), s.band_hi.push_back(s.y[i] + e);
+    }
+    return s;
+  };
   for (int k = 0; k < kinds; ++k) {
-    height.series.push_back(series(named("height", k), profile_colour(k, 0), [k](const Stage& s) {
+    height.series.push_back(with_band(series(named("height", k), profile_colour(k, 0), [k](const Stage& s) {
       return measure_profile(s.outlines[k]).height * 1000;
-    }));
-    faces.series.push_back(series(named("leading face", k), profile_colour(k, 1), [k](const Stage& s) {
+    }), [k](const StageSe& e) { return e.height_mm[k]; }));
+    faces.series.push_back(with_band(series(named("leading face", k), profile_colour(k, 1), [k](const Stage& s) {
       return measure_profile(s.outlines[k]).leading_angle_deg;
-    }));
-    faces.series.push_back(series(named("trailing face", k), profile_colour(k, 0), [k](const Stage& s) {
+    }), [k](const StageSe& e) { return e.leading_deg[k]; }));
+    faces.series.push_back(with_band(series(named("trailing face", k), profile_colour(k, 0), [k](const Stage& s) {
       return measure_profile(s.outlines[k]).trailing_angle_deg;
-    }));
+    }), [k](const StageSe& e) { return e.trailing_deg[k]; }));
   }
   // The height from the shell up (a few mm lost shows as a few mm), the
   // angles over at least 10 deg.

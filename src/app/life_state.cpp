@@ -26,6 +26,15 @@ json points_json(const std::vector<Vec2>& o) {
   return a;
 }
 
+json parts_json(const WearParts& p) {
+  return {{"liner_sliding_wear_kg_per_h", p.liner_sliding_kg_h},
+          {"liner_strike_W", p.liner_strike_W},
+          {"shell_sliding_wear_mm_per_1000h", p.shell_sliding_mm_per_1000h},
+          {"shell_strike_W_per_m2", p.shell_strike_W_m2},
+          {"station_sliding_wear_m3_per_s", p.station_sliding_m3_s},
+          {"station_strike_W", p.station_strike_W}};
+}
+
 json stage_json(const Stage& s) {
   json j;
   j["index"] = s.index;
@@ -43,17 +52,18 @@ json stage_json(const Stage& s) {
                    {"impact_point_deg", number_or_null(r.impact_deg)},
                    {"bare_liner_impact_share", number_or_null(r.bare_share)},
                    {"liner_wear_kg_per_h", r.liner_kg_h}, {"shell_wear_mm_per_1000h", r.shell_mm_per_1000h},
-                   {"station_wear_m3_per_s", r.station_m3_s},
-                   {"liner_sliding_wear_kg_per_h", r.liner_sliding_kg_h}, {"liner_strike_W", r.liner_strike_W},
-                   {"shell_sliding_wear_mm_per_1000h", r.shell_sliding_mm_per_1000h},
-                   {"shell_strike_W_per_m2", r.shell_strike_W_m2},
-                   {"station_sliding_wear_m3_per_s", r.station_sliding_m3_s},
-                   {"station_strike_W", r.station_strike_W}};
+                   {"station_wear_m3_per_s", r.station_m3_s}};
+    j["result"].update(parts_json(r.parts));
+    if (!r.halves.empty()) j["result"]["halves"] = {parts_json(r.halves[0]), parts_json(r.halves[1])};
   }
   if (s.span_case_hours > 0)
     j["wear"] = {{"span_case_hours", s.span_case_hours}, {"shell_depth_m", s.shell_depth_m},
                  {"booked_mm2", s.booked_mm2}, {"removed_mm2", s.removed_mm2}, {"scale", s.scale},
                  {"spread", s.spread}};
+  if (s.span_case_hours > 0 && !s.se_height_mm.empty())
+    j["wear"]["step_se"] = {{"height_mm", s.se_height_mm},
+                            {"leading_angle_deg", s.se_leading_deg},
+                            {"trailing_angle_deg", s.se_trailing_deg}};
   return j;
 }
 
@@ -72,6 +82,26 @@ std::vector<Vec2> outline_of(const JsonAt& a, double R, double room) {
   const std::string fault = profile_outline_fault(o, R, room);
   if (!fault.empty()) a.fail(fault);
   return o;
+}
+
+WearParts parts_of(const JsonAt& r, std::size_t profiles) {
+  WearParts x;
+  r.object();
+  x.liner_sliding_kg_h = r["liner_sliding_wear_kg_per_h"].number_at_least(0);
+  x.liner_strike_W = r["liner_strike_W"].number_at_least(0);
+  x.shell_sliding_mm_per_1000h = r["shell_sliding_wear_mm_per_1000h"].number_at_least(0);
+  x.shell_strike_W_m2 = r["shell_strike_W_per_m2"].number_at_least(0);
+  for (const auto& [key, into] : {std::pair{"station_sliding_wear_m3_per_s", &x.station_sliding_m3_s},
+                                  std::pair{"station_strike_W", &x.station_strike_W}}) {
+    const JsonAt a = r[key];
+    a.size(profiles, "profiles");
+    for (std::size_t k = 0; k < profiles; ++k) {
+      into->push_back(a[k].numbers(kWearStations, "wear stations"));
+      for (int j = 0; j < kWearStations; ++j)
+        if ((*into)[k][j] < 0) a[k][j].fail("below 0");
+    }
+  }
+  return x;
 }
 
 StageResult result_of(const JsonAt& r, std::size_t profiles) {
@@ -95,25 +125,17 @@ StageResult result_of(const JsonAt& r, std::size_t profiles) {
   // The parts, where the study wrote them; a study begun before impact
   // wear holds sliding wear alone.
   if (!r.has("station_sliding_wear_m3_per_s")) {
-    x.liner_sliding_kg_h = x.liner_kg_h;
-    x.shell_sliding_mm_per_1000h = x.shell_mm_per_1000h;
-    x.station_sliding_m3_s = x.station_m3_s;
-    x.station_strike_W.assign(profiles, std::vector<double>(kWearStations, 0.0));
+    x.parts.liner_sliding_kg_h = x.liner_kg_h;
+    x.parts.shell_sliding_mm_per_1000h = x.shell_mm_per_1000h;
+    x.parts.station_sliding_m3_s = x.station_m3_s;
+    x.parts.station_strike_W.assign(profiles, std::vector<double>(kWearStations, 0.0));
     return x;
   }
-  x.liner_sliding_kg_h = r["liner_sliding_wear_kg_per_h"].number_at_least(0);
-  x.liner_strike_W = r["liner_strike_W"].number_at_least(0);
-  x.shell_sliding_mm_per_1000h = r["shell_sliding_wear_mm_per_1000h"].number_at_least(0);
-  x.shell_strike_W_m2 = r["shell_strike_W_per_m2"].number_at_least(0);
-  for (const auto& [key, into] : {std::pair{"station_sliding_wear_m3_per_s", &x.station_sliding_m3_s},
-                                  std::pair{"station_strike_W", &x.station_strike_W}}) {
-    const JsonAt a = r[key];
-    a.size(profiles, "profiles");
-    for (std::size_t k = 0; k < profiles; ++k) {
-      into->push_back(a[k].numbers(kWearStations, "wear stations"));
-      for (int j = 0; j < kWearStations; ++j)
-        if ((*into)[k][j] < 0) a[k][j].fail("below 0");
-    }
+  x.parts = parts_of(r, profiles);
+  if (r.has("halves")) {
+    const JsonAt h = r["halves"];
+    h.size(2, "halves of the averaging window");
+    for (std::size_t k = 0; k < 2; ++k) x.halves.push_back(parts_of(h[k], profiles));
   }
   return x;
 }
@@ -129,6 +151,16 @@ void wear_of(const JsonAt& w, std::size_t profiles, Stage& s) {
   const JsonAt sp = w["spread"];
   sp.size(profiles, "profiles");
   for (std::size_t k = 0; k < profiles; ++k) s.spread.push_back(static_cast<int>(sp[k].whole()));
+  if (w.has("step_se")) {
+    const JsonAt e = w["step_se"];
+    for (const auto& [key, into] : {std::pair{"height_mm", &s.se_height_mm},
+                                    std::pair{"leading_angle_deg", &s.se_leading_deg},
+                                    std::pair{"trailing_angle_deg", &s.se_trailing_deg}}) {
+      *into = e[key].numbers(profiles, "profiles");
+      for (std::size_t k = 0; k < profiles; ++k)
+        if ((*into)[k] < 0) e[key][k].fail("below 0");
+    }
+  }
 }
 
 Stage stage_of(const JsonAt& j, int i, const StateShape& shape, const Stage* before) {
@@ -260,13 +292,26 @@ StageResult read_stage_result(const fs::path& dir, int profiles) {
       const double kg_h = p["wear_kg_per_h"].number(), sliding = split ? p["sliding_wear_kg_per_h"].number() : kg_h;
       const double strike = split ? p["strike_power_W"].number() : 0.0;
       r.liner_kg_h += kg_h;
-      r.liner_sliding_kg_h += sliding;
-      r.liner_strike_W += strike;
+      r.parts.liner_sliding_kg_h += sliding;
+      r.parts.liner_strike_W += strike;
       if (name == "shell") {
         r.shell_mm_per_1000h = p["mean_wear_mm_per_1000h"].number();
-        r.shell_sliding_mm_per_1000h = kg_h > 0 ? r.shell_mm_per_1000h * sliding / kg_h : r.shell_mm_per_1000h;
+        r.parts.shell_sliding_mm_per_1000h = kg_h > 0 ? r.shell_mm_per_1000h * sliding / kg_h : r.shell_mm_per_1000h;
         const double area = p["area_m2"].number();
-        r.shell_strike_W_m2 = area > 0 ? strike / area : 0.0;
+        r.parts.shell_strike_W_m2 = area > 0 ? strike / area : 0.0;
+      }
+    }
+    // The halves of the window, where the run has them.
+    if (l.has("halves")) {
+      const JsonAt h = l["halves"];
+      h.size(2, "halves of the averaging window");
+      r.halves.resize(2);
+      for (std::size_t k = 0; k < 2; ++k) {
+        WearParts& x = r.halves[k];
+        x.liner_sliding_kg_h = h[k]["shell_lifters_sliding_wear_kg_per_h"].number_at_least(0);
+        x.liner_strike_W = h[k]["shell_lifters_strike_W"].number_at_least(0);
+        x.shell_sliding_mm_per_1000h = h[k]["shell_sliding_wear_mm_per_1000h"].number_at_least(0);
+        x.shell_strike_W_m2 = h[k]["shell_strike_W_per_m2"].number_at_least(0);
       }
     }
   } catch (const std::invalid_argument& e) {
@@ -276,8 +321,15 @@ StageResult read_stage_result(const fs::path& dir, int profiles) {
   const int c_p = t.column("profile"), c_s = t.column("station"), c_w = t.column("wear_m3_per_s");
   const bool split = t.has("sliding_wear_m3_per_s");  // a run before impact wear has sliding wear alone
   const int c_sl = split ? t.column("sliding_wear_m3_per_s") : c_w, c_st = split ? t.column("strike_W") : -1;
+  const bool halves = !r.halves.empty() && t.has("first_half_strike_W");
+  const int c_h[4] = {halves ? t.column("first_half_sliding_wear_m3_per_s") : -1,
+                      halves ? t.column("first_half_strike_W") : -1,
+                      halves ? t.column("second_half_sliding_wear_m3_per_s") : -1,
+                      halves ? t.column("second_half_strike_W") : -1};
+  if (!halves) r.halves.clear();
   r.station_m3_s.assign(profiles, std::vector<double>(kWearStations, 0.0));
-  r.station_sliding_m3_s = r.station_strike_W = r.station_m3_s;
+  r.parts.station_sliding_m3_s = r.parts.station_strike_W = r.station_m3_s;
+  for (WearParts& h : r.halves) h.station_sliding_m3_s = h.station_strike_W = r.station_m3_s;
   for (std::size_t k = 0; k < t.rows.size(); ++k) {
     const double pf = t.number(k, c_p), sf = t.number(k, c_s), w = t.number(k, c_w);
     if (!(pf >= 0 && pf < profiles && pf == std::floor(pf) && sf >= 0 && sf < kWearStations && sf == std::floor(sf)))
@@ -286,46 +338,87 @@ StageResult read_stage_result(const fs::path& dir, int profiles) {
     if (!(std::isfinite(w) && w >= 0))
       throw std::invalid_argument(t.where(k) + ": wear_m3_per_s " + t.rows[k][c_w] +
                                   " is not a wear rate (finite, >= 0); the file is damaged");
-    const double sl = t.number(k, c_sl), st = c_st >= 0 ? t.number(k, c_st) : 0.0;
-    if (!(std::isfinite(sl) && sl >= 0 && std::isfinite(st) && st >= 0))
-      throw std::invalid_argument(t.where(k) + ": sliding_wear_m3_per_s or strike_W is not a rate (finite, >= 0); "
-                                  "the file is damaged");
-    r.station_m3_s[static_cast<int>(pf)][static_cast<int>(sf)] = w;
-    r.station_sliding_m3_s[static_cast<int>(pf)][static_cast<int>(sf)] = sl;
-    r.station_strike_W[static_cast<int>(pf)][static_cast<int>(sf)] = st;
+    const int pi = static_cast<int>(pf), si = static_cast<int>(sf);
+    auto rate = [&](int col) {
+      const double v = col >= 0 ? t.number(k, col) : 0.0;
+      if (!(std::isfinite(v) && v >= 0))
+        throw std::invalid_argument(t.where(k) + ": " + t.header[col] + " " + t.rows[k][col] +
+                                    " is not a rate (finite, >= 0); the file is damaged");
+      return v;
+    };
+    r.station_m3_s[pi][si] = w;
+    r.parts.station_sliding_m3_s[pi][si] = rate(c_sl);
+    r.parts.station_strike_W[pi][si] = rate(c_st);
+    for (std::size_t h = 0; h < r.halves.size(); ++h) {
+      r.halves[h].station_sliding_m3_s[pi][si] = rate(c_h[2 * h]);
+      r.halves[h].station_strike_W[pi][si] = rate(c_h[2 * h + 1]);
+    }
   }
   return r;
+}
+
+std::vector<StageSe> cumulative_se(const std::vector<Stage>& stages) {
+  std::vector<StageSe> out;
+  if (stages.empty()) return out;
+  const std::size_t profiles = stages.front().outlines.size();
+  StageSe var{std::vector<double>(profiles, 0.0), std::vector<double>(profiles, 0.0),
+              std::vector<double>(profiles, 0.0)};
+  for (const Stage& s : stages) {
+    StageSe e = var;
+    for (std::size_t k = 0; k < profiles; ++k)
+      e.height_mm[k] = std::sqrt(var.height_mm[k]), e.leading_deg[k] = std::sqrt(var.leading_deg[k]),
+      e.trailing_deg[k] = std::sqrt(var.trailing_deg[k]);
+    out.push_back(e);
+    const bool has = s.span_case_hours > 0 && s.se_height_mm.size() == profiles;
+    for (std::size_t k = 0; k < profiles; ++k) {
+      var.height_mm[k] += has ? s.se_height_mm[k] * s.se_height_mm[k] : NAN;
+      var.leading_deg[k] += has ? s.se_leading_deg[k] * s.se_leading_deg[k] : NAN;
+      var.trailing_deg[k] += has ? s.se_trailing_deg[k] * s.se_trailing_deg[k] : NAN;
+    }
+  }
+  return out;
 }
 
 WearMix mix_for_share(const StageResult& s0, double share, double case_impact, double density) {
   WearMix m;
   m.share = share;
   const double kg_h_per_W = density * 3600.0;  // per m³/J of impact coefficient
-  const double impact_kg_h = case_impact * s0.liner_strike_W * kg_h_per_W;
-  const double total = s0.liner_sliding_kg_h + impact_kg_h;  // the new liner at the case's coefficients
-  if (share > 0 && !(s0.liner_strike_W > 0))
+  const WearParts& p = s0.parts;
+  const double impact_kg_h = case_impact * p.liner_strike_W * kg_h_per_W;
+  const double total = p.liner_sliding_kg_h + impact_kg_h;  // the new liner at the case's coefficients
+  if (share > 0 && !(p.liner_strike_W > 0))
     throw std::invalid_argument(fmt::format(
         "--impact-share {:g}: the new liner's run booked no strike energy on the shell and the lifters, so impact "
         "wear cannot take a share of its wear",
         share));
-  if (share < 1 && !(s0.liner_sliding_kg_h > 0))
+  if (share < 1 && !(p.liner_sliding_kg_h > 0))
     throw std::invalid_argument(fmt::format(
         "--impact-share {:g}: the new liner's run booked no sliding wear on the shell and the lifters, so sliding "
         "cannot take the rest; give --impact-share 1",
         share));
   if (!(total > 0))
     throw std::invalid_argument(fmt::format("--impact-share {:g}: the new liner's run booked no wear at all", share));
-  m.sliding = share < 1 ? (1 - share) * total / s0.liner_sliding_kg_h : 0.0;
-  m.impact = share > 0 ? share * total / (s0.liner_strike_W * kg_h_per_W) : 0.0;
+  m.sliding = share < 1 ? (1 - share) * total / p.liner_sliding_kg_h : 0.0;
+  m.impact = share > 0 ? share * total / (p.liner_strike_W * kg_h_per_W) : 0.0;
   return m;
 }
 
+MixedWear mixed(const WearParts& p, const WearMix& mix, double density) {
+  MixedWear w;
+  w.liner_kg_h = mix.sliding * p.liner_sliding_kg_h + mix.impact * p.liner_strike_W * density * 3600.0;
+  w.shell_mm_per_1000h = mix.sliding * p.shell_sliding_mm_per_1000h + mix.impact * p.shell_strike_W_m2 * 3.6e9;
+  w.station_m3_s = p.station_sliding_m3_s;
+  for (std::size_t k = 0; k < w.station_m3_s.size(); ++k)
+    for (std::size_t j = 0; j < w.station_m3_s[k].size(); ++j)
+      w.station_m3_s[k][j] = mix.sliding * p.station_sliding_m3_s[k][j] + mix.impact * p.station_strike_W[k][j];
+  return w;
+}
+
 void apply_mix(StageResult& r, const WearMix& mix, double density) {
-  r.liner_kg_h = mix.sliding * r.liner_sliding_kg_h + mix.impact * r.liner_strike_W * density * 3600.0;
-  r.shell_mm_per_1000h = mix.sliding * r.shell_sliding_mm_per_1000h + mix.impact * r.shell_strike_W_m2 * 3.6e9;
-  for (std::size_t k = 0; k < r.station_m3_s.size(); ++k)
-    for (std::size_t j = 0; j < r.station_m3_s[k].size(); ++j)
-      r.station_m3_s[k][j] = mix.sliding * r.station_sliding_m3_s[k][j] + mix.impact * r.station_strike_W[k][j];
+  MixedWear w = mixed(r.parts, mix, density);
+  r.liner_kg_h = w.liner_kg_h;
+  r.shell_mm_per_1000h = w.shell_mm_per_1000h;
+  r.station_m3_s = std::move(w.station_m3_s);
 }
 
 }  // namespace mc::app::life

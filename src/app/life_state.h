@@ -20,6 +20,14 @@ namespace mc::app::life {
 inline constexpr const char* kFormat = "millcharge life 2";
 
 // What a stage's run reported (its summary.json and lifter_wear.csv).
+// What a stage's wear is made of: sliding wear at the case's coefficient,
+// and the strike energy (J/s) the impact wear reads.
+struct WearParts {
+  double liner_sliding_kg_h = 0, liner_strike_W = 0;  // shell and lifters
+  double shell_sliding_mm_per_1000h = 0, shell_strike_W_m2 = 0;
+  std::vector<std::vector<double>> station_sliding_m3_s, station_strike_W;  // per profile, per station
+};
+
 // The wear figures are the sum of sliding and impact wear at the study's
 // coefficients (WearMix); the raw parts they are made of are kept beside
 // them, so that a study given an impact share mixes them again.
@@ -28,11 +36,10 @@ struct StageResult {
   double liner_kg_h = 0;          // shell and lifters (not the end plates), at the study's coefficients
   double shell_mm_per_1000h = 0;  // the shell's mean depth rate, likewise
   std::vector<std::vector<double>> station_m3_s;  // per profile, per station: one row's volume rate
-  // The parts: sliding wear at the case's coefficient, and the strike
-  // energy (J/s) the impact wear reads (core/liner_wear.h WearMix).
-  double liner_sliding_kg_h = 0, liner_strike_W = 0;       // shell and lifters
-  double shell_sliding_mm_per_1000h = 0, shell_strike_W_m2 = 0;
-  std::vector<std::vector<double>> station_sliding_m3_s, station_strike_W;
+  WearParts parts;
+  // The parts over each half of the run's averaging window (none where the
+  // run has no halves): how far the stage's wear can be trusted.
+  std::vector<WearParts> halves;
 };
 
 // How a study mixes the two wears: volume = sliding · (Archard's volume at
@@ -51,6 +58,13 @@ struct WearMix {
 // std::invalid_argument naming --impact-share where it cannot be had.
 WearMix mix_for_share(const StageResult& s0, double share, double case_impact, double density);
 
+// Wear figures at a mix, from their parts.
+struct MixedWear {
+  double liner_kg_h = 0, shell_mm_per_1000h = 0;
+  std::vector<std::vector<double>> station_m3_s;
+};
+MixedWear mixed(const WearParts& p, const WearMix& mix, double density);
+
 // The stage's wear figures at that mix, from their parts.
 void apply_mix(StageResult& r, const WearMix& mix, double density);
 
@@ -65,7 +79,21 @@ struct Stage {
   double span_case_hours = 0, shell_depth_m = 0;
   std::vector<double> booked_mm2, removed_mm2, scale;
   std::vector<int> spread;
+  // Per profile, how far this stage's step can be trusted: half the
+  // difference between the bar worn by the first and by the second half
+  // of the window's wear (height mm, leading and trailing face deg); empty
+  // where the run has no halves.
+  std::vector<double> se_height_mm, se_leading_deg, se_trailing_deg;
 };
+
+// Each stage's standard errors of its bars' height (mm) and face angles
+// (deg), per profile: the steps before it (Stage::se_*) added in
+// quadrature, each stage's window being a run of its own; NaN from the
+// first stage whose run had no halves on.
+struct StageSe {
+  std::vector<double> height_mm, leading_deg, trailing_deg;
+};
+std::vector<StageSe> cumulative_se(const std::vector<Stage>& stages);
 
 // What a study's state must fit: its case's lifter profiles and the room a
 // bar must leave for a ball (the largest ball's diameter).

@@ -108,8 +108,9 @@ int main(int argc, char** argv) {
   view->add_option("--colour", vo.colour, "colour the balls by speed, size, material or impact")
       ->check(CLI::IsMember({"speed", "size", "material", "impact"}));
   view->add_option("--liner", vo.liner,
-                   "colour the liner plain, by impact power or by wear rate of the last 0.1 s")
-      ->check(CLI::IsMember({"plain", "impact", "wear"}));
+                   "colour the liner plain, by impact power or by wear rate of the last 0.1 s (wear: sliding + "
+                   "impact; sliding-wear, impact-wear: each alone)")
+      ->check(CLI::IsMember({"plain", "impact", "wear", "sliding-wear", "impact-wear"}));
   std::string size;
   view->add_option("--size", size, "window size in pixels (default 1280x800)")->type_name("WxH");
   view->add_flag("--no-panel", vo.no_panel, "draw the mill only, without the ImGui panel");

@@ -118,6 +118,26 @@ Errors errors_of(const std::vector<WindowBatch>& revs) {
 
 }  // namespace
 
+// What a life study reads of a half's wear (app/life_state.h WearParts):
+// the shell's sliding depth rate and strike energy per m², the shell and
+// lifters' sliding kg/h and strike energy.
+static nlohmann::ordered_json wear_parts_json(const LinerReport& h, double window_s, double density) {
+  nlohmann::ordered_json j;
+  j["window_s"] = window_s;
+  double kg_h = 0, strike = 0;
+  for (const LinerPartRates& p : h.parts) {
+    if (p.name == "shell") {
+      j["shell_sliding_wear_mm_per_1000h"] =
+          p.area_m2 > 0 ? p.sliding_kg_per_h / density / 3600.0 / p.area_m2 * 3.6e9 : 0.0;
+      j["shell_strike_W_per_m2"] = p.area_m2 > 0 ? p.strike_W / p.area_m2 : 0.0;
+    }
+    if (p.name == "shell" || p.name.rfind("lifter", 0) == 0) kg_h += p.sliding_kg_per_h, strike += p.strike_W;
+  }
+  j["shell_lifters_sliding_wear_kg_per_h"] = kg_h;
+  j["shell_lifters_strike_W"] = strike;
+  return j;
+}
+
 LinerConsumption liner_consumption(const LinerReport& liner, double power_W, double wear_coefficient) {
   LinerConsumption x;
   x.power_W = power_W;
@@ -300,14 +320,32 @@ std::vector<std::string> write_run_results(const FinishedRun& r, const RunReport
   // The results first: once the charge has turned, nothing after them (a
   // picture, a mesh) may lose them; what cannot be drawn or written then is
   // a warning that names the file.
+  // The liner's wear over each half of the window, where the run has them
+  // (how far a life study's stage can be trusted: docs/liner-life.md).
+  BookSums halves[2];
+  const bool split = liner_books_half(r.s.books, s.half_books, 0, halves[0]) &&
+                     liner_books_half(r.s.books, s.half_books, 1, halves[1]) && s.half_window_s > 0 &&
+                     s.window_s > s.half_window_s;
+  const double half_s[2] = {s.half_window_s, s.window_s - s.half_window_s};
+  if (split) {
+    j["liner"]["halves"] = nlohmann::json::array();
+    for (int h = 0; h < 2; ++h)
+      j["liner"]["halves"].push_back(wear_parts_json(
+          liner_report(r.scene, layout, halves[h], half_s[h], {}, ChargeAngles{}), half_s[h],
+          r.scene.wall_material.density));
+  }
   io::write_spectra_csv(out / "spectra.csv", spectra);
   io::write_wear_csv(out / "wear.csv", layout, liner);
   if (c.lifter_rows > 0) {
     std::vector<std::vector<Vec2>> outlines;
     for (const LifterProfile& p : c.lifter_pattern) outlines.push_back(profile_outline(p));
+    const double k_impact = r.scene.wall_material.impact_wear_coefficient;
+    std::vector<std::vector<LifterStation>> by_half;
+    for (int h = 0; h < 2 && split; ++h)
+      by_half.push_back(lifter_stations(halves[h], half_s[h], outlines, 0.5 * c.diameter, c.length, k_impact));
     io::write_lifter_wear_csv(out / "lifter_wear.csv",
-                              lifter_stations(r.s.books, s.window_s, outlines, 0.5 * c.diameter, c.length,
-                                              r.scene.wall_material.impact_wear_coefficient));
+                              lifter_stations(r.s.books, s.window_s, outlines, 0.5 * c.diameter, c.length, k_impact),
+                              by_half);
   }
   io::write_file_atomic(out / "summary.json", j.dump(2) + "\n");
 
@@ -443,6 +481,11 @@ void print_run_results(const FinishedRun& r, const RunReport& rep, const std::ve
               plus_minus(liner.wear_kg_per_h, err.wear.sem, " kg/h").c_str(), parts.c_str(),
               liner.worst_wear_mm_per_1000h,
               liner.worst_element >= 0 ? io::element_name(layout, liner.worst_element).c_str() : "none");
+  if (liner.impact_kg_per_h > 0)
+    std::printf("                wear by sliding %.4g kg/h, by impact %.4g kg/h (%.0f %%: %.4g W of strike energy at "
+                "%g m3/J)\n",
+                liner.sliding_kg_per_h, liner.impact_kg_per_h, 100 * liner.impact_kg_per_h / liner.wear_kg_per_h,
+                liner.strike_W, r.scene.wall_material.impact_wear_coefficient);
   std::string others;
   if (use.has_end_plates)
     others += fmt_g(", end plates %.3g g/kWh (%.3g kg/h)", use.end_plates_g_kWh, use.end_plates_kg_h);

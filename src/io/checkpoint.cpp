@@ -134,6 +134,7 @@ void run_fields(R& r, F&& f) {
   f("pre_work", r.pre_work);
   f("pre_diss", r.pre_diss);
   f("pre_torque_time", r.pre_torque_time);
+  f("half_window_s", r.half_window_s);
 }
 
 // Fields added after version 1 began: older files lack them, and the run
@@ -141,7 +142,7 @@ void run_fields(R& r, F&& f) {
 // windows that began on a row boundary).
 bool optional_run_field(const std::string& key) {
   for (const char* k : {"open_loss_start", "stop_step", "settle_wall_s", "batches_per_revolution", "window_floor_step",
-                        "window_begun", "pre_span", "pre_work", "pre_diss", "pre_torque_time"})
+                        "window_begun", "pre_span", "pre_work", "pre_diss", "pre_torque_time", "half_window_s"})
     if (key == k) return true;
   return false;
 }
@@ -197,6 +198,8 @@ void write_checkpoint(const std::filesystem::path& path, const Checkpoint& cp) {
   std::vector<std::int64_t> rprof(r.batch_profile.begin(), r.batch_profile.end());
   put_record(payload, "run.batch_profile", reinterpret_cast<const char*>(rprof.data()),
              rprof.size() * sizeof(std::int64_t));
+  const std::string half_bytes = doubles_bytes(r.half_books);
+  put_record(payload, "run.half_books", half_bytes.data(), half_bytes.size());
 
   const SolverState& s = cp.solver;
   Scalars ss;
@@ -310,6 +313,9 @@ Checkpoint read_checkpoint(const std::filesystem::path& path) {
     std::memcpy(rc.data(), b.data(), rc.size() * sizeof(std::int64_t));
     r.batch_profile.assign(rc.begin(), rc.end());
   }
+  // The first half's liner books: absent from files written before them
+  // (the run then has no halves).
+  if (records.count("run.half_books")) r.half_books = bytes_doubles(records["run.half_books"]);
 
   const ScalarReader ss(record("solver"), where + ": solver");
   SolverState& s = cp.solver;

@@ -110,15 +110,25 @@ void write_wear_csv(const std::filesystem::path& path, const LinerLayout& layout
   write_file_atomic(path, t);
 }
 
-void write_lifter_wear_csv(const std::filesystem::path& path, const std::vector<LifterStation>& stations) {
+void write_lifter_wear_csv(const std::filesystem::path& path, const std::vector<LifterStation>& stations,
+                           const std::vector<std::vector<LifterStation>>& halves) {
   std::string t =
       "profile,station,x_mm,y_mm,length_mm,impacts_per_s,impact_W,shear_W,wear_m3_per_s,wear_mm_per_1000h,strike_W,"
-      "sliding_wear_m3_per_s,impact_wear_m3_per_s\n";
-  char line[512];
-  for (const LifterStation& s : stations) {
-    std::snprintf(line, sizeof line, "%d,%d,%.4f,%.4f,%.4f,%.6g,%.6g,%.6g,%.9g,%.6g,%.9g,%.9g,%.9g\n", s.profile,
+      "sliding_wear_m3_per_s,impact_wear_m3_per_s,first_half_sliding_wear_m3_per_s,first_half_strike_W,"
+      "second_half_sliding_wear_m3_per_s,second_half_strike_W\n";
+  const bool split = halves.size() == 2 && halves[0].size() == stations.size() && halves[1].size() == stations.size();
+  char line[640];
+  for (std::size_t k = 0; k < stations.size(); ++k) {
+    const LifterStation& s = stations[k];
+    std::snprintf(line, sizeof line, "%d,%d,%.4f,%.4f,%.4f,%.6g,%.6g,%.6g,%.9g,%.6g,%.9g,%.9g,%.9g", s.profile,
                   s.station, s.x_m * 1000, s.y_m * 1000, s.length_m * 1000, s.impacts_per_s, s.impact_W, s.shear_W,
                   s.wear_m3_per_s, s.wear_mm_per_1000h, s.strike_W, s.sliding_m3_per_s, s.impact_m3_per_s);
+    t += line;
+    if (split)
+      std::snprintf(line, sizeof line, ",%.9g,%.9g,%.9g,%.9g\n", halves[0][k].sliding_m3_per_s, halves[0][k].strike_W,
+                    halves[1][k].sliding_m3_per_s, halves[1][k].strike_W);
+    else
+      std::snprintf(line, sizeof line, ",,,,\n");
     t += line;
   }
   write_file_atomic(path, t);
@@ -291,12 +301,17 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
   }
   const double spacing = nl > 0 ? 360.0 / nl : 360.0;
   const int repeats = nl > 0 ? nl / period : 1;
-  HeatMap impact, wear;
+  HeatMap impact, wear, sliding, by_impact;
+  // With impact wear, the sum and each wear alone.
+  const bool both = r.impact_kg_per_h > 0;
+  const std::string rel = relative ? " (relative: wear coefficient not calibrated)" : "";
   impact.title = title + ": impact power on the liner";
-  wear.title = relative ? "wear rate (relative: wear coefficient not calibrated)" : "wear rate";
+  wear.title = (both ? "wear rate, sliding + impact" : "wear rate") + rel;
+  sliding.title = "sliding wear (Archard)" + rel;
+  by_impact.title = "impact wear (Bitter's deformation wear)" + rel;
   impact.unit = "W/m\u00b2";
-  wear.unit = "mm/1000 h";
-  for (HeatMap* m : {&impact, &wear}) {
+  wear.unit = sliding.unit = by_impact.unit = "mm/1000 h";
+  for (HeatMap* m : {&impact, &wear, &sliding, &by_impact}) {
     m->x_label = nl > 0 ? "degrees from a lifter row's centre, counter-clockwise (rows outlined: trailing | top | leading "
                           "face), averaged over the " + std::to_string(repeats) + " repeats of the pattern"
                         : "angle in the mill frame (deg, counter-clockwise)";
@@ -308,7 +323,7 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
   }
   // Cells by (row in the pattern, part, bin, axial): the mean over repeats.
   struct Cell {
-    double x0, x1, z0, z1, impact = 0, wear = 0;
+    double x0, x1, z0, z1, impact = 0, wear = 0, sliding = 0, by_impact = 0;
     bool outline;
     int count = 0;
   };
@@ -337,11 +352,15 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
     c.outline = el.part == LinerPart::lifter;
     c.impact += r.elements.at(e).impact_W_m2;
     c.wear += r.elements.at(e).wear_mm_per_1000h;
+    c.sliding += depth_mm_per_1000h(r.elements.at(e).sliding_m3_per_s, el.area_m2);
+    c.by_impact += depth_mm_per_1000h(r.elements.at(e).impact_m3_per_s, el.area_m2);
     ++c.count;
   }
   for (const auto& [key, c] : cells) {
     impact.cells.push_back({c.x0, c.x1, c.z0, c.z1, c.impact / c.count, c.outline});
     wear.cells.push_back({c.x0, c.x1, c.z0, c.z1, c.wear / c.count, c.outline});
+    sliding.cells.push_back({c.x0, c.x1, c.z0, c.z1, c.sliding / c.count, c.outline});
+    by_impact.cells.push_back({c.x0, c.x1, c.z0, c.z1, c.by_impact / c.count, c.outline});
   }
   // Where the liner is struck, in the lab frame: impact power per degree.
   // The colour is the impact power of each degree (grey: none); the curve
@@ -375,7 +394,8 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
   bars.title = relative ? "mean wear rate of each part (mm per 1000 h, relative: not calibrated)"
                        : "mean wear rate of each part (mm per 1000 h)";
   for (const LinerPartRates& p : r.parts) bars.bars.push_back({p.name, p.mean_wear_mm_per_1000h});
-  write_heat_maps_png(path, {impact, wear, strike}, bars);
+  if (both) write_heat_maps_png(path, {impact, wear, sliding, by_impact, strike}, bars);
+  else write_heat_maps_png(path, {impact, wear, strike}, bars);
 }
 
 PolyMesh liner_mesh(const LinerLayout& layout, const LinerReport* r, double mill_angle, double time_s) {

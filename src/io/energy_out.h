@@ -17,7 +17,10 @@ namespace mc::io {
 void write_spectra_csv(const std::filesystem::path& path, const SpectraReport& r);
 void write_wear_csv(const std::filesystem::path& path, const LinerLayout& layout, const LinerReport& r);
 // lifter_wear.csv: each lifter profile's wear stations, foot to foot.
-void write_lifter_wear_csv(const std::filesystem::path& path, const std::vector<LifterStation>& stations);
+// With `halves` (the stations over the window's first and second halves,
+// or empty), each station's sliding wear and strike energy in each half.
+void write_lifter_wear_csv(const std::filesystem::path& path, const std::vector<LifterStation>& stations,
+                           const std::vector<std::vector<LifterStation>>& halves = {});
 
 nlohmann::ordered_json spectra_json(const SpectraReport& r);
 nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& r, const Material& liner);

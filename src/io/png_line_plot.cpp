@@ -95,6 +95,10 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
     for (std::size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i)
       if (std::isfinite(s.x[i]) && std::isfinite(s.y[i]))
         x0 = std::min(x0, s.x[i]), x1 = std::max(x1, s.x[i]), y0 = std::min(y0, s.y[i]), y1 = std::max(y1, s.y[i]);
+  for (const PlotSeries& s : plot.series)
+    for (std::size_t i = 0; i < std::min({s.x.size(), s.band_lo.size(), s.band_hi.size()}); ++i)
+      if (std::isfinite(s.x[i]) && std::isfinite(s.band_lo[i]) && std::isfinite(s.band_hi[i]))
+        y0 = std::min(y0, s.band_lo[i]), y1 = std::max(y1, s.band_hi[i]);
   const bool span = plot.span_to > plot.span_from && std::isfinite(plot.span_from) && std::isfinite(plot.span_to);
   if (span) x0 = std::min(x0, plot.span_from), x1 = std::max(x1, plot.span_to);
   for (const RefLine& r : plot.ref_lines)
@@ -148,6 +152,27 @@ Canvas render_line_plot(const LinePlot& given, int width, int height) {
   for (int i = 0; i < ax.ticks(); ++i) cv.fill_rect(std::floor(X(ax.tick(i))), T, std::floor(X(ax.tick(i))) + 1, B, kGrid);
   for (int i = 0; i < ay.ticks(); ++i) cv.fill_rect(L, std::floor(Y(ay.tick(i))), R, std::floor(Y(ay.tick(i))) + 1, kGrid);
 
+  // Bands under every line: each run of finite points a translucent
+  // polygon, the upper edge out and the lower back.
+  for (const PlotSeries& s : plot.series) {
+    const std::size_t n = std::min({s.x.size(), s.band_lo.size(), s.band_hi.size()});
+    auto ok = [&](std::size_t i) {
+      return std::isfinite(s.x[i]) && std::isfinite(s.band_lo[i]) && std::isfinite(s.band_hi[i]);
+    };
+    for (std::size_t i = 0; i < n;) {
+      if (!ok(i)) {
+        ++i;
+        continue;
+      }
+      std::size_t j = i;
+      while (j < n && ok(j)) ++j;
+      std::vector<P> poly;
+      for (std::size_t k = i; k < j; ++k) poly.push_back({X(s.x[k]), Y(s.band_hi[k])});
+      for (std::size_t k = j; k-- > i;) poly.push_back({X(s.x[k]), Y(s.band_lo[k])});
+      if (j - i >= 2) cv.polygon(poly, s.rgb, 0.18);
+      i = j;
+    }
+  }
   // Series: NaN (in x or y) breaks the line; a lone point becomes a dot.
   for (const PlotSeries& s : plot.series) {
     const std::size_t n = std::min(s.x.size(), s.y.size());

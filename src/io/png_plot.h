@@ -35,6 +35,9 @@ struct PlotSeries {
   std::uint32_t rgb = 0x1f77b4;  // 0xRRGGBB
   bool markers = false;          // a dot at every point
   bool dashed = false;           // a dashed line (a model beside the data)
+  // A shaded band under the line (an interval about each point), as long
+  // as x where given; NaN breaks it.
+  std::vector<double> band_lo, band_hi;
 };
 
 // A horizontal line at y = value (a mean, a target) from x_from to x_to

@@ -136,6 +136,22 @@ SpectraReport spectra_report(const Scene& scene, const BookSums& books, double w
   return r;
 }
 
+bool liner_books_half(const BookSums& whole, const std::vector<double>& first_half, int half, BookSums& out) {
+  const std::size_t nl = whole.liner.size(), ns = whole.stations.size();
+  if (first_half.size() != nl + ns || nl == 0) return false;
+  out = BookSums{};
+  out.n_types = whole.n_types;
+  out.n_elements = whole.n_elements;
+  out.n_stations = whole.n_stations;
+  out.liner.assign(first_half.begin(), first_half.begin() + static_cast<std::ptrdiff_t>(nl));
+  out.stations.assign(first_half.begin() + static_cast<std::ptrdiff_t>(nl), first_half.end());
+  if (half == 1) {
+    for (std::size_t q = 0; q < nl; ++q) out.liner[q] = whole.liner[q] - out.liner[q];
+    for (std::size_t q = 0; q < ns; ++q) out.stations[q] = whole.stations[q] - out.stations[q];
+  }
+  return true;
+}
+
 std::vector<double> liner_impact_coefficients(const Scene& scene) {
   const LinerLayout layout = liner_layout(scene);
   std::vector<double> k;

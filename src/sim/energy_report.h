@@ -133,6 +133,12 @@ std::vector<LifterStation> lifter_stations(const BookSums& books, double window_
 // with the mill's length; not the end plates.
 double shell_lifters_wear_kg_per_h(const LinerReport& r);
 
+// The liner's books over one half of the window (RunSummary::half_books):
+// the first half as taken, or the second (the whole less the first); the
+// spectra and the impact profile are left empty. False where the run has
+// no halves or they do not fit these books.
+bool liner_books_half(const BookSums& whole, const std::vector<double>& first_half, int half, BookSums& out);
+
 // Each liner element's impact wear coefficient (m³/J): its mesh's
 // material's, or the liner's.
 std::vector<double> liner_impact_coefficients(const Scene& scene);

@@ -145,14 +145,21 @@ RunState extend_run(const RunState& st, const MillCase& old_c, const MillDerived
   // the same batches closed by now (an auto run given a larger cap or a
   // smaller tolerance; a run whose window still begins at the warm-up).
   if (after.window_start == before.window_start &&
-      batches_ended_by(after, per_rev, s) == static_cast<long>(st.batches.size()))
+      batches_ended_by(after, per_rev, s) == static_cast<long>(st.batches.size())) {
+    // Its halves move with its end: the first half's books are taken again
+    // if the middle is still to come, else the run has none.
+    out.half_books.clear();
+    out.half_window_s = 0;
     return out;
+  }
   // Otherwise a new window, no earlier than here: its books from zero.
   out.window_floor_step = s;
   out.window_begun = 0;
   out.window_profile.assign(out.window_profile.size(), 0);
   out.batch_profile.assign(out.batch_profile.size(), 0);
   out.batches.clear();
+  out.half_books.clear();
+  out.half_window_s = 0;
   out.batch = BatchTally{};
   out.work = out.diss = out.torque_time = out.arm_time = out.span = out.comx = out.comy = out.neigh = 0;
   out.rows_in_window = 0;
@@ -443,6 +450,14 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
     m.liner_shear_W = (shear_J - rev.shear_J) / span;
     m.wear_kg_per_h = (wear_m3 - rev.wear_m3) / span * scene.wall_material.density * 3600.0;
     st.batches.push_back(m);
+    // Half way through a window of known length, the liner's books so far:
+    // the wear of each half apart (how far a stage's wear can be trusted).
+    if (!c.duration_auto && n_batches >= 2 && st.half_books.empty() &&
+        static_cast<long>(st.batches.size()) == n_batches / 2) {
+      st.half_books = books.liner;
+      st.half_books.insert(st.half_books.end(), books.stations.begin(), books.stations.end());
+      for (const WindowBatch& x : st.batches) st.half_window_s += x.span_s;
+    }
     // The next batch begins with the row's sums at this cut and the
     // books' totals now.
     BatchTally next;
@@ -543,6 +558,8 @@ RunSummary run_mill(Solver& solver, const Scene& scene, const MillCase& c, const
   sum.mill_angle_end = solver.mill_angle();
   sum.angles = toe_and_shoulder(st.window_profile);
   sum.window_batches = st.batches;
+  sum.half_books = st.half_books;
+  sum.half_window_s = st.half_window_s;
   sum.duration_auto = c.duration_auto;
   sum.converged = c.duration_auto && st.stop_step >= 0;
   sum.capped = c.duration_auto && st.stop_step < 0;

@@ -119,6 +119,11 @@ struct RunSummary {
   // revolutions of them), and how the turning ended.
   std::vector<WindowBatch> window_batches;
   int batches_per_revolution = kBatchesPerRevolution;
+  // The liner's books (BookSums liner, then stations) over the window's
+  // first half of its batches, and that half's seconds; empty where the
+  // run has none (an auto duration, a window of one batch, an extended run).
+  std::vector<double> half_books;
+  double half_window_s = 0;
   bool duration_auto = false;
   bool converged = false;           // auto: the power's standard error reached the tolerance
   bool capped = false;              // auto: stopped at the cap without converging
@@ -143,6 +148,8 @@ struct RunState {
   std::vector<WindowBatch> batches;     // closed batches of the window
   BatchTally batch;                     // the open one
   std::vector<long> batch_profile;      // its rows' contact profile
+  std::vector<double> half_books;       // RunSummary::half_books, once taken
+  double half_window_s = 0;
   // Batches a revolution is cut into (kBatchesPerRevolution; 1 in
   // checkpoints written when the batches were whole revolutions).
   int batches_per_revolution = kBatchesPerRevolution;

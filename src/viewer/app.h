@@ -108,7 +108,7 @@ class App {
   Camera camera_;
   ChargeMonitor monitor_;
   LinerMonitor liner_;
-  int liner_colour_ = 0;    // 0 plain, 1 impact power, 2 wear rate
+  int liner_colour_ = 0;    // 0 plain, 1 impact power, 2 wear rate, 3 sliding wear, 4 impact wear
   long liner_drawn_ = -1;   // the liner report's version the colours show
   float liner_max_ = 0;     // the colour scale's top (the hottest element)
   BallStyle style_;

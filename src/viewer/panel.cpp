@@ -250,8 +250,8 @@ void App::panel_view() {
     ImGui::SliderFloat("slab centre, m", &slab_centre_, 0.0f, static_cast<float>(case_.length), "%.3f");
     ImGui::SliderFloat("slab width, m", &slab_width_, 0.005f, static_cast<float>(case_.length), "%.3f");
   }
-  const char* liner_modes[] = {"plain", "impact power", "wear rate"};
-  if (ImGui::Combo("liner", &liner_colour_, liner_modes, 3)) liner_drawn_ = -1;
+  const char* liner_modes[] = {"plain", "impact power", "wear rate", "sliding wear", "impact wear"};
+  if (ImGui::Combo("liner", &liner_colour_, liner_modes, 5)) liner_drawn_ = -1;
   if (liner_colour_ != 0) {
     if (!liner_.ready()) ImGui::TextDisabled("(the liner's sums come once the mill turns)");
     else {
@@ -259,8 +259,10 @@ void App::panel_view() {
       colour_bar(liner_max_ / 1000, liner_max_,
                  liner_colour_ == 1 ? "W/m^2, log" : relative ? "mm per 1000 h, log, relative" : "mm per 1000 h, log");
       const LinerReport& r = liner_.report();
-      ImGui::TextWrapped("liner: impact %.3g W, shear %.3g W, wear %.3g kg/h (shell, lifters, ends)%s", r.impact_W,
-                         r.shear_W, r.wear_kg_per_h, relative ? ", relative: wear coefficient not calibrated" : "");
+      ImGui::TextWrapped("liner: impact %.3g W, shear %.3g W, wear %.3g kg/h (sliding %.3g, impact %.3g; shell, "
+                         "lifters, ends)%s",
+                         r.impact_W, r.shear_W, r.wear_kg_per_h, r.sliding_kg_per_h, r.impact_kg_per_h,
+                         relative ? ", relative: wear coefficient not calibrated" : "");
     }
   }
   if (liner_.ready() && std::isfinite(liner_.report().impact_point_deg)) {

@@ -156,7 +156,11 @@ App::App(const MillCase& c, const MillDerived& d, Scene scene, const ViewOptions
     fixed_steps_ = 40;
   }
   style_.colour_by = colour_from(opt_.colour);
-  liner_colour_ = opt_.liner == "impact" ? 1 : opt_.liner == "wear" ? 2 : 0;
+  liner_colour_ = opt_.liner == "impact"        ? 1
+                  : opt_.liner == "wear"        ? 2
+                  : opt_.liner == "sliding-wear" ? 3
+                  : opt_.liner == "impact-wear"  ? 4
+                                                 : 0;
   set_colour_ranges();
   install_solver(std::move(scene), !opt_.from, d.settle_damping);
   if (opt_.from) open_checkpoint(*opt_.from);
@@ -420,7 +424,8 @@ void App::render() {
   glViewport(0, 0, fb_w, fb_h);
 }
 
-// The liner's elements coloured by impact power or wear rate of the last
+// The liner's elements coloured by impact power or wear rate (the sum, or
+// sliding or impact wear alone) of the last
 // 0.1 s (where the charge strikes as the liner turns through), on a log
 // scale over three decades below the hottest element, when the monitor has
 // new sums.
@@ -430,7 +435,13 @@ void App::colour_liner() {
   std::vector<double> v(r.elements.size());
   double hi = 0;
   for (std::size_t e = 0; e < v.size(); ++e) {
-    v[e] = liner_colour_ == 1 ? r.elements[e].impact_W_m2 : r.elements[e].wear_mm_per_1000h;
+    // Sliding or impact wear alone: its part of the element's wear depth.
+    const LinerElementRates& x = r.elements[e];
+    const double part = liner_colour_ == 3 ? x.sliding_m3_per_s : x.impact_m3_per_s;
+    v[e] = liner_colour_ == 1   ? x.impact_W_m2
+           : liner_colour_ == 2 ? x.wear_mm_per_1000h
+           : x.wear_m3_per_s > 0 ? x.wear_mm_per_1000h * part / x.wear_m3_per_s
+                                 : 0.0;
     hi = std::max(hi, v[e]);
   }
   liner_max_ = static_cast<float>(hi);
