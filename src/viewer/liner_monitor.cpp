@@ -1,5 +1,7 @@
 #include "viewer/liner_monitor.h"
 
+#include "core/layout.hpp"
+
 namespace mc::viewer {
 
 void LinerMonitor::set_scene(const Scene& scene) {
@@ -38,7 +40,7 @@ void LinerMonitor::after_steps(Solver& solver, double time_s, bool turning, bool
     reads_.pop_front();
     spans_.pop_front();
   }
-  if (static_cast<int>(reads_.back().liner.size()) != layout_.size() * 4) return;  // a solver of another scene
+  if (static_cast<int>(reads_.back().liner.size()) != layout_.size() * MC_LINER_FIELDS) return;  // a solver of another scene
   // The last `count` reads summed into one set of books over their span.
   auto report_of = [&](std::size_t count) {
     const std::size_t from = reads_.size() - std::min(count, reads_.size());
