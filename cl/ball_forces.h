@@ -118,10 +118,12 @@ MC_FN void wall_contact(WallRef wr, real3 n, real overlap, real3 p, real4 vel, r
                         MC_GLOBAL const LifterPolygon* lifters, int law, WallSlots* ws, Books* books,
                         BallSums* sums) {
   int rec = MC_NO_RECORD;
+  int matched = 0; /* the contact was there the step before (with or without a record) */
   for (int s = 0; s < MC_MAX_WALL_CONTACTS; ++s)
     if (ws->old_key[s] == wr.match && !ws->renewed[s]) {
       rec = ws->old_rec[s];
       ws->renewed[s] = 1;
+      matched = 1;
       break;
     }
   /* A new contact takes a record (so does one that found the pool full, at
@@ -160,9 +162,10 @@ MC_FN void wall_contact(WallRef wr, real3 n, real overlap, real3 p, real4 vel, r
   const real along = on_bar ? lifter_path_place(&lifters[wr.key - MC_WALL_LIFTER0], make_real2(rm.x, rm.y)) : R(0.0);
   if (element < 0) element = liner_element(books->bp, sp, lifters, wr.key, rm, along);
   /* The strike energy at first touch (Bitter's deformation wear): the
-   * ball's mass and its approach speed above the material's threshold. */
+   * ball's mass and its approach speed above the material's threshold;
+   * once a contact, also one that found the record pool full. */
   const real over = fmax(-v3_dot(g.v_rel, g.normal), R(0.0)) - wr.strike_k;
-  const real strike = fresh && over > R(0.0) ? R(0.5) * g.m_eff * over * over : R(0.0);
+  const real strike = !matched && over > R(0.0) ? R(0.5) * g.m_eff * over * over : R(0.0);
   liner_step(books, element, fresh, c, wr.wear_k, strike, wr.type != MC_WALL_TYPE_PLATE, atan2_fast(rc.y, rc.x));
   if (on_bar) { /* where on the bar: its wear station */
     const int k = wr.key - MC_WALL_LIFTER0;

@@ -355,10 +355,30 @@ TEST_CASE("an impact share sets the two wear coefficients so that the new liner 
     CHECK(r.liner_kg_h == Approx(total).epsilon(1e-12));
     CHECK(m.impact * 500.0 * rho * 3600 / r.liner_kg_h == Approx(share).margin(1e-12));
     CHECK(m.sliding == Approx((1 - share) * total / 2.0).margin(1e-12));
-    CHECK(r.shell_mm_per_1000h == Approx(m.sliding * 10.0 + m.impact * 40.0 * 3.6e9).epsilon(1e-12));
+    // 40 W/m² at m³/J is a depth rate in m/s: 1000 mm/m, 3600 s/h, 1000 h.
+    const double mm_per_1000h_per_m_s = 1000.0 * 3600.0 * 1000.0;
+    CHECK(r.shell_mm_per_1000h == Approx(m.sliding * 10.0 + m.impact * 40.0 * mm_per_1000h_per_m_s).epsilon(1e-12));
     CHECK(r.station_m3_s[0][0] == Approx(m.sliding * 1e-9 + m.impact * 3.0).epsilon(1e-12));
     CHECK(r.station_m3_s[0][1] == Approx(m.sliding * 2e-9).epsilon(1e-12));
   }
+  // A shell whose coefficients are R times the bars': the shell wears R
+  // times as deep, and the new liner still as much in all, S of it by
+  // impact.
+  s0.parts.shell_sliding_kg_h = 1.5;
+  s0.parts.shell_strike_W = 400.0;
+  for (double R : {0.5, 1.25})
+    for (double share : {0.0, 0.4}) {
+      INFO("ratio " << R << ", share " << share);
+      const mc::app::life::WearMix m = mc::app::life::mix_for_share(s0, share, k_case, rho, R);
+      StageResult r = s0;
+      mc::app::life::apply_mix(r, m, rho);
+      CHECK(r.liner_kg_h == Approx(total).epsilon(1e-12));
+      CHECK(mc::app::life::impact_share(r, m, rho) == Approx(share).margin(1e-12));
+      CHECK(r.shell_mm_per_1000h == Approx(R * (m.sliding * 10.0 + m.impact * 40.0 * 1000.0 * 3600.0 * 1000.0))
+                                         .epsilon(1e-12));
+      // The bars' stations keep the bars' coefficients.
+      CHECK(r.station_m3_s[0][1] == Approx(m.sliding * 2e-9).epsilon(1e-12));
+    }
   // Where one wear is missing, the share that needs it is refused by name.
   StageResult no_strike = s0;
   no_strike.parts.liner_strike_W = 0;

@@ -68,6 +68,7 @@ struct LifeOptions {
   double calibrate_hours = 0;   //   lifters lost MM of height in H operating hours
   double calibrate_rate_kg_h = 0;  // --calibrate-rate KG/H: the new shell liner's wear rate
   double calibrate_consumption_g_kWh = 0;  // --calibrate-consumption G_PER_KWH: the new shell and lifters' g/kWh
+  double shell_wear_ratio = 1;  // --shell-wear-ratio R: the shell's wear coefficients over the bars'
   double impact_share = -1;     // --impact-share S: the share of the new liner's wear that impact does (< 0: the case's)
   bool force = false;           // --force: start again in an --out that holds another study
   bool quiet = false;

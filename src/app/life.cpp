@@ -58,6 +58,7 @@ json request_with_consumption(const LifeOptions& o, const Prepared& p) {
   json r = request_of(o, p);
   if (o.calibrate_consumption_g_kWh > 0) r["calibrate_consumption_g_per_kWh"] = o.calibrate_consumption_g_kWh;
   if (o.impact_share >= 0) r["impact_share"] = o.impact_share;
+  if (o.shell_wear_ratio != 1) r["shell_wear_ratio"] = o.shell_wear_ratio;
   return r;
 }
 
@@ -88,11 +89,13 @@ struct Study {
 
 double height_of(const Stage& s, int k) { return measure_profile(s.outlines[k]).height; }
 
-// With --impact-share, the mix that gives the new liner that share, and
-// every stage's wear at it; else the case's own mix, as the runs wrote it.
+// With --impact-share (or --shell-wear-ratio), the mix that gives the new
+// liner that share, and every stage's wear at it; else the case's own mix,
+// as the runs wrote it.
 void mix_stages(Study& st, const LifeOptions& o) {
-  if (o.impact_share < 0) return;
-  st.mix = life::mix_for_share(st.stages.front().r, o.impact_share, st.impact_coefficient, st.density);
+  if (o.impact_share < 0 && o.shell_wear_ratio == 1) return;
+  st.mix = life::mix_for_share(st.stages.front().r, o.impact_share >= 0 ? o.impact_share : NAN,
+                               st.impact_coefficient, st.density, o.shell_wear_ratio);
   for (Stage& s : st.stages)
     if (s.ran) life::apply_mix(s.r, st.mix, st.density);
 }
@@ -100,7 +103,7 @@ void mix_stages(Study& st, const LifeOptions& o) {
 // The share of a stage's shell and lifter wear that impact does, at the
 // study's mix.
 double impact_share_of(const Study& st, const StageResult& r) {
-  return r.liner_kg_h > 0 ? st.mix.impact * r.parts.liner_strike_W * st.density * 3600.0 / r.liner_kg_h : 0.0;
+  return life::impact_share(r, st.mix, st.density);
 }
 
 // The calibration factor from the stages so far.
@@ -293,6 +296,12 @@ int cmd_life(const LifeOptions& o) {
                                               m));
   if (c.lifter_rows == 0)
     throw std::invalid_argument("lifters.rows = 0: a life study wears lifter bars; this mill has none");
+  for (std::size_t k = 0; k < c.sizes.size() && o.impact_share > 0; ++k)
+    if (!c.sizes[k].shape.empty())
+      throw std::invalid_argument(fmt::format(
+          "--impact-share {:g}: charge.size[{}] is a class of clumps, whose components' strikes are booked with "
+          "their bodies' whole mass: impact wear would be overcounted",
+          o.impact_share, k));
   if (o.calibrate_rate_kg_h > 0 && c.periodic)
     throw std::invalid_argument(fmt::format(
         "--calibrate-rate {:g}: mill.ends = \"periodic\": the case is a {:g} m slice of a longer mill, and a whole "
@@ -471,17 +480,23 @@ int cmd_life(const LifeOptions& o) {
       next.outlines.push_back(w.outline);
       if (halves.size() == 2) {  // the same hours at each half's rates
         ProfileMeasures m[2];
-        for (int h = 0; h < 2; ++h)
-          m[h] = measure_profile(wear_for_hours(s.outlines[k], R,
-                                                BarWearRates{halves[h].station_m3_s[k], length,
-                                                             halves[h].shell_mm_per_1000h * 1e-6},
-                                                span)
-                                     .outline);
+        for (int h = 0; h < 2; ++h) {
+          const WornLifter wh = wear_for_hours(
+              s.outlines[k], R, BarWearRates{halves[h].station_m3_s[k], length, halves[h].shell_mm_per_1000h * 1e-6},
+              span);
+          if (wh.worn_away) m[h].height = m[h].leading_angle_deg = m[h].trailing_angle_deg = NAN;
+          else m[h] = measure_profile(wh.outline);
+        }
+        // (a half that wears the bar away has no shape to measure: NaN)
         s.se_height_mm.push_back(0.5 * std::fabs(m[0].height - m[1].height) * 1000);
         s.se_leading_deg.push_back(0.5 * std::fabs(m[0].leading_angle_deg - m[1].leading_angle_deg));
         s.se_trailing_deg.push_back(0.5 * std::fabs(m[0].trailing_angle_deg - m[1].trailing_angle_deg));
       }
     }
+    // A step without a standard error for every profile has none.
+    for (const auto* v : {&s.se_height_mm, &s.se_leading_deg, &s.se_trailing_deg})
+      if (v->size() != s.outlines.size() || std::any_of(v->begin(), v->end(), [](double x) { return !std::isfinite(x); }))
+        s.se_height_mm.clear(), s.se_leading_deg.clear(), s.se_trailing_deg.clear();
     next.diameter = s.diameter + 2 * s.shell_depth_m;
     next.shell_wear_m = s.shell_wear_m + s.shell_depth_m;
     // The same charge in the larger free volume.

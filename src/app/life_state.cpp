@@ -29,6 +29,8 @@ json points_json(const std::vector<Vec2>& o) {
 json parts_json(const WearParts& p) {
   return {{"liner_sliding_wear_kg_per_h", p.liner_sliding_kg_h},
           {"liner_strike_W", p.liner_strike_W},
+          {"shell_sliding_wear_kg_per_h", p.shell_sliding_kg_h},
+          {"shell_strike_W", p.shell_strike_W},
           {"shell_sliding_wear_mm_per_1000h", p.shell_sliding_mm_per_1000h},
           {"shell_strike_W_per_m2", p.shell_strike_W_m2},
           {"station_sliding_wear_m3_per_s", p.station_sliding_m3_s},
@@ -89,6 +91,8 @@ WearParts parts_of(const JsonAt& r, std::size_t profiles) {
   r.object();
   x.liner_sliding_kg_h = r["liner_sliding_wear_kg_per_h"].number_at_least(0);
   x.liner_strike_W = r["liner_strike_W"].number_at_least(0);
+  x.shell_sliding_kg_h = r["shell_sliding_wear_kg_per_h"].number_at_least(0);
+  x.shell_strike_W = r["shell_strike_W"].number_at_least(0);
   x.shell_sliding_mm_per_1000h = r["shell_sliding_wear_mm_per_1000h"].number_at_least(0);
   x.shell_strike_W_m2 = r["shell_strike_W_per_m2"].number_at_least(0);
   for (const auto& [key, into] : {std::pair{"station_sliding_wear_m3_per_s", &x.station_sliding_m3_s},
@@ -212,7 +216,7 @@ LifeState read_life_state(const fs::path& file, const StateShape& shape) {
   const std::string basis = cal["hours_and_wear_rates"].text();
   if (basis != "calibrated" && basis != "relative" && basis != "case_coefficient")
     cal["hours_and_wear_rates"].fail("\"" + basis + "\", not one of \"calibrated\", \"relative\", \"case_coefficient\"");
-  if (!(cal["case_wear_coefficient_m3_per_N_m"].number() > 0)) cal["case_wear_coefficient_m3_per_N_m"].fail("must be > 0");
+  (void)cal["case_wear_coefficient_m3_per_N_m"].number_at_least(0);  // 0 where the case wears by impact alone
   (void)cal["wear_coefficient_m3_per_N_m"].number_at_least(0);  // 0 where impact does all the wear
   if (cal.has("impact_wear_coefficient_m3_per_J")) (void)cal["impact_wear_coefficient_m3_per_J"].number_at_least(0);
   const JsonAt stages = top["stages"];
@@ -295,6 +299,8 @@ StageResult read_stage_result(const fs::path& dir, int profiles) {
       r.parts.liner_sliding_kg_h += sliding;
       r.parts.liner_strike_W += strike;
       if (name == "shell") {
+        r.parts.shell_sliding_kg_h = sliding;
+        r.parts.shell_strike_W = strike;
         r.shell_mm_per_1000h = p["mean_wear_mm_per_1000h"].number();
         r.parts.shell_sliding_mm_per_1000h = kg_h > 0 ? r.shell_mm_per_1000h * sliding / kg_h : r.shell_mm_per_1000h;
         const double area = p["area_m2"].number();
@@ -310,6 +316,8 @@ StageResult read_stage_result(const fs::path& dir, int profiles) {
         WearParts& x = r.halves[k];
         x.liner_sliding_kg_h = h[k]["shell_lifters_sliding_wear_kg_per_h"].number_at_least(0);
         x.liner_strike_W = h[k]["shell_lifters_strike_W"].number_at_least(0);
+        x.shell_sliding_kg_h = h[k]["shell_sliding_wear_kg_per_h"].number_at_least(0);
+        x.shell_strike_W = h[k]["shell_strike_W"].number_at_least(0);
         x.shell_sliding_mm_per_1000h = h[k]["shell_sliding_wear_mm_per_1000h"].number_at_least(0);
         x.shell_strike_W_m2 = h[k]["shell_strike_W_per_m2"].number_at_least(0);
       }
@@ -379,13 +387,20 @@ std::vector<StageSe> cumulative_se(const std::vector<Stage>& stages) {
   return out;
 }
 
-WearMix mix_for_share(const StageResult& s0, double share, double case_impact, double density) {
+WearMix mix_for_share(const StageResult& s0, double share, double case_impact, double density, double shell) {
   WearMix m;
   m.share = share;
+  m.shell = shell;
   const double kg_h_per_W = density * 3600.0;  // per m³/J of impact coefficient
   const WearParts& p = s0.parts;
-  const double impact_kg_h = case_impact * p.liner_strike_W * kg_h_per_W;
-  const double total = p.liner_sliding_kg_h + impact_kg_h;  // the new liner at the case's coefficients
+  const double total = p.liner_sliding_kg_h + case_impact * p.liner_strike_W * kg_h_per_W;  // at the case's
+  // What each coefficient acts on, the shell's part weighed by its ratio.
+  const double sliding = p.liner_sliding_kg_h + (shell - 1) * p.shell_sliding_kg_h;
+  const double strike = p.liner_strike_W + (shell - 1) * p.shell_strike_W;
+  if (!std::isfinite(share)) {  // the case's own mix, the shell's wear scaled
+    m.sliding = 1, m.impact = case_impact;
+    return m;
+  }
   if (share > 0 && !(p.liner_strike_W > 0))
     throw std::invalid_argument(fmt::format(
         "--impact-share {:g}: the new liner's run booked no strike energy on the shell and the lifters, so impact "
@@ -393,25 +408,35 @@ WearMix mix_for_share(const StageResult& s0, double share, double case_impact, d
         share));
   if (share < 1 && !(p.liner_sliding_kg_h > 0))
     throw std::invalid_argument(fmt::format(
-        "--impact-share {:g}: the new liner's run booked no sliding wear on the shell and the lifters, so sliding "
-        "cannot take the rest; give --impact-share 1",
+        "--impact-share {:g}: the new liner's run booked no sliding wear on the shell and the lifters (is the "
+        "liner's wear_coefficient 0?), so sliding cannot take the rest; give --impact-share 1",
         share));
   if (!(total > 0))
     throw std::invalid_argument(fmt::format("--impact-share {:g}: the new liner's run booked no wear at all", share));
-  m.sliding = share < 1 ? (1 - share) * total / p.liner_sliding_kg_h : 0.0;
-  m.impact = share > 0 ? share * total / (p.liner_strike_W * kg_h_per_W) : 0.0;
+  m.sliding = share < 1 ? (1 - share) * total / sliding : 0.0;
+  m.impact = share > 0 ? share * total / (strike * kg_h_per_W) : 0.0;
   return m;
 }
 
 MixedWear mixed(const WearParts& p, const WearMix& mix, double density) {
   MixedWear w;
-  w.liner_kg_h = mix.sliding * p.liner_sliding_kg_h + mix.impact * p.liner_strike_W * density * 3600.0;
-  w.shell_mm_per_1000h = mix.sliding * p.shell_sliding_mm_per_1000h + mix.impact * p.shell_strike_W_m2 * 3.6e9;
+  const double sliding = p.liner_sliding_kg_h + (mix.shell - 1) * p.shell_sliding_kg_h;
+  const double strike = p.liner_strike_W + (mix.shell - 1) * p.shell_strike_W;
+  w.liner_kg_h = mix.sliding * sliding + mix.impact * strike * density * 3600.0;
+  // W/m² times m³/J is m/s: 3.6e9 of it is mm per 1000 h.
+  w.shell_mm_per_1000h =
+      mix.shell * (mix.sliding * p.shell_sliding_mm_per_1000h + mix.impact * p.shell_strike_W_m2 * 3.6e9);
   w.station_m3_s = p.station_sliding_m3_s;
   for (std::size_t k = 0; k < w.station_m3_s.size(); ++k)
     for (std::size_t j = 0; j < w.station_m3_s[k].size(); ++j)
       w.station_m3_s[k][j] = mix.sliding * p.station_sliding_m3_s[k][j] + mix.impact * p.station_strike_W[k][j];
   return w;
+}
+
+double impact_share(const StageResult& r, const WearMix& mix, double density) {
+  const WearParts& p = r.parts;
+  const double strike = p.liner_strike_W + (mix.shell - 1) * p.shell_strike_W;
+  return r.liner_kg_h > 0 ? mix.impact * strike * density * 3600.0 / r.liner_kg_h : 0.0;
 }
 
 void apply_mix(StageResult& r, const WearMix& mix, double density) {

@@ -24,6 +24,7 @@ inline constexpr const char* kFormat = "millcharge life 2";
 // and the strike energy (J/s) the impact wear reads.
 struct WearParts {
   double liner_sliding_kg_h = 0, liner_strike_W = 0;  // shell and lifters
+  double shell_sliding_kg_h = 0, shell_strike_W = 0;  // the shell's part of them
   double shell_sliding_mm_per_1000h = 0, shell_strike_W_m2 = 0;
   std::vector<std::vector<double>> station_sliding_m3_s, station_strike_W;  // per profile, per station
 };
@@ -48,15 +49,22 @@ struct StageResult {
 // share S of the new liner's shell and lifter wear (--impact-share), both
 // are set so that the new liner wears as much as at the case's own, S of it
 // by impact.
+// `shell` (--shell-wear-ratio) is the shell plates' coefficients over the
+// bars' (both wears): the bars keep theirs, the shell's wear is so many
+// times what the runs booked at the case's.
 struct WearMix {
   double sliding = 1, impact = 0;
+  double shell = 1;
   double share = NAN;  // the share asked for; NaN: the case's own mix
 };
 
-// The mix for share S from the new liner's result `s0` (liner density
-// `density`, kg/m³; the case's impact coefficient `case_impact`, m³/J);
-// std::invalid_argument naming --impact-share where it cannot be had.
-WearMix mix_for_share(const StageResult& s0, double share, double case_impact, double density);
+// The mix for share S (NaN: the case's own mix) and shell ratio `shell`
+// from the new liner's result `s0` (liner density `density`, kg/m³; the
+// case's impact coefficient `case_impact`, m³/J): the new liner's shell
+// and lifters wear as much as at the case's coefficients, S of it by
+// impact; std::invalid_argument naming --impact-share where that cannot be
+// had.
+WearMix mix_for_share(const StageResult& s0, double share, double case_impact, double density, double shell = 1);
 
 // Wear figures at a mix, from their parts.
 struct MixedWear {
@@ -64,6 +72,9 @@ struct MixedWear {
   std::vector<std::vector<double>> station_m3_s;
 };
 MixedWear mixed(const WearParts& p, const WearMix& mix, double density);
+
+// The share of a stage's shell and lifter wear that impact does at a mix.
+double impact_share(const StageResult& r, const WearMix& mix, double density);
 
 // The stage's wear figures at that mix, from their parts.
 void apply_mix(StageResult& r, const WearMix& mix, double density);

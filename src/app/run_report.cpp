@@ -130,6 +130,8 @@ static nlohmann::ordered_json wear_parts_json(const LinerReport& h, double windo
       j["shell_sliding_wear_mm_per_1000h"] =
           p.area_m2 > 0 ? p.sliding_kg_per_h / density / 3600.0 / p.area_m2 * 3.6e9 : 0.0;
       j["shell_strike_W_per_m2"] = p.area_m2 > 0 ? p.strike_W / p.area_m2 : 0.0;
+      j["shell_sliding_wear_kg_per_h"] = p.sliding_kg_per_h;
+      j["shell_strike_W"] = p.strike_W;
     }
     if (p.name == "shell" || p.name.rfind("lifter", 0) == 0) kg_h += p.sliding_kg_per_h, strike += p.strike_W;
   }

@@ -81,6 +81,11 @@ MillDerived derive(const MillCase& c) {
     if (!(m.youngs_modulus > 0)) fail(key + ".youngs_modulus", "must be > 0 Pa (got " + num(m.youngs_modulus) + ")");
     if (!(m.poisson_ratio > -1 && m.poisson_ratio < 0.5))
       fail(key + ".poisson_ratio", "must be in (-1, 0.5) (got " + num(m.poisson_ratio) + ")");
+    // A clump's component books the strike with its body's mass (cl/body.h).
+    for (const SizeClass& s : c.sizes)
+      if (m.impact_wear_coefficient > 0 && !s.shape.empty())
+        fail(key + ".impact_wear_coefficient", "impact wear with a charge of clumps: a component's strike is booked "
+                                               "with its body's whole mass, so the wear would be overcounted");
   }
 
   // Size classes.

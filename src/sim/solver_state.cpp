@@ -24,9 +24,11 @@ bool has_array(const SolverState& st, const char* name) {
 // fields a cell (`olds`: the widths it may have had): the spectra had six
 // before the normal energy spectrum and eight before the severity spectra,
 // the liner four before the strike energy. The fields it lacked start at
-// zero, so they hold only what happens after the load (millcharge grind
-// checks that the spectrum it reads covers every collision; a liner's
-// strike energy reads over the averaging window, which starts after it).
+// zero, so they hold only what happens after the load: millcharge grind
+// checks that the spectrum it reads covers every collision; a run resumed
+// mid-window from such a checkpoint books the strike energy (impact wear)
+// of the rest of its window only, over the whole window's seconds, and
+// has no halves (the checkpoint holds none).
 bool widen_old(const SolverState& st, const char* name, compute::Buffer<std::uint32_t>& b, std::size_t fields,
                std::initializer_list<std::size_t> olds) {
   for (const auto& [key, bytes] : st.arrays) {
