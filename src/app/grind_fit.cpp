@@ -19,6 +19,7 @@
 #include "grind/bond.h"
 #include "grind/circuit.h"
 #include "grind/fit.h"
+#include "grind/interval.h"
 #include "grind/ore.h"
 #include "io/atomic_file.h"
 #include "io/batch_test_file.h"
@@ -138,6 +139,41 @@ nlohmann::ordered_json parameter_json(const FittedParameter& p) {
   return q;
 }
 
+// The covariance of the fitted variables, their correlations, and the
+// held parameters' ranges.
+nlohmann::ordered_json covariance_json(const FitCovariance& u) {
+  nlohmann::ordered_json j;
+  std::vector<std::string> vars;
+  for (const std::string& n : u.names) vars.push_back(variable_name(n));
+  j["variables"] = vars;
+  j["values"] = u.values;
+  j["matrix"] = u.matrix;
+  std::vector<std::vector<double>> r = u.matrix;
+  for (std::size_t a = 0; a < r.size(); ++a)
+    for (std::size_t b = 0; b < r.size(); ++b) r[a][b] = u.matrix[a][b] / std::sqrt(u.matrix[a][a] * u.matrix[b][b]);
+  j["correlation"] = r;
+  j["residual_variance_pp2"] = u.residual_variance_pp2;
+  j["degrees_of_freedom"] = u.dof;
+  j["held"] = nlohmann::json::array();
+  for (const HeldParameter& h : u.held) j["held"].push_back({{"name", h.name}, {"value", h.value}, {"lo", h.lo}, {"hi", h.hi}});
+  return j;
+}
+
+void print_covariance(const FitCovariance& u) {
+  if (u.names.size() > 1) {
+    std::printf("  correlation of the fitted variables:\n");
+    for (std::size_t a = 0; a < u.names.size(); ++a) {
+      std::string row;
+      for (std::size_t b = 0; b < u.names.size(); ++b)
+        row += fmt::format(" {:6.3f}", u.matrix[a][b] / std::sqrt(u.matrix[a][a] * u.matrix[b][b]));
+      std::printf("    %-22s%s\n", variable_name(u.names[a]).c_str(), row.c_str());
+    }
+  }
+  for (const HeldParameter& h : u.held)
+    std::printf("  %-16s held at %.6g; the data leave it open from %.6g to %.6g (the free ones refitted there)\n",
+                h.name.c_str(), h.value, h.lo, h.hi);
+}
+
 int fit_batch(const GrindOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   const Ore start = io::read_ore(o.ore);
@@ -149,6 +185,9 @@ int fit_batch(const GrindOptions& o) {
       o.fit_params.empty() ? std::vector<std::string>{default_parameter(start.model)} : o.fit_params;
   BatchFit fit = fit_batch_test(start, run.spectrum, run.power_W, holdup_kg, tf.test, names);
   fit.ore.fitted_under = record(run, o.fit_test, o.run_dir, names, fit.rms_pp);
+  // What the fit leaves open, kept with the ore for the intervals of its products.
+  fit.ore.fitted_under.covariance = fit_covariance(fit, run.spectrum, run.power_W, holdup_kg, tf.test);
+  const FitCovariance& cov = fit.ore.fitted_under.covariance;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Everything computed; now the files.
@@ -182,6 +221,7 @@ int fit_batch(const GrindOptions& o) {
   j["evaluations"] = fit.evaluations;
   j["refits"] = fit.refits;
   j["condition"] = std::isfinite(fit.condition) ? nlohmann::json(fit.condition) : nlohmann::json();
+  j["covariance"] = covariance_json(cov);
   j["seconds"] = seconds;
   j["contact"] = {{"law", run.contact.law},
                   {"restitution", run.contact.restitution},
@@ -210,6 +250,7 @@ int fit_batch(const GrindOptions& o) {
       else
         std::printf("  %-16s unidentified: %s (%.6g)\n", p.name.c_str(), p.why.c_str(), p.value);
     }
+    print_covariance(cov);
     if (fit.free == 0)
       std::printf("  no parameter left free: every one is held, the residuals are the starting ore's\n");
     std::printf("  rms residual %.4g pp; %d iterations, %d evaluations, %.2f s\n", fit.rms_pp, fit.iterations,

@@ -389,6 +389,34 @@ Identification identify(const Matrix& J, double ssr, const std::vector<double>& 
   return id;
 }
 
+Matrix covariance_matrix(const Matrix& J, double ssr) {
+  const std::size_t n = J.size(), np = n ? J[0].size() : 0;
+  Matrix cov(np, std::vector<double>(np, 0.0));
+  if (np == 0 || n <= np) return cov;
+  Matrix A(np, std::vector<double>(np, 0.0));
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t a = 0; a < np; ++a)
+      for (std::size_t b = 0; b < np; ++b) A[a][b] += J[i][a] * J[i][b];
+  std::vector<double> d(np);
+  for (std::size_t a = 0; a < np; ++a) d[a] = A[a][a] > 0 ? 1 / std::sqrt(A[a][a]) : 0;
+  Matrix C(np, std::vector<double>(np, 0.0));
+  for (std::size_t a = 0; a < np; ++a)
+    for (std::size_t b = 0; b < np; ++b) C[a][b] = A[a][b] * d[a] * d[b];
+  std::vector<double> lambda;
+  Matrix V;
+  jacobi_eigen(C, lambda, V);
+  const double lmax = *std::max_element(lambda.begin(), lambda.end());
+  const double s2 = ssr / static_cast<double>(n - np);
+  for (std::size_t a = 0; a < np; ++a)
+    for (std::size_t b = 0; b < np; ++b) {
+      double v = 0;
+      for (std::size_t k = 0; k < np; ++k)
+        if (lambda[k] >= 1e-10 * lmax) v += V[a][k] * V[b][k] / lambda[k];
+      cov[a][b] = v * s2 * d[a] * d[b];
+    }
+  return cov;
+}
+
 // ------------------------------------------------------------ the fit
 
 namespace {
@@ -530,6 +558,17 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
     for (std::size_t t = 0; t < nt; ++t)
       for (std::size_t k : used) fit.ssr += std::pow(100 * (fit.predicted[t][k] - test.passing[t][k]), 2);
     fit.rms_pp = std::sqrt(fit.ssr / static_cast<double>(n));
+    // The covariance of those off their bounds, with the bound ones fixed.
+    if (!inner.empty()) {
+      Matrix Jin(lm.J.size(), std::vector<double>(inner.size()));
+      for (std::size_t a = 0; a < inner.size(); ++a) {
+        fit.covariance_of.push_back(free[inner[a]]);
+        for (std::size_t i = 0; i < lm.J.size(); ++i) Jin[i][a] = lm.J[i][inner[a]];
+      }
+      fit.covariance = covariance_matrix(Jin, lm.ssr);
+    }
+    fit.dof = static_cast<int>(n - inner.size());
+    fit.s2 = fit.dof > 0 ? lm.ssr / fit.dof : kNaN;
     for (std::size_t k = 0; k < params.size(); ++k) {
       FittedParameter f;
       f.name = params[k]->name;

@@ -102,6 +102,10 @@ struct Identification {
 Identification identify(const std::vector<std::vector<double>>& J, double ssr,
                         const std::vector<double>& se_limit = {});
 
+// s² (JᵀJ)⁻¹ with s² = ssr / (n − p), through the same scaled eigen-
+// decomposition as identify (directions below 1e-10 of the largest left out).
+std::vector<std::vector<double>> covariance_matrix(const std::vector<std::vector<double>>& J, double ssr);
+
 // ------------------------------------------------------------ the fit
 
 struct FittedParameter {
@@ -120,6 +124,12 @@ struct BatchFit {
   int iterations = 0, evaluations = 0, data = 0, refits = 0;
   int free = 0;                                 // parameters left free (0: every one held)
   double condition = 0;
+  // The covariance of the free parameters off their bounds, in their fitted
+  // variables (the logarithm of a scale): s² (JᵀJ)⁻¹ at the solution.
+  std::vector<std::size_t> covariance_of;       // indices into `parameters`
+  std::vector<std::vector<double>> covariance;
+  double s2 = 0;                                // ssr / (data − free), pp²
+  int dof = 0;
 };
 // Fits the named parameters of `start` to the test through the mill's
 // spectrum and power, with the hold-up `holdup_kg`. An unidentified
