@@ -336,7 +336,7 @@ TEST_CASE("grind intervals through the command: --fit keeps the covariance, grin
   mc::app::GrindOptions o;
   o.run_dir = run_dir.string();
   o.ore = (fs::path(MC_ASSET_DIR) / "ores" / "example_spectrum.toml").string();
-  o.fit_test = (dir.path / "test.toml").string();
+  o.fit_tests = {(dir.path / "test.toml").string()};
   o.fit_params = {"efficiency", "e_inf_J_kg", "sigma"};
   o.out = (dir.path / "fit").string();
   o.quiet = true;
@@ -384,4 +384,140 @@ TEST_CASE("grind intervals through the command: --fit keeps the covariance, grin
   // The truth's ore has no fit: no intervals.
   CHECK_FALSE(tj["products"][0].contains("P80_um_95"));
   CHECK(first_line(dir.path / "truth" / "grind.csv").find("lower 95") == std::string::npos);
+}
+
+// ------------------------------------------------------------ tests fitted together
+
+namespace {
+
+// A second mill, made up: fewer collisions, ten times harder.
+std::vector<SpectrumBin> harder_spectrum() {
+  std::vector<SpectrumBin> s = synthetic_spectrum();
+  for (SpectrumBin& b : s) b.energy_J *= 10, b.collisions_per_s /= 20;
+  return s;
+}
+
+TestInMill in_mill(const Ore& truth, const std::vector<SpectrumBin>& spectrum, std::uint64_t seed) {
+  BatchTest t = synthetic_test(truth, 1.0, seed);  // the first mill's test: remade in this one
+  t.passing = batch_test_products(truth, spectrum, kPower_W, kHoldup_kg, t);
+  Scatter s(seed);
+  for (auto& row : t.passing)
+    for (std::size_t k = 1; k < row.size(); ++k) row[k] += 0.01 * s.next();
+  return {t, spectrum, kPower_W, kHoldup_kg};
+}
+
+}  // namespace
+
+TEST_CASE("grind --fit twice: a second mill fixes what the first leaves loose, and the interval narrows",
+          "[grind][interval][joint]") {
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.e_inf_J_kg = 40;
+  start.fracture.sigma = 1.0;
+  const std::vector<std::string> names = {"efficiency", "e_inf_J_kg", "sigma"};
+  const TestInMill a = in_mill(truth, synthetic_spectrum(), 21), b = in_mill(truth, harder_spectrum(), 22);
+  const BatchFit fa = fit_batch_tests(start, {a}, names), fb = fit_batch_tests(start, {b}, names);
+  const BatchFit fab = fit_batch_tests(start, {a, b}, names);
+  auto identified = [](const BatchFit& f) {
+    int n = 0;
+    for (const FittedParameter& p : f.parameters) n += p.identified && !p.at_bound;
+    return n;
+  };
+  std::printf("identified: %d of 3 by the first mill's test, %d by the second's, %d by both\n", identified(fa),
+              identified(fb), identified(fab));
+  CHECK(identified(fab) == 3);
+  // E∞ against η: the second mill's spectrum, ten times harder, fixes E∞.
+  const double se_a = fa.parameters[1].se, se_ab = fab.parameters[1].se;
+  std::printf("E_inf standard error: %.3g by the first test alone, %.3g by both\n", se_a, se_ab);
+  CHECK(se_ab < 0.5 * se_a);
+  REQUIRE(fab.rms_by_test.size() == 2);
+  CHECK(fab.data == 2 * fa.data);
+  for (double r : fab.rms_by_test) CHECK(r == Approx(1 / std::sqrt(3.0)).epsilon(0.3));
+  for (const FittedParameter& p : fab.parameters) {
+    INFO(p.name << " " << p.value << " +- " << p.se);
+    CHECK(std::fabs(p.value - find_ore_parameter(p.name)->get(truth)) < 3 * p.se);
+  }
+  // A third mill's product: the interval with both tests inside that with
+  // the first alone's width, and holding the truth.
+  const std::vector<SpectrumBin> third = {{3e3, 4e-3, 0.015}, {300, 4e-2, 0.015}};
+  auto p80_third = [&](const Ore& o) {
+    const MillRates r = mill_rates(o, third, 200, 5);
+    return std::vector<double>{passing_size(o.sizes, batch_grind(o.feed, r.S_per_min, appearance_matrix(o, third), 10),
+                                            0.8) * 1e6};
+  };
+  const double true_p80 = p80_third(truth)[0];
+  const Interval ia = propagate(fa.ore, fit_covariance(fa, {a}), p80_third)[0];
+  const Interval iab = propagate(fab.ore, fit_covariance(fab, {a, b}), p80_third)[0];
+  std::printf("third mill's P80 (true %.1f um): first test alone [%.1f, %.1f], both [%.1f, %.1f]\n", true_p80, ia.lo,
+              ia.hi, iab.lo, iab.hi);
+  REQUIRE(iab.valid());
+  CHECK(iab.lo <= true_p80);
+  CHECK(true_p80 <= iab.hi);
+  CHECK(iab.hi - iab.lo < ia.hi - ia.lo);
+}
+
+TEST_CASE("grind --fit twice through the command: the run key, the tests side by side; bad input named",
+          "[grind][interval][joint][failures]") {
+  const fs::path run_dir = short_bond_run();
+  const mc::io::Run run = mc::io::read_run(run_dir, true);
+  const Ore truth = known_ore();
+  const TempDir dir{temp("joint")};
+  fs::create_directories(dir.path / "tests");
+  // A copy of the run as the second test's mill, named by its run key
+  // relative to the test file; one without its spectrum.
+  fs::copy(run_dir, dir.path / "mill2", fs::copy_options::recursive);
+  fs::copy(run_dir, dir.path / "nospectrum", fs::copy_options::recursive);
+  fs::remove(dir.path / "nospectrum" / "spectra.csv");
+  auto write_test = [&](const std::string& name, std::uint64_t seed, const std::string& run_key) {
+    mc::io::BatchTestFile tf;
+    tf.title = name;
+    tf.run = run_key;
+    tf.test = synthetic_test(truth, 1.0, seed);
+    tf.test.passing = batch_test_products(truth, run.spectrum, run.power_W, kHoldup_kg, tf.test);
+    Scatter s(seed);
+    for (auto& row : tf.test.passing)
+      for (std::size_t k = 1; k < row.size(); ++k) row[k] = std::clamp(row[k] + 0.01 * s.next(), 0.0, 1.0);
+    const fs::path p = dir.path / "tests" / (name + ".toml");
+    std::ofstream(p) << mc::io::batch_test_toml(tf);
+    return p.string();
+  };
+  const std::string t1 = write_test("one", 31, ""), t2 = write_test("two", 32, "../mill2");
+  mc::app::GrindOptions o;
+  o.run_dir = run_dir.string();
+  o.ore = (fs::path(MC_ASSET_DIR) / "ores" / "example_spectrum.toml").string();
+  o.fit_tests = {t1, t2};
+  o.fit_params = {"efficiency", "sigma"};
+  o.out = (dir.path / "fit").string();
+  o.quiet = true;
+  REQUIRE(mc::app::cmd_grind(o) == 0);
+  const nlohmann::json j = json_of(dir.path / "fit" / "fit.json");
+  REQUIRE(j["tests"].size() == 2);
+  CHECK(j["tests"][1]["run"].get<std::string>() == (dir.path / "mill2").lexically_normal().string());
+  CHECK(j["data"].get<int>() == 120);
+  CHECK(fs::exists(dir.path / "fit" / "fit_2.png"));
+  CHECK(first_line(dir.path / "fit" / "fit_residuals.csv").rfind("test,time_min", 0) == 0);
+  CHECK(mc::io::read_ore(dir.path / "fit" / "ore_fitted.toml").fitted_under.covariance.dof == 118);
+
+  // Bad input: one message naming the file and the key, nothing written.
+  auto refused = [&](std::vector<std::string> tests, const std::string& message) {
+    mc::app::GrindOptions b = o;
+    b.fit_tests = std::move(tests);
+    b.out = (dir.path / "refused").string();
+    CHECK_THROWS_WITH(mc::app::cmd_grind(b), Catch::Contains(message));
+    CHECK_FALSE(fs::exists(dir.path / "refused"));
+  };
+  refused({t1, write_test("nowhere", 33, "../no_such_run")},
+          "nowhere.toml: run: \"../no_such_run\" (" + (dir.path / "no_such_run").string() + ") is not a run folder");
+  refused({t1, write_test("nospec", 34, "../nospectrum")}, "nospec.toml: run: \"../nospectrum\": ");
+  refused({t1, t1}, "--fit " + t1 + ": the same test twice");
+  std::filesystem::copy_file(t2, dir.path / "tests" / "copy.toml");
+  refused({t2, (dir.path / "tests" / "copy.toml").string()}, "copy.toml: the same test as");
+  // Sieves past the ore's top: the test cannot share the ore's one series.
+  {
+    std::string text = mc::io::batch_test_toml(mc::io::read_batch_test(t2));
+    text.replace(text.find("sieve_mm = [3.35"), 16, "sieve_mm = [4.75");
+    std::ofstream(dir.path / "tests" / "coarse.toml") << text;
+  }
+  refused({t1, (dir.path / "tests" / "coarse.toml").string()}, "coarse.toml: sieve_mm: 4.75 to");
 }

@@ -536,7 +536,7 @@ void add_intervals(nlohmann::ordered_json& j, const GrindOptions& o, const Grind
 }  // namespace
 
 int cmd_grind(const GrindOptions& o) {
-  if (!o.fit_test.empty() || o.fit_wi_kWh_t > 0) return cmd_grind_fit(o);
+  if (!o.fit_tests.empty() || o.fit_wi_kWh_t > 0) return cmd_grind_fit(o);
   if (!o.fit_params.empty()) throw std::invalid_argument("--fit-params: names what --fit or --fit-wi fits; give one");
   // The inputs, checked before anything is computed.
   const Ore ore = io::read_ore(o.ore);

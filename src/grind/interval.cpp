@@ -17,16 +17,14 @@ double to_var(const OreParameter& p, double v) { return p.log ? std::log(v) : v;
 double from_var(const OreParameter& p, double x) { return p.log ? std::exp(x) : x; }
 
 // The sum of squared residuals (pp²) of the ore's products against the
-// test, over the sieves the fit reads (those not passing 1 throughout).
-double ssr_of(const Ore& ore, const std::vector<SpectrumBin>& spectrum, double power_W, double holdup_kg,
-              const BatchTest& test) {
-  const auto pred = batch_test_products(ore, spectrum, power_W, holdup_kg, test);
+// tests, over the sieves the fit reads.
+double ssr_of(const Ore& ore, const std::vector<TestInMill>& tests) {
   double ssr = 0;
-  for (std::size_t k = 0; k < test.sieve_m.size(); ++k) {
-    bool all_one = test.feed_passing[k] >= 1 - 1e-12;
-    for (std::size_t t = 0; t < test.times_min.size(); ++t) all_one = all_one && test.passing[t][k] >= 1 - 1e-12;
-    if (all_one) continue;
-    for (std::size_t t = 0; t < test.times_min.size(); ++t) ssr += std::pow(100 * (pred[t][k] - test.passing[t][k]), 2);
+  for (const TestInMill& tm : tests) {
+    const auto pred = batch_test_products(ore, tm.spectrum, tm.power_W, tm.holdup_kg, tm.test);
+    for (std::size_t k : informative_sieves(tm.test))
+      for (std::size_t t = 0; t < tm.test.times_min.size(); ++t)
+        ssr += std::pow(100 * (pred[t][k] - tm.test.passing[t][k]), 2);
   }
   return ssr;
 }
@@ -43,7 +41,7 @@ std::vector<double> variables_of(const Ore& ore, const std::vector<std::string>&
 // One side (dir −1 or +1) of a held parameter's profile: the furthest value
 // within the data, and the free variables refitted there.
 void profile_side(HeldParameter& h, int dir, const BatchFit& fit, const FitCovariance& u,
-                  const std::vector<SpectrumBin>& spectrum, double power_W, double holdup_kg, const BatchTest& test) {
+                  const std::vector<TestInMill>& tests) {
   const OreParameter& p = *find_ore_parameter(h.name);
   const double x_held = to_var(p, h.value);
   const double x_end = dir < 0 ? to_var(p, p.log ? std::max(p.lo, 1e-300) : p.lo) : to_var(p, p.hi);
@@ -58,11 +56,11 @@ void profile_side(HeldParameter& h, int dir, const BatchFit& fit, const FitCovar
     Ore o = inside;
     p.set(o, from_var(p, x));
     try {
-      if (!u.names.empty()) o = fit_batch_test(o, spectrum, power_W, holdup_kg, test, u.names).ore;
+      if (!u.names.empty()) o = fit_batch_tests(o, tests, u.names).ore;
     } catch (const std::exception&) {
       return false;
     }
-    if (!(ssr_of(o, spectrum, power_W, holdup_kg, test) <= limit)) return false;
+    if (!(ssr_of(o, tests) <= limit)) return false;
     ore = o;
     return true;
   };
@@ -119,6 +117,10 @@ std::string parameter_of_variable(const std::string& v) {
 
 FitCovariance fit_covariance(const BatchFit& fit, const std::vector<SpectrumBin>& spectrum, double power_W,
                              double holdup_kg, const BatchTest& test) {
+  return fit_covariance(fit, {TestInMill{test, spectrum, power_W, holdup_kg}});
+}
+
+FitCovariance fit_covariance(const BatchFit& fit, const std::vector<TestInMill>& tests) {
   FitCovariance u;
   u.given = true;
   for (std::size_t k : fit.covariance_of) u.names.push_back(fit.parameters[k].name);
@@ -133,8 +135,8 @@ FitCovariance fit_covariance(const BatchFit& fit, const std::vector<SpectrumBin>
     h.name = f.name;
     h.value = h.lo = h.hi = f.value;
     h.why = f.identified ? "on its bound" : f.why;
-    profile_side(h, -1, fit, u, spectrum, power_W, holdup_kg, test);
-    profile_side(h, +1, fit, u, spectrum, power_W, holdup_kg, test);
+    profile_side(h, -1, fit, u, tests);
+    profile_side(h, +1, fit, u, tests);
     u.held.push_back(h);
   }
   return u;

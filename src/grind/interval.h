@@ -28,6 +28,8 @@ std::string parameter_of_variable(const std::string& variable);
 // ore file's range ends, at most 6 steps a side.
 FitCovariance fit_covariance(const BatchFit& fit, const std::vector<SpectrumBin>& spectrum, double power_W,
                              double holdup_kg, const BatchTest& test);
+// The same for tests fitted together (fit_batch_tests).
+FitCovariance fit_covariance(const BatchFit& fit, const std::vector<TestInMill>& tests);
 
 // The two-sided quantile of Student's t with `dof` degrees of freedom at
 // probability p (0.975 for a 95 % interval); the normal's for dof <= 0.
