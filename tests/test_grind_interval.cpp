@@ -82,7 +82,7 @@ BatchTest synthetic_test(const Ore& ore, double noise_pp, std::uint64_t seed) {
   // Not clipped to 0..1: readings clipped near 1 scatter less than the rest,
   // s² pooled over every reading comes out below the scatter of those that
   // carry the information, and the intervals narrower than they should be
-  // (docs/grinding.md: 0.927 held clipped, 0.936 unclipped).
+  // (docs/grinding.md: 0.927 held clipped, 0.939 unclipped).
   for (auto& row : t.passing)
     for (std::size_t k = 1; k < row.size(); ++k) row[k] = row[k] + noise_pp / 100 * s.next();
   return t;

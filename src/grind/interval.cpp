@@ -174,19 +174,19 @@ std::vector<Interval> propagate(const Ore& ore, const FitCovariance& u,
   const std::vector<double> v0 = f(ore);
   const std::size_t n = v0.size(), np = u.names.size();
   const std::vector<double> x0 = variables_of(ore, u.names);
-  // The gradient in the fitted variables, by central differences.
-  std::vector<std::vector<double>> g(np, std::vector<double>(n, 0.0));
+  // The points the numbers are evaluated at: the fit's ± a step in each
+  // fitted variable, then each held parameter at its range's ends.
+  std::vector<std::vector<double>> plus, minus, ends;
+  std::vector<double> steps;
   for (std::size_t j = 0; j < np; ++j) {
     const double h = u.matrix[j][j] > 0 ? 0.1 * std::sqrt(u.matrix[j][j]) : 1e-6;
     std::vector<double> xp = x0, xm = x0;
     xp[j] += h;
     xm[j] -= h;
-    const std::vector<double> fp = eval(with_variables(ore, u, xp), n), fm = eval(with_variables(ore, u, xm), n);
-    for (std::size_t i = 0; i < n; ++i) g[j][i] = (fp[i] - fm[i]) / (2 * h);
+    steps.push_back(h);
+    plus.push_back(eval(with_variables(ore, u, xp), n));
+    minus.push_back(eval(with_variables(ore, u, xm), n));
   }
-  const double q = t_quantile(0.975, u.dof) * width_scale;
-  std::vector<double> down(n, 0.0), up(n, 0.0);
-  // Each held parameter at its range's ends, the free ones as refitted there.
   for (const HeldParameter& h : u.held) {
     const OreParameter* p = find_ore_parameter(h.name);
     if (!p) continue;
@@ -196,23 +196,37 @@ std::vector<Interval> propagate(const Ore& ore, const FitCovariance& u,
       if (at == h.value) continue;
       Ore o = free_at.size() == np ? with_variables(ore, u, free_at) : ore;
       p->set(o, at);
-      const std::vector<double> v = eval(o, n);
-      for (std::size_t i = 0; i < n; ++i) {
-        down[i] = std::min(down[i], v[i] - v0[i]);  // NaN stays NaN
-        up[i] = std::max(up[i], v[i] - v0[i]);
-        if (std::isnan(v[i])) down[i] = up[i] = kNaN;
-      }
+      ends.push_back(eval(o, n));
     }
   }
+  const double q = t_quantile(0.975, u.dof) * width_scale;
   std::vector<Interval> out(n);
   for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(v0[i])) continue;
+    // A number positive wherever it is evaluated is propagated as its
+    // logarithm: its interval is then never below 0 (a feed rate, a P80),
+    // and wider above than below where it grows faster than linearly.
+    bool positive = v0[i] > 0;
+    for (const auto* set : {&plus, &minus, &ends})
+      for (const auto& v : *set) positive = positive && v[i] > 0;
+    auto g_of = [&](double v) { return positive ? std::log(v) : v; };
+    const double y0 = g_of(v0[i]);
+    std::vector<double> g(np);
+    for (std::size_t j = 0; j < np; ++j) g[j] = (g_of(plus[j][i]) - g_of(minus[j][i])) / (2 * steps[j]);
     double var = 0;
     for (std::size_t a = 0; a < np; ++a)
-      for (std::size_t b = 0; b < np; ++b) var += g[a][i] * u.matrix[a][b] * g[b][i];
+      for (std::size_t b = 0; b < np; ++b) var += g[a] * u.matrix[a][b] * g[b];
+    double down = 0, up = 0;  // the held parameters' reach, below and above
+    bool ok = std::isfinite(var);
+    for (const auto& v : ends) {
+      if (!std::isfinite(v[i])) ok = false;
+      down = std::min(down, g_of(v[i]) - y0);
+      up = std::max(up, g_of(v[i]) - y0);
+    }
+    if (!ok) continue;
     const double half = q * std::sqrt(std::max(var, 0.0));
-    if (!std::isfinite(v0[i]) || !std::isfinite(half) || std::isnan(down[i])) continue;
-    out[i].lo = v0[i] - half + down[i];
-    out[i].hi = v0[i] + half + up[i];
+    out[i].lo = positive ? std::exp(y0 - half + down) : y0 - half + down;
+    out[i].hi = positive ? std::exp(y0 + half + up) : y0 + half + up;
   }
   return out;
 }

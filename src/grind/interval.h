@@ -45,8 +45,10 @@ struct Interval {
 // in the fitted variables (steps of a tenth of each one's standard error),
 // q Student's t at 0.975; each held parameter moves the interval's ends by
 // the furthest f reaches at its range's ends (the free ones there as
-// refitted), below and above. width_scale 1 but for tests of the coverage.
-// An f that is NaN or throws at any point leaves that number without one.
+// refitted), below and above. A number positive at every point is
+// propagated as its logarithm (its interval stays above 0). width_scale 1
+// but for tests of the coverage. An f that is NaN or throws at any point
+// leaves that number without one.
 std::vector<Interval> propagate(const Ore& ore, const FitCovariance& u,
                                 const std::function<std::vector<double>(const Ore&)>& f, double width_scale = 1.0);
 
