@@ -423,7 +423,16 @@ void print(const GrindOptions& o, const Ore& ore, const io::Run& run, const Circ
                           c.sizes.mid_m(i) * 1e6);
     std::printf("  appearance: Tavares' t10 from this mill's collisions, mean t10 %s\n", t10s.c_str());
   }
-  if (ci.given) std::printf("  with the 95 %% intervals the fit leaves open: value [lo, hi]\n");
+  if (ci.given) {
+    std::printf("  with the 95 %% intervals the fit leaves open: value [lo, hi]\n");
+    // A fit that ended on a bound may sit in another valley than the ore's:
+    // the intervals are local (docs/grinding.md).
+    for (const HeldParameter& h : ore.fitted_under.covariance.held)
+      if (h.why == "on its bound")
+        std::printf("  note: the fit left %s on its bound (%g): the intervals describe this fit's neighbourhood "
+                    "only; another test or fewer parameters (docs/grinding.md)\n",
+                    h.name.c_str(), h.value);
+  }
   for (std::size_t k = 0; k < products.size(); ++k) {
     const Product& p = products[k];
     // An interval where the number depends on the ore (a batch's kWh/t does not).
