@@ -291,8 +291,11 @@ void draw(const fs::path& out, const Ore& ore, const io::Run& run, const Circuit
 }
 
 // The products asked for, in a mill.
+// `lenient` (an ore moved for the intervals): a target not reached gives a
+// product of NaN rather than a refusal, so that the other products keep
+// their intervals.
 std::vector<Product> make_products(const GrindOptions& o, const Ore& ore, const Circuit& c,
-                                   const std::vector<double>& times, double& target_rate) {
+                                   const std::vector<double>& times, double& target_rate, bool lenient = false) {
   std::vector<Product> products;
   for (double t : times) {
     Product p = batch_product(c, t);
@@ -300,7 +303,18 @@ std::vector<Product> make_products(const GrindOptions& o, const Ore& ore, const 
     products.push_back(p);
   }
   if (o.feed_rate_t_h > 0) products.push_back(continuous(c, o.feed_rate_t_h));
-  if (o.target_p80_um > 0) products.push_back(at_target(o, ore, c, target_rate));
+  if (o.target_p80_um > 0) {
+    try {
+      products.push_back(at_target(o, ore, c, target_rate));
+    } catch (const std::invalid_argument&) {
+      if (!lenient) throw;
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      Product p;
+      p.feed_t_h = p.kWh_t = p.p80_m = target_rate = nan;
+      p.m.assign(c.feed.size(), nan);
+      products.push_back(p);
+    }
+  }
   return products;
 }
 
@@ -476,8 +490,10 @@ struct Made {
   double target_rate = std::numeric_limits<double>::quiet_NaN();
 };
 
+// `lenient`: an ore moved for the intervals; a product or Bond's test it
+// cannot make is NaN, not a refusal.
 Made make(const GrindOptions& o, const Ore& ore, const io::Run& run, const io::Run& lab,
-          const std::vector<double>& times) {
+          const std::vector<double>& times, bool lenient = false) {
   Made m;
   // The mill: the ore in it, the rates, the circuit.
   m.holdup_kg = mill_holdup_kg(ore, run.porosity, run.filling, run.mill_volume);
@@ -495,7 +511,7 @@ Made make(const GrindOptions& o, const Ore& ore, const io::Run& run, const io::R
   c.classifier.alpha = o.classifier_alpha;
   c.classifier.bypass = o.classifier_bypass;
   // The products: batch times, a feed rate, the feed rate for a target P80.
-  m.products = make_products(o, ore, c, times, m.target_rate);
+  m.products = make_products(o, ore, c, times, m.target_rate, lenient);
   // --scale-from: the same products by Herbst & Fuerstenau's scale-up, the
   // energy-specific rates the ore has in the laboratory run held in this mill.
   if (!o.scale_from.empty()) {
@@ -505,7 +521,12 @@ Made make(const GrindOptions& o, const Ore& ore, const io::Run& run, const io::R
   if (o.bond_p1_um > 0) {
     Ore bond_ore = ore;
     put_sieve_on_class_top(bond_ore, o.bond_p1_um * 1e-6);
-    m.bond = run_bond(o, bond_ore, run);
+    try {
+      m.bond = run_bond(o, bond_ore, run);
+    } catch (const std::invalid_argument&) {
+      if (!lenient) throw;
+      m.bond.wi_kWh_t = m.bond.p80_um = m.bond.gbp_g_rev = std::numeric_limits<double>::quiet_NaN();
+    }
   }
   return m;
 }
@@ -602,7 +623,7 @@ int cmd_grind(const GrindOptions& o) {
                  "or to a work index): products without intervals; fit it again with --fit for them\n",
                  o.ore.c_str());
   const GrindIntervals ci = grind_intervals(ore, numbers(o, made),
-                                            [&](const Ore& moved) { return numbers(o, make(o, moved, run, lab, times)); });
+                                            [&](const Ore& moved) { return numbers(o, make(o, moved, run, lab, times, true)); });
 
   // Everything computed; now the files.
   const fs::path out = o.out.empty() ? fs::path(o.run_dir) / "grind" : fs::path(o.out);

@@ -599,7 +599,7 @@ BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests,
       fit.covariance = covariance_matrix(Jin, lm.ssr);
     }
     fit.dof = static_cast<int>(n - inner.size());
-    fit.s2 = fit.dof > 0 ? lm.ssr / fit.dof : kNaN;
+    fit.s2 = fit.dof > 0 ? fit.ssr / fit.dof : kNaN;
     for (std::size_t k = 0; k < params.size(); ++k) {
       FittedParameter f;
       f.name = params[k]->name;
