@@ -457,7 +457,7 @@ TEST_CASE("grind --fit twice: a second mill fixes what the first leaves loose, a
   CHECK(iab.hi - iab.lo < ia.hi - ia.lo);
 }
 
-TEST_CASE("grind --fit twice through the command: the run key, the tests side by side; bad input named",
+TEST_CASE("grind --fit twice through the command: the run key, the tests side by side, bad input named",
           "[grind][interval][joint][failures]") {
   const fs::path run_dir = short_bond_run();
   const mc::io::Run run = mc::io::read_run(run_dir, true);
