@@ -40,6 +40,8 @@ def main():
     head, body = rows[0], rows[1:]
     times = []
     for col, name in enumerate(head[2:], start=2):
+        if name.endswith(" lower 95") or name.endswith(" upper 95"):
+            continue  # a fitted ore's 95 % interval beside its product
         if not name.startswith("batch ") or not name.endswith(" min"):
             sys.exit(f"{a.grind_csv}: column {name!r} is not a batch product; grind with --time only")
         times.append((float(name[6:-4]), col))

@@ -391,7 +391,7 @@ TEST_CASE("grind --fit through the command: the fitted ore, its record of the co
   mc::app::GrindOptions o;
   o.run_dir = run_dir.string();
   o.ore = ore_file("example_spectrum.toml").string();
-  o.fit_test = test_path.string();
+  o.fit_tests = {test_path.string()};
   o.out = temp("fit_out").string();
   o.quiet = true;
   REQUIRE(mc::app::cmd_grind(o) == 0);
@@ -510,7 +510,7 @@ passing = [1.0, 0.9, 0.70, 0.50, 0.35]
     mc::app::GrindOptions o;
     o.run_dir = run_dir.string();
     o.ore = ore_file("example_spectrum.toml").string();
-    o.fit_test = p.string();
+    o.fit_tests = {p.string()};
     o.fit_params = params;
     o.out = out.string();
     o.quiet = true;
@@ -550,7 +550,7 @@ passing = [1.0, 0.9, 0.70, 0.50, 0.35]
     mc::app::GrindOptions o;
     o.run_dir = old.string();
     o.ore = ore_file("example_spectrum.toml").string();
-    o.fit_test = p.string();
+    o.fit_tests = {p.string()};
     o.out = out.string();
     o.quiet = true;
     CHECK_THROWS_WITH(mc::app::cmd_grind(o), Catch::Contains("has no impact severity spectrum"));

@@ -24,7 +24,7 @@ struct GrindOptions {
   // Calibration (grind_fit.cpp): the ore fitted to a laboratory batch test
   // through this run, or one of its rates' scales to a measured Bond work
   // index (with --bond).
-  std::string fit_test;                 // --fit TEST.toml
+  std::vector<std::string> fit_tests;   // --fit TEST.toml, once or more (fitted together)
   std::vector<std::string> fit_params;  // --fit-params NAME,... (default: the rate model's scale)
   double fit_wi_kWh_t = 0;              // --fit-wi: the measured work index to meet
   // Scale-up: beside the spectrum model's products in this run, those of

@@ -4,6 +4,7 @@
 // or a fit that does not converge leaves nothing behind.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -19,6 +20,7 @@
 #include "grind/bond.h"
 #include "grind/circuit.h"
 #include "grind/fit.h"
+#include "grind/interval.h"
 #include "grind/ore.h"
 #include "io/atomic_file.h"
 #include "io/batch_test_file.h"
@@ -39,12 +41,12 @@ std::string default_parameter(RateModel m) {
 }
 
 void check_fit_options(const GrindOptions& o) {
-  const std::string what = o.fit_test.empty() ? "--fit-wi" : "--fit";
-  if (!o.fit_test.empty() && o.fit_wi_kWh_t > 0)
+  const std::string what = o.fit_tests.empty() ? "--fit-wi" : "--fit";
+  if (!o.fit_tests.empty() && o.fit_wi_kWh_t > 0)
     throw std::invalid_argument("--fit and --fit-wi: give one (a batch test, or a Bond work index)");
   if (o.fit_wi_kWh_t > 0 && !(o.bond_p1_um > 0))
     throw std::invalid_argument("--fit-wi: give the test's closing sieve with --bond P1_UM");
-  if (!o.fit_test.empty() && o.bond_p1_um > 0)
+  if (!o.fit_tests.empty() && o.bond_p1_um > 0)
     throw std::invalid_argument("--fit with --bond: a batch test is fitted alone; fit a work index with --fit-wi");
   if (!o.times_min.empty() || o.feed_rate_t_h > 0 || o.target_p80_um > 0 || o.classifier_d50c_um > 0 ||
       !o.scale_from.empty())
@@ -74,7 +76,8 @@ std::string header(const std::string& what) {
 
 // fit.png: measured points and fitted curves of cumulative passing; below,
 // the residuals in percentage points.
-void draw_fit(const fs::path& out, const BatchTest& t, const BatchFit& f, const std::string& title) {
+void draw_fit(const fs::path& out, const std::string& name, const BatchTest& t, const BatchFit& f,
+              const std::string& title) {
   static const std::uint32_t colours[] = {0x1f77b4, 0xd62728, 0x2ca02c, 0xff7f0e, 0x9467bd, 0x8c564b, 0xe377c2, 0x17becf};
   io::LinePlot psd, res;
   psd.title = title;
@@ -107,7 +110,7 @@ void draw_fit(const fs::path& out, const BatchTest& t, const BatchFit& f, const 
     res.series.push_back(r);
   }
   res.ref_lines.push_back({0.0, 0, 0, 0x222222, true, ""});
-  io::draw_or_warn(out / "fit.png", [&] { io::write_line_plots_png(out / "fit.png", {psd, res}); });
+  io::draw_or_warn(out / name, [&] { io::write_line_plots_png(out / name, {psd, res}); });
 }
 
 // The fit's folder (--out, else RUN/fit), made.
@@ -138,50 +141,177 @@ nlohmann::ordered_json parameter_json(const FittedParameter& p) {
   return q;
 }
 
+// The covariance of the fitted variables, their correlations, and the
+// held parameters' ranges.
+nlohmann::ordered_json covariance_json(const FitCovariance& u) {
+  nlohmann::ordered_json j;
+  std::vector<std::string> vars;
+  for (const std::string& n : u.names) vars.push_back(variable_name(n));
+  j["variables"] = vars;
+  j["values"] = u.values;
+  j["matrix"] = u.matrix;
+  std::vector<std::vector<double>> r = u.matrix;
+  for (std::size_t a = 0; a < r.size(); ++a)
+    for (std::size_t b = 0; b < r.size(); ++b) r[a][b] = u.matrix[a][b] / std::sqrt(u.matrix[a][a] * u.matrix[b][b]);
+  j["correlation"] = r;
+  j["residual_variance_pp2"] = u.residual_variance_pp2;
+  j["degrees_of_freedom"] = u.dof;
+  j["held"] = nlohmann::json::array();
+  for (const HeldParameter& h : u.held) j["held"].push_back({{"name", h.name}, {"value", h.value}, {"lo", h.lo}, {"hi", h.hi}});
+  return j;
+}
+
+void print_covariance(const FitCovariance& u) {
+  if (u.names.size() > 1) {
+    std::printf("  correlation of the fitted variables:\n");
+    for (std::size_t a = 0; a < u.names.size(); ++a) {
+      std::string row;
+      for (std::size_t b = 0; b < u.names.size(); ++b)
+        row += fmt::format(" {:6.3f}", u.matrix[a][b] / std::sqrt(u.matrix[a][a] * u.matrix[b][b]));
+      std::printf("    %-22s%s\n", variable_name(u.names[a]).c_str(), row.c_str());
+    }
+  }
+  for (const HeldParameter& h : u.held)
+    std::printf("  %-16s held at %.6g; the data leave it open from %.6g to %.6g (the free ones refitted there)\n",
+                h.name.c_str(), h.value, h.lo, h.hi);
+}
+
+// One batch test of a fit and the run of the mill it was made in.
+struct TestRun {
+  std::string path, run_dir;
+  io::BatchTestFile file;
+  io::Run run;
+  double holdup_kg = 0;
+};
+
+bool same_data(const BatchTest& a, const BatchTest& b) {
+  return a.sieve_m == b.sieve_m && a.feed_passing == b.feed_passing && a.times_min == b.times_min &&
+         a.passing == b.passing;
+}
+
+// The tests of --fit, each with its run (its `run` key, relative to the
+// file; else RUN), checked before anything is fitted: every message names
+// the file and the key.
+std::vector<TestRun> read_tests(const GrindOptions& o, const Ore& start) {
+  std::vector<TestRun> tests;
+  for (const std::string& path : o.fit_tests) {
+    TestRun t;
+    t.path = path;
+    t.file = io::read_batch_test(path);
+    for (const TestRun& u : tests) {
+      std::error_code e1, e2;
+      if (fs::weakly_canonical(path, e1) == fs::weakly_canonical(u.path, e2))
+        throw std::invalid_argument("--fit " + path + ": the same test twice");
+      if (same_data(t.file.test, u.file.test))
+        throw std::invalid_argument("--fit " + path + ": the same test as " + u.path +
+                                    " (sieve_mm, feed and every product alike): the same test twice");
+    }
+    t.run_dir = t.file.run.empty() ? o.run_dir : (fs::path(path).parent_path() / t.file.run).lexically_normal().string();
+    tests.push_back(t);
+  }
+  for (TestRun& t : tests) {
+    const BatchTest& bt = t.file.test;
+    if (bt.sieve_m.front() > start.sizes.top_m.front() * (1 + 1e-9) ||
+        bt.sieve_m.back() < start.sizes.top_m.back() * (1 - 1e-9))
+      throw std::invalid_argument(fmt::format(
+          "{}: sieve_mm: {:g} to {:g} mm lies outside the ore's size classes ({:g} to {:g} mm): the tests fitted "
+          "together share the ore's one series (sizes.top_mm, sizes.classes)",
+          t.path, bt.sieve_m.front() * 1e3, bt.sieve_m.back() * 1e3, start.sizes.top_m.front() * 1e3,
+          start.sizes.top_m.back() * 1e3));
+    if (t.file.run.empty()) {
+      t.run = io::read_run(o.run_dir, start.model == RateModel::spectrum, start.energy_basis);
+    } else {
+      if (!fs::is_regular_file(fs::path(t.run_dir) / "summary.json"))
+        throw std::invalid_argument(t.path + ": run: \"" + t.file.run + "\" (" + t.run_dir +
+                                    ") is not a run folder: it has no summary.json (make it with millcharge run)");
+      try {
+        t.run = io::read_run(t.run_dir, start.model == RateModel::spectrum, start.energy_basis);
+      } catch (const std::exception& e) {
+        throw std::invalid_argument(t.path + ": run: \"" + t.file.run + "\": " + e.what());
+      }
+    }
+    t.holdup_kg = bt.holdup_kg > 0 ? bt.holdup_kg
+                                   : mill_holdup_kg(start, t.run.porosity, t.run.filling, t.run.mill_volume);
+    // One ore holds under one contact: tests through runs of other contacts cannot share it.
+    const std::string changed = contact_mismatch(tests.front().run.contact, t.run.contact);
+    if (!changed.empty())
+      throw std::invalid_argument(t.path + ": run: \"" + t.run_dir + "\": its contact differs from " +
+                                  tests.front().run_dir + "'s (" + changed +
+                                  "): tests fitted together must be run under one contact");
+  }
+  return tests;
+}
+
 int fit_batch(const GrindOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   const Ore start = io::read_ore(o.ore);
-  const io::BatchTestFile tf = io::read_batch_test(o.fit_test);
-  const io::Run run = io::read_run(o.run_dir, start.model == RateModel::spectrum, start.energy_basis);
-  const double holdup_kg = tf.test.holdup_kg > 0 ? tf.test.holdup_kg
-                                                 : mill_holdup_kg(start, run.porosity, run.filling, run.mill_volume);
+  const std::vector<TestRun> tests = read_tests(o, start);
   const std::vector<std::string> names =
       o.fit_params.empty() ? std::vector<std::string>{default_parameter(start.model)} : o.fit_params;
-  BatchFit fit = fit_batch_test(start, run.spectrum, run.power_W, holdup_kg, tf.test, names);
-  fit.ore.fitted_under = record(run, o.fit_test, o.run_dir, names, fit.rms_pp);
+  std::vector<TestInMill> in_mills;
+  for (const TestRun& t : tests) in_mills.push_back({t.file.test, t.run.spectrum, t.run.power_W, t.holdup_kg});
+  BatchFit fit = fit_batch_tests(start, in_mills, names);
+  std::string test_names, run_names;
+  for (const TestRun& t : tests) {
+    test_names += (test_names.empty() ? "" : ", ") + t.path;
+    run_names += (run_names.empty() ? "" : ", ") + t.run_dir;
+  }
+  const io::Run& run = tests.front().run;
+  fit.ore.fitted_under = record(run, test_names, run_names, names, fit.rms_pp);
+  // What the fit leaves open, kept with the ore for the intervals of its products.
+  fit.ore.fitted_under.covariance = fit_covariance(fit, in_mills);
+  const FitCovariance& cov = fit.ore.fitted_under.covariance;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Everything computed; now the files.
   const fs::path out = fit_folder(o);
   io::write_file_atomic(out / "ore_fitted.toml",
-                        io::ore_toml(fit.ore, header("fitted to the batch test " + o.fit_test + " through the run " +
-                                                     o.run_dir)));
-  std::string csv = "time_min,sieve_um,measured_passing,fitted_passing,residual_pp\n";
-  const BatchTest& t = tf.test;
-  for (std::size_t i = 0; i < t.times_min.size(); ++i)
-    for (std::size_t k = 0; k < t.sieve_m.size(); ++k)
-      csv += fmt::format("{:g},{:.6g},{:.8f},{:.8f},{:.6f}\n", t.times_min[i], t.sieve_m[k] * 1e6, t.passing[i][k],
-                         fit.predicted[i][k], 100 * (fit.predicted[i][k] - t.passing[i][k]));
+                        io::ore_toml(fit.ore, header((tests.size() > 1 ? "fitted to the batch tests " : "fitted to the "
+                                                                                                          "batch test ") +
+                                                     test_names + " through the run" + (tests.size() > 1 ? "s " : " ") +
+                                                     run_names)));
+  // Several tests: a first column names each row's.
+  std::string csv = std::string(tests.size() > 1 ? "test," : "") +
+                    "time_min,sieve_um,measured_passing,fitted_passing,residual_pp\n";
+  for (std::size_t m = 0; m < tests.size(); ++m) {
+    const BatchTest& t = tests[m].file.test;
+    const auto& pred = fit.predicted_by_test[m];
+    for (std::size_t i = 0; i < t.times_min.size(); ++i)
+      for (std::size_t k = 0; k < t.sieve_m.size(); ++k)
+        csv += (tests.size() > 1 ? "\"" + tests[m].path + "\"," : std::string()) +
+               fmt::format("{:g},{:.6g},{:.8f},{:.8f},{:.6f}\n", t.times_min[i], t.sieve_m[k] * 1e6, t.passing[i][k],
+                           pred[i][k], 100 * (pred[i][k] - t.passing[i][k]));
+  }
   io::write_file_atomic(out / "fit_residuals.csv", csv);
   nlohmann::ordered_json j;
-  j["test"] = o.fit_test;
+  j["test"] = tests.front().path;
   j["run"] = run.title;
   j["ore"] = start.name;
   j["model"] = start.model == RateModel::spectrum ? "spectrum" : start.model == RateModel::energy ? "energy" : "austin";
   j["power_W"] = run.power_W;
-  j["holdup_kg"] = holdup_kg;
+  j["holdup_kg"] = tests.front().holdup_kg;
+  j["tests"] = nlohmann::json::array();
+  for (std::size_t m = 0; m < tests.size(); ++m)
+    j["tests"].push_back({{"file", tests[m].path},
+                          {"run", tests[m].run_dir},
+                          {"power_W", tests[m].run.power_W},
+                          {"holdup_kg", tests[m].holdup_kg},
+                          {"rms_residual_pp", fit.rms_by_test[m]}});
   j["data"] = fit.data;
   j["parameters"] = nlohmann::json::array();
   for (const FittedParameter& p : fit.parameters) j["parameters"].push_back(parameter_json(p));
   j["free_parameters"] = fit.free;
   j["rms_residual_pp"] = fit.rms_pp;
+  double noise_pp = 0;
+  for (const TestRun& t : tests) noise_pp = std::max(noise_pp, t.file.test.noise_pp);
   // With nothing free the residual says how far the ore as it stands is
   // from the test, not how well a fit did: no verdict then.
-  j["within_twice_noise"] = fit.free > 0 ? nlohmann::json(fit.rms_pp <= 2 * tf.test.noise_pp) : nlohmann::json();
+  j["within_twice_noise"] = fit.free > 0 ? nlohmann::json(fit.rms_pp <= 2 * noise_pp) : nlohmann::json();
   j["iterations"] = fit.iterations;
   j["evaluations"] = fit.evaluations;
   j["refits"] = fit.refits;
   j["condition"] = std::isfinite(fit.condition) ? nlohmann::json(fit.condition) : nlohmann::json();
+  j["covariance"] = covariance_json(cov);
   j["seconds"] = seconds;
   j["contact"] = {{"law", run.contact.law},
                   {"restitution", run.contact.restitution},
@@ -190,15 +320,34 @@ int fit_batch(const GrindOptions& o) {
                   {"youngs_modulus_Pa", run.contact.youngs_modulus_Pa}};
   j["build"] = {{"version", version()}, {"commit", build_commit()}};
   io::write_file_atomic(out / "fit.json", j.dump(2) + "\n");
-  draw_fit(out, t, fit,
-           fmt::format("{}: fitted through the run ({:.1f} W), rms {:.3g} pp",
-                       tf.title.empty() ? std::string("batch test") : tf.title, run.power_W, fit.rms_pp));
+  std::string pictures;
+  for (std::size_t m = 0; m < tests.size(); ++m) {
+    BatchFit one = fit;
+    one.predicted = fit.predicted_by_test[m];
+    const std::string name = m == 0 ? "fit.png" : fmt::format("fit_{}.png", m + 1);
+    pictures += ", " + name;
+    const std::string& title = tests[m].file.title;
+    draw_fit(out, name, tests[m].file.test, one,
+             fmt::format("{}: fitted through the run ({:.1f} W), rms {:.3g} pp",
+                         title.empty() ? std::string("batch test") : title, tests[m].run.power_W, fit.rms_by_test[m]));
+  }
   bool any_at_bound = false;
   for (const FittedParameter& p : fit.parameters) any_at_bound = any_at_bound || p.at_bound;
   if (!o.quiet) {
-    std::printf("batch test %s: %zu times x %zu sieves, %d data; run %.1f W, hold-up %.4g kg, %s contact\n",
-                o.fit_test.c_str(), t.times_min.size(), t.sieve_m.size(), fit.data, run.power_W, holdup_kg,
-                run.contact.law.c_str());
+    for (std::size_t m = 0; m < tests.size(); ++m) {
+      const BatchTest& t = tests[m].file.test;
+      if (tests.size() == 1)
+        std::printf("batch test %s: %zu times x %zu sieves, %d data; run %.1f W, hold-up %.4g kg, %s contact\n",
+                    tests[m].path.c_str(), t.times_min.size(), t.sieve_m.size(), fit.data, tests[m].run.power_W,
+                    tests[m].holdup_kg, tests[m].run.contact.law.c_str());
+      else
+        std::printf("batch test %s: %zu times x %zu sieves; run %s, %.1f W, hold-up %.4g kg; rms residual %.4g pp\n",
+                    tests[m].path.c_str(), t.times_min.size(), t.sieve_m.size(), tests[m].run_dir.c_str(),
+                    tests[m].run.power_W, tests[m].holdup_kg, fit.rms_by_test[m]);
+    }
+    if (tests.size() > 1)
+      std::printf("  %zu tests fitted together, %d data, %s contact\n", tests.size(), fit.data,
+                  run.contact.law.c_str());
     for (const FittedParameter& p : fit.parameters) {
       if (p.identified && p.at_bound)
         std::printf("  %-16s %.6g on its bound: the test wants it past the ore file's range (no standard error)   "
@@ -210,15 +359,16 @@ int fit_batch(const GrindOptions& o) {
       else
         std::printf("  %-16s unidentified: %s (%.6g)\n", p.name.c_str(), p.why.c_str(), p.value);
     }
+    print_covariance(cov);
     if (fit.free == 0)
       std::printf("  no parameter left free: every one is held, the residuals are the starting ore's\n");
     std::printf("  rms residual %.4g pp; %d iterations, %d evaluations, %.2f s\n", fit.rms_pp, fit.iterations,
                 fit.evaluations, seconds);
-    if (fit.rms_pp > 2 * t.noise_pp && fit.free > 0)
+    if (fit.rms_pp > 2 * noise_pp && fit.free > 0)
       std::printf("  note: the rms residual is above twice the test's noise_pp (%g pp): the model cannot reproduce "
                   "the test with these parameters free%s\n",
-                  t.noise_pp, any_at_bound ? " (one is held on its bound)" : "");
-    std::printf("wrote %s/{ore_fitted.toml, fit_residuals.csv, fit.json, fit.png}\n", out.string().c_str());
+                  noise_pp, any_at_bound ? " (one is held on its bound)" : "");
+    std::printf("wrote %s/{ore_fitted.toml, fit_residuals.csv, fit.json%s}\n", out.string().c_str(), pictures.c_str());
   }
   return 0;
 }
@@ -282,7 +432,7 @@ int fit_wi(const GrindOptions& o) {
 
 int cmd_grind_fit(const GrindOptions& o) {
   check_fit_options(o);
-  return o.fit_test.empty() ? fit_wi(o) : fit_batch(o);
+  return o.fit_tests.empty() ? fit_wi(o) : fit_batch(o);
 }
 
 }  // namespace mc::app

@@ -227,10 +227,13 @@ int main(int argc, char** argv) {
                     "the share of the fines that bypasses the classifier to the underflow (default 0)")
       ->check(mc::app::cli::between(0.0, 0.95));
   std::string fit_params;
-  grind->add_option("--fit", go.fit_test,
-                    "fit the ore to this laboratory batch test (TOML) through the run, the test's mill: writes the "
-                    "fitted ore, its residuals, fit.json and fit.png")
-      ->type_name("TEST");
+  grind->add_option("--fit", go.fit_tests,
+                    "fit the ore to this laboratory batch test (TOML) through the run, the test's mill (or the run "
+                    "its `run` key names): writes the fitted ore, its residuals, fit.json and fit.png; give it "
+                    "again for tests fitted together")
+      ->type_name("TEST")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   CLI::Option* fit_params_opt = grind->add_option("--fit-params", fit_params,
                     "the ore parameters --fit or --fit-wi moves, comma-separated (default: the rate model's scale, "
                     "efficiency for the spectrum model)")

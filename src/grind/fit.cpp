@@ -389,6 +389,34 @@ Identification identify(const Matrix& J, double ssr, const std::vector<double>& 
   return id;
 }
 
+Matrix covariance_matrix(const Matrix& J, double ssr) {
+  const std::size_t n = J.size(), np = n ? J[0].size() : 0;
+  Matrix cov(np, std::vector<double>(np, 0.0));
+  if (np == 0 || n <= np) return cov;
+  Matrix A(np, std::vector<double>(np, 0.0));
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t a = 0; a < np; ++a)
+      for (std::size_t b = 0; b < np; ++b) A[a][b] += J[i][a] * J[i][b];
+  std::vector<double> d(np);
+  for (std::size_t a = 0; a < np; ++a) d[a] = A[a][a] > 0 ? 1 / std::sqrt(A[a][a]) : 0;
+  Matrix C(np, std::vector<double>(np, 0.0));
+  for (std::size_t a = 0; a < np; ++a)
+    for (std::size_t b = 0; b < np; ++b) C[a][b] = A[a][b] * d[a] * d[b];
+  std::vector<double> lambda;
+  Matrix V;
+  jacobi_eigen(C, lambda, V);
+  const double lmax = *std::max_element(lambda.begin(), lambda.end());
+  const double s2 = ssr / static_cast<double>(n - np);
+  for (std::size_t a = 0; a < np; ++a)
+    for (std::size_t b = 0; b < np; ++b) {
+      double v = 0;
+      for (std::size_t k = 0; k < np; ++k)
+        if (lambda[k] >= 1e-10 * lmax) v += V[a][k] * V[b][k] / lambda[k];
+      cov[a][b] = v * s2 * d[a] * d[b];
+    }
+  return cov;
+}
+
 // ------------------------------------------------------------ the fit
 
 namespace {
@@ -419,27 +447,53 @@ void check_names(const Ore& start, const std::vector<std::string>& names, std::v
 BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectrum, double power_W,
                         double holdup_kg, const BatchTest& test, const std::vector<std::string>& names,
                         int max_iterations) {
-  std::vector<const OreParameter*> params;
-  check_names(start, names, params);
-  const std::size_t nt = test.times_min.size(), ns = test.sieve_m.size();
-  // Sieves where every product and the feed pass 1 hold no information;
-  // the rest are the data.
+  return fit_batch_tests(start, {TestInMill{test, spectrum, power_W, holdup_kg}}, names, max_iterations);
+}
+
+std::vector<std::size_t> informative_sieves(const BatchTest& test) {
   std::vector<std::size_t> used;
-  for (std::size_t k = 0; k < ns; ++k) {
+  for (std::size_t k = 0; k < test.sieve_m.size(); ++k) {
     bool all_one = test.feed_passing[k] >= 1 - 1e-12;
-    for (std::size_t t = 0; t < nt; ++t) all_one = all_one && test.passing[t][k] >= 1 - 1e-12;
+    for (std::size_t t = 0; t < test.times_min.size(); ++t) all_one = all_one && test.passing[t][k] >= 1 - 1e-12;
     if (!all_one) used.push_back(k);
   }
-  const std::size_t n = nt * used.size();
+  return used;
+}
+
+BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests, const std::vector<std::string>& names,
+                         int max_iterations) {
+  std::vector<const OreParameter*> params;
+  check_names(start, names, params);
+  if (tests.empty()) throw std::invalid_argument("--fit: no batch test");
+  // Sieves where every product and the feed pass 1 hold no information;
+  // the rest are the data, test after test.
+  std::vector<std::vector<std::size_t>> used;
+  std::size_t n = 0;
+  for (const TestInMill& tm : tests) {
+    used.push_back(informative_sieves(tm.test));
+    n += tm.test.times_min.size() * used.back().size();
+    if (tm.test.sieve_m.back() < start.sizes.top_m.back() * (1 - 1e-9))
+      throw std::invalid_argument("sieve_mm: the finest sieve lies below the ore's finest class top (" +
+                                  std::to_string(start.sizes.top_m.back() * 1e6) + " um): more sizes.classes");
+    if (tm.test.sieve_m.front() > start.sizes.top_m.front() * (1 + 1e-9))
+      throw std::invalid_argument("sieve_mm: the coarsest sieve lies above the ore's top class (sizes.top_mm)");
+  }
   if (params.size() >= n)
     throw std::invalid_argument("--fit-params: " + std::to_string(params.size()) + " parameters for " +
                                 std::to_string(n) +
                                 " data (times x sieves below the top): a fit needs more data than parameters");
-  if (test.sieve_m.back() < start.sizes.top_m.back() * (1 - 1e-9))
-    throw std::invalid_argument("sieve_mm: the finest sieve lies below the ore's finest class top (" +
-                                std::to_string(start.sizes.top_m.back() * 1e6) + " um): more sizes.classes");
-  if (test.sieve_m.front() > start.sizes.top_m.front() * (1 + 1e-9))
-    throw std::invalid_argument("sieve_mm: the coarsest sieve lies above the ore's top class (sizes.top_mm)");
+  // The residuals of an ore against every test, in percentage points; the
+  // products by test.
+  auto residuals_of = [&](const Ore& o, std::vector<double>& r, std::vector<Matrix>* products) {
+    std::size_t i = 0;
+    for (std::size_t m = 0; m < tests.size(); ++m) {
+      const TestInMill& tm = tests[m];
+      const auto pred = batch_test_products(o, tm.spectrum, tm.power_W, tm.holdup_kg, tm.test);
+      for (std::size_t t = 0; t < tm.test.times_min.size(); ++t)
+        for (std::size_t k : used[m]) r[i++] = 100 * (pred[t][k] - tm.test.passing[t][k]);
+      if (products) products->push_back(pred);
+    }
+  };
 
   BatchFit fit;
   fit.data = static_cast<int>(n);
@@ -461,10 +515,7 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
     prob.residuals = [&](const std::vector<double>& x, std::vector<double>& r) {
       Ore o = start;
       for (std::size_t a = 0; a < free.size(); ++a) params[free[a]]->set(o, from_var(*params[free[a]], x[a]));
-      const auto pred = batch_test_products(o, spectrum, power_W, holdup_kg, test);
-      std::size_t i = 0;
-      for (std::size_t t = 0; t < nt; ++t)
-        for (std::size_t k : used) r[i++] = 100 * (pred[t][k] - test.passing[t][k]);  // percentage points
+      residuals_of(o, r, nullptr);
     };
     LmResult lm;
     if (!free.empty()) lm = levenberg_marquardt(prob);
@@ -523,13 +574,32 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
     fit.ore = ore;
     fit.free = static_cast<int>(free.size());
     fit.condition = id.condition;
-    fit.predicted = batch_test_products(ore, spectrum, power_W, holdup_kg, test);
     // The residuals of the products as written, whatever is free (with
-    // nothing free, those of the starting ore).
+    // nothing free, those of the starting ore); by test too.
+    std::vector<double> r(n);
+    residuals_of(ore, r, &fit.predicted_by_test);
+    fit.predicted = fit.predicted_by_test.front();
     fit.ssr = 0;
-    for (std::size_t t = 0; t < nt; ++t)
-      for (std::size_t k : used) fit.ssr += std::pow(100 * (fit.predicted[t][k] - test.passing[t][k]), 2);
+    std::size_t i = 0;
+    for (std::size_t m = 0; m < tests.size(); ++m) {
+      double ssr_m = 0;
+      const std::size_t nm = tests[m].test.times_min.size() * used[m].size();
+      for (std::size_t j = 0; j < nm; ++j, ++i) ssr_m += r[i] * r[i];
+      fit.ssr += ssr_m;
+      fit.rms_by_test.push_back(nm ? std::sqrt(ssr_m / static_cast<double>(nm)) : 0.0);
+    }
     fit.rms_pp = std::sqrt(fit.ssr / static_cast<double>(n));
+    // The covariance of those off their bounds, with the bound ones fixed.
+    if (!inner.empty()) {
+      Matrix Jin(lm.J.size(), std::vector<double>(inner.size()));
+      for (std::size_t a = 0; a < inner.size(); ++a) {
+        fit.covariance_of.push_back(free[inner[a]]);
+        for (std::size_t i = 0; i < lm.J.size(); ++i) Jin[i][a] = lm.J[i][inner[a]];
+      }
+      fit.covariance = covariance_matrix(Jin, lm.ssr);
+    }
+    fit.dof = static_cast<int>(n - inner.size());
+    fit.s2 = fit.dof > 0 ? fit.ssr / fit.dof : kNaN;
     for (std::size_t k = 0; k < params.size(); ++k) {
       FittedParameter f;
       f.name = params[k]->name;

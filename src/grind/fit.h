@@ -102,6 +102,10 @@ struct Identification {
 Identification identify(const std::vector<std::vector<double>>& J, double ssr,
                         const std::vector<double>& se_limit = {});
 
+// s² (JᵀJ)⁻¹ with s² = ssr / (n − p), through the same scaled eigen-
+// decomposition as identify (directions below 1e-10 of the largest left out).
+std::vector<std::vector<double>> covariance_matrix(const std::vector<std::vector<double>>& J, double ssr);
+
 // ------------------------------------------------------------ the fit
 
 struct FittedParameter {
@@ -115,11 +119,19 @@ struct FittedParameter {
 struct BatchFit {
   Ore ore;                                      // the start with the fitted values
   std::vector<FittedParameter> parameters;
-  std::vector<std::vector<double>> predicted;   // [time][sieve]
+  std::vector<std::vector<double>> predicted;   // [time][sieve] of the first test
+  std::vector<std::vector<std::vector<double>>> predicted_by_test;
+  std::vector<double> rms_by_test;              // pp
   double rms_pp = 0, ssr = 0;                   // of `predicted` against the test
   int iterations = 0, evaluations = 0, data = 0, refits = 0;
   int free = 0;                                 // parameters left free (0: every one held)
   double condition = 0;
+  // The covariance of the free parameters off their bounds, in their fitted
+  // variables (the logarithm of a scale): s² (JᵀJ)⁻¹ at the solution.
+  std::vector<std::size_t> covariance_of;       // indices into `parameters`
+  std::vector<std::vector<double>> covariance;
+  double s2 = 0;                                // ssr / (data − free), pp²
+  int dof = 0;
 };
 // Fits the named parameters of `start` to the test through the mill's
 // spectrum and power, with the hold-up `holdup_kg`. An unidentified
@@ -132,6 +144,20 @@ struct BatchFit {
 BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectrum, double power_W,
                         double holdup_kg, const BatchTest& test, const std::vector<std::string>& names,
                         int max_iterations = 300);
+
+// Several batch tests of one ore, each in the mill it was made in (its
+// run's spectrum and power, the test's hold-up), fitted together: their
+// residuals side by side, the rest as fit_batch_test.
+struct TestInMill {
+  BatchTest test;
+  std::vector<SpectrumBin> spectrum;
+  double power_W = 0, holdup_kg = 0;
+};
+BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests, const std::vector<std::string>& names,
+                         int max_iterations = 300);
+// The sieves of a test that carry information: not passing 1 in the feed
+// and every product.
+std::vector<std::size_t> informative_sieves(const BatchTest& test);
 
 // One parameter set so that Bond's test (bond.h) in this mill gives the
 // work index `wi_kWh_t`: bisection on the parameter's logarithm over its

@@ -33,6 +33,29 @@ inline bool basis_of(const std::string& name, EnergyBasis* b) {
   return false;
 }
 
+// What a fit to batch tests leaves open (the [fitted] table's covariance and
+// held parameters; docs/grinding.md, "Intervals"). The fitted variables are
+// the logarithm of a scale ("log(efficiency)") and any other parameter
+// itself, as the fit moves them.
+struct HeldParameter {
+  std::string name;             // the ore file's key
+  double value = 0;             // held at (file units)
+  double lo = 0, hi = 0;        // what the data leave open (file units)
+  std::string why;
+  // The free variables refitted with this one at lo and at hi (empty: the
+  // refit failed; the free ones then stay at their fitted values).
+  std::vector<double> free_at_lo, free_at_hi;
+};
+struct FitCovariance {
+  bool given = false;                       // the ore file has one (an ore fitted before has not)
+  std::vector<std::string> names;           // the free parameters, ore file keys
+  std::vector<double> values;               // their fitted variables at the fit
+  std::vector<std::vector<double>> matrix;  // covariance of the fitted variables
+  double residual_variance_pp2 = 0;         // s² of the fit
+  int dof = 0;                              // data − free parameters
+  std::vector<HeldParameter> held;          // unidentified, held at their start, or on their bound
+};
+
 // The contact law and parameters of the DEM run an ore was fitted through
 // (the [fitted] table of an ore file): the normal energy spectrum, and so
 // the fitted parameters, hold only under these (docs/grinding.md).
@@ -49,6 +72,7 @@ struct ContactRecord {
   // What else the ore file's [fitted] table says (not compared).
   std::string test, run, parameters;
   double rms_residual_pp = 0;
+  FitCovariance covariance;  // a batch test's fit only
 };
 
 struct Ore {

@@ -65,11 +65,12 @@ BatchTestFile read_batch_test(const fs::path& path) {
                                             e.source().begin.column, e.description()));
   }
   const TestReader r(path.string());
-  r.knows(top, "", {"title", "mill", "sieve_mm", "holdup_kg", "noise_pp", "feed", "product"});
+  r.knows(top, "", {"title", "mill", "run", "sieve_mm", "holdup_kg", "noise_pp", "feed", "product"});
   BatchTestFile f;
   grind::BatchTest& t = f.test;
   f.title = text_key(top, r, "title");
   f.mill = text_key(top, r, "mill");
+  f.run = text_key(top, r, "run");
   if (top.get("holdup_kg")) t.holdup_kg = r.number(top, "holdup_kg", "holdup_kg", 1e-6, 1e9, "kg > 0");
   if (top.get("noise_pp"))
     t.noise_pp = r.number(top, "noise_pp", "noise_pp", 0, 20, "percentage points, 0 to 20");
@@ -152,6 +153,7 @@ std::string batch_test_toml(const BatchTestFile& f) {
                   "# the feed and the product after each grinding time.\n";
   if (!f.title.empty()) s += fmt::format("title = \"{}\"\n", f.title);
   if (!f.mill.empty()) s += fmt::format("mill = \"{}\"\n", f.mill);
+  if (!f.run.empty()) s += fmt::format("run = \"{}\"\n", f.run);
   if (t.holdup_kg > 0) s += fmt::format("holdup_kg = {:.10g}\n", t.holdup_kg);
   s += fmt::format("noise_pp = {:g}\n", t.noise_pp);
   // Sizes to 10 significant digits, passing to 10 decimals: a test written

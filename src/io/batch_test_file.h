@@ -16,6 +16,7 @@ namespace mc::io {
 struct BatchTestFile {
   grind::BatchTest test;
   std::string title, mill;  // free text: what was ground, in which mill
+  std::string run;          // the run of the test's mill, relative to the file ("": the RUN argument)
 };
 
 BatchTestFile read_batch_test(const std::filesystem::path& path);

@@ -13,6 +13,8 @@
 #include <utility>
 #include <vector>
 
+#include "grind/fit.h"
+#include "grind/interval.h"
 #include "grind/pbm.h"
 #include "io/toml_names.h"
 
@@ -71,11 +73,90 @@ class OreReader : public TomlFileMessages {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// An array of numbers of any length (an empty one too).
+std::vector<double> any_numbers(const OreReader& r, const toml::node* n, const std::string& key) {
+  if (!n->is_array()) r.fail(key, n, "must be an array of numbers, not " + type_name(*n));
+  std::vector<double> v;
+  for (const toml::node& e : *n->as_array()) {
+    if (!e.is_number() || !std::isfinite(e.value<double>().value()))
+      r.fail(key, &e, "must hold finite numbers only, not " + type_name(e));
+    v.push_back(e.value<double>().value());
+  }
+  return v;
+}
+
+// [fitted]'s covariance and held parameters (grind::FitCovariance): what a
+// batch test's fit leaves open. None: an ore fitted before they were kept.
+void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u) {
+  const toml::node* dn = ft.get("degrees_of_freedom");
+  if (!dn) {
+    for (const char* k : {"covariance_variables", "covariance_values", "covariance", "residual_variance_pp2", "held"})
+      if (ft.get(k)) r.fail(std::string("fitted.") + k, ft.get(k), "given without fitted.degrees_of_freedom");
+    return;
+  }
+  u.given = true;
+  u.dof = static_cast<int>(r.number(ft, "fitted.", "degrees_of_freedom", 1, 1e9, "an integer >= 1"));
+  u.residual_variance_pp2 = r.number(ft, "fitted.", "residual_variance_pp2", 0, kInf, ">= 0 (pp²)");
+  const toml::node* vn = ft.get("covariance_variables");
+  if (!vn || !vn->is_array()) r.fail("fitted.covariance_variables", vn, "missing (an array of names, maybe empty)");
+  for (const toml::node& e : *vn->as_array()) {
+    const std::string v = e.is_string() ? e.value<std::string>().value() : std::string();
+    const std::string name = grind::parameter_of_variable(v);
+    if (name.empty())
+      r.fail("fitted.covariance_variables", &e,
+             "\"" + v + "\" is not a fitted variable (log(NAME) for a scale, NAME for zeta1, zeta2, "
+             "breakage.phi)");
+    u.names.push_back(name);
+  }
+  const std::size_t np = u.names.size();
+  const toml::node* xn = ft.get("covariance_values");
+  if (!xn) r.fail("fitted.covariance_values", nullptr, "missing (the fitted variables' values)");
+  u.values = any_numbers(r, xn, "fitted.covariance_values");
+  if (u.values.size() != np)
+    r.fail("fitted.covariance_values", xn, fmt::format("{} values for {} variables", u.values.size(), np));
+  const toml::node* cn = ft.get("covariance");
+  if (!cn || !cn->is_array()) r.fail("fitted.covariance", cn, "missing (an array of rows, one per variable)");
+  for (const toml::node& row : *cn->as_array()) u.matrix.push_back(any_numbers(r, &row, "fitted.covariance"));
+  bool square = u.matrix.size() == np;
+  for (std::size_t a = 0; a < u.matrix.size() && square; ++a) {
+    square = u.matrix[a].size() == np && u.matrix[a][a] >= 0;
+    for (std::size_t b = 0; b < a && square; ++b) square = std::fabs(u.matrix[a][b] - u.matrix[b][a]) <=
+                                                           1e-6 * std::sqrt(u.matrix[a][a] * u.matrix[b][b]) + 1e-300;
+  }
+  if (!square)
+    r.fail("fitted.covariance", cn,
+           fmt::format("must be a symmetric {} x {} matrix with a non-negative diagonal (one row per variable)", np, np));
+  const toml::node* hn = ft.get("held");
+  if (!hn) return;
+  if (!hn->is_array_of_tables()) r.fail("fitted.held", hn, "must be an array of tables ([[fitted.held]])");
+  for (const toml::node& e : *hn->as_array()) {
+    const toml::table& t = *e.as_table();
+    r.knows(t, "fitted.held.", {"name", "value", "lo", "hi", "why", "free_at_lo", "free_at_hi"});
+    grind::HeldParameter h;
+    const toml::node* nn = t.get("name");
+    h.name = nn && nn->is_string() ? nn->value<std::string>().value() : "";
+    if (!find_ore_parameter(h.name)) r.fail("fitted.held.name", nn ? nn : &e, "not a parameter a fit can move");
+    h.value = r.number(t, "fitted.held.", "value", -kInf, kInf, "a number");
+    h.lo = r.number(t, "fitted.held.", "lo", -kInf, h.value, "at most value");
+    h.hi = r.number(t, "fitted.held.", "hi", h.value, kInf, "at least value");
+    if (const toml::node* w = t.get("why"); w && w->is_string()) h.why = w->value<std::string>().value();
+    for (auto [key, dst] : {std::pair{"free_at_lo", &h.free_at_lo}, std::pair{"free_at_hi", &h.free_at_hi}}) {
+      const toml::node* fn = t.get(key);
+      if (!fn) continue;
+      *dst = any_numbers(r, fn, std::string("fitted.held.") + key);
+      if (!dst->empty() && dst->size() != np)
+        r.fail(std::string("fitted.held.") + key, fn, fmt::format("{} values for {} variables", dst->size(), np));
+    }
+    u.held.push_back(h);
+  }
+}
+
 // [fitted]: the contact the ore was fitted under (grind::ContactRecord).
 void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   r.knows(ft, "fitted.", {"contact_law", "restitution", "friction", "rolling_friction", "stiffness_N_m",
                           "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp",
-                          "energy_basis"});
+                          "energy_basis", "covariance_variables", "covariance_values", "covariance",
+                          "residual_variance_pp2", "degrees_of_freedom", "held"});
   auto text = [&](const std::string& key) {
     const toml::node* n = ft.get(key);
     if (!n) return std::string();
@@ -99,6 +180,7 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   c.run = text("run");
   c.parameters = text("parameters");
   c.rms_residual_pp = r.number(ft, "fitted.", "rms_residual_pp", 0, kInf, ">= 0", 0.0);
+  read_covariance(r, ft, c.covariance);
 }
 
 // [breakage] with model = "t10": Tavares' energy-dependent t10 (grind::T10Breakage).
@@ -303,6 +385,39 @@ grind::Ore read_ore(const fs::path& path) {
   return o;
 }
 
+namespace {
+
+// [fitted]'s covariance and held parameters, as read_covariance reads them.
+std::string covariance_toml(const FitCovariance& u) {
+  if (!u.given) return "";
+  auto g = [](double v) { return fmt::format("{:.10g}", v); };
+  auto list = [&](const std::vector<double>& v) {
+    std::string s = "[";
+    for (std::size_t k = 0; k < v.size(); ++k) s += (k ? ", " : "") + g(v[k]);
+    return s + "]";
+  };
+  std::string s = "# What the fit leaves open (docs/grinding.md, \"Intervals\"): the covariance of the fitted\n"
+                  "# variables (the logarithm of a scale), and the range each held parameter may take\n";
+  s += "covariance_variables = [";
+  for (std::size_t k = 0; k < u.names.size(); ++k) s += (k ? ", \"" : "\"") + grind::variable_name(u.names[k]) + "\"";
+  s += "]\ncovariance_values = " + list(u.values) + "\ncovariance = [";
+  for (std::size_t a = 0; a < u.matrix.size(); ++a) s += (a ? ", " : "") + list(u.matrix[a]);
+  s += "]\nresidual_variance_pp2 = " + g(u.residual_variance_pp2) + "\ndegrees_of_freedom = " +
+       std::to_string(u.dof) + "\n";
+  for (const grind::HeldParameter& h : u.held) {
+    s += "\n[[fitted.held]]\nname = \"" + h.name + "\"\nvalue = " + g(h.value) + "\nlo = " + g(h.lo) +
+         "\nhi = " + g(h.hi) + "\n";
+    std::string why;
+    for (char c : h.why) why += c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c);
+    if (!why.empty()) s += "why = \"" + why + "\"\n";
+    if (!h.free_at_lo.empty()) s += "free_at_lo = " + list(h.free_at_lo) + "\n";
+    if (!h.free_at_hi.empty()) s += "free_at_hi = " + list(h.free_at_hi) + "\n";
+  }
+  return s;
+}
+
+}  // namespace
+
 std::string ore_toml(const grind::Ore& o, const std::string& header) {
   auto g = [](double v) { return fmt::format("{:.10g}", v); };
   auto list = [&](const std::vector<double>& v, double scale) {
@@ -359,6 +474,7 @@ std::string ore_toml(const grind::Ore& o, const std::string& header) {
     if (!f.run.empty()) s += "run = " + quoted(f.run) + "\n";
     if (!f.parameters.empty()) s += "parameters = " + quoted(f.parameters) + "\n";
     s += "rms_residual_pp = " + g(f.rms_residual_pp) + "\n";
+    s += covariance_toml(f.covariance);
   }
   return s;
 }
