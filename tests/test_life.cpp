@@ -332,7 +332,7 @@ TEST_CASE("a lab run with its bars given as points is the h x w x theta run bit 
   fs::remove_all(dir);
 }
 
-TEST_CASE("an impact share of 0 is the sliding study; a share of 1 wears by impact alone", "[life][cli][impact_wear]") {
+TEST_CASE("an impact share of 0 is the sliding study, and a share of 1 wears by impact alone", "[life][cli][impact_wear]") {
   // The new liner's wear is the same whatever the share (only how it is
   // split); the shapes it wears to differ.
   const fs::path none = scratch("share-none"), zero = scratch("share-0"), one = scratch("share-1");

@@ -392,7 +392,7 @@ TEST_CASE("an impact share sets the two wear coefficients so that the new liner 
   CHECK_NOTHROW(mc::app::life::mix_for_share(no_slide, 1.0, k_case, rho));
 }
 
-TEST_CASE("the stages' standard errors add in quadrature; a stage without halves ends them", "[life][life_state]") {
+TEST_CASE("the stages' standard errors add in quadrature, and a stage without halves ends them", "[life][life_state]") {
   using mc::app::life::Stage;
   std::vector<Stage> st(4);
   for (int i = 0; i < 4; ++i) {
