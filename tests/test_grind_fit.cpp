@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "app/commands.h"
+#include "bond_run.h"
 #include "app/grind.h"
 #include "grind/circuit.h"
 #include "grind/fit.h"
@@ -49,33 +50,6 @@ fs::path temp(const std::string& name) {
   return fs::temp_directory_path() / ("millcharge_test_fit_" + std::to_string(::getpid()) + "_" + name);
 }
 
-// A folder removed when the test program ends.
-struct TempDir {
-  fs::path path;
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
-
-// A short run of the Bond test's mill (285 balls), made once: the
-// laboratory mill of these tests.
-const fs::path& bond_run() {
-  static const TempDir out{[] {
-    const fs::path dir = temp("bond_run");
-    fs::remove_all(dir);
-    mc::app::RunOptions o;
-    o.c.case_path = std::string(MC_ASSET_DIR) + "/cases/bond.toml";
-    o.c.overrides = {"run.settle=0.05", "run.warmup=0.1", "run.output_interval=0.01", "run.snapshot_interval=0",
-                     "run.checkpoint_interval=0"};
-    o.c.duration = 0.4;
-    o.out = dir.string();
-    o.quiet = true;
-    REQUIRE(mc::app::cmd_run(o) == 0);
-    return dir;
-  }()};
-  return out.path;
-}
 
 fs::path ore_file(const std::string& name) { return fs::path(MC_ASSET_DIR) / "ores" / name; }
 
@@ -188,7 +162,7 @@ BatchFit check_round_trip(const mc::io::Run& run, const Ore& truth, const Ore& s
 }  // namespace
 
 TEST_CASE("grind --fit round trip: five parameters of a known ore back to 1e-6 without noise", "[grind][fit]") {
-  const mc::io::Run run = mc::io::read_run(bond_run(), true);
+  const mc::io::Run run = mc::io::read_run(mc::test::short_bond_run(), true);
   Ore truth = mc::io::read_ore(ore_file("example_spectrum.toml"));
   truth.efficiency = 0.35;
   const BatchTest t = synthetic_test(truth, run, 1.2, 0);
@@ -208,7 +182,7 @@ TEST_CASE("grind --fit round trip: five parameters of a known ore back to 1e-6 w
 
 TEST_CASE("grind --fit round trip: Tavares' t10 (A, b') and the efficiency back to 1e-6 without noise",
           "[grind][fit][t10]") {
-  const mc::io::Run run = mc::io::read_run(bond_run(), true);
+  const mc::io::Run run = mc::io::read_run(mc::test::short_bond_run(), true);
   Ore truth = mc::io::read_ore(ore_file("example_t10.toml"));
   truth.efficiency = 0.35;
   const BatchTest t = synthetic_test(truth, run, 1.2, 0);
@@ -227,7 +201,7 @@ TEST_CASE("grind --fit round trip: Tavares' t10 (A, b') and the efficiency back 
 
 TEST_CASE("grind --fit round trip: with ±1 pp of scatter the parameters come back within their errors",
           "[grind][fit]") {
-  const mc::io::Run run = mc::io::read_run(bond_run(), true);
+  const mc::io::Run run = mc::io::read_run(mc::test::short_bond_run(), true);
   Ore truth = mc::io::read_ore(ore_file("example_spectrum.toml"));
   truth.efficiency = 0.35;
   const double H = 1.2;
@@ -275,7 +249,7 @@ TEST_CASE("grind --fit round trip: with ±1 pp of scatter the parameters come ba
 TEST_CASE("grind --fit: a parameter the data cannot fix is said to be unidentified", "[grind][fit]") {
   // Herbst & Fuerstenau's rates with x1 free beside S1E, zeta1 and zeta2:
   // moving x1 is the same as changing the other three, so JᵀJ is singular.
-  const mc::io::Run run = mc::io::read_run(bond_run(), false);
+  const mc::io::Run run = mc::io::read_run(mc::test::short_bond_run(), false);
   const Ore truth = mc::io::read_ore(ore_file("example_energy.toml"));
   const BatchTest t = synthetic_test(truth, run, 1.2, 0);
   Ore start = truth;
@@ -298,7 +272,7 @@ TEST_CASE("grind --fit with nothing left free reports the starting ore's residua
   // Austin's B with gamma = beta does not depend on phi: breakage.phi, the
   // only parameter named, is held, and nothing is fitted. The rms residual
   // is then the starting ore's, computed here from its products directly.
-  const mc::io::Run run = mc::io::read_run(bond_run(), false);
+  const mc::io::Run run = mc::io::read_run(mc::test::short_bond_run(), false);
   const Ore truth = mc::io::read_ore(ore_file("example_energy.toml"));
   const BatchTest t = synthetic_test(truth, run, 1.2, 0);
   Ore start = truth;
@@ -322,7 +296,7 @@ TEST_CASE("grind --fit: a parameter on its bound has no standard error, a value'
           "[grind][fit]") {
   // The test made with 1.2 kg in the mill, fitted with 3 kg: the rates
   // must be 2.5 times those of efficiency 1, past its range (at most 1).
-  const mc::io::Run run = mc::io::read_run(bond_run(), true);
+  const mc::io::Run run = mc::io::read_run(mc::test::short_bond_run(), true);
   const Ore truth = mc::io::read_ore(ore_file("example_spectrum.toml"));
   const BatchTest t = synthetic_test(truth, run, 1.2, 0);
   const BatchFit f = fit_batch_test(truth, run.spectrum, run.power_W, 3.0, t, {"efficiency"});
@@ -348,7 +322,7 @@ TEST_CASE("grind --fit-params: an unknown name gets the one it most likely meant
   CHECK(closest_ore_parameter("e_inf") == "e_inf_J_kg");
   CHECK(closest_ore_parameter("sigm") == "sigma");
   CHECK(closest_ore_parameter("b_prime") == "breakage.b_prime");
-  const mc::io::Run run = mc::io::read_run(bond_run(), true);
+  const mc::io::Run run = mc::io::read_run(mc::test::short_bond_run(), true);
   const Ore ore = mc::io::read_ore(ore_file("example_spectrum.toml"));
   const BatchTest t = synthetic_test(ore, run, 1.2, 0);
   try {
@@ -364,7 +338,7 @@ TEST_CASE("grind --fit-params: an unknown name gets the one it most likely meant
 
 TEST_CASE("grind --fit through the command: the fitted ore, its record of the contact, the warning",
           "[grind][fit][outputs]") {
-  const fs::path run_dir = bond_run();
+  const fs::path run_dir = mc::test::short_bond_run();
   const mc::io::Run run = mc::io::read_run(run_dir, true);
   Ore truth = mc::io::read_ore(ore_file("example_spectrum.toml"));
   truth.efficiency = 0.35;
@@ -443,7 +417,7 @@ TEST_CASE("grind --fit through the command: the fitted ore, its record of the co
 }
 
 TEST_CASE("grind --fit-wi: one rate scale set so that Bond's test gives a measured work index", "[grind][fit]") {
-  const fs::path run_dir = bond_run();
+  const fs::path run_dir = mc::test::short_bond_run();
   const mc::io::Run run = mc::io::read_run(run_dir, true);
   Ore ore = mc::io::read_ore(ore_file("example_spectrum.toml"));
   put_sieve_on_class_top(ore, 150e-6);
@@ -482,7 +456,7 @@ TEST_CASE("grind --fit-wi: one rate scale set so that Bond's test gives a measur
 }
 
 TEST_CASE("grind --fit refuses bad tests and fits by key and line, writing nothing", "[grind][fit][failures]") {
-  const fs::path run_dir = bond_run();
+  const fs::path run_dir = mc::test::short_bond_run();
   const std::string good = R"(title = "t"
 sieve_mm = [3.35, 1.70, 0.850, 0.425, 0.212]
 noise_pp = 1
@@ -583,7 +557,7 @@ passing = [1.0, 0.9, 0.70, 0.50, 0.35]
 
 TEST_CASE("grind --scale-from: the energy-specific scale-up beside the spectrum model's products",
           "[grind][fit][outputs]") {
-  const fs::path lab = bond_run();
+  const fs::path lab = mc::test::short_bond_run();
   auto grind = [&](const fs::path& run, const std::string& ore, const fs::path& out) {
     mc::app::GrindOptions o;
     o.run_dir = run.string();
@@ -683,7 +657,7 @@ std::vector<Disc> discs(const unsigned char* px, int w, int y0, int y1, int r, i
 TEST_CASE("grind with Tavares' t10 off the Schuhmann family: the t10 panel of grind.png, and --scale-from holds "
           "the lab's appearance",
           "[grind][fit][t10][outputs]") {
-  const fs::path lab = bond_run();
+  const fs::path lab = mc::test::short_bond_run();
   const std::string ore = std::string(MC_TEST_DATA) + "/ore_t10_beta.toml";
   auto grind = [&](const fs::path& run, const fs::path& out, bool scale) {
     mc::app::GrindOptions o;

@@ -25,6 +25,7 @@
 #include "grind/fit.h"
 #include "grind/interval.h"
 #include "app/commands.h"
+#include "bond_run.h"
 #include "app/grind.h"
 #include "io/batch_test_file.h"
 #include "io/ore_file.h"
@@ -269,32 +270,6 @@ TEST_CASE("grind intervals: the delta method's interval against a parametric boo
 
 namespace {
 
-// A folder removed when the test program ends.
-struct TempDir {
-  fs::path path;
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
-
-// A short run of the Bond test's mill (285 balls), as test_grind_fit.cpp's.
-const fs::path& short_bond_run() {
-  static const TempDir out{[] {
-    const fs::path dir = temp("bond_run");
-    fs::remove_all(dir);
-    mc::app::RunOptions o;
-    o.c.case_path = std::string(MC_ASSET_DIR) + "/cases/bond.toml";
-    o.c.overrides = {"run.settle=0.05", "run.warmup=0.1", "run.output_interval=0.01", "run.snapshot_interval=0",
-                     "run.checkpoint_interval=0"};
-    o.c.duration = 0.4;
-    o.out = dir.string();
-    o.quiet = true;
-    REQUIRE(mc::app::cmd_run(o) == 0);
-    return dir;
-  }()};
-  return out.path;
-}
 
 nlohmann::json json_of(const fs::path& p) {
   std::ifstream in(p);
@@ -312,7 +287,7 @@ std::string first_line(const fs::path& p) {
 
 TEST_CASE("grind intervals through the command: --fit keeps the covariance, grind gives every product its interval",
           "[grind][interval][outputs]") {
-  const fs::path run_dir = short_bond_run();
+  const fs::path run_dir = mc::test::short_bond_run();
   const mc::io::Run run = mc::io::read_run(run_dir, true);
   const Ore truth = known_ore();
   mc::io::BatchTestFile tf;
@@ -329,7 +304,7 @@ TEST_CASE("grind intervals through the command: --fit keeps the covariance, grin
   for (auto& row : t.passing)
     for (std::size_t k = 1; k < row.size(); ++k) row[k] = std::clamp(row[k] + 0.01 * sc.next(), 0.0, 1.0);
   tf.test = t;
-  const TempDir dir{temp("command")};
+  const mc::test::TempDir dir{temp("command")};
   fs::create_directories(dir.path);
   std::ofstream(dir.path / "test.toml") << mc::io::batch_test_toml(tf);
 
@@ -459,10 +434,10 @@ TEST_CASE("grind --fit twice: a second mill fixes what the first leaves loose, a
 
 TEST_CASE("grind --fit twice through the command: the run key, the tests side by side, bad input named",
           "[grind][interval][joint][failures]") {
-  const fs::path run_dir = short_bond_run();
+  const fs::path run_dir = mc::test::short_bond_run();
   const mc::io::Run run = mc::io::read_run(run_dir, true);
   const Ore truth = known_ore();
-  const TempDir dir{temp("joint")};
+  const mc::test::TempDir dir{temp("joint")};
   fs::create_directories(dir.path / "tests");
   // A copy of the run as the second test's mill, named by its run key
   // relative to the test file; one without its spectrum.
