@@ -217,8 +217,13 @@ LifeState read_life_state(const fs::path& file, const StateShape& shape) {
   if (basis != "calibrated" && basis != "relative" && basis != "case_coefficient")
     cal["hours_and_wear_rates"].fail("\"" + basis + "\", not one of \"calibrated\", \"relative\", \"case_coefficient\"");
   (void)cal["case_wear_coefficient_m3_per_N_m"].number_at_least(0);  // 0 where the case wears by impact alone
-  (void)cal["wear_coefficient_m3_per_N_m"].number_at_least(0);  // 0 where impact does all the wear
-  if (cal.has("impact_wear_coefficient_m3_per_J")) (void)cal["impact_wear_coefficient_m3_per_J"].number_at_least(0);
+  // One of the two wears at least: the sliding coefficient 0 where impact
+  // does all the wear.
+  const double sliding = cal["wear_coefficient_m3_per_N_m"].number_at_least(0);
+  const double impact =
+      cal.has("impact_wear_coefficient_m3_per_J") ? cal["impact_wear_coefficient_m3_per_J"].number_at_least(0) : 0.0;
+  if (!(sliding > 0) && !(impact > 0))
+    cal["wear_coefficient_m3_per_N_m"].fail("must be > 0 where impact_wear_coefficient_m3_per_J is 0 or missing");
   const JsonAt stages = top["stages"];
   const std::size_t n = stages.size();
   if (n == 0) stages.fail("empty list: the study holds no stage");
