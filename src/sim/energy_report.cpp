@@ -152,12 +152,15 @@ bool liner_books_half(const BookSums& whole, const std::vector<double>& first_ha
   return true;
 }
 
+// An element's impact wear coefficient: its mesh's material's, or the liner's.
+static double impact_coefficient(const Scene& scene, const LinerElement& el) {
+  return el.impact_wear_coefficient >= 0 ? el.impact_wear_coefficient : scene.wall_material.impact_wear_coefficient;
+}
+
 std::vector<double> liner_impact_coefficients(const Scene& scene) {
   const LinerLayout layout = liner_layout(scene);
   std::vector<double> k;
-  for (const LinerElement& el : layout.elements)
-    k.push_back(el.impact_wear_coefficient >= 0 ? el.impact_wear_coefficient
-                                                : scene.wall_material.impact_wear_coefficient);
+  for (const LinerElement& el : layout.elements) k.push_back(impact_coefficient(scene, el));
   return k;
 }
 
@@ -184,9 +187,7 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
     x.shear_W = books.liner_at(ei, MC_LINER_SHEAR) / w;
     x.sliding_m3_per_s = books.liner_at(ei, MC_LINER_WEAR) / w;
     x.strike_W = books.liner_at(ei, MC_LINER_STRIKE) / w;
-    x.impact_m3_per_s =
-        x.strike_W * (el.impact_wear_coefficient >= 0 ? el.impact_wear_coefficient
-                                                      : scene.wall_material.impact_wear_coefficient);
+    x.impact_m3_per_s = x.strike_W * impact_coefficient(scene, el);
     x.wear_m3_per_s = x.sliding_m3_per_s + x.impact_m3_per_s;
     if (el.area_m2 > 0) {
       x.impact_W_m2 = x.impact_W / el.area_m2;
