@@ -74,11 +74,23 @@ struct LifeOptions {
   bool quiet = false;
 };
 
+// life-compare: life studies side by side (app/life_compare.h).
+struct LifeCompareOptions {
+  std::vector<std::string> studies;   // the studies' folders (their --out)
+  std::vector<std::string> labels;    // --label, one per study; empty: the folders' names
+  std::vector<double> at;             // --at H,...: the hours tabled; empty: 4 to the shortest study's end
+  std::vector<std::string> measured;  // --measured COLUMN@HOURS=VALUE
+  int profile = 0;                    // --profile K: the lifter profile followed
+  std::string out;                    // --out; empty: runs/life-compare
+  bool quiet = false;
+};
+
 int cmd_devices();
 int cmd_check(const CaseOptions& o);
 int cmd_run(const RunOptions& o);
 int cmd_bench(const BenchOptions& o);
 int cmd_view(const ViewOptions& o);
 int cmd_life(const LifeOptions& o);
+int cmd_life_compare(const LifeCompareOptions& o);
 
 }  // namespace mc::app

@@ -168,6 +168,32 @@ int main(int argc, char** argv) {
   life->add_flag("--force", lo.force, "start the study again in an --out that holds one");
   life->add_flag("--quiet", lo.quiet, "no progress lines from the stages' runs");
 
+  mc::app::LifeCompareOptions lco;
+  auto* life_compare = app.add_subcommand(
+      "life-compare", "life studies side by side: their figures at the same hours, with their standard errors, and "
+                      "measured points beside them");
+  life_compare->add_option("studies", lco.studies, "the life studies' folders (their --out)")->required();
+  life_compare->add_option("--label", lco.labels, "a name for each study in the table and the picture, in the studies' "
+                                                  "order (repeatable; default: the folders' names)")
+      ->type_name("TEXT")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  life_compare->add_option("--at", lco.at, "the operating hours to table, comma-separated (default: four steps to the "
+                                           "shortest study's end)")
+      ->delimiter(',')
+      ->check(mc::app::cli::non_negative("h"))
+      ->type_name("H,...");
+  life_compare->add_option("--measured", lco.measured,
+                           "a measured point set beside the studies (repeatable), e.g. leading_angle_deg@4000=47.1; "
+                           "columns: leading_angle_deg, height_mm, trailing_angle_deg, shell_wear_mm")
+      ->type_name("COLUMN@HOURS=VALUE")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  life_compare->add_option("--profile", lco.profile, "the lifter profile followed (default 0)")
+      ->check(mc::app::cli::count(0, 1000));
+  life_compare->add_option("--out", lco.out, "folder for compare.csv and compare.png (default runs/life-compare)");
+  life_compare->add_flag("--quiet", lco.quiet, "no table on the console");
+
   mc::app::CaseOptions co;
   auto* check = app.add_subcommand("check", "validate a case and print its derived values");
   add_case_options(check, co, false);
@@ -263,6 +289,7 @@ int main(int argc, char** argv) {
     if (*check) return mc::app::cmd_check(co);
     if (*run) return mc::app::cmd_run(ro);
     if (*life) return mc::app::cmd_life(lo);
+    if (*life_compare) return mc::app::cmd_life_compare(lco);
     if (*bench) return mc::app::cmd_bench(bo);
     if (*grind) {
       std::size_t start = 0;

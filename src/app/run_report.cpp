@@ -356,7 +356,10 @@ std::vector<std::string> write_run_results(const FinishedRun& r, const RunReport
   plot.title = fmt::format("{}: power draw, {:.4g} % of critical", c.name, 100 * d.speed_fraction);
   plot.x_label = "time since the mill started (s)";
   plot.y_label = "power (W)";
-  plot.series = {{"torque power", r.t_series, r.p_torque, 0x1f77b4}, {"dissipation", r.t_series, r.p_diss, 0xd62728}};
+  io::PlotSeries torque, diss;
+  torque.label = "torque power", torque.x = r.t_series, torque.y = r.p_torque, torque.rgb = 0x1f77b4;
+  diss.label = "dissipation", diss.x = r.t_series, diss.y = r.p_diss, diss.rgb = 0xd62728;
+  plot.series = {torque, diss};
   plot.span_from = s.window_from_s;
   plot.span_to = s.window_to_s;
   plot.span_label = "averaged";
