@@ -6,7 +6,7 @@ a code block that begins with `build/millcharge`, `bash scripts/run.sh`,
 of its own that holds `assets`, `scripts` and `build` of the checkout.
 
 Shortened: a run turns 0.2 s after a 0.02 s settle (a study one stage of
-that), a bench times 20 steps, a window draws 3 frames under xvfb-run, a
+that, a comparison of studies without hours beyond theirs), a bench times 20 steps, a window draws 3 frames under xvfb-run, a
 sweep prints its jobs instead of submitting them. A case of more than
 30,000 balls is checked (`check` with the same case and keys) instead of
 run. A command whose input the page does not make (a placeholder such as
@@ -212,6 +212,12 @@ class Runner:
             if n is not None and n > MAX_BALLS:
                 return [self.binary, 'check'] + self.case_args(rest), None
             return [self.binary, 'life'] + rest + ['--stages', '1'] + SHORT_RUN + ['--quiet'], None
+        if sub == 'life-compare':
+            # The page's studies are one stage each here: hours of theirs
+            # (--at, --measured) may lie beyond them.
+            drop(rest, '--at')
+            drop(rest, '--measured')
+            return [self.binary, 'life-compare'] + rest + ['--quiet'], None
         if sub == 'bench':
             drop(rest, '--steps')
             if '--tile' in rest:
