@@ -32,7 +32,8 @@ fs::path write_study(const fs::path& dir, double hours_per_stage, int stages, bo
   for (int s = 0; s <= stages; ++s)
     for (int k = 0; k < 2; ++k) {
       const double h = s * hours_per_stage;
-      const std::string se = with_se && s > 0 ? std::to_string(0.1 * s) : "";
+      // life writes 0 for the new liner's error.
+      const std::string se = with_se ? std::to_string(0.1 * s) : "";
       f << s << "," << h << "," << h << "," << k << "," << 150 - 0.02 * h << ",100," << 14 + slope * h + 5 * k << ","
         << 14 + 0.002 * h << ",1,0," << 0.01 * h << ",8.26,387000,1500,240,45," << 230 + 0.001 * h
         << ",0.8,2,5,30,,,," << "calibrated,0.1," << se << "," << se << "," << se << "\n";
@@ -61,9 +62,11 @@ TEST_CASE("life-compare: a study's figures between its stages are interpolated i
   CHECK(a.at(0, 1000) == Approx(24.0).margin(1e-9));
   CHECK(a.at(1, 2500) == Approx(150 - 50.0).margin(1e-9));
   CHECK(a.at(3, 4200) == Approx(42.0).margin(1e-9));  // the last stage exactly
-  // The standard errors likewise: 0.1 s at stage s, so 1000 h is 1/0.7 stages in: 0.1 + 0.1 (300/700).
-  CHECK(a.at(0, 1000, true) == Approx(0.1 + 0.1 * 300.0 / 700).margin(1e-9));
-  CHECK(std::isnan(a.at(0, 350, true)));  // stage 0 has no error: the interpolation with it is none
+  // The standard errors' variances likewise: 0.1 s at stage s, so 1000 h is 300/700 of the way from 0.1 to 0.2.
+  CHECK(a.at(0, 1000, true) == Approx(std::sqrt(0.01 + 0.03 * 300.0 / 700)).margin(1e-9));
+  CHECK(a.at(0, 350, true) == Approx(std::sqrt(0.5 * 0.01)).margin(1e-9));  // up from the new liner's 0
+  const StudyPath none = read_study_path(write_study(dir / "b", 700, 6, false), "b", 0);
+  CHECK(std::isnan(none.at(0, 1000, true)));  // a study without errors has none between its stages
   CHECK(std::isnan(a.at(0, 4300)));       // beyond the study
   // Profile 1 is profile 0 five degrees on.
   const StudyPath b = read_study_path(dir / "a", "a", 1);
@@ -75,8 +78,9 @@ TEST_CASE("life-compare: a study's figures between its stages are interpolated i
   const Against x = against(a, m);
   CHECK(x.value == Approx(54.0).margin(1e-9));
   CHECK(x.difference == Approx(6.9).margin(1e-9));
-  CHECK(x.se == Approx(0.5 + 0.1 * 500.0 / 700).margin(1e-9));
-  CHECK(x.in_se == Approx(6.9 / (0.5 + 0.1 * 500.0 / 700)).margin(1e-9));
+  const double se4000 = std::sqrt(0.25 + (0.36 - 0.25) * 500.0 / 700);
+  CHECK(x.se == Approx(se4000).margin(1e-9));
+  CHECK(x.in_se == Approx(6.9 / se4000).margin(1e-9));
   fs::remove_all(dir);
 }
 
@@ -98,9 +102,20 @@ TEST_CASE("life-compare: compare.csv holds each study at the hours asked", "[lif
   CHECK(t.rows[1][se].empty());                            // the slow study has no errors
   CHECK(t.number(3, se) == Approx(0.3).margin(1e-4));
   CHECK(fs::file_size(dir / "cmp" / "compare.png") > 10000);
-  const std::string log = slurp(dir / "log.txt");
+  std::string log = slurp(dir / "log.txt");
+  CHECK(log.find("different grounds") == std::string::npos);
   CHECK(log.find("leading_angle_deg at 4000 h, fast: 54.0 ± 0.4 against 47.2 measured (+6.8, 17.0 standard errors)") !=
         std::string::npos);
+  // A study whose hours are relative beside a calibrated one: compared, with a note.
+  {
+    std::string text = slurp(dir / "slow" / "life.csv");
+    for (std::size_t at; (at = text.find(",calibrated,")) != std::string::npos;) text.replace(at, 12, ",relative,");
+    std::ofstream(dir / "slow" / "life.csv") << text;
+  }
+  REQUIRE(cli("'" + (dir / "slow").string() + "' '" + (dir / "fast").string() + "' --out '" + (dir / "cmp2").string() + "'",
+              dir / "log.txt") == 0);
+  log = slurp(dir / "log.txt");
+  CHECK(log.find("the studies' hours stand on different grounds (slow relative, fast calibrated)") != std::string::npos);
   fs::remove_all(dir);
 }
 

@@ -154,7 +154,16 @@ void calibrate(Study& st, const LifeOptions& o, double length) {
   if (at < 0) {  // not reached yet: on at the rate the last stage's wear lowers the bar
     const Stage& last = st.stages.back();
     const double lost = h0 - height_of(last, k) * 1000, left = o.calibrate_loss_mm - lost;
-    const double span = span_for_loss(last, k, length, left);
+    double span = span_for_loss(last, k, length, left);
+    // Worn for all the hours at once, a bar whose top outwears the shell
+    // may still be lowered slower than the rounding of its top and the
+    // shell's fall take it apart: then on at the rate at which the stage's
+    // wear takes the first part of the rest off.
+    int parts = 1;
+    for (int n = 2; n <= 16 && !(span > 0); n *= 2) {
+      const double first = span_for_loss(last, k, length, left / n);
+      if (first > 0) span = first * n, parts = n;
+    }
     if (!(span > 0))
       throw std::invalid_argument(fmt::format(
           "--calibrate-loss {:g}: the wear of stage {} does not lower the lifters (profile {}, {:.1f} mm high) by the "
@@ -162,7 +171,10 @@ void calibrate(Study& st, const LifeOptions& o, double length) {
           "so no hours bring the loss measured; give --calibrate-rate, or check the case's wear coefficients",
           o.calibrate_loss_mm, last.index, k, height_of(last, k) * 1000));
     at = last.case_hours + span;
-    how = "extrapolated at the last stage's wear (the study has not reached it yet)";
+    how = parts == 1 ? "extrapolated at the last stage's wear (the study has not reached it yet)"
+                     : fmt::format("extrapolated at the rate the last stage's wear takes the first 1/{} of the rest "
+                                   "off (the study has not reached it yet)",
+                                   parts);
   }
   st.factor = at / o.calibrate_hours;
   st.calibration = fmt::format("the lifters lost {:g} mm of height in {:g} h ({})", o.calibrate_loss_mm,

@@ -52,6 +52,9 @@ double StudyPath::at(int figure, double h, bool want_se) const {
   for (std::size_t i = 1; i < n; ++i)
     if (h < hours[i]) {
       const double t = (h - hours[i - 1]) / (hours[i] - hours[i - 1]);
+      // A standard error's variance grows with the hours of wear behind
+      // it: interpolated as a variance.
+      if (want_se) return std::sqrt(y[i - 1] * y[i - 1] + t * (y[i] * y[i] - y[i - 1] * y[i - 1]));
       return y[i - 1] + t * (y[i] - y[i - 1]);
     }
   return y.back();

@@ -28,7 +28,7 @@ struct StudyPath {
   std::vector<double> hours;
   std::vector<std::vector<double>> value, se;  // [figure][stage]
   // Interpolated linearly between the stages around `h` (the standard
-  // error likewise); NaN outside the study's hours.
+  // error's variance likewise); NaN outside the study's hours.
   double at(int figure, double h, bool want_se = false) const;
 };
 

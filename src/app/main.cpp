@@ -161,8 +161,8 @@ int main(int argc, char** argv) {
       ->check(mc::app::cli::between(0, 1))
       ->type_name("S");
   life->add_option("--shell-wear-ratio", lo.shell_wear_ratio,
-                   "the shell plates' wear coefficients over the lifter bars' (default 1: one liner steel); the "
-                   "shell wears R times what the runs booked")
+                   "the shell plates' wear coefficients over the lifter bars' (default 1: one liner steel): the "
+                   "shell wears R times what the bars' coefficients give it")
       ->check(mc::app::cli::between(0.01, 100))
       ->type_name("R");
   life->add_flag("--force", lo.force, "start the study again in an --out that holds one");
