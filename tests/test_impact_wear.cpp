@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/layout.hpp"
+#include "core/lifters.h"
 #include "core/liner.h"
 #include "helpers.h"
 #include "sim/energy_report.h"
@@ -114,4 +115,99 @@ TEST_CASE("impact wear off books the strike energy and adds nothing to the wear"
   CHECK(rep.strike_W == Approx(0.5 * m * vn * vn).epsilon(1e-9));
   CHECK(rep.impact_kg_per_h == 0);
   CHECK(rep.wear_kg_per_h == rep.sliding_kg_per_h);
+}
+
+namespace {
+
+// The turning mill's strikes: the wall's own speed at the contact point
+// counts where it is along the liner's normal, and not where it is along
+// the liner. Books of elements and of lifter wear stations, summed.
+struct Struck {
+  double elements = 0, stations = 0, impacts = 0;
+};
+
+Struck strikes_of(const Scene& sc, int steps) {
+  auto s = make_solver(context(), sc);
+  s->advance(steps);
+  const BookSums books = s->read_books();
+  Struck out;
+  for (int e = 0; e < books.n_elements; ++e) {
+    out.elements += books.liner_at(e, MC_LINER_STRIKE);
+    out.impacts += books.liner_at(e, MC_LINER_IMPACTS);
+  }
+  for (std::size_t i = MC_LINER_STRIKE; i < books.stations.size(); i += MC_LINER_FIELDS) out.stations += books.stations[i];
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("a turning lifter face sweeping into a ball at rest books 1/2 m (w rho - K)^2", "[books][physics][wear][impact_wear]") {
+  // A radial-faced bar (152 mm scaled down: 30 mm high, 20 mm top) at angle
+  // 0 of a 0.25 m shell turning at w; a ball at rest a micrometre ahead of
+  // its leading face at radius rho. The face plane is parallel to the
+  // radial line: its speed along its normal at radius rho is w rho.
+  const double R = 0.25, h = 0.03, w = 0.02, r = 0.008, omega = 4.0, m = sphere_mass(7800, r);
+  for (const Precision precision : {Precision::double_, Precision::single})
+    for (const double threshold : {0.0, 0.3}) {
+      Interaction in;
+      in.restitution = 0.5;
+      in.mu_slide = 0.3;
+      in.mu_roll = 0;
+      in.kn = 1e6;
+      Material liner = kSteel;
+      liner.impact_wear_coefficient = 1e-11;
+      liner.impact_wear_threshold_speed = threshold;
+      Scene sc = bare_scene(kSteel, liner, in, ContactLaw::linear, precision);
+      sc.numerics.dt = kPi * std::sqrt(m / in.kn) / 60;
+      sc.walls.shell_radius = R;
+      sc.walls.length = 0.1;
+      LifterProfile bar;
+      bar.height = h, bar.top_width = w, bar.face_angle_deg = 0;
+      sc.walls.lifters = lifter_rows(R, 8, {bar}, 0.0);
+      sc.mill_omega = omega;
+      const double rho = R - 0.5 * h;
+      Ball b;
+      b.radius = r;
+      b.position = {rho, 0.5 * w + r + 1e-6, 0.05};
+      sc.balls = {b};
+      const Struck got = strikes_of(sc, 200);  // the contact is 60 steps; the ball clears the face after
+      const double over = std::max(omega * rho - threshold, 0.0), strike = 0.5 * m * over * over;
+      INFO((precision == Precision::double_ ? "double" : "float") << ", K " << threshold);
+      CHECK(got.impacts == 1);
+      const double eps = precision == Precision::double_ ? 1e-5 : 1e-4;
+      CHECK(got.elements == Approx(strike).epsilon(eps));
+      CHECK(got.stations == Approx(strike).epsilon(eps));
+    }
+}
+
+TEST_CASE("a ball dropped onto the turning shell books its radial speed alone, not the shell's", "[books][physics][wear][impact_wear]") {
+  // The shell moves at w R = 1 m/s along itself; the ball meets it at 1.5
+  // m/s along the radius: the strike is 1/2 m (1.5 - K)^2, where |v_rel|
+  // would give 1/2 m (1.5^2 + 1^2).
+  const double R = 0.25, r = 0.008, omega = 4.0, speed = 1.5, m = sphere_mass(7800, r);
+  for (const Precision precision : {Precision::double_, Precision::single}) {
+    Interaction in;
+    in.restitution = 0.5;
+    in.mu_slide = 0.3;
+    in.mu_roll = 0;
+    in.kn = 1e6;
+    Material liner = kSteel;
+    liner.impact_wear_coefficient = 1e-11;
+    liner.impact_wear_threshold_speed = 0.2;
+    Scene sc = bare_scene(kSteel, liner, in, ContactLaw::linear, precision);
+    sc.numerics.dt = kPi * std::sqrt(m / in.kn) / 60;
+    sc.walls.shell_radius = R;
+    sc.walls.length = 0.1;
+    sc.mill_omega = omega;
+    Ball b;
+    b.radius = r;
+    b.position = {0, -(R - r - 1e-6), 0.05};
+    b.velocity = {0, -speed, 0};
+    sc.balls = {b};
+    const Struck got = strikes_of(sc, 200);
+    INFO((precision == Precision::double_ ? "double" : "float"));
+    CHECK(got.impacts == 1);
+    CHECK(got.elements == Approx(0.5 * m * (speed - 0.2) * (speed - 0.2)).epsilon(precision == Precision::double_ ? 1e-6 : 1e-4));
+    CHECK(got.stations == 0);
+  }
 }
