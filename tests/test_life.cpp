@@ -20,6 +20,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/lifters.h"
+#include "core/liner_wear.h"
 #include "io/case_file.h"
 #include "io/csv_read.h"
 #include "text_file.h"
@@ -388,5 +390,34 @@ TEST_CASE("an impact share of 0 is the sliding study, and a share of 1 wears by 
   CHECK(num(a[0], "height_mm_se") == 0);
   CHECK(num(a[1], "leading_angle_deg_se") > 0);
   CHECK(num(a[1], "leading_angle_deg_se") < 2);
+  // Again from the files: the new bar (life.json) worn for the stage's
+  // hours by each half's station rates (lifter_wear.csv) and shell rate
+  // (summary.json); half the difference of the two bars is the step's
+  // error, which stage 1's row gives.
+  {
+    const nlohmann::json lj = nlohmann::json::parse(read_text(zero / "life.json"));
+    const nlohmann::json& s0 = lj["stages"][0];
+    std::vector<mc::Vec2> bar;
+    for (const auto& pt : s0["profiles"][0]) bar.push_back({pt[0].get<double>(), pt[1].get<double>()});
+    const double R = 0.5 * s0["diameter_m"].get<double>(), span = s0["wear"]["span_case_hours"].get<double>();
+    std::vector<double> rate[2] = {std::vector<double>(mc::kWearStations, 0.0), std::vector<double>(mc::kWearStations, 0.0)};
+    for (const auto& r : read_csv(zero / "stage-00" / "lifter_wear.csv"))
+      if (num(r, "profile") == 0) {
+        rate[0][static_cast<int>(num(r, "station"))] = num(r, "first_half_sliding_wear_m3_per_s");
+        rate[1][static_cast<int>(num(r, "station"))] = num(r, "second_half_sliding_wear_m3_per_s");
+      }
+    mc::ProfileMeasures m[2];
+    for (int h = 0; h < 2; ++h) {
+      const double shell = sj["liner"]["halves"][h]["shell_sliding_wear_mm_per_1000h"].get<double>() * 1e-6;
+      const mc::WornLifter w = mc::wear_for_hours(bar, R, mc::BarWearRates{rate[h], sj["length_m"].get<double>(), shell}, span);
+      REQUIRE_FALSE(w.worn_away);
+      m[h] = mc::measure_profile(w.outline);
+    }
+    const double se_h = 0.5 * std::fabs(m[0].height - m[1].height) * 1000,
+                 se_lead = 0.5 * std::fabs(m[0].leading_angle_deg - m[1].leading_angle_deg);
+    CHECK(num(a[1], "height_mm_se") == Approx(se_h).margin(1e-4));
+    CHECK(num(a[1], "leading_angle_deg_se") == Approx(se_lead).margin(1e-4));
+    CHECK(s0["wear"]["step_se"]["leading_angle_deg"][0].get<double>() == Approx(se_lead).epsilon(1e-9));
+  }
   for (const fs::path& p : {none, zero, one}) fs::remove_all(p);
 }

@@ -372,8 +372,11 @@ TEST_CASE("an impact share sets the two wear coefficients so that the new liner 
   // A shell whose coefficients are R times the bars': the shell wears R
   // times as deep, and the new liner still as much in all, S of it by
   // impact.
-  s0.parts.shell_sliding_kg_h = 1.5;
-  s0.parts.shell_strike_W = 400.0;
+  // The shell's parts as one 10 m² shell of this density gives them: 10
+  // mm per 1000 h over 10 m² is 0.78 kg/h, 40 W/m² over it 400 W.
+  const double area = 10.0;
+  s0.parts.shell_sliding_kg_h = 10.0 * 1e-6 * area * rho;
+  s0.parts.shell_strike_W = 40.0 * area;
   for (double R : {0.5, 1.25})
     for (double share : {0.0, 0.4}) {
       INFO("ratio " << R << ", share " << share);
@@ -386,6 +389,10 @@ TEST_CASE("an impact share sets the two wear coefficients so that the new liner 
                                          .epsilon(1e-12));
       // The bars' stations keep the bars' coefficients.
       CHECK(r.station_m3_s[0][1] == Approx(m.sliding * 2e-9).epsilon(1e-12));
+      // The shell's depth rate over its area is the shell's part of the
+      // mixed kg/h: the depth and the mass paths agree.
+      const double shell_kg_h = R * (m.sliding * s0.parts.shell_sliding_kg_h + m.impact * s0.parts.shell_strike_W * rho * 3600);
+      CHECK(r.shell_mm_per_1000h * 1e-6 * area * rho == Approx(shell_kg_h).epsilon(1e-12));
     }
   // Where one wear is missing, the share that needs it is refused by name.
   StageResult no_strike = s0;
