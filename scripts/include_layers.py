@@ -12,7 +12,7 @@ import re
 import sys
 
 # Lowest first. cl/ (the kernels' shared headers) sits below them all.
-LAYERS = [["core"], ["compute"], ["sim", "grind"], ["io"], ["viewer"], ["app"]]
+LAYERS = [["core"], ["compute"], ["sim", "grind", "life"], ["io"], ["viewer"], ["app"]]
 LEVEL = {folder: k for k, group in enumerate(LAYERS) for folder in group}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 

@@ -1,0 +1,60 @@
+// A mesh liner worn by its booked wear (docs/liner-life.md, "Mesh liners
+// wear"): each triangle's booked volume is a depth over its area; each
+// vertex (welded where triangles share its coordinates) moves against its
+// area-weighted normal, into the liner, by the area-weighted mean depth of
+// the triangles around it, so that to first order the volume removed is
+// the volume booked; a depth scale then makes the swept volume equal the
+// booked one exactly (as core/liner_wear.h does for a bar's outline). Where
+// the booked depths are noisy, passes of smoothing average each vertex's
+// depth with its neighbours' first (the booked volume kept). The worn mesh
+// is checked: no triangle turned over or shrunk to nothing, no vertex
+// beyond the shell or the mill's ends. No OpenCL: the unit tests reach it.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/vec.h"
+
+namespace mc::life {
+
+// Where a worn mesh must stay: inside the shell (radius at most
+// shell_radius · (1 + 1e-3); 0: not checked) and between z0 and z1 (not
+// checked where z1 <= z0).
+struct MeshBounds {
+  double shell_radius = 0;
+  double z0 = 0, z1 = 0;
+};
+
+struct MeshWear {
+  std::vector<Triangle> triangles;  // the worn mesh, the same triangles in the same order
+  double booked_m3 = 0;             // the volume the triangles booked
+  double removed_m3 = 0;            // the volume between the mesh and the worn one
+  double scale = 1;                 // the depth scale that makes them equal
+  int smoothing = 0;                // passes of depth smoothing done
+  double deepest_m = 0;             // the largest vertex move
+};
+
+// The welded vertices of a mesh: each triangle's corners as indices into
+// `points` (corners with equal coordinates are one vertex).
+struct WeldedMesh {
+  std::vector<Vec3> points;
+  std::vector<std::array<int, 3>> corners;
+};
+WeldedMesh weld(const std::vector<Triangle>& triangles);
+
+// The volume swept between a mesh and the same mesh with its vertices
+// moved (corner for corner): positive where they moved against the
+// triangles' normals. For a closed mesh it is the enclosed volume lost.
+double swept_volume(const std::vector<Triangle>& before, const std::vector<Triangle>& after);
+
+// The mesh worn by `volume_m3` per triangle (>= 0, as many as triangles),
+// with `smoothing` passes over the depths. Throws std::invalid_argument
+// naming `name` and the triangle (from 1) where the wear would turn a
+// triangle over or shrink it below a thousandth of its area, or take a
+// vertex beyond `bounds`; std::invalid_argument for a negative or
+// non-finite volume, or a count that is not the triangles'.
+MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,
+                   const MeshBounds& bounds, int smoothing = 0, const std::string& name = "mesh");
+
+}  // namespace mc::life
