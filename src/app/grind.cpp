@@ -3,6 +3,7 @@
 // makes: grind.csv, rates.csv, grind.json and grind.png.
 #include "app/grind.h"
 #include "app/grind_interval.h"
+#include "app/grind_next.h"
 
 #include <fmt/format.h>
 
@@ -644,6 +645,7 @@ int cmd_grind(const GrindOptions& o) {
                  o.ore.c_str(), contact_changed.c_str());
 
   const io::Run lab = o.scale_from.empty() ? io::Run{} : scale_from_run(o, ore, run);
+  const NextPlan next = plan_next(o, ore);  // the candidates of --next-test, checked
   const std::vector<double> times = o.times_min.empty() && !(o.feed_rate_t_h > 0) && !(o.target_p80_um > 0) &&
                                             !(o.bond_p1_um > 0)
                                         ? std::vector<double>{1, 2, 4, 8, 16}
@@ -666,6 +668,15 @@ int cmd_grind(const GrindOptions& o) {
                  "the covariance describes the fitted ore only: products without intervals; fit it again with "
                  "--fit for them\n",
                  o.ore.c_str(), ci.stale.c_str());
+  // Which test next: every candidate's expected interval of the product.
+  NextRanking ranking;
+  if (next.asked) {
+    const GrindNumbers g = numbers(o, made);
+    const NextTarget target = next_target(o, g);
+    ranking = rank_next(next, ore, target, ci, g, [&](const Ore& moved) {
+      return flatten(numbers(o, make(o, moved, run, lab, times, true)))[target.index];
+    });
+  }
 
   // Everything computed; now the files.
   const fs::path out = o.out.empty() ? fs::path(o.run_dir) / "grind" : fs::path(o.out);
@@ -683,12 +694,18 @@ int cmd_grind(const GrindOptions& o) {
                                  {"imbalance", run.imbalance},
                                  {"energy_change_W", run.energy_change_W}};
   if (!o.scale_from.empty()) j["scale_up"] = scale_up_json(o, made.up, products);
+  if (next.asked) {
+    j["next_test"] = next_json(ranking);
+    write_next_csv(out, ranking);
+  }
   io::write_file_atomic(out / "grind.json", j.dump(2) + "\n");
   draw(out, ore, run, c, products, ci);
   if (!o.quiet) {
     print(o, ore, run, c, made.holdup_kg, products, bond, ci);
     if (!o.scale_from.empty()) print_scale_up(o, made.up, products);
-    std::printf("wrote %s/{grind.csv, rates.csv, grind.json, grind.png}\n", out.string().c_str());
+    if (next.asked) print_next(ranking);
+    std::printf("wrote %s/{grind.csv, rates.csv, grind.json, grind.png%s}\n", out.string().c_str(),
+                next.asked ? ", next_test.csv" : "");
   }
   return 0;
 }

@@ -49,10 +49,10 @@ void check_fit_options(const GrindOptions& o) {
   if (!o.fit_tests.empty() && o.bond_p1_um > 0)
     throw std::invalid_argument("--fit with --bond: a batch test is fitted alone; fit a work index with --fit-wi");
   if (!o.times_min.empty() || o.feed_rate_t_h > 0 || o.target_p80_um > 0 || o.classifier_d50c_um > 0 ||
-      !o.scale_from.empty())
+      !o.scale_from.empty() || !o.next_tests.empty() || !o.next_times.empty() || !o.next_for.empty())
     throw std::invalid_argument(what +
                                 ": fits the ore and writes it; grind the fitted ore in a second call (--time, "
-                                "--feed-rate, --target-p80, --classifier and --scale-from belong there)");
+                                "--feed-rate, --target-p80, --classifier, --scale-from and --next-test belong there)");
   if (o.fit_wi_kWh_t > 0 && o.fit_params.size() > 1)
     throw std::invalid_argument("--fit-params: a work index is one number and fits one parameter, not " +
                                 std::to_string(o.fit_params.size()));
