@@ -135,7 +135,8 @@ std::string held_range(const HeldParameter& h, std::string* kind = nullptr) {
     k = (on_lo ? hi_end : lo_end) ? "open" : "one-sided";
     text = k == "open" ? fmt::format("open: the data do not bound it within the ore file's range ({:.6g} to {:.6g})",
                                      p->lo, p->hi)
-                       : fmt::format("one-sided: from {:.6g} to its bound {:.6g}", on_lo ? h.hi : h.lo, h.value);
+                       : on_lo ? fmt::format("one-sided: from its bound {:.6g} to {:.6g}", h.value, h.hi)
+                               : fmt::format("one-sided: from {:.6g} to its bound {:.6g}", h.lo, h.value);
   } else {
     if (lo_end && hi_end) k = "open";
     text = fmt::format("from {:.6g} to {:.6g}", h.lo, h.hi);
@@ -222,6 +223,14 @@ void print_covariance(const FitCovariance& u) {
   for (const HeldParameter& h : u.held)
     std::printf("  %-16s held at %.6g; 95 %% range %s (the free ones refitted there)\n", h.name.c_str(), h.value,
                 held_range(h).c_str());
+  if (!u.held.empty() && u.best.held.size() == u.held.size()) {
+    std::string at;
+    for (std::size_t k = 0; k < u.held.size(); ++k)
+      at += fmt::format("{}{} {:.6g}", k ? ", " : "", u.held[k].name, u.best.held[k]);
+    std::printf("  the held parameters fit the data best at %s (the free ones refitted there): the intervals are "
+                "built around it\n",
+                at.c_str());
+  }
 }
 
 // One batch test of a fit and the run of the mill it was made in.
