@@ -142,6 +142,11 @@ TEST_CASE("grind intervals: the fit's covariance kept with the ore and read back
   for (std::size_t a = 0; a < u.names.size(); ++a)
     for (std::size_t b = 0; b < u.names.size(); ++b) CHECK(v.matrix[a][b] == Approx(u.matrix[a][b]).epsilon(1e-9));
   REQUIRE(v.held.size() == u.held.size());
+  REQUIRE(v.information.size() == u.names.size() + u.held.size());
+  CHECK(v.information[0][0] == Approx(u.information[0][0]).epsilon(1e-9));
+  CHECK(v.edges.size() == u.edges.size());
+  REQUIRE(v.best.held.size() == u.best.held.size());
+  for (std::size_t k = 0; k < u.best.held.size(); ++k) CHECK(v.best.held[k] == Approx(u.best.held[k]).epsilon(1e-9));
   for (std::size_t k = 0; k < u.held.size(); ++k) {
     CHECK(v.held[k].lo == Approx(u.held[k].lo).epsilon(1e-9));
     CHECK(v.held[k].free_at_hi.size() == u.names.size());

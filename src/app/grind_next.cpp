@@ -54,6 +54,10 @@ NextPlan plan_next(const GrindOptions& o, const Ore& ore) {
     throw std::invalid_argument("--next-test: " + o.ore +
                                 " keeps no covariance ([fitted] degrees_of_freedom): rank next tests for an ore "
                                 "fitted with --fit");
+  if (u.information.size() != u.names.size() + u.held.size())
+    throw std::invalid_argument("--next-test: " + o.ore +
+                                " keeps no information matrix ([fitted] information: fitted by an older millcharge): "
+                                "fit it again with --fit");
   const std::string stale = stale_covariance(ore, u);
   if (!stale.empty())
     throw std::invalid_argument("--next-test: " + o.ore + ": " + stale +

@@ -465,16 +465,22 @@ std::vector<double> test_weights(const std::vector<TestInMill>& tests) {
   return w;
 }
 
-double weighted_ssr(const Ore& ore, const std::vector<TestInMill>& tests) {
+std::vector<double> weighted_residuals(const Ore& ore, const std::vector<TestInMill>& tests) {
   const std::vector<double> w = test_weights(tests);
-  double ssr = 0;
+  std::vector<double> r;
   for (std::size_t m = 0; m < tests.size(); ++m) {
     const TestInMill& tm = tests[m];
     const auto pred = batch_test_products(ore, tm.spectrum, tm.power_W, tm.holdup_kg, tm.test);
     for (std::size_t k : informative_sieves(tm.test))
       for (std::size_t t = 0; t < tm.test.times_min.size(); ++t)
-        ssr += std::pow(w[m] * 100 * (pred[t][k] - tm.test.passing[t][k]), 2);
+        r.push_back(w[m] * 100 * (pred[t][k] - tm.test.passing[t][k]));
   }
+  return r;
+}
+
+double weighted_ssr(const Ore& ore, const std::vector<TestInMill>& tests) {
+  double ssr = 0;
+  for (double x : weighted_residuals(ore, tests)) ssr += x * x;
   return ssr;
 }
 

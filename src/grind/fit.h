@@ -169,8 +169,9 @@ constexpr double kBoundWhisker = 1e-6;
 // where the noises are alike). Throws std::invalid_argument for a noise of
 // 0 beside others.
 std::vector<double> test_weights(const std::vector<TestInMill>& tests);
-// The weighted sum of squares of the ore's products against the tests
-// (pp² of the first test), over the sieves the fit reads.
+// The weighted residuals of the ore's products against the tests (pp of
+// the first test), over the sieves the fit reads, and their sum of squares.
+std::vector<double> weighted_residuals(const Ore& ore, const std::vector<TestInMill>& tests);
 double weighted_ssr(const Ore& ore, const std::vector<TestInMill>& tests);
 // The sieves of a test that carry information: not passing 1 in the feed
 // and every product.

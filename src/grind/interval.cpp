@@ -187,6 +187,15 @@ std::pair<LinePoint, LinePoint> stretch(const std::vector<LinePoint>& pts, std::
   return {ends[0], ends[1]};
 }
 
+// An edge point, unless it is the best point or one kept already.
+void add_edge(FitCovariance& u, const std::vector<double>& best, const std::vector<double>& held,
+              const std::vector<double>& free) {
+  if (held == best) return;
+  for (const HeldEdge& e : u.edges)
+    if (e.held == held) return;
+  u.edges.push_back({held, free});
+}
+
 // What the data leave open to the held parameters (fit_covariance):
 // 1. where they fit best: each moved in turn through the best point met
 //    (its least S refined by golden sections);
@@ -234,8 +243,7 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
     h.hi = hi.x > x_held ? from_var(p, hi.x) : h.value;
     h.free_at_lo = lo.x < x_held ? lo.p.at.free : u.values;
     h.free_at_hi = hi.x > x_held ? hi.p.at.free : u.values;
-    for (const LinePoint* e : {&lo, &hi})
-      if (e->p.held != best.held) u.edges.push_back({e->p.held, e->p.at.free});
+    for (const LinePoint* e : {&lo, &hi}) add_edge(u, best.held, e->p.held, e->p.at.free);
   }
   if (nh < 2 || nh > 4) return;
   std::vector<const OreParameter*> ps;
@@ -263,8 +271,44 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
         else s_out = s;
       }
     }
-    if (s_in > 0) u.edges.push_back({in.held, in.at.free});
+    if (s_in > 0) add_edge(u, best.held, in.held, in.at.free);
   }
+}
+
+// The tests' information on the free variables and then the held ones at
+// the fit, JᵀJ / s²: the Jacobian of the weighted residuals by differences
+// inside the ore file's ranges (central, or one-sided of second order at a
+// bound), steps of 10⁻⁴ of the variable (at least 10⁻⁴).
+std::vector<std::vector<double>> information(const FitCovariance& u, const BatchFit& fit,
+                                             const std::vector<TestInMill>& tests) {
+  if (!(u.residual_variance_pp2 > 0)) return {};
+  std::vector<const OreParameter*> ps;
+  for (const std::string& n : u.names) ps.push_back(find_ore_parameter(n));
+  for (const HeldParameter& h : u.held) ps.push_back(find_ore_parameter(h.name));
+  const std::vector<double> r0 = weighted_residuals(fit.ore, tests);
+  std::vector<std::vector<double>> J(ps.size());
+  for (std::size_t v = 0; v < ps.size(); ++v) {
+    const OreParameter& p = *ps[v];
+    const double x = to_var(p, p.get(fit.ore)), lo = var_lo(p), hi = var_hi(p);
+    double h = 1e-4 * std::max(1.0, std::fabs(x));
+    if (x - h < lo && x + h > hi) h = std::max(hi - x, x - lo) / 2;
+    const int sign = x + h <= hi && x - h >= lo ? 0 : x + 2 * h <= hi ? +1 : -1;
+    auto at = [&](double xv) {
+      Ore o = fit.ore;
+      p.set(o, from_var(p, xv));
+      return weighted_residuals(o, tests);
+    };
+    const std::vector<double> a = at(sign == 0 ? x + h : x + sign * h), b = at(sign == 0 ? x - h : x + 2 * sign * h);
+    for (std::size_t i = 0; i < r0.size(); ++i)
+      J[v].push_back(sign == 0 ? (a[i] - b[i]) / (2 * h) : sign * (-3 * r0[i] + 4 * a[i] - b[i]) / (2 * h));
+  }
+  std::vector<std::vector<double>> L(ps.size(), std::vector<double>(ps.size(), 0.0));
+  for (std::size_t a = 0; a < ps.size(); ++a)
+    for (std::size_t b = 0; b < ps.size(); ++b) {
+      for (std::size_t i = 0; i < r0.size(); ++i) L[a][b] += J[a][i] * J[b][i];
+      L[a][b] /= u.residual_variance_pp2;
+    }
+  return L;
 }
 
 // ------------------------------------------------------------ Student's t
@@ -374,6 +418,7 @@ FitCovariance fit_covariance(const BatchFit& fit, const std::vector<TestInMill>&
     u.held.push_back(h);
   }
   if (!u.held.empty() && u.dof > 0) held_ranges(u, fit, tests);
+  u.information = information(u, fit, tests);
   return u;
 }
 

@@ -113,48 +113,9 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
     const std::vector<double> col = column(*ps[v], ore, c, sieves, r0);
     for (std::size_t i = 0; i < r0.size(); ++i) Jc[i][v] = col[i];
   }
-  // The current information, rebuilt (next_test.h).
-  Matrix Lff;
-  if (np > 0 && !invert_spd(u.matrix, Lff)) return out;
-  const double t_now = t_quantile(0.975, u.dof);
-  Matrix B(np, std::vector<double>(nh, 0.0));
-  std::vector<double> S(nh, 0.0);
-  for (std::size_t j = 0; j < nh; ++j) {
-    const HeldParameter& h = u.held[j];
-    const OreParameter& p = *ps[np + j];
-    const double x = to_var(p, h.value), xl = to_var(p, h.lo), xh = to_var(p, h.hi);
-    const bool lo_ok = h.lo < h.value && h.free_at_lo.size() == np, hi_ok = h.hi > h.value && h.free_at_hi.size() == np;
-    for (std::size_t a = 0; a < np; ++a) {
-      const double fl = lo_ok ? h.free_at_lo[a] : u.values[a], fh = hi_ok ? h.free_at_hi[a] : u.values[a];
-      const double xa = lo_ok ? xl : x, xb = hi_ok ? xh : x;
-      B[a][j] = xb > xa ? (fh - fl) / (xb - xa) : 0.0;
-    }
-    // The profile's reach where the data bound it (not the file's range).
-    const double span = p.hi - p.lo;
-    const bool lo_data = h.lo > p.lo + 1e-9 * span && h.lo < h.value;
-    const bool hi_data = h.hi < p.hi - 1e-9 * span && h.hi > h.value;
-    double reach = 0;
-    if (lo_data && hi_data) reach = 0.5 * (xh - xl);
-    else if (lo_data) reach = x - xl;
-    else if (hi_data) reach = xh - x;
-    S[j] = reach > 0 ? t_now * t_now / (reach * reach) : 0.0;
-  }
-  Matrix L(nv, std::vector<double>(nv, 0.0));
-  for (std::size_t a = 0; a < np; ++a)
-    for (std::size_t b = 0; b < np; ++b) L[a][b] = Lff[a][b];
-  for (std::size_t a = 0; a < np; ++a)
-    for (std::size_t j = 0; j < nh; ++j) {
-      double v = 0;  // -(Λ_ff B)_aj
-      for (std::size_t b = 0; b < np; ++b) v -= Lff[a][b] * B[b][j];
-      L[a][np + j] = L[np + j][a] = v;
-    }
-  for (std::size_t i = 0; i < nh; ++i)
-    for (std::size_t j = 0; j < nh; ++j) {
-      double v = i == j ? S[i] : 0.0;  // (Bᵀ Λ_ff B)_ij + S
-      for (std::size_t a = 0; a < np; ++a)
-        for (std::size_t b = 0; b < np; ++b) v += B[a][i] * Lff[a][b] * B[b][j];
-      L[np + i][np + j] = v;
-    }
+  // The current information: the tests' JᵀJ / s² on every variable, kept with the covariance.
+  if (u.information.size() != nv) return out;
+  Matrix L = u.information;
   // The candidate's information: its readings scatter as the first test's (s²).
   const double s2 = u.residual_variance_pp2;
   if (!(s2 > 0)) return out;

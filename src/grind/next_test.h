@@ -2,10 +2,11 @@
 // run next"): for a candidate test (a mill's run and grinding times, read
 // on the usual sieves), the 95 % interval a product of the fitted ore is
 // expected to have once that test is fitted with the others. Linear: the
-// current fit's information on its variables plus the candidate's Fisher
-// information JᵀJ / s² at the fitted ore, inverted; a held parameter the
-// sum would fix (its expected standard error within the fit's own limit
-// for identifying it) joins the free ones, the others keep their ranges.
+// current fit's information on its variables (free and held) plus the
+// candidate's Fisher information JᵀJ / s² at the fitted ore, inverted; a
+// held parameter the sum would fix (its expected standard error within the
+// fit's own limit for identifying it) joins the free ones, the others keep
+// their reach.
 #pragma once
 
 #include <string>
@@ -31,15 +32,13 @@ struct NextTestWidth {
 
 // The expected interval, after the candidate test, of the product whose
 // sensitivity at the fitted ore is `s` (sensitivities(..., true): with its
-// gradient in the held parameters too).
-//
-// The current information on the free variables f and held ones h is
-// rebuilt from what the ore keeps: Λ_ff = C⁻¹; the held ones' coupling to
-// the free from the refits at their range's ends (the free ones move by B
-// per unit of h: Λ_fh = -Λ_ff B, Λ_hh = Bᵀ Λ_ff B + S); S_j = t²/Δ_j² from
-// the profile's reach Δ_j where the data bound it, 0 where the range is
-// open. The candidate adds J_cᵀ J_c / s², J_c the derivatives of its
-// readings (pp) in (f, h) at the fitted ore.
+// gradient in the held parameters too). The current information is the
+// tests' JᵀJ / s² on the free and the held variables that the fit kept
+// (FitCovariance::information); the candidate adds J_cᵀ J_c / s², J_c the
+// derivatives of its readings (pp) at the fitted ore, its readings taken
+// to scatter as the first test's. The held parameters the sum fixes join
+// the free ones; the rest keep their reach. An ore without the
+// information matrix gets no interval (expected.valid() false).
 NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensitivity& s,
                              const TestInMill& candidate);
 

@@ -68,6 +68,10 @@ struct FitCovariance {
   // range's ends, and two to four together toward each corner of their
   // ranges, as far as the data allow.
   std::vector<HeldEdge> edges;
+  // The tests' information on every fitted variable at the fit, the free
+  // ones' then the held ones': JᵀJ / s² of the weighted residuals (what a
+  // next test adds to: next_test.h). Empty: not kept.
+  std::vector<std::vector<double>> information;
 };
 
 // The contact law and parameters of the DEM run an ore was fitted through

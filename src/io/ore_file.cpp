@@ -92,7 +92,7 @@ void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u
   const toml::node* dn = ft.get("degrees_of_freedom");
   if (!dn) {
     for (const char* k :
-         {"covariance_variables", "covariance_values", "covariance", "residual_variance_pp2", "held", "edge", "best"})
+         {"covariance_variables", "covariance_values", "covariance", "residual_variance_pp2", "held", "edge", "best", "information"})
       if (ft.get(k)) r.fail(std::string("fitted.") + k, ft.get(k), "given without fitted.degrees_of_freedom");
     return;
   }
@@ -129,9 +129,8 @@ void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u
     r.fail("fitted.covariance", cn,
            fmt::format("must be a symmetric {} x {} matrix with a non-negative diagonal (one row per variable)", np, np));
   const toml::node* hn = ft.get("held");
-  if (!hn) return;
-  if (!hn->is_array_of_tables()) r.fail("fitted.held", hn, "must be an array of tables ([[fitted.held]])");
-  for (const toml::node& e : *hn->as_array()) {
+  if (hn && !hn->is_array_of_tables()) r.fail("fitted.held", hn, "must be an array of tables ([[fitted.held]])");
+  for (const toml::node& e : hn ? *hn->as_array() : toml::array{}) {
     const toml::table& t = *e.as_table();
     r.knows(t, "fitted.held.", {"name", "value", "lo", "hi", "why", "free_at_lo", "free_at_hi"});
     grind::HeldParameter h;
@@ -169,6 +168,16 @@ void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u
     if (!bn->is_table()) r.fail("fitted.best", bn, "must be a table ([fitted.best])");
     point(*bn->as_table(), "fitted.best", u.best);
   }
+  if (const toml::node* in = ft.get("information")) {
+    const std::size_t nv = np + u.held.size();
+    if (!in->is_array()) r.fail("fitted.information", in, "must be an array of rows");
+    for (const toml::node& row : *in->as_array()) u.information.push_back(any_numbers(r, &row, "fitted.information"));
+    bool square = u.information.size() == nv;
+    for (const auto& row : u.information) square = square && row.size() == nv;
+    if (!square)
+      r.fail("fitted.information", in,
+             fmt::format("must be a {} x {} matrix (one row per variable, then per held parameter)", nv, nv));
+  }
   const toml::node* kn = ft.get("edge");
   if (!kn) return;
   if (!kn->is_array_of_tables()) r.fail("fitted.edge", kn, "must be an array of tables ([[fitted.edge]])");
@@ -184,7 +193,7 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   r.knows(ft, "fitted.", {"contact_law", "restitution", "friction", "rolling_friction", "stiffness_N_m",
                           "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp",
                           "energy_basis", "covariance_variables", "covariance_values", "covariance",
-                          "residual_variance_pp2", "degrees_of_freedom", "held", "edge", "best"});
+                          "residual_variance_pp2", "degrees_of_freedom", "held", "edge", "best", "information"});
   auto text = [&](const std::string& key) {
     const toml::node* n = ft.get(key);
     if (!n) return std::string();
@@ -432,6 +441,11 @@ std::string covariance_toml(const FitCovariance& u) {
   for (std::size_t a = 0; a < u.matrix.size(); ++a) s += (a ? ", " : "") + list(u.matrix[a]);
   s += "]\nresidual_variance_pp2 = " + g(u.residual_variance_pp2) + "\ndegrees_of_freedom = " +
        std::to_string(u.dof) + "\n";
+  if (!u.information.empty()) {
+    s += "information = [";  // JᵀJ / s² of the free variables, then the held parameters'
+    for (std::size_t a = 0; a < u.information.size(); ++a) s += (a ? ", " : "") + list(u.information[a]);
+    s += "]   # the tests' information: the variables, then the held parameters (log of a scale)\n";
+  }
   for (const grind::HeldParameter& h : u.held) {
     s += "\n[[fitted.held]]\nname = \"" + h.name + "\"\nvalue = " + g(h.value) + "\nlo = " + g(h.lo) +
          "\nhi = " + g(h.hi) + "\n";
