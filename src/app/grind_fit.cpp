@@ -227,9 +227,9 @@ void print_covariance(const FitCovariance& u) {
     std::string at;
     for (std::size_t k = 0; k < u.held.size(); ++k)
       at += fmt::format("{}{} {:.6g}", k ? ", " : "", u.held[k].name, u.best.held[k]);
-    std::printf("  the held parameters fit the data best at %s (the free ones refitted there): the intervals are "
-                "built around it\n",
-                at.c_str());
+    std::printf("  the held parameters fit the data best at %s (the free ones refitted there; S %.4g there, %.4g "
+                "where they are held, the limit %.4g): the intervals are built around it\n",
+                at.c_str(), u.ssr_best, u.ssr_fit, profile_limit(u.ssr_best, u.dof));
   }
 }
 

@@ -224,6 +224,8 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
   }
   const double limit = profile_limit(best.at.ssr, u.dof);
   u.best = {best.held, best.at.free};
+  u.ssr_fit = fit.ssr;
+  u.ssr_best = best.at.ssr;
   for (std::size_t j = 0; j < nh; ++j) {
     // The last line runs through the best point already; the others again.
     std::vector<LinePoint> pts = lines[j];

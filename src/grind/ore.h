@@ -72,6 +72,9 @@ struct FitCovariance {
   // ones' then the held ones': JᵀJ / s² of the weighted residuals (what a
   // next test adds to: next_test.h). Empty: not kept.
   std::vector<std::vector<double>> information;
+  // The weighted sum of squares at the fit and at `best` (not kept in the
+  // file: what --fit says).
+  double ssr_fit = 0, ssr_best = 0;
 };
 
 // The contact law and parameters of the DEM run an ore was fitted through
