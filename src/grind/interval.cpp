@@ -315,41 +315,9 @@ std::vector<std::vector<double>> information(const FitCovariance& u, const Batch
 
 // ------------------------------------------------------------ Student's t
 
-// The regularised incomplete beta function I_x(a, b): its continued
-// fraction (DLMF 8.17.22) by the modified Lentz method, on the side of x
-// where it converges fast (I_x(a, b) = 1 - I_{1-x}(b, a)).
-double incomplete_beta(double x, double a, double b) {
-  if (x <= 0) return 0;
-  if (x >= 1) return 1;
-  if (x > (a + 1) / (a + b + 2)) return 1 - incomplete_beta(1 - x, b, a);
-  const double front =
-      std::exp(a * std::log(x) + b * std::log1p(-x) - (std::lgamma(a) + std::lgamma(b) - std::lgamma(a + b))) / a;
-  const double tiny = 1e-300;
-  double f = 1, C = 1, D = 0;
-  for (int i = 0; i <= 400; ++i) {
-    double d;  // the i-th partial numerator
-    if (i == 0) {
-      d = 1;
-    } else if (i % 2 == 0) {
-      const double m = i / 2;
-      d = m * (b - m) * x / ((a + 2 * m - 1) * (a + 2 * m));
-    } else {
-      const double m = (i - 1) / 2;
-      d = -(a + m) * (a + b + m) * x / ((a + 2 * m) * (a + 2 * m + 1));
-    }
-    D = 1 + d * D;
-    D = std::fabs(D) < tiny ? tiny : D;
-    C = 1 + d / C;
-    C = std::fabs(C) < tiny ? tiny : C;
-    D = 1 / D;
-    const double delta = C * D;
-    f *= delta;
-    if (std::fabs(delta - 1) < 1e-16) break;
-  }
-  return front * (f - 1);
-}
-
-// P(T <= t) for Student's t with nu degrees of freedom.
+// P(T <= t) for Student's t with nu degrees of freedom, by the
+// regularised incomplete beta function (pbm.h): 1 - I_x(nu/2, 1/2) / 2,
+// x = nu / (nu + t²), for t >= 0.
 double t_cdf(double t, double nu) {
   const double tail = 0.5 * incomplete_beta(nu / (nu + t * t), 0.5 * nu, 0.5);
   return t >= 0 ? 1 - tail : tail;

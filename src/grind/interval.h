@@ -52,7 +52,7 @@ double profile_limit(double ssr_min, int dof);
 // The quantile of Student's t with `dof` degrees of freedom at probability
 // p (0.975 for a 95 % interval); the normal's for dof <= 0. Closed forms
 // for 1 and 2 degrees of freedom, else the distribution function (the
-// regularised incomplete beta function) inverted by bisection.
+// regularised incomplete beta function of pbm.h) inverted by bisection.
 double t_quantile(double p, int dof);
 
 // An interval; an end at ±infinity is open (the number goes past any
