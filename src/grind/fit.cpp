@@ -430,7 +430,7 @@ void check_names(const Ore& start, const std::vector<std::string>& names, std::v
     const OreParameter* p = find_ore_parameter(nm);
     if (!p)
       throw std::invalid_argument("--fit-params " + nm + ": not a parameter a fit can move; did you mean " +
-                                  closest_ore_parameter(nm) + "? (docs/grinding.md lists them)");
+                                  closest_ore_parameter(nm) + "? (docs/grinding-fit.md lists them)");
     if (!p->any_model && p->model != start.model)
       throw std::invalid_argument("--fit-params " + nm + ": not a parameter of the ore's rate model (rates.model)");
     if (p->appearance && *p->appearance != start.appearance)

@@ -1,4 +1,4 @@
-// An ore fitted to a laboratory batch grinding test (docs/grinding.md):
+// An ore fitted to a laboratory batch grinding test (docs/grinding-fit.md):
 // the test (the feed and the products' cumulative passing at the same
 // sieves after each grinding time), the ore's parameters a fit may move,
 // a small Levenberg–Marquardt least-squares solver with a numerical
