@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """A synthetic batch grinding test for `millcharge grind --fit`, made from a
-known ore's batch products (docs/grinding.md).
+known ore's batch products (docs/grinding-fit.md).
 
 Reads the grind.csv that `millcharge grind RUN --ore ORE --time T1,T2,...`
 wrote, picks SIEVES class tops from the feed's top down, adds uniform

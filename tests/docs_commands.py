@@ -43,10 +43,11 @@ EXPECTED_SKIPS = [
     ('docs/gpu.md', 'rusticl'),                       # another OpenCL driver, tested by its own label
     ('docs/gpu.md', 'RUSTICL_ENABLE'),
     ('docs/grinding.md', 'sweeps/lifters'),           # a sweep of the lifters the page only names
-    ('docs/grinding.md', 'grind runs/lab_bc --ore assets/ores/example_t10'),  # runs the page makes further down
+    ('docs/grinding.md', 'grind runs/lab_bc --ore assets/ores/example_t10'),  # runs grinding-scale-up.md makes
     ('docs/grinding.md', 'grind runs/bond --ore assets/ores/example_t10'),
-    ('docs/grinding.md', 'runs/mill_d_bc'),           # seed mill D's slice: over an hour
-    ('docs/grinding.md', 'fit_eta0/'),                # made by an inline command of the page's prose
+    ('docs/grinding-scale-up.md', 'runs/mill_d_bc'),  # seed mill D's slice: over an hour
+    ('docs/grinding-intervals.md', 'seq 101 140'),    # a bootstrap of 40 refits: minutes
+    ('docs/grinding-intervals.md', 'seq 1 30'),       # 30 draws of two tests, fitted: minutes
     ('docs/liner-life.md', 'runs/lab-life/stage-08'), # an eight-stage study, shortened to one stage here
     ('docs/reliability.md', '--resume runs/lab1'),    # after Ctrl-C
     ('docs/commands.md', '--resume runs/b'),          # after Ctrl-C, a crash or a time limit

@@ -207,7 +207,7 @@ TEST_CASE("grind --fit round trip: with ±1 pp of scatter the parameters come ba
   const double H = 1.2;
   // Two parameters: with this much scatter on 5 times x 12 sieves of the
   // short run, more of the spectrum model's are not all identified
-  // (docs/grinding.md gives the five-parameter fit).
+  // (docs/grinding-fit.md gives the five-parameter fit).
   Ore start = truth;
   start.efficiency = 0.6;
   start.fracture.sigma = 1.0;
@@ -233,7 +233,7 @@ TEST_CASE("grind --fit round trip: with ±1 pp of scatter the parameters come ba
       if (seed == 0) {
         std::printf("  %-12s %.5g +- %.2g (true %.5g, %.2f standard errors off)\n", p.name.c_str(), p.value, p.se,
                     truth_v, std::fabs(z));
-        CHECK(std::fabs(z) < 0.6);  // docs/grinding.md
+        CHECK(std::fabs(z) < 0.6);  // docs/grinding-fit.md
       }
       sum_z2 += z * z;
       max_z = std::max(max_z, std::fabs(z));

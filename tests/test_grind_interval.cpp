@@ -26,6 +26,7 @@
 #include "grind/interval.h"
 #include "app/commands.h"
 #include "bond_run.h"
+#include "grind_synthetic.h"
 #include "app/grind.h"
 #include "io/batch_test_file.h"
 #include "io/ore_file.h"
@@ -34,68 +35,16 @@
 using namespace mc::grind;
 namespace fs = std::filesystem;
 
+using mc::test::harder_spectrum;
+using mc::test::kHoldup_kg;
+using mc::test::known_ore;
+using mc::test::kPower_W;
+using mc::test::p80_at_20_min;
+using mc::test::Scatter;
+using mc::test::synthetic_spectrum;
+using mc::test::synthetic_test;
+
 namespace {
-
-// A ball mill's spectrum, made up: collisions from 0.5 mJ to 50 mJ, fewer
-// the harder, between surfaces of 10 mm effective radius.
-std::vector<SpectrumBin> synthetic_spectrum() {
-  std::vector<SpectrumBin> s;
-  for (int k = 0; k < 12; ++k) {
-    const double e = 5e-4 * std::pow(10.0, k / 5.5);
-    s.push_back({2e4 * std::pow(e / 5e-4, -1.2), e, 0.01});
-  }
-  return s;
-}
-constexpr double kPower_W = 80, kHoldup_kg = 1.2;
-
-Ore known_ore() {
-  Ore o = mc::io::read_ore(fs::path(MC_ASSET_DIR) / "ores" / "example_spectrum.toml");
-  o.efficiency = 0.35;
-  return o;
-}
-
-// Uniform scatter in [-1, 1], the same on every machine (xorshift64, as
-// test_grind_fit.cpp's).
-struct Scatter {
-  std::uint64_t state;
-  explicit Scatter(std::uint64_t seed) : state(88172645463325252ULL + seed * 0x9E3779B97F4A7C15ULL) {}
-  double next() {
-    state ^= state << 13;
-    state ^= state >> 7;
-    state ^= state << 17;
-    return 2.0 * static_cast<double>(state >> 11) / 9007199254740992.0 - 1.0;
-  }
-};
-
-// 5 times x 13 sieves (3.35 mm and the √2 series from 2.36 mm), the ore's
-// products with ±noise_pp of uniform scatter.
-BatchTest synthetic_test(const Ore& ore, double noise_pp, std::uint64_t seed) {
-  BatchTest t;
-  t.sieve_m.push_back(3.35e-3);
-  for (int k = 0; k < 12; ++k) t.sieve_m.push_back(2.36e-3 / std::pow(std::sqrt(2.0), k));
-  for (double x : t.sieve_m) t.feed_passing.push_back(passing_at(ore.sizes, ore.feed, x));
-  t.feed_passing[0] = 1;
-  t.times_min = {0.5, 1, 2, 4, 8};
-  t.holdup_kg = kHoldup_kg;
-  t.noise_pp = noise_pp;
-  t.passing = batch_test_products(ore, synthetic_spectrum(), kPower_W, kHoldup_kg, t);
-  Scatter s(seed);
-  // Not clipped to 0..1: readings clipped near 1 scatter less than the rest,
-  // s² pooled over every reading comes out below the scatter of those that
-  // carry the information, and the intervals narrower than they should be
-  // (docs/grinding.md: 0.927 held clipped, 0.939 unclipped).
-  for (auto& row : t.passing)
-    for (std::size_t k = 1; k < row.size(); ++k) row[k] = row[k] + noise_pp / 100 * s.next();
-  return t;
-}
-
-// The product outside the test: P80 (um) after 20 min in the same mill.
-std::vector<double> p80_at_20_min(const Ore& o) {
-  const auto spectrum = synthetic_spectrum();
-  const MillRates r = mill_rates(o, spectrum, kPower_W, kHoldup_kg);
-  const std::vector<double> m = batch_grind(o.feed, r.S_per_min, appearance_matrix(o, spectrum), 20);
-  return {passing_size(o.sizes, m, 0.8) * 1e6};
-}
 
 fs::path temp(const std::string& name) {
   return fs::temp_directory_path() / ("millcharge_test_interval_" + std::to_string(::getpid()) + "_" + name);
@@ -103,11 +52,44 @@ fs::path temp(const std::string& name) {
 
 }  // namespace
 
-TEST_CASE("grind intervals: Student's t quantile", "[grind][interval]") {
+namespace {
+
+// P(0 <= T <= t) for Student's t with nu degrees of freedom: its density
+// integrated by Simpson's rule on 40,000 intervals, independently of the
+// code's incomplete beta function.
+double t_mass_to(double t, int nu) {
+  const double v = nu;
+  const double c = std::exp(std::lgamma(0.5 * (v + 1)) - std::lgamma(0.5 * v)) / std::sqrt(v * M_PI);
+  auto f = [&](double x) { return c * std::pow(1 + x * x / v, -0.5 * (v + 1)); };
+  const int n = 40000;
+  const double h = t / n;
+  double sum = f(0) + f(t);
+  for (int k = 1; k < n; ++k) sum += (k % 2 ? 4 : 2) * f(k * h);
+  return sum * h / 3;
+}
+
+}  // namespace
+
+TEST_CASE("grind intervals: Student's t quantile, exact for every degree of freedom", "[grind][interval]") {
+  // Closed forms: nu = 1, the Cauchy distribution, tan(pi (p - 1/2)); nu =
+  // 2, (2p - 1) / sqrt(2 p (1 - p)).
+  for (double p : {0.6, 0.9, 0.975, 0.995}) {
+    CHECK(t_quantile(p, 1) == Approx(std::tan(M_PI * (p - 0.5))).epsilon(1e-12));
+    CHECK(t_quantile(p, 2) == Approx((2 * p - 1) / std::sqrt(2 * p * (1 - p))).epsilon(1e-12));
+  }
+  // The density integrated up to the quantile gives back p - 1/2.
+  for (int nu : {1, 2, 3, 4, 5, 6, 8, 10, 30, 100})
+    for (double p : {0.9, 0.975, 0.995}) {
+      INFO("nu " << nu << ", p " << p << ", t " << t_quantile(p, nu));
+      CHECK(t_mass_to(t_quantile(p, nu), nu) == Approx(p - 0.5).margin(1e-9));
+    }
+  // The tables' values at 0.975 (to their 6 decimals), symmetry, the normal.
+  const std::pair<int, double> table[] = {{1, 12.706205}, {2, 4.302653}, {3, 3.182446}, {4, 2.776445},
+                                          {5, 2.570582},  {10, 2.228139}, {30, 2.042272}, {60, 2.000298}};
+  for (const auto& [nu, t] : table) CHECK(t_quantile(0.975, nu) == Approx(t).margin(1e-6));
+  CHECK(t_quantile(0.025, 7) == Approx(-t_quantile(0.975, 7)).epsilon(1e-12));
+  CHECK(t_quantile(0.5, 3) == 0);
   CHECK(t_quantile(0.975, 0) == Approx(1.959964).epsilon(1e-6));
-  CHECK(t_quantile(0.975, 10) == Approx(2.228139).epsilon(1e-3));
-  CHECK(t_quantile(0.975, 30) == Approx(2.042272).epsilon(1e-4));
-  CHECK(t_quantile(0.975, 60) == Approx(2.000298).epsilon(1e-5));
 }
 
 TEST_CASE("grind intervals: the fit's covariance kept with the ore and read back, an ore fitted before has none",
@@ -160,6 +142,11 @@ TEST_CASE("grind intervals: the fit's covariance kept with the ore and read back
   for (std::size_t a = 0; a < u.names.size(); ++a)
     for (std::size_t b = 0; b < u.names.size(); ++b) CHECK(v.matrix[a][b] == Approx(u.matrix[a][b]).epsilon(1e-9));
   REQUIRE(v.held.size() == u.held.size());
+  REQUIRE(v.information.size() == u.names.size() + u.held.size());
+  CHECK(v.information[0][0] == Approx(u.information[0][0]).epsilon(1e-9));
+  CHECK(v.edges.size() == u.edges.size());
+  REQUIRE(v.best.held.size() == u.best.held.size());
+  for (std::size_t k = 0; k < u.best.held.size(); ++k) CHECK(v.best.held[k] == Approx(u.best.held[k]).epsilon(1e-9));
   for (std::size_t k = 0; k < u.held.size(); ++k) {
     CHECK(v.held[k].lo == Approx(u.held[k].lo).epsilon(1e-9));
     CHECK(v.held[k].free_at_hi.size() == u.names.size());
@@ -205,9 +192,10 @@ TEST_CASE("grind intervals: the 95 % interval of a P80 outside the test holds th
   const auto spectrum = synthetic_spectrum();
   // N seeded tests with ±1 pp of uniform scatter, each fitted (η and σ) and
   // its interval of the P80 after 20 min (the test stops at 8) checked
-  // against the truth's, at the width the method gives and at half of it.
+  // against the truth's, at the width the method gives, at 0.8 of it and
+  // at twice it.
   const int n = 1000;
-  int held = 0, held_half = 0;
+  int held = 0, held_narrow = 0, held_wide = 0;
   double width = 0, sum_z = 0, sum_z2 = 0;  // z: the P80's distance from the truth in its standard errors
   for (int seed = 0; seed < n; ++seed) {
     const BatchTest t = synthetic_test(truth, 1.0, 1000 + seed);
@@ -215,27 +203,59 @@ TEST_CASE("grind intervals: the 95 % interval of a P80 outside the test holds th
     const FitCovariance u = fit_covariance(f, spectrum, kPower_W, kHoldup_kg, t);
     REQUIRE(u.held.empty());
     const Interval i = propagate(f.ore, u, p80_at_20_min)[0];
-    const Interval h = propagate(f.ore, u, p80_at_20_min, 0.5)[0];
+    const Interval narrow = propagate(f.ore, u, p80_at_20_min, 0.8)[0];
+    const Interval wide = propagate(f.ore, u, p80_at_20_min, 2.0)[0];
     REQUIRE(i.valid());
     held += i.lo <= true_p80 && true_p80 <= i.hi;
-    held_half += h.lo <= true_p80 && true_p80 <= h.hi;
+    held_narrow += narrow.lo <= true_p80 && true_p80 <= narrow.hi;
+    held_wide += wide.lo <= true_p80 && true_p80 <= wide.hi;
     width += (i.hi - i.lo) / true_p80 / n;
     const double z = (0.5 * (i.lo + i.hi) - true_p80) / (0.5 * (i.hi - i.lo) / t_quantile(0.975, u.dof));
     sum_z += z / n;
     sum_z2 += z * z / n;
   }
-  const double coverage = static_cast<double>(held) / n, coverage_half = static_cast<double>(held_half) / n;
+  const double coverage = static_cast<double>(held) / n;
+  const double narrow = static_cast<double>(held_narrow) / n, wide = static_cast<double>(held_wide) / n;
   // Three binomial standard deviations of a share of n at 0.95: ±0.021.
   const double tolerance = 3 * std::sqrt(0.95 * 0.05 / n);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("interval coverage: true P80 %.1f um at 20 min; %d tests, mean width %.2f %% of it: %.3f held at the "
-              "method's width, %.3f at half of it (tolerance +-%.3f); z mean %.3f, rms %.3f; %.1f s\n",
-              true_p80, n, 100 * width, coverage, coverage_half, tolerance, sum_z, std::sqrt(sum_z2), seconds);
+              "method's width, %.3f at 0.8 of it, %.4f at twice it (tolerance +-%.3f); z mean %.3f, rms %.3f; "
+              "%.1f s\n",
+              true_p80, n, 100 * width, coverage, narrow, wide, tolerance, sum_z, std::sqrt(sum_z2), seconds);
   CHECK(std::fabs(coverage - 0.95) <= tolerance);
-  // Intervals too narrow fail the same check.
-  CHECK_FALSE(std::fabs(coverage_half - 0.95) <= tolerance);
+  // Intervals 0.8 of the width hold the truth in about 88 % of tests (a
+  // normal's share within 0.8 x 1.96): clearly below, so the check above
+  // fails for intervals too narrow; twice the width in all but about
+  // 1 in 10,000: clearly above, so it fails for intervals too wide.
+  CHECK(narrow < 0.95 - tolerance);
+  CHECK(narrow > 0.80);
+  CHECK(wide > 0.95 + tolerance);
   CHECK(width > 0.001);  // an interval that says something, not a point
   CHECK(width < 0.2);
+}
+
+// The figure docs/grinding-intervals.md gives for readings clipped to 0..1,
+// as a sieve reports them: not run with the suite (hidden), run by name:
+// millcharge_tests "[interval_clipped]".
+TEST_CASE("grind intervals: coverage with the readings clipped to 0..1", "[.][interval_clipped]") {
+  const Ore truth = known_ore();
+  const double true_p80 = p80_at_20_min(truth)[0];
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.sigma = 1.0;
+  const auto spectrum = synthetic_spectrum();
+  const int n = 1000;
+  int held = 0;
+  for (int seed = 0; seed < n; ++seed) {
+    const BatchTest t = synthetic_test(truth, 1.0, 1000 + seed, spectrum, {0.5, 1, 2, 4, 8}, true);
+    const BatchFit f = fit_batch_test(start, spectrum, kPower_W, kHoldup_kg, t, {"efficiency", "sigma"});
+    const Interval i = propagate(f.ore, fit_covariance(f, spectrum, kPower_W, kHoldup_kg, t), p80_at_20_min)[0];
+    held += i.valid() && i.lo <= true_p80 && true_p80 <= i.hi;
+  }
+  std::printf("interval coverage with the readings clipped to 0..1: %.3f of %d tests\n",
+              static_cast<double>(held) / n, n);
+  CHECK(static_cast<double>(held) / n < 0.95);  // below what is wanted: s² understates the informative readings
 }
 
 TEST_CASE("grind intervals: the delta method's interval against a parametric bootstrap's", "[grind][interval]") {
@@ -365,20 +385,8 @@ TEST_CASE("grind intervals through the command: --fit keeps the covariance, grin
 
 namespace {
 
-// A second mill, made up: fewer collisions, ten times harder.
-std::vector<SpectrumBin> harder_spectrum() {
-  std::vector<SpectrumBin> s = synthetic_spectrum();
-  for (SpectrumBin& b : s) b.energy_J *= 10, b.collisions_per_s /= 20;
-  return s;
-}
-
 TestInMill in_mill(const Ore& truth, const std::vector<SpectrumBin>& spectrum, std::uint64_t seed) {
-  BatchTest t = synthetic_test(truth, 1.0, seed);  // the first mill's test: remade in this one
-  t.passing = batch_test_products(truth, spectrum, kPower_W, kHoldup_kg, t);
-  Scatter s(seed);
-  for (auto& row : t.passing)
-    for (std::size_t k = 1; k < row.size(); ++k) row[k] += 0.01 * s.next();
-  return {t, spectrum, kPower_W, kHoldup_kg};
+  return {synthetic_test(truth, 1.0, seed, spectrum), spectrum, kPower_W, kHoldup_kg};
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // makes: grind.csv, rates.csv, grind.json and grind.png.
 #include "app/grind.h"
 #include "app/grind_interval.h"
+#include "app/grind_next.h"
 
 #include <fmt/format.h>
 
@@ -102,7 +103,11 @@ Product continuous(const Circuit& c, double feed_t_h) {
 }
 
 // The product at --target-p80, and the feed rate that makes it.
-Product at_target(const GrindOptions& o, const Ore& ore, const Circuit& c, double& rate_t_h) {
+// `lenient` (an ore moved for the intervals): a target that no feed rate
+// reaches gives the throughput past any bound, -inf (the ore too hard:
+// coarser even fed slowest) or +inf (too soft: finer even fed fastest),
+// which opens that end of its interval.
+Product at_target(const GrindOptions& o, const Ore& ore, const Circuit& c, double& rate_t_h, bool lenient = false) {
   const double target = o.target_p80_um * 1e-6;
   if (!(target < ore.f80_m))
     throw std::invalid_argument(fmt::format("--target-p80 {:g}: not below the feed's F80 of {} um", o.target_p80_um,
@@ -115,6 +120,17 @@ Product at_target(const GrindOptions& o, const Ore& ore, const Circuit& c, doubl
         "meet it; give a target above {} um, or an ore file whose size series reaches finer",
         o.target_p80_um, fmt_um(finest), fmt_um(finest)));
   const TargetFeed f = feed_rate_for_p80(c, target);
+  if (lenient && (f.outcome == TargetFeed::Outcome::coarse_when_slowest ||
+                  f.outcome == TargetFeed::Outcome::fine_when_fastest)) {
+    const double inf = std::numeric_limits<double>::infinity();
+    const bool hard = f.outcome == TargetFeed::Outcome::coarse_when_slowest;
+    Product p;
+    p.feed_t_h = rate_t_h = hard ? -inf : inf;
+    p.kWh_t = hard ? inf : -inf;
+    p.p80_m = target;
+    p.m.assign(c.feed.size(), std::numeric_limits<double>::quiet_NaN());
+    return p;
+  }
   if (f.outcome == TargetFeed::Outcome::coarse_when_slowest)
     throw std::invalid_argument(fmt::format(
         "--target-p80 {:g}: not reached: even fed at {:g} t/h the mill's product has P80 {} um", o.target_p80_um,
@@ -305,7 +321,7 @@ std::vector<Product> make_products(const GrindOptions& o, const Ore& ore, const 
   if (o.feed_rate_t_h > 0) products.push_back(continuous(c, o.feed_rate_t_h));
   if (o.target_p80_um > 0) {
     try {
-      products.push_back(at_target(o, ore, c, target_rate));
+      products.push_back(at_target(o, ore, c, target_rate, lenient));
     } catch (const std::invalid_argument&) {
       if (!lenient) throw;
       const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -366,7 +382,7 @@ io::Run scale_from_run(const GrindOptions& o, const Ore& ore, const io::Run& pla
 }
 
 ScaleUp scale_up(const GrindOptions& o, const Ore& ore, const io::Run& plant, const io::Run& lab, const Circuit& c,
-                 const std::vector<double>& times) {
+                 const std::vector<double>& times, bool lenient) {
   ScaleUp up;
   up.lab = lab;
   up.contact_changed = contact_mismatch(up.lab.contact, plant.contact);
@@ -379,7 +395,7 @@ ScaleUp scale_up(const GrindOptions& o, const Ore& ore, const io::Run& plant, co
   for (std::size_t i = 0; i < he.S_per_min.size(); ++i)
     he.S_per_min[i] = up.SE_t_per_kWh[i] * c.power_kW / c.holdup_t / 60;
   try {
-    up.products = make_products(o, ore, he, times, up.target_rate);
+    up.products = make_products(o, ore, he, times, up.target_rate, lenient);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string(e.what()) + " (by the energy-specific rates of --scale-from " +
                                 o.scale_from + ")");
@@ -440,12 +456,17 @@ void print(const GrindOptions& o, const Ore& ore, const io::Run& run, const Circ
   if (ci.given) {
     std::printf("  with the 95 %% intervals the fit leaves open: value [lo, hi]\n");
     // A fit that ended on a bound may sit in another valley than the ore's:
-    // the intervals are local (docs/grinding.md).
+    // the intervals are local (docs/grinding-intervals.md).
     for (const HeldParameter& h : ore.fitted_under.covariance.held)
       if (h.why == "on its bound")
-        std::printf("  note: the fit left %s on its bound (%g): the intervals describe this fit's neighbourhood "
-                    "only; another test or fewer parameters (docs/grinding.md)\n",
+        std::printf("  note: the fit left %s on its bound (%g), held there: its range is one-sided, and the "
+                    "intervals describe this fit's neighbourhood only; another test or fewer parameters "
+                    "(docs/grinding-intervals.md)\n",
                     h.name.c_str(), h.value);
+    for (const Correlated& c : ci.correlated)
+      std::printf("  note: %s and %s are correlated at r = %+.4f: the tests fix only their combination, not "
+                  "each\n",
+                  c.a.c_str(), c.b.c_str(), c.r);
   }
   for (std::size_t k = 0; k < products.size(); ++k) {
     const Product& p = products[k];
@@ -453,7 +474,7 @@ void print(const GrindOptions& o, const Ore& ore, const io::Run& run, const Circ
     auto iv = [&](Interval ProductInterval::*m, double scale, const char* f) {
       if (!ci.given) return std::string();
       const Interval& i = ci.products[k].*m;
-      return i.valid() && i.hi > i.lo ? bracket(i, scale, f) : std::string();
+      return i.valid() && i.hi - i.lo > 1e-9 * std::fabs(i.hi) ? bracket(i, scale, f) : std::string();
     };
     std::printf("  %-28s %s %8.3g kWh/t%s  P80 %s um%s%s\n", p.label.c_str(),
                 p.feed_t_h > 0 ? fmt::format("{:9.4g} t/h{}", p.feed_t_h, iv(&ProductInterval::feed_t_h, 1, "{:.4g}"))
@@ -515,7 +536,7 @@ Made make(const GrindOptions& o, const Ore& ore, const io::Run& run, const io::R
   // --scale-from: the same products by Herbst & Fuerstenau's scale-up, the
   // energy-specific rates the ore has in the laboratory run held in this mill.
   if (!o.scale_from.empty()) {
-    m.up = scale_up(o, ore, run, lab, c, times);
+    m.up = scale_up(o, ore, run, lab, c, times, lenient);
     m.products.insert(m.products.end(), m.up.products.begin(), m.up.products.end());
   }
   if (o.bond_p1_um > 0) {
@@ -543,19 +564,35 @@ GrindNumbers numbers(const GrindOptions& o, const Made& m) {
 
 // grind.json: each number's interval beside it ("P80_um_95": [lo, hi]).
 void add_intervals(nlohmann::ordered_json& j, const GrindOptions& o, const GrindIntervals& ci) {
-  auto pair = [](const Interval& i) { return i.valid() ? nlohmann::json({i.lo, i.hi}) : nlohmann::json(); };
+  // An open end (past any bound: a target the moved ore cannot reach) is
+  // null, and "KEY_open" says which.
+  auto end = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
+  auto pair = [&](const Interval& i) { return i.valid() ? nlohmann::json({end(i.lo), end(i.hi)}) : nlohmann::json(); };
+  auto put = [&](nlohmann::ordered_json& at, const std::string& key, const Interval& i) {
+    at[key] = pair(i);
+    if (i.valid() && (i.open_below() || i.open_above()))
+      at[key + "_open"] = i.open_below() && i.open_above() ? "both" : i.open_below() ? "below" : "above";
+  };
   j["intervals"] = {{"level", 0.95},
-                    {"method", "linearised propagation of the fit's covariance (Student's t), widened by the held "
-                               "parameters' ranges (docs/grinding.md)"}};
+                    {"method", "linearised propagation of the fit's covariance (Student's t), combined in quadrature "
+                               "with how far the held parameters move each number (docs/grinding-intervals.md)"}};
+  if (!ci.correlated.empty()) {
+    nlohmann::json pairs = nlohmann::json::array();
+    for (const Correlated& c : ci.correlated)
+      pairs.push_back({{"variables", {c.a, c.b}},
+                       {"r", c.r},
+                       {"note", "the tests fix only this pair's combination, not each"}});
+    j["intervals"]["correlated"] = pairs;
+  }
   for (std::size_t k = 0; k < ci.products.size(); ++k) {
     auto& q = j["products"][k];
     const ProductInterval& p = ci.products[k];
-    q["P80_um_95"] = pair(p.p80_um);
-    q["specific_energy_kWh_t_95"] = pair(p.kWh_t);
-    if (q.contains("feed_rate_t_h")) q["feed_rate_t_h_95"] = pair(p.feed_t_h);
-    if (q.contains("circulating_load")) q["circulating_load_95"] = pair(p.circulating_load);
+    put(q, "P80_um_95", p.p80_um);
+    put(q, "specific_energy_kWh_t_95", p.kWh_t);
+    if (q.contains("feed_rate_t_h")) put(q, "feed_rate_t_h_95", p.feed_t_h);
+    if (q.contains("circulating_load")) put(q, "circulating_load_95", p.circulating_load);
   }
-  if (o.target_p80_um > 0) j["throughput_at_target_t_h_95"] = pair(ci.throughput_t_h);
+  if (o.target_p80_um > 0) put(j, "throughput_at_target_t_h_95", ci.throughput_t_h);
   if (o.bond_p1_um > 0) {
     j["bond"]["work_index_kWh_t_95"] = pair(ci.work_index_kWh_t);
     j["bond"]["P80_um_95"] = pair(ci.bond_p80_um);
@@ -604,10 +641,11 @@ int cmd_grind(const GrindOptions& o) {
   if (!contact_changed.empty())
     std::fprintf(stderr,
                  "millcharge: warning: %s: the ore was fitted under other contact parameters than this run's (%s); "
-                 "its breakage parameters hold under the contact they were fitted under (docs/grinding.md)\n",
+                 "its breakage parameters hold under the contact they were fitted under (docs/grinding-fit.md)\n",
                  o.ore.c_str(), contact_changed.c_str());
 
   const io::Run lab = o.scale_from.empty() ? io::Run{} : scale_from_run(o, ore, run);
+  const NextPlan next = plan_next(o, ore);  // the candidates of --next-test, checked
   const std::vector<double> times = o.times_min.empty() && !(o.feed_rate_t_h > 0) && !(o.target_p80_um > 0) &&
                                             !(o.bond_p1_um > 0)
                                         ? std::vector<double>{1, 2, 4, 8, 16}
@@ -624,6 +662,21 @@ int cmd_grind(const GrindOptions& o) {
                  o.ore.c_str());
   const GrindIntervals ci = grind_intervals(ore, numbers(o, made),
                                             [&](const Ore& moved) { return numbers(o, make(o, moved, run, lab, times, true)); });
+  if (!ci.stale.empty() && !o.quiet)
+    std::fprintf(stderr,
+                 "millcharge: note: %s: %s ([fitted] covariance_values): the ore was changed after its fit, and "
+                 "the covariance describes the fitted ore only: products without intervals; fit it again with "
+                 "--fit for them\n",
+                 o.ore.c_str(), ci.stale.c_str());
+  // Which test next: every candidate's expected interval of the product.
+  NextRanking ranking;
+  if (next.asked) {
+    const GrindNumbers g = numbers(o, made);
+    const NextTarget target = next_target(o, g);
+    ranking = rank_next(next, ore, target, ci, g, [&](const Ore& moved) {
+      return flatten(numbers(o, make(o, moved, run, lab, times, true)))[target.index];
+    });
+  }
 
   // Everything computed; now the files.
   const fs::path out = o.out.empty() ? fs::path(o.run_dir) / "grind" : fs::path(o.out);
@@ -633,6 +686,7 @@ int cmd_grind(const GrindOptions& o) {
   write_tables(out, c, products, made.rates.SE_t_per_kWh, ci);
   nlohmann::ordered_json j = summary(o, ore, run, c, made.holdup_kg, products, made.target_rate, bond);
   if (ci.given) add_intervals(j, o, ci);
+  if (!ci.stale.empty()) j["intervals"] = {{"none", "the ore differs from the fit its covariance describes"}, {"changed", ci.stale}};
   if (!contact_changed.empty()) j["contact_differs_from_fit"] = contact_changed;
   if (unbalanced)
     j["not_in_steady_motion"] = {{"torque_W", run.power_W},
@@ -640,12 +694,18 @@ int cmd_grind(const GrindOptions& o) {
                                  {"imbalance", run.imbalance},
                                  {"energy_change_W", run.energy_change_W}};
   if (!o.scale_from.empty()) j["scale_up"] = scale_up_json(o, made.up, products);
+  if (next.asked) {
+    j["next_test"] = next_json(ranking);
+    write_next_csv(out, ranking);
+  }
   io::write_file_atomic(out / "grind.json", j.dump(2) + "\n");
   draw(out, ore, run, c, products, ci);
   if (!o.quiet) {
     print(o, ore, run, c, made.holdup_kg, products, bond, ci);
     if (!o.scale_from.empty()) print_scale_up(o, made.up, products);
-    std::printf("wrote %s/{grind.csv, rates.csv, grind.json, grind.png}\n", out.string().c_str());
+    if (next.asked) print_next(ranking);
+    std::printf("wrote %s/{grind.csv, rates.csv, grind.json, grind.png%s}\n", out.string().c_str(),
+                next.asked ? ", next_test.csv" : "");
   }
   return 0;
 }

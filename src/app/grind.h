@@ -30,6 +30,11 @@ struct GrindOptions {
   // Scale-up: beside the spectrum model's products in this run, those of
   // the energy-specific rates the ore has in a laboratory run.
   std::string scale_from;               // --scale-from LAB_RUN
+  // Which test to run next (grind_next.cpp): candidate mills' runs, sets of
+  // grinding times, and the product whose interval they should narrow.
+  std::vector<std::string> next_tests;           // --next-test RUN, once or more
+  std::vector<std::vector<double>> next_times;   // --next-times MIN,..., once or more
+  std::string next_for;                          // --next-for wi|throughput|p80:K
 };
 
 int cmd_grind(const GrindOptions& o);

@@ -49,10 +49,10 @@ void check_fit_options(const GrindOptions& o) {
   if (!o.fit_tests.empty() && o.bond_p1_um > 0)
     throw std::invalid_argument("--fit with --bond: a batch test is fitted alone; fit a work index with --fit-wi");
   if (!o.times_min.empty() || o.feed_rate_t_h > 0 || o.target_p80_um > 0 || o.classifier_d50c_um > 0 ||
-      !o.scale_from.empty())
+      !o.scale_from.empty() || !o.next_tests.empty() || !o.next_times.empty() || !o.next_for.empty())
     throw std::invalid_argument(what +
                                 ": fits the ore and writes it; grind the fitted ore in a second call (--time, "
-                                "--feed-rate, --target-p80, --classifier and --scale-from belong there)");
+                                "--feed-rate, --target-p80, --classifier, --scale-from and --next-test belong there)");
   if (o.fit_wi_kWh_t > 0 && o.fit_params.size() > 1)
     throw std::invalid_argument("--fit-params: a work index is one number and fits one parameter, not " +
                                 std::to_string(o.fit_params.size()));
@@ -71,7 +71,7 @@ ContactRecord record(const io::Run& run, const std::string& test, const std::str
 
 std::string header(const std::string& what) {
   return std::string("# Fitted by millcharge ") + version() + " (" + build_commit() + "): " + what +
-         "\n# The parameters hold under the contact law of [fitted] (docs/grinding.md).\n";
+         "\n# The parameters hold under the contact law of [fitted] (docs/grinding-fit.md).\n";
 }
 
 // fit.png: measured points and fitted curves of cumulative passing; below,
@@ -122,7 +122,40 @@ fs::path fit_folder(const GrindOptions& o) {
   return out;
 }
 
-nlohmann::ordered_json parameter_json(const FittedParameter& p) {
+// A held parameter's range in words: "from 0.87 to its bound (one-sided)",
+// "open: ..." where the data bound it on neither side within the file's
+// range. `kind` gets "one-sided", "open" or "two-sided".
+std::string held_range(const HeldParameter& h, std::string* kind = nullptr) {
+  const OreParameter* p = find_ore_parameter(h.name);
+  const double span = p->hi - p->lo;
+  const bool lo_end = h.lo <= p->lo + 1e-9 * span, hi_end = h.hi >= p->hi - 1e-9 * span;
+  const bool on_lo = h.value <= p->lo + 1e-9 * span, on_hi = h.value >= p->hi - 1e-9 * span;
+  std::string k = "two-sided", text;
+  if (on_lo || on_hi) {
+    k = (on_lo ? hi_end : lo_end) ? "open" : "one-sided";
+    text = k == "open" ? fmt::format("open: the data do not bound it within the ore file's range ({:.6g} to {:.6g})",
+                                     p->lo, p->hi)
+                       : on_lo ? fmt::format("one-sided: from its bound {:.6g} to {:.6g}", h.value, h.hi)
+                               : fmt::format("one-sided: from {:.6g} to its bound {:.6g}", h.lo, h.value);
+  } else {
+    if (lo_end && hi_end) k = "open";
+    text = fmt::format("from {:.6g} to {:.6g}", h.lo, h.hi);
+    if (lo_end || hi_end)
+      text += lo_end && hi_end ? " (open: the whole of the ore file's range)"
+                               : lo_end ? " (open below: the ore file's range ends there)"
+                                        : " (open above: the ore file's range ends there)";
+  }
+  if (kind) *kind = k;
+  return text;
+}
+
+const HeldParameter* held_entry(const FitCovariance& u, const std::string& name) {
+  for (const HeldParameter& h : u.held)
+    if (h.name == name) return &h;
+  return nullptr;
+}
+
+nlohmann::ordered_json parameter_json(const FittedParameter& p, const FitCovariance& u) {
   nlohmann::ordered_json q;
   q["name"] = p.name;
   q["start"] = p.start;
@@ -133,6 +166,11 @@ nlohmann::ordered_json parameter_json(const FittedParameter& p) {
     if (!p.at_bound) {  // on its bound it is not free: no standard error
       q["standard_error"] = p.se;
       q["relative_standard_error"] = p.value != 0 ? nlohmann::json(p.se / std::fabs(p.value)) : nlohmann::json();
+    } else if (const HeldParameter* h = held_entry(u, p.name)) {  // held there: its range, one-sided or open
+      std::string kind;
+      held_range(*h, &kind);
+      q["range_95"] = {h->lo, h->hi};
+      q["range_95_kind"] = kind;
     }
   } else {
     q["held_at"] = p.value;
@@ -157,7 +195,15 @@ nlohmann::ordered_json covariance_json(const FitCovariance& u) {
   j["residual_variance_pp2"] = u.residual_variance_pp2;
   j["degrees_of_freedom"] = u.dof;
   j["held"] = nlohmann::json::array();
-  for (const HeldParameter& h : u.held) j["held"].push_back({{"name", h.name}, {"value", h.value}, {"lo", h.lo}, {"hi", h.hi}});
+  for (const HeldParameter& h : u.held) {
+    std::string kind;
+    held_range(h, &kind);
+    j["held"].push_back({{"name", h.name}, {"value", h.value}, {"lo", h.lo}, {"hi", h.hi}, {"kind", kind}});
+  }
+  j["edge_points"] = u.edges.size();
+  j["correlated"] = nlohmann::json::array();
+  for (const Correlated& c : correlated_pairs(u))
+    j["correlated"].push_back({{"variables", {c.a, c.b}}, {"r", c.r}});
   return j;
 }
 
@@ -171,9 +217,20 @@ void print_covariance(const FitCovariance& u) {
       std::printf("    %-22s%s\n", variable_name(u.names[a]).c_str(), row.c_str());
     }
   }
+  for (const Correlated& c : correlated_pairs(u))
+    std::printf("  note: %s and %s are correlated at r = %+.4f: the tests fix only their combination, not each\n",
+                c.a.c_str(), c.b.c_str(), c.r);
   for (const HeldParameter& h : u.held)
-    std::printf("  %-16s held at %.6g; the data leave it open from %.6g to %.6g (the free ones refitted there)\n",
-                h.name.c_str(), h.value, h.lo, h.hi);
+    std::printf("  %-16s held at %.6g; 95 %% range %s (the free ones refitted there)\n", h.name.c_str(), h.value,
+                held_range(h).c_str());
+  if (!u.held.empty() && u.best.held.size() == u.held.size()) {
+    std::string at;
+    for (std::size_t k = 0; k < u.held.size(); ++k)
+      at += fmt::format("{}{} {:.6g}", k ? ", " : "", u.held[k].name, u.best.held[k]);
+    std::printf("  the held parameters fit the data best at %s (the free ones refitted there; S %.4g there, %.4g "
+                "where they are held, the limit %.4g): the intervals are built around it\n",
+                at.c_str(), u.ssr_best, u.ssr_fit, profile_limit(u.ssr_best, u.dof));
+  }
 }
 
 // One batch test of a fit and the run of the mill it was made in.
@@ -230,6 +287,12 @@ std::vector<TestRun> read_tests(const GrindOptions& o, const Ore& start) {
         throw std::invalid_argument(t.path + ": run: \"" + t.file.run + "\": " + e.what());
       }
     }
+    if (!(bt.noise_pp > 0) && tests.size() > 1)
+      for (const TestRun& u : tests)
+        if (u.file.test.noise_pp > 0)
+          throw std::invalid_argument(t.path + ": noise_pp: 0 beside " + u.path +
+                                      "'s scatter: tests fitted together count by 1/noise_pp^2, infinite at 0; give "
+                                      "the test the scatter of its sieving");
     t.holdup_kg = bt.holdup_kg > 0 ? bt.holdup_kg
                                    : mill_holdup_kg(start, t.run.porosity, t.run.filling, t.run.mill_volume);
     // One ore holds under one contact: tests through runs of other contacts cannot share it.
@@ -251,6 +314,7 @@ int fit_batch(const GrindOptions& o) {
   std::vector<TestInMill> in_mills;
   for (const TestRun& t : tests) in_mills.push_back({t.file.test, t.run.spectrum, t.run.power_W, t.holdup_kg});
   BatchFit fit = fit_batch_tests(start, in_mills, names);
+  const std::vector<double> weights = test_weights(in_mills);  // on the residuals: the squares count by their square
   std::string test_names, run_names;
   for (const TestRun& t : tests) {
     test_names += (test_names.empty() ? "" : ", ") + t.path;
@@ -296,10 +360,12 @@ int fit_batch(const GrindOptions& o) {
                           {"run", tests[m].run_dir},
                           {"power_W", tests[m].run.power_W},
                           {"holdup_kg", tests[m].holdup_kg},
+                          {"noise_pp", tests[m].file.test.noise_pp},
+                          {"weight", std::pow(weights[m], 2)},
                           {"rms_residual_pp", fit.rms_by_test[m]}});
   j["data"] = fit.data;
   j["parameters"] = nlohmann::json::array();
-  for (const FittedParameter& p : fit.parameters) j["parameters"].push_back(parameter_json(p));
+  for (const FittedParameter& p : fit.parameters) j["parameters"].push_back(parameter_json(p, cov));
   j["free_parameters"] = fit.free;
   j["rms_residual_pp"] = fit.rms_pp;
   double noise_pp = 0;
@@ -350,8 +416,8 @@ int fit_batch(const GrindOptions& o) {
                   run.contact.law.c_str());
     for (const FittedParameter& p : fit.parameters) {
       if (p.identified && p.at_bound)
-        std::printf("  %-16s %.6g on its bound: the test wants it past the ore file's range (no standard error)   "
-                    "start %.6g\n",
+        std::printf("  %-16s %.6g on its bound, held there: the test wants it past the ore file's range (no "
+                    "standard error)   start %.6g\n",
                     p.name.c_str(), p.value, p.start);
       else if (p.identified)
         std::printf("  %-16s %.6g +- %.2g (%.2g %%)   start %.6g\n", p.name.c_str(), p.value, p.se,

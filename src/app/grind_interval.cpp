@@ -39,6 +39,9 @@ GrindIntervals grind_intervals(const Ore& ore, const GrindNumbers& made,
   GrindIntervals out;
   const FitCovariance& u = ore.fitted_under.covariance;
   if (!u.given) return out;
+  out.stale = stale_covariance(ore, u);
+  if (!out.stale.empty()) return out;
+  out.correlated = correlated_pairs(u);
   const std::size_t n = flatten(made).size();
   const std::vector<Interval> all = propagate(ore, u, [&](const Ore& o) {
     const std::vector<double> v = flatten(make(o));
@@ -67,6 +70,9 @@ GrindIntervals grind_intervals(const Ore& ore, const GrindNumbers& made,
 
 std::string bracket(const Interval& i, double scale, const char* format) {
   if (!i.valid()) return "";
+  if (i.open_below() && i.open_above()) return " [open: no bound either way]";
+  if (i.open_above()) return fmt::format(fmt::runtime(std::string(" [> ") + format + "]"), i.lo * scale);
+  if (i.open_below()) return fmt::format(fmt::runtime(std::string(" [< ") + format + "]"), i.hi * scale);
   const std::string f = std::string(" [") + format + ", " + format + "]";
   return fmt::format(fmt::runtime(f), i.lo * scale, i.hi * scale);
 }

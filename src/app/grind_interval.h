@@ -1,7 +1,7 @@
 // The 95 % intervals of `grind`'s products from a fitted ore's covariance
 // (src/grind/interval.h): every number grind reports, as one list the
 // intervals are propagated through, and back into the console, grind.csv,
-// grind.json and grind.png (docs/grinding.md, "Intervals").
+// grind.json and grind.png (docs/grinding-intervals.md).
 #pragma once
 
 #include <functional>
@@ -33,16 +33,23 @@ struct ProductInterval {
 };
 struct GrindIntervals {
   bool given = false;
+  // Why none were made though the ore has a covariance: a fitted or held
+  // parameter of the ore differs from the value the covariance was computed
+  // at (grind::stale_covariance); "" otherwise.
+  std::string stale;
+  std::vector<grind::Correlated> correlated;  // pairs beyond |r| > 0.99
   std::vector<ProductInterval> products;
   grind::Interval work_index_kWh_t, bond_p80_um, gbp_g_rev, throughput_t_h;
 };
 
 // The intervals of what `make` gives for the ore; none (given false) for an
-// ore whose [fitted] table has no covariance.
+// ore whose [fitted] table has no covariance, or whose fitted values were
+// changed since (`stale` says which).
 GrindIntervals grind_intervals(const grind::Ore& ore, const GrindNumbers& made,
                                const std::function<GrindNumbers(const grind::Ore&)>& make);
 
-// " [lo, hi]" with the value's format, or "" without an interval.
+// " [lo, hi]" with the value's format, " [> lo]" or " [< hi]" for an
+// interval open at one end, or "" without an interval.
 std::string bracket(const grind::Interval& i, double scale, const char* format);
 
 }  // namespace mc::app

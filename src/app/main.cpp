@@ -272,6 +272,24 @@ int main(int argc, char** argv) {
                     "a laboratory run: beside the spectrum model's products, Herbst & Fuerstenau's scale-up (the "
                     "ore's energy-specific rates in that run, at this mill's power and hold-up)")
       ->type_name("LAB_RUN");
+  std::vector<std::string> next_times;
+  grind->add_option("--next-test", go.next_tests,
+                    "a run of a mill a next batch test could be made in (normal energy spectrum): rank the candidate "
+                    "tests by the interval they would leave on a product of the fitted ore; give it again for more "
+                    "mills")
+      ->type_name("RUN")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  grind->add_option("--next-times", next_times,
+                    "with --next-test: one candidate set of grinding times in minutes, comma-separated; give it again "
+                    "for more (default 0.5,1,2,4,8 and 1,2,4,8,16 and 2,4,8,16,32)")
+      ->type_name("MIN,...")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  grind->add_option("--next-for", go.next_for,
+                    "with --next-test: the product to narrow: wi (Bond's work index, with --bond), throughput (with "
+                    "--target-p80) or p80:K (the K-th product's P80); default wi, else throughput, else p80:1")
+      ->type_name("WHAT");
   grind->add_option("--out", go.out, "folder for the results (default RUN/grind, RUN/fit for a fit)");
   grind->add_flag("--quiet", go.quiet, "no summary lines");
 
@@ -303,6 +321,26 @@ int main(int argc, char** argv) {
                                       item + "\"");
         go.times_min.push_back(t);
         start = end + 1;
+      }
+      for (const std::string& set : next_times) {
+        std::vector<double> ts;
+        std::string before;
+        for (std::size_t start = 0; start <= set.size();) {
+          const std::size_t end = std::min(set.find(',', start), set.size());
+          const std::string item = set.substr(start, end - start);
+          char* stop = nullptr;
+          const double t = std::strtod(item.c_str(), &stop);
+          if (item.empty() || *stop != '\0' || !(t > 0) || !std::isfinite(t))
+            throw std::invalid_argument("--next-times " + set + ": expected minutes > 0, comma-separated, got \"" +
+                                        item + "\"");
+          if (!ts.empty() && !(t > ts.back()))
+            throw std::invalid_argument("--next-times " + set + ": " + item + " does not follow " + before +
+                                        ": times must ascend");
+          ts.push_back(t);
+          before = item;
+          start = end + 1;
+        }
+        go.next_times.push_back(ts);
       }
       if (fit_params_opt->count() > 0 && fit_params.empty())
         throw std::invalid_argument("--fit-params \"\": names no parameter; name one or more (e.g. --fit-params "

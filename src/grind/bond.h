@@ -1,4 +1,4 @@
-// Bond's locked-cycle test run on the population balance (docs/grinding.md):
+// Bond's locked-cycle test run on the population balance (docs/grinding-scale-up.md):
 // the test's charge, the size series put on its closing sieve, and the
 // test itself with Bond's work index from it.
 #pragma once

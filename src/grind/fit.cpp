@@ -430,7 +430,7 @@ void check_names(const Ore& start, const std::vector<std::string>& names, std::v
     const OreParameter* p = find_ore_parameter(nm);
     if (!p)
       throw std::invalid_argument("--fit-params " + nm + ": not a parameter a fit can move; did you mean " +
-                                  closest_ore_parameter(nm) + "? (docs/grinding.md lists them)");
+                                  closest_ore_parameter(nm) + "? (docs/grinding-fit.md lists them)");
     if (!p->any_model && p->model != start.model)
       throw std::invalid_argument("--fit-params " + nm + ": not a parameter of the ore's rate model (rates.model)");
     if (p->appearance && *p->appearance != start.appearance)
@@ -450,6 +450,40 @@ BatchFit fit_batch_test(const Ore& start, const std::vector<SpectrumBin>& spectr
   return fit_batch_tests(start, {TestInMill{test, spectrum, power_W, holdup_kg}}, names, max_iterations);
 }
 
+std::vector<double> test_weights(const std::vector<TestInMill>& tests) {
+  std::vector<double> w(tests.size(), 1.0);
+  bool alike = true;
+  for (const TestInMill& tm : tests) alike = alike && tm.test.noise_pp == tests.front().test.noise_pp;
+  if (alike) return w;
+  for (std::size_t m = 0; m < tests.size(); ++m) {
+    if (!(tests[m].test.noise_pp > 0))
+      throw std::invalid_argument("--fit: test " + std::to_string(m + 1) +
+                                  " has noise_pp 0 beside tests with scatter: its weight 1/noise_pp^2 is infinite; "
+                                  "give each test the scatter of its sieving");
+    w[m] = tests.front().test.noise_pp / tests[m].test.noise_pp;
+  }
+  return w;
+}
+
+std::vector<double> weighted_residuals(const Ore& ore, const std::vector<TestInMill>& tests) {
+  const std::vector<double> w = test_weights(tests);
+  std::vector<double> r;
+  for (std::size_t m = 0; m < tests.size(); ++m) {
+    const TestInMill& tm = tests[m];
+    const auto pred = batch_test_products(ore, tm.spectrum, tm.power_W, tm.holdup_kg, tm.test);
+    for (std::size_t k : informative_sieves(tm.test))
+      for (std::size_t t = 0; t < tm.test.times_min.size(); ++t)
+        r.push_back(w[m] * 100 * (pred[t][k] - tm.test.passing[t][k]));
+  }
+  return r;
+}
+
+double weighted_ssr(const Ore& ore, const std::vector<TestInMill>& tests) {
+  double ssr = 0;
+  for (double x : weighted_residuals(ore, tests)) ssr += x * x;
+  return ssr;
+}
+
 std::vector<std::size_t> informative_sieves(const BatchTest& test) {
   std::vector<std::size_t> used;
   for (std::size_t k = 0; k < test.sieve_m.size(); ++k) {
@@ -461,7 +495,7 @@ std::vector<std::size_t> informative_sieves(const BatchTest& test) {
 }
 
 BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests, const std::vector<std::string>& names,
-                         int max_iterations) {
+                         int max_iterations, bool hold_unidentified) {
   std::vector<const OreParameter*> params;
   check_names(start, names, params);
   if (tests.empty()) throw std::invalid_argument("--fit: no batch test");
@@ -482,7 +516,9 @@ BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests,
     throw std::invalid_argument("--fit-params: " + std::to_string(params.size()) + " parameters for " +
                                 std::to_string(n) +
                                 " data (times x sieves below the top): a fit needs more data than parameters");
-  // The residuals of an ore against every test, in percentage points; the
+  const std::vector<double> weight = test_weights(tests);
+  // The residuals of an ore against every test, in percentage points of
+  // the first test's noise (each test's weighted by its noise); the
   // products by test.
   auto residuals_of = [&](const Ore& o, std::vector<double>& r, std::vector<Matrix>* products) {
     std::size_t i = 0;
@@ -490,7 +526,7 @@ BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests,
       const TestInMill& tm = tests[m];
       const auto pred = batch_test_products(o, tm.spectrum, tm.power_W, tm.holdup_kg, tm.test);
       for (std::size_t t = 0; t < tm.test.times_min.size(); ++t)
-        for (std::size_t k : used[m]) r[i++] = 100 * (pred[t][k] - tm.test.passing[t][k]);
+        for (std::size_t k : used[m]) r[i++] = weight[m] * 100 * (pred[t][k] - tm.test.passing[t][k]);
       if (products) products->push_back(pred);
     }
   };
@@ -533,8 +569,13 @@ BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests,
     // standard error, and the others' are those with it fixed.
     std::vector<bool> on_bound(free.size(), false);
     std::vector<std::size_t> inner;  // indices into free, off their bounds
+    // Within a whisker of it (a millionth of its range in the fitted
+    // variable) counts as on it, and is put there: a parameter that close
+    // has no room for a standard error on that side.
     for (std::size_t a = 0; a < free.size(); ++a) {
-      on_bound[a] = std::fabs(lm.x[a] - prob.lo[a]) < 1e-9 || std::fabs(lm.x[a] - prob.hi[a]) < 1e-9;
+      const double whisker = kBoundWhisker * (prob.hi[a] - prob.lo[a]);
+      if (lm.x[a] - prob.lo[a] < whisker) lm.x[a] = prob.lo[a], on_bound[a] = true;
+      if (prob.hi[a] - lm.x[a] < whisker) lm.x[a] = prob.hi[a], on_bound[a] = true;
       if (!on_bound[a]) inner.push_back(a);
     }
     // Which the data cannot fix, judged with every free parameter; the
@@ -564,7 +605,7 @@ BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests,
       if (!id.identified[a] && (hold == free.size() || (std::isnan(id.se[a]) && !std::isnan(id.se[hold])) ||
                                 (!std::isnan(id.se[hold]) && id.se[a] > id.se[hold])))
         hold = a;
-    if (hold < free.size()) {
+    if (hold < free.size() && hold_unidentified) {
       held[free[hold]] = true;
       held_why[free[hold]] = id.why[hold];
       ++fit.refits;
@@ -579,16 +620,21 @@ BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests,
     std::vector<double> r(n);
     residuals_of(ore, r, &fit.predicted_by_test);
     fit.predicted = fit.predicted_by_test.front();
+    // The sum of squares as weighted (what the fit minimised); the rms
+    // residuals in percentage points as measured.
     fit.ssr = 0;
+    double ssr_pp = 0;
     std::size_t i = 0;
     for (std::size_t m = 0; m < tests.size(); ++m) {
       double ssr_m = 0;
       const std::size_t nm = tests[m].test.times_min.size() * used[m].size();
       for (std::size_t j = 0; j < nm; ++j, ++i) ssr_m += r[i] * r[i];
       fit.ssr += ssr_m;
+      ssr_m /= weight[m] * weight[m];
+      ssr_pp += ssr_m;
       fit.rms_by_test.push_back(nm ? std::sqrt(ssr_m / static_cast<double>(nm)) : 0.0);
     }
-    fit.rms_pp = std::sqrt(fit.ssr / static_cast<double>(n));
+    fit.rms_pp = std::sqrt(ssr_pp / static_cast<double>(n));
     // The covariance of those off their bounds, with the bound ones fixed.
     if (!inner.empty()) {
       Matrix Jin(lm.J.size(), std::vector<double>(inner.size()));

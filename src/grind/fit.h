@@ -1,4 +1,4 @@
-// An ore fitted to a laboratory batch grinding test (docs/grinding.md):
+// An ore fitted to a laboratory batch grinding test (docs/grinding-fit.md):
 // the test (the feed and the products' cumulative passing at the same
 // sieves after each grinding time), the ore's parameters a fit may move,
 // a small Levenberg–Marquardt least-squares solver with a numerical
@@ -122,7 +122,8 @@ struct BatchFit {
   std::vector<std::vector<double>> predicted;   // [time][sieve] of the first test
   std::vector<std::vector<std::vector<double>>> predicted_by_test;
   std::vector<double> rms_by_test;              // pp
-  double rms_pp = 0, ssr = 0;                   // of `predicted` against the test
+  double rms_pp = 0;                            // of every test's products, pp as measured
+  double ssr = 0;                               // weighted by the tests' noise (fit_batch_tests)
   int iterations = 0, evaluations = 0, data = 0, refits = 0;
   int free = 0;                                 // parameters left free (0: every one held)
   double condition = 0;
@@ -130,7 +131,7 @@ struct BatchFit {
   // variables (the logarithm of a scale): s² (JᵀJ)⁻¹ at the solution.
   std::vector<std::size_t> covariance_of;       // indices into `parameters`
   std::vector<std::vector<double>> covariance;
-  double s2 = 0;                                // ssr / (data − free), pp²
+  double s2 = 0;                                // ssr / (data − free), pp² of the first test
   int dof = 0;
 };
 // Fits the named parameters of `start` to the test through the mill's
@@ -153,8 +154,25 @@ struct TestInMill {
   std::vector<SpectrumBin> spectrum;
   double power_W = 0, holdup_kg = 0;
 };
+// Each test's residuals count by 1/noise_pp²: a test sieved to 0.5 pp
+// counts four times one sieved to 1 pp. The weights are taken relative to
+// the first test's noise, so that the sum of squares and s² are in pp² of
+// a reading of the first test, and tests of equal noise fit as unweighted.
+// A parameter the fit ends within kBoundWhisker of its range (in the
+// fitted variable) from a bound is put on the bound. hold_unidentified
+// false: none is held (a refit of parameters known to be free, for a
+// profile).
 BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests, const std::vector<std::string>& names,
-                         int max_iterations = 300);
+                         int max_iterations = 300, bool hold_unidentified = true);
+constexpr double kBoundWhisker = 1e-6;
+// The tests' residual weights, noise_pp of the first over each's (all 1
+// where the noises are alike). Throws std::invalid_argument for a noise of
+// 0 beside others.
+std::vector<double> test_weights(const std::vector<TestInMill>& tests);
+// The weighted residuals of the ore's products against the tests (pp of
+// the first test), over the sieves the fit reads, and their sum of squares.
+std::vector<double> weighted_residuals(const Ore& ore, const std::vector<TestInMill>& tests);
+double weighted_ssr(const Ore& ore, const std::vector<TestInMill>& tests);
 // The sieves of a test that carry information: not passing 1 in the feed
 // and every product.
 std::vector<std::size_t> informative_sieves(const BatchTest& test);

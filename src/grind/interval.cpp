@@ -1,6 +1,8 @@
 // The fit's uncertainty carried to a fitted ore's products (interval.h).
 #include "grind/interval.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -12,22 +14,14 @@ namespace mc::grind {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kPi = 3.14159265358979323846;
 
 double to_var(const OreParameter& p, double v) { return p.log ? std::log(v) : v; }
 double from_var(const OreParameter& p, double x) { return p.log ? std::exp(x) : x; }
-
-// The sum of squared residuals (pp²) of the ore's products against the
-// tests, over the sieves the fit reads.
-double ssr_of(const Ore& ore, const std::vector<TestInMill>& tests) {
-  double ssr = 0;
-  for (const TestInMill& tm : tests) {
-    const auto pred = batch_test_products(ore, tm.spectrum, tm.power_W, tm.holdup_kg, tm.test);
-    for (std::size_t k : informative_sieves(tm.test))
-      for (std::size_t t = 0; t < tm.test.times_min.size(); ++t)
-        ssr += std::pow(100 * (pred[t][k] - tm.test.passing[t][k]), 2);
-  }
-  return ssr;
-}
+// The ore file's range in the fitted variable.
+double var_lo(const OreParameter& p) { return to_var(p, p.log ? std::max(p.lo, 1e-300) : p.lo); }
+double var_hi(const OreParameter& p) { return to_var(p, p.hi); }
 
 std::vector<double> variables_of(const Ore& ore, const std::vector<std::string>& names) {
   std::vector<double> x;
@@ -38,57 +32,295 @@ std::vector<double> variables_of(const Ore& ore, const std::vector<std::string>&
   return x;
 }
 
-// One side (dir −1 or +1) of a held parameter's profile: the furthest value
-// within the data, and the free variables refitted there.
-void profile_side(HeldParameter& h, int dir, const BatchFit& fit, const FitCovariance& u,
-                  const std::vector<TestInMill>& tests) {
-  const OreParameter& p = *find_ore_parameter(h.name);
-  const double x_held = to_var(p, h.value);
-  const double x_end = dir < 0 ? to_var(p, p.log ? std::max(p.lo, 1e-300) : p.lo) : to_var(p, p.hi);
-  const double step = p.log ? 1.0 : (p.hi - p.lo) / 4;
-  const double limit = fit.ssr + 3.84 * u.residual_variance_pp2;
-  double x_in = x_held, x_out = x_held;  // the last step within the data, the first past it
-  std::vector<double> free_there = u.values;
-  Ore ore = fit.ore, inside = fit.ore;
-  // The free ones refitted with the held one at x (from the last ore within
-  // the data); false where no fit is found or the data are left.
-  auto within = [&](double x) {
-    Ore o = inside;
-    p.set(o, from_var(p, x));
-    try {
-      if (!u.names.empty()) o = fit_batch_tests(o, tests, u.names).ore;
-    } catch (const std::exception&) {
-      return false;
-    }
-    if (!(ssr_of(o, tests) <= limit)) return false;
-    ore = o;
-    return true;
-  };
-  for (int s = 1; s <= 6 && std::isfinite(limit); ++s) {
-    const double x = dir < 0 ? std::max(x_held - s * step, x_end) : std::min(x_held + s * step, x_end);
-    if (!within(x)) {
-      x_out = x;
-      break;
-    }
-    x_in = x;
-    inside = ore;
-    free_there = variables_of(ore, u.names);
-    if (x == x_end) break;
-  }
-  // Three halvings between the last step within and the first past: the
-  // range's end to an eighth of a step.
-  for (int k = 0; k < 3 && x_out != x_in; ++k) {
-    const double x = 0.5 * (x_in + x_out);
-    if (within(x)) {
-      x_in = x;
-      inside = ore;
-      free_there = variables_of(ore, u.names);
+// ------------------------------------------------------------ profiles
+
+// The free parameters refitted with some held ones moved (none of them
+// held in turn: they are free at the fit): the weighted sum of squares
+// there and the free variables; ok false where no fit is found.
+struct Refit {
+  bool ok = false;
+  double ssr = kInf;
+  std::vector<double> free;
+  Ore ore;
+};
+
+Refit refit(const Ore& from, const FitCovariance& u, const std::vector<TestInMill>& tests) {
+  Refit r;
+  r.ore = from;
+  try {
+    if (!u.names.empty()) {
+      const BatchFit f = fit_batch_tests(from, tests, u.names, 300, false);
+      r.ore = f.ore;
+      r.ssr = f.ssr;
     } else {
-      x_out = x;
+      r.ssr = weighted_ssr(from, tests);
+    }
+  } catch (const std::exception&) {
+    return r;
+  }
+  r.ok = std::isfinite(r.ssr);
+  r.free = variables_of(r.ore, u.names);
+  return r;
+}
+
+// A point of the held parameters: their values (file units) and the free
+// ones refitted there.
+struct HeldPoint {
+  std::vector<double> held;
+  Refit at;
+};
+
+HeldPoint held_point(const FitCovariance& u, const std::vector<double>& held, const Ore& warm,
+                     const std::vector<TestInMill>& tests) {
+  Ore o = warm;
+  for (std::size_t k = 0; k < held.size(); ++k) find_ore_parameter(u.held[k].name)->set(o, held[k]);
+  return {held, refit(o, u, tests)};
+}
+
+struct LinePoint {
+  double x = 0;  // the moving held parameter's variable
+  HeldPoint p;
+};
+
+// Held parameter j moved through the point `from` (the others there): each
+// side stepped out (a factor of e for a scale, a quarter of its file
+// range for a value) to the file's range, or to the first point past the
+// limit of the least S met so far (which only falls: a point past it stays
+// past it), or where no fit is found. Sorted by x, `from` among them.
+std::vector<LinePoint> line(const FitCovariance& u, std::size_t j, const HeldPoint& from,
+                            const std::vector<TestInMill>& tests, double& ssr_min) {
+  const OreParameter& p = *find_ore_parameter(u.held[j].name);
+  const double x0 = to_var(p, from.held[j]), step = p.log ? 1.0 : (p.hi - p.lo) / 4;
+  std::vector<LinePoint> pts = {{x0, from}};
+  for (int dir : {-1, +1}) {
+    const double end = dir < 0 ? var_lo(p) : var_hi(p);
+    double x = x0;
+    Ore warm = from.at.ore;
+    while (dir < 0 ? x > end : x < end) {
+      x = dir < 0 ? std::max(x - step, end) : std::min(x + step, end);
+      std::vector<double> v = from.held;
+      v[j] = from_var(p, x);
+      pts.push_back({x, held_point(u, v, warm, tests)});
+      const Refit& r = pts.back().p.at;
+      if (!r.ok) break;
+      ssr_min = std::min(ssr_min, r.ssr);
+      if (r.ssr > profile_limit(ssr_min, u.dof)) break;
+      warm = r.ore;
     }
   }
-  (dir < 0 ? h.lo : h.hi) = x_in == x_held ? h.value : from_var(p, x_in);
-  (dir < 0 ? h.free_at_lo : h.free_at_hi) = free_there;
+  std::sort(pts.begin(), pts.end(), [](const LinePoint& a, const LinePoint& b) { return a.x < b.x; });
+  return pts;
+}
+
+std::size_t lowest_of(const std::vector<LinePoint>& pts) {
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    if (pts[i].p.at.ok && pts[i].p.at.ssr < pts[k].p.at.ssr) k = i;
+  return k;
+}
+
+// The least S on a line between the neighbours of its least point, by
+// golden sections: until the bracket is a thousandth of a step or the two
+// inner points' S differ by less than 10⁻⁴ of `margin` (a flat profile);
+// at most 16 refits. Inserted into the line; its index returned.
+std::size_t refine(std::vector<LinePoint>& pts, const FitCovariance& u, std::size_t j,
+                   const std::vector<TestInMill>& tests, double margin) {
+  const OreParameter& p = *find_ore_parameter(u.held[j].name);
+  const double step = p.log ? 1.0 : (p.hi - p.lo) / 4;
+  const std::size_t k = lowest_of(pts);
+  LinePoint lowest = pts[k];
+  double a = k > 0 ? pts[k - 1].x : pts[k].x, b = k + 1 < pts.size() ? pts[k + 1].x : pts[k].x;
+  if (!(b > a)) return k;
+  auto at = [&](double x) {
+    std::vector<double> v = lowest.p.held;
+    v[j] = from_var(p, x);
+    return LinePoint{x, held_point(u, v, lowest.p.at.ore, tests)};
+  };
+  auto keep = [&](const LinePoint& q) {
+    if (q.p.at.ok && q.p.at.ssr < lowest.p.at.ssr) lowest = q;
+  };
+  const double g = 0.5 * (std::sqrt(5.0) - 1);
+  LinePoint c = at(b - g * (b - a)), d = at(a + g * (b - a));
+  for (int i = 0; i < 14 && b - a > 1e-3 * step; ++i) {
+    keep(c), keep(d);
+    if (i >= 2 && c.p.at.ok && d.p.at.ok && std::fabs(c.p.at.ssr - d.p.at.ssr) < 1e-4 * margin) break;
+    if (!(d.p.at.ok && (!c.p.at.ok || c.p.at.ssr > d.p.at.ssr))) {
+      b = d.x, d = c, c = at(b - g * (b - a));
+    } else {
+      a = c.x, c = d, d = at(a + g * (b - a));
+    }
+  }
+  keep(c), keep(d);
+  if (lowest.x == pts[k].x) return k;
+  const auto it = std::upper_bound(pts.begin(), pts.end(), lowest,
+                                   [](const LinePoint& l, const LinePoint& r) { return l.x < r.x; });
+  const auto at_lowest = pts.insert(it, lowest);
+  return static_cast<std::size_t>(at_lowest - pts.begin());
+}
+
+// The stretch of a line within `limit` around its point `k`: each end
+// between the last point within and the first past, by halvings to a
+// tenth of its distance from point k (at most twenty). The two ends.
+std::pair<LinePoint, LinePoint> stretch(const std::vector<LinePoint>& pts, std::size_t k, const FitCovariance& u,
+                                        std::size_t j, const std::vector<TestInMill>& tests, double limit) {
+  const OreParameter& p = *find_ore_parameter(u.held[j].name);
+  auto within = [&](const LinePoint& q) { return q.p.at.ok && q.p.at.ssr <= limit; };
+  LinePoint ends[2];
+  for (int side = 0; side < 2; ++side) {
+    const int dir = side ? +1 : -1;
+    std::size_t i = k;
+    while ((dir < 0 ? i > 0 : i + 1 < pts.size()) && within(pts[dir < 0 ? i - 1 : i + 1])) i = dir < 0 ? i - 1 : i + 1;
+    LinePoint in = pts[i];
+    if (dir < 0 ? i > 0 : i + 1 < pts.size()) {
+      double x_out = pts[dir < 0 ? i - 1 : i + 1].x;
+      for (int b = 0; b < 20 && std::fabs(x_out - in.x) > 0.1 * std::fabs(in.x - pts[k].x); ++b) {
+        std::vector<double> v = in.p.held;
+        const double x = 0.5 * (in.x + x_out);
+        v[j] = from_var(p, x);
+        LinePoint q{x, held_point(u, v, in.p.at.ore, tests)};
+        if (within(q)) in = q;
+        else x_out = x;
+      }
+    }
+    ends[side] = in;
+  }
+  return {ends[0], ends[1]};
+}
+
+// An edge point, unless it is the best point or one kept already.
+void add_edge(FitCovariance& u, const std::vector<double>& best, const std::vector<double>& held,
+              const std::vector<double>& free) {
+  if (held == best) return;
+  for (const HeldEdge& e : u.edges)
+    if (e.held == held) return;
+  u.edges.push_back({held, free});
+}
+
+// What the data leave open to the held parameters (fit_covariance):
+// 1. where they fit best: each moved in turn through the best point met
+//    (its least S refined by golden sections);
+// 2. through that point, each one's stretch within S_min (1 + t²/ν): its
+//    range (widened to hold where it is held) and two edge points;
+// 3. two to four together, from the best point toward each corner of their
+//    ranges, as far as the limit allows (the corner itself, or found by
+//    four halvings): more edge points.
+void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestInMill>& tests) {
+  const std::size_t nh = u.held.size();
+  Refit at_fit;
+  at_fit.ok = true;
+  at_fit.ssr = fit.ssr;
+  at_fit.free = u.values;
+  at_fit.ore = fit.ore;
+  std::vector<double> held;
+  for (const HeldParameter& h : u.held) held.push_back(h.value);
+  HeldPoint best{held, at_fit};
+  double ssr_min = fit.ssr;
+  const double margin = profile_limit(fit.ssr, u.dof) - fit.ssr;
+  std::vector<std::vector<LinePoint>> lines(nh);
+  for (std::size_t j = 0; j < nh; ++j) {
+    lines[j] = line(u, j, best, tests, ssr_min);
+    const std::size_t k = refine(lines[j], u, j, tests, margin);
+    if (lines[j][k].p.at.ssr < best.at.ssr) best = lines[j][k].p;
+  }
+  const double limit = profile_limit(best.at.ssr, u.dof);
+  u.best = {best.held, best.at.free};
+  u.ssr_fit = fit.ssr;
+  u.ssr_best = best.at.ssr;
+  for (std::size_t j = 0; j < nh; ++j) {
+    // The last line runs through the best point already; the others again.
+    std::vector<LinePoint> pts = lines[j];
+    std::size_t k = lowest_of(pts);
+    if (pts[k].p.held != best.held) {
+      double ignored = best.at.ssr;
+      pts = line(u, j, best, tests, ignored);
+      k = 0;
+      while (pts[k].p.held != best.held) ++k;
+    }
+    const auto [lo, hi] = stretch(pts, k, u, j, tests, limit);
+    HeldParameter& h = u.held[j];
+    const OreParameter& p = *find_ore_parameter(h.name);
+    const double x_held = to_var(p, h.value);
+    // The range, widened to hold where the parameter is held (its products are made there).
+    h.lo = lo.x < x_held ? from_var(p, lo.x) : h.value;
+    h.hi = hi.x > x_held ? from_var(p, hi.x) : h.value;
+    h.free_at_lo = lo.x < x_held ? lo.p.at.free : u.values;
+    h.free_at_hi = hi.x > x_held ? hi.p.at.free : u.values;
+    for (const LinePoint* e : {&lo, &hi}) add_edge(u, best.held, e->p.held, e->p.at.free);
+  }
+  if (nh < 2 || nh > 4) return;
+  std::vector<const OreParameter*> ps;
+  for (const HeldParameter& h : u.held) ps.push_back(find_ore_parameter(h.name));
+  for (unsigned c = 0; c < (1u << nh); ++c) {
+    std::vector<double> x0(nh), x1(nh);
+    for (std::size_t j = 0; j < nh; ++j) {
+      x0[j] = to_var(*ps[j], best.held[j]);
+      x1[j] = to_var(*ps[j], (c >> j) & 1u ? u.held[j].hi : u.held[j].lo);
+    }
+    auto at = [&](double s, const Ore& warm) {
+      std::vector<double> v(nh);
+      for (std::size_t j = 0; j < nh; ++j) v[j] = from_var(*ps[j], x0[j] + s * (x1[j] - x0[j]));
+      return held_point(u, v, warm, tests);
+    };
+    double s_in = 0, s_out = 1;
+    HeldPoint in = at(1, best.at.ore);
+    if (in.at.ok && in.at.ssr <= limit) {
+      s_in = 1;
+    } else {
+      for (int b = 0; b < 4; ++b) {
+        const double s = 0.5 * (s_in + s_out);
+        const HeldPoint q = at(s, s_in > 0 ? in.at.ore : best.at.ore);
+        if (q.at.ok && q.at.ssr <= limit) s_in = s, in = q;
+        else s_out = s;
+      }
+    }
+    if (s_in > 0) add_edge(u, best.held, in.held, in.at.free);
+  }
+}
+
+// The tests' information on the free variables and then the held ones at
+// the fit, JᵀJ / s²: the Jacobian of the weighted residuals by differences
+// inside the ore file's ranges (central, or one-sided of second order at a
+// bound), steps of 10⁻⁴ of the variable (at least 10⁻⁴).
+std::vector<std::vector<double>> information(const FitCovariance& u, const BatchFit& fit,
+                                             const std::vector<TestInMill>& tests) {
+  if (!(u.residual_variance_pp2 > 0)) return {};
+  std::vector<const OreParameter*> ps;
+  for (const std::string& n : u.names) ps.push_back(find_ore_parameter(n));
+  for (const HeldParameter& h : u.held) ps.push_back(find_ore_parameter(h.name));
+  const std::vector<double> r0 = weighted_residuals(fit.ore, tests);
+  std::vector<std::vector<double>> J(ps.size());
+  for (std::size_t v = 0; v < ps.size(); ++v) {
+    const OreParameter& p = *ps[v];
+    const double x = to_var(p, p.get(fit.ore)), lo = var_lo(p), hi = var_hi(p);
+    double h = 1e-4 * std::max(1.0, std::fabs(x));
+    if (x - h < lo && x + h > hi) h = std::max(hi - x, x - lo) / 2;
+    const int sign = x + h <= hi && x - h >= lo ? 0 : x + 2 * h <= hi ? +1 : -1;
+    auto at = [&](double xv) {
+      Ore o = fit.ore;
+      p.set(o, from_var(p, xv));
+      return weighted_residuals(o, tests);
+    };
+    const std::vector<double> a = at(sign == 0 ? x + h : x + sign * h), b = at(sign == 0 ? x - h : x + 2 * sign * h);
+    for (std::size_t i = 0; i < r0.size(); ++i)
+      J[v].push_back(sign == 0 ? (a[i] - b[i]) / (2 * h) : sign * (-3 * r0[i] + 4 * a[i] - b[i]) / (2 * h));
+  }
+  std::vector<std::vector<double>> L(ps.size(), std::vector<double>(ps.size(), 0.0));
+  for (std::size_t a = 0; a < ps.size(); ++a)
+    for (std::size_t b = 0; b < ps.size(); ++b) {
+      for (std::size_t i = 0; i < r0.size(); ++i) L[a][b] += J[a][i] * J[b][i];
+      L[a][b] /= u.residual_variance_pp2;
+    }
+  return L;
+}
+
+// ------------------------------------------------------------ Student's t
+
+// P(T <= t) for Student's t with nu degrees of freedom, by the
+// regularised incomplete beta function (pbm.h): 1 - I_x(nu/2, 1/2) / 2,
+// x = nu / (nu + t²), for t >= 0.
+double t_cdf(double t, double nu) {
+  const double tail = 0.5 * incomplete_beta(nu / (nu + t * t), 0.5 * nu, 0.5);
+  return t >= 0 ? 1 - tail : tail;
 }
 
 // The normal distribution's quantile, by bisection on erfc.
@@ -101,7 +333,21 @@ double normal_quantile(double p) {
   return 0.5 * (lo + hi);
 }
 
+// An evaluation of f that gives NaNs instead of throwing.
+std::vector<double> evaluate(const std::function<std::vector<double>(const Ore&)>& f, const Ore& o, std::size_t n) {
+  try {
+    std::vector<double> v = f(o);
+    if (v.size() == n) return v;
+  } catch (const std::exception&) {
+  }
+  return std::vector<double>(n, kNaN);
+}
+
 }  // namespace
+
+double profile_limit(double ssr_min, int dof) {
+  return dof > 0 ? ssr_min * (1 + std::pow(t_quantile(0.975, dof), 2) / dof) : kNaN;
+}
 
 std::string variable_name(const std::string& parameter) {
   const OreParameter* p = find_ore_parameter(parameter);
@@ -113,6 +359,10 @@ std::string parameter_of_variable(const std::string& v) {
   const std::string name = log ? v.substr(4, v.size() - 5) : v;
   const OreParameter* p = find_ore_parameter(name);
   return p && p->log == log ? name : "";
+}
+
+std::string ore_file_key(const std::string& parameter) {
+  return parameter.rfind("breakage.", 0) == 0 || parameter.rfind("rates.", 0) == 0 ? parameter : "rates." + parameter;
 }
 
 FitCovariance fit_covariance(const BatchFit& fit, const std::vector<SpectrumBin>& spectrum, double power_W,
@@ -135,21 +385,26 @@ FitCovariance fit_covariance(const BatchFit& fit, const std::vector<TestInMill>&
     h.name = f.name;
     h.value = h.lo = h.hi = f.value;
     h.why = f.identified ? "on its bound" : f.why;
-    profile_side(h, -1, fit, u, tests);
-    profile_side(h, +1, fit, u, tests);
     u.held.push_back(h);
   }
+  if (!u.held.empty() && u.dof > 0) held_ranges(u, fit, tests);
+  u.information = information(u, fit, tests);
   return u;
 }
 
 double t_quantile(double p, int dof) {
-  const double z = normal_quantile(p);
-  if (dof <= 0) return z;
-  // Cornish–Fisher expansion of Student's t in 1/ν (Abramowitz & Stegun
-  // 26.7.5): within 1e-3 of the exact quantile from ν = 5 at p = 0.975.
-  const double v = dof, z2 = z * z;
-  return z + z * (z2 + 1) / (4 * v) + z * ((5 * z2 + 16) * z2 + 3) / (96 * v * v) +
-         z * (((3 * z2 + 19) * z2 + 17) * z2 - 15) / (384 * v * v * v);
+  if (dof <= 0) return normal_quantile(p);
+  if (dof == 1) return std::tan(kPi * (p - 0.5));
+  if (dof == 2) return (2 * p - 1) / std::sqrt(2 * p * (1 - p));
+  if (p == 0.5) return 0;
+  if (p < 0.5) return -t_quantile(1 - p, dof);
+  double lo = 0, hi = 1;
+  while (t_cdf(hi, dof) < p && hi < 1e300) lo = hi, hi *= 2;
+  for (int k = 0; k < 200 && hi - lo > 1e-15 * hi; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (t_cdf(mid, dof) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
 }
 
 Ore with_variables(const Ore& ore, const FitCovariance& u, const std::vector<double>& x) {
@@ -161,73 +416,190 @@ Ore with_variables(const Ore& ore, const FitCovariance& u, const std::vector<dou
   return o;
 }
 
-std::vector<Interval> propagate(const Ore& ore, const FitCovariance& u,
-                                const std::function<std::vector<double>(const Ore&)>& f, double width_scale) {
-  auto eval = [&](const Ore& o, std::size_t n) {
-    try {
-      std::vector<double> v = f(o);
-      if (v.size() == n) return v;
-    } catch (const std::exception&) {
-    }
-    return std::vector<double>(n, kNaN);
-  };
+std::vector<Sensitivity> sensitivities(const Ore& ore, const FitCovariance& u,
+                                       const std::function<std::vector<double>(const Ore&)>& f, bool held_gradient) {
   const std::vector<double> v0 = f(ore);
-  const std::size_t n = v0.size(), np = u.names.size();
+  const std::size_t n = v0.size(), np = u.names.size(), nh = u.held.size();
   const std::vector<double> x0 = variables_of(ore, u.names);
-  // The points the numbers are evaluated at: the fit's ± a step in each
-  // fitted variable, then each held parameter at its range's ends.
-  std::vector<std::vector<double>> plus, minus, ends;
-  std::vector<double> steps;
+  // Two points a free variable: x ± h, or x + h and x + 2h (x − h and
+  // x − 2h) where a step would leave the ore file's range.
+  struct Diff {
+    double h = 0;
+    int sign = 0;  // 0: central; +1 forward, -1 backward
+    std::vector<double> a, b;  // f at x + h and x − h (central) or x ± h and x ± 2h
+  };
+  auto differences = [&](const OreParameter& p, double x, double h, const std::function<Ore(double)>& moved) {
+    Diff d;
+    const double lo = var_lo(p), hi = var_hi(p);
+    if (x - h < lo && x + h > hi) h = std::max(hi - x, x - lo) / 2;
+    d.h = h;
+    d.sign = x + h <= hi && x - h >= lo ? 0 : x + 2 * h <= hi ? +1 : -1;
+    d.a = evaluate(f, moved(d.sign == 0 ? x + h : x + d.sign * h), n);
+    d.b = evaluate(f, moved(d.sign == 0 ? x - h : x + 2 * d.sign * h), n);
+    return d;
+  };
+  std::vector<Diff> diffs, held_diffs;
   for (std::size_t j = 0; j < np; ++j) {
+    const OreParameter& p = *find_ore_parameter(u.names[j]);
     const double h = u.matrix[j][j] > 0 ? 0.1 * std::sqrt(u.matrix[j][j]) : 1e-6;
-    std::vector<double> xp = x0, xm = x0;
-    xp[j] += h;
-    xm[j] -= h;
-    steps.push_back(h);
-    plus.push_back(eval(with_variables(ore, u, xp), n));
-    minus.push_back(eval(with_variables(ore, u, xm), n));
+    diffs.push_back(differences(p, x0[j], h, [&](double x) {
+      std::vector<double> xs = x0;
+      xs[j] = x;
+      return with_variables(ore, u, xs);
+    }));
   }
-  for (const HeldParameter& h : u.held) {
-    const OreParameter* p = find_ore_parameter(h.name);
-    if (!p) continue;
-    for (int side = 0; side < 2; ++side) {
-      const double at = side ? h.hi : h.lo;
-      const std::vector<double>& free_at = side ? h.free_at_hi : h.free_at_lo;
-      if (at == h.value) continue;
-      Ore o = free_at.size() == np ? with_variables(ore, u, free_at) : ore;
-      p->set(o, at);
-      ends.push_back(eval(o, n));
+  if (held_gradient)
+    for (const HeldParameter& hp : u.held) {
+      const OreParameter& p = *find_ore_parameter(hp.name);
+      held_diffs.push_back(differences(p, to_var(p, p.get(ore)), 1e-3, [&](double x) {
+        Ore o = ore;
+        p.set(o, from_var(p, x));
+        return o;
+      }));
+    }
+  // The held parameters' points: each alone at its range's ends, then
+  // together toward the corners; the free ones as refitted there.
+  auto at_point = [&](const HeldEdge& c) {
+    Ore o = c.free.size() == np ? with_variables(ore, u, c.free) : ore;
+    for (std::size_t k = 0; k < nh; ++k) find_ore_parameter(u.held[k].name)->set(o, c.held[k]);
+    return evaluate(f, o, n);
+  };
+  // The centre the held parameters' reach is measured from: where they fit
+  // the data best (else, an ore written without it, where they are held).
+  const bool centred = nh > 0 && u.best.held.size() == nh;
+  const std::vector<double> at_best = centred ? at_point(u.best) : v0;
+  std::vector<std::vector<double>> ends;
+  std::vector<int> end_of;  // the held parameter a point moves alone from the centre; -1: several
+  if (!u.edges.empty()) {
+    for (const HeldEdge& e : u.edges) {
+      if (e.held.size() != nh) continue;
+      ends.push_back(at_point(e));
+      int alone = -1, moved = 0;
+      for (std::size_t k = 0; k < nh; ++k)
+        if (!centred || e.held[k] != u.best.held[k]) alone = static_cast<int>(k), ++moved;
+      end_of.push_back(moved == 1 ? alone : -1);
+    }
+  } else {  // an ore written before the edge points were kept: each at its range's ends
+    for (std::size_t k = 0; k < nh; ++k) {
+      const HeldParameter& h = u.held[k];
+      const OreParameter* p = find_ore_parameter(h.name);
+      for (int side = 0; side < 2; ++side) {
+        const double at = side ? h.hi : h.lo;
+        const std::vector<double>& free_at = side ? h.free_at_hi : h.free_at_lo;
+        if (at == h.value) continue;
+        Ore o = free_at.size() == np ? with_variables(ore, u, free_at) : ore;
+        p->set(o, at);
+        ends.push_back(evaluate(f, o, n));
+        end_of.push_back(static_cast<int>(k));
+      }
     }
   }
-  const double q = t_quantile(0.975, u.dof) * width_scale;
-  std::vector<Interval> out(n);
+
+  std::vector<Sensitivity> out(n);
   for (std::size_t i = 0; i < n; ++i) {
+    Sensitivity& s = out[i];
+    s.value = v0[i];
     if (!std::isfinite(v0[i])) continue;
     // A number positive wherever it is evaluated is propagated as its
     // logarithm: its interval is then never below 0 (a feed rate, a P80),
     // and wider above than below where it grows faster than linearly.
-    bool positive = v0[i] > 0;
-    for (const auto* set : {&plus, &minus, &ends})
-      for (const auto& v : *set) positive = positive && v[i] > 0;
-    auto g_of = [&](double v) { return positive ? std::log(v) : v; };
+    bool positive = v0[i] > 0, finite = true;
+    for (const auto* set : {&diffs, &held_diffs})
+      for (const Diff& d : *set) {
+        positive = positive && d.a[i] > 0 && d.b[i] > 0;
+        finite = finite && std::isfinite(d.a[i]) && std::isfinite(d.b[i]);
+      }
+    for (const auto& v : ends) positive = positive && (v[i] > 0 || v[i] == -kInf);
+    positive = positive && at_best[i] > 0;
+    if (!finite || !std::isfinite(at_best[i])) continue;
+    s.log = positive;
+    auto g_of = [&](double v) { return positive && std::isfinite(v) ? std::log(v) : v; };
     const double y0 = g_of(v0[i]);
-    std::vector<double> g(np);
-    for (std::size_t j = 0; j < np; ++j) g[j] = (g_of(plus[j][i]) - g_of(minus[j][i])) / (2 * steps[j]);
-    double var = 0;
-    for (std::size_t a = 0; a < np; ++a)
-      for (std::size_t b = 0; b < np; ++b) var += g[a] * u.matrix[a][b] * g[b];
-    double down = 0, up = 0;  // the held parameters' reach, below and above
-    bool ok = std::isfinite(var);
-    for (const auto& v : ends) {
-      if (!std::isfinite(v[i])) ok = false;
-      down = std::min(down, g_of(v[i]) - y0);
-      up = std::max(up, g_of(v[i]) - y0);
+    s.center = g_of(at_best[i]);
+    auto slope = [&](const Diff& d) {
+      if (d.sign == 0) return (g_of(d.a[i]) - g_of(d.b[i])) / (2 * d.h);
+      return d.sign * (-3 * y0 + 4 * g_of(d.a[i]) - g_of(d.b[i])) / (2 * d.h);
+    };
+    for (const Diff& d : diffs) s.g.push_back(slope(d));
+    for (const Diff& d : held_diffs) s.g_held.push_back(slope(d));
+    bool ok = true;
+    // The reach below and above the centre, over the held parameters'
+    // points and where they are held.
+    s.down = std::min(0.0, y0 - s.center);
+    s.up = std::max(0.0, y0 - s.center);
+    s.down_by_held.assign(nh, s.down);
+    s.up_by_held.assign(nh, s.up);
+    for (std::size_t e = 0; e < ends.size(); ++e) {
+      const double v = ends[e][i];
+      if (std::isnan(v)) ok = false;
+      const double dy = g_of(v) - s.center;
+      s.down = std::min(s.down, dy);
+      s.up = std::max(s.up, dy);
+      if (end_of[e] >= 0) {
+        s.down_by_held[end_of[e]] = std::min(s.down_by_held[end_of[e]], dy);
+        s.up_by_held[end_of[e]] = std::max(s.up_by_held[end_of[e]], dy);
+      }
     }
-    if (!ok) continue;
-    const double half = q * std::sqrt(std::max(var, 0.0));
-    out[i].lo = positive ? std::exp(y0 - half + down) : y0 - half + down;
-    out[i].hi = positive ? std::exp(y0 + half + up) : y0 + half + up;
+    s.ok = ok;
   }
+  return out;
+}
+
+Interval interval_of(const Sensitivity& s, const std::vector<std::vector<double>>& C, double q, double width_scale) {
+  Interval out;
+  if (!s.ok) return out;
+  double var = 0;
+  for (std::size_t a = 0; a < s.g.size(); ++a)
+    for (std::size_t b = 0; b < s.g.size(); ++b) var += s.g[a] * C[a][b] * s.g[b];
+  if (!std::isfinite(var)) return out;
+  // The free parameters' half-width and the held ones' reach, in
+  // quadrature: for a model linear in its parameters this is the profile
+  // interval over all of them at the same limit (docs/grinding-intervals.md).
+  const double half = q * std::sqrt(std::max(var, 0.0));
+  const double below = std::hypot(half, width_scale * s.down), above = std::hypot(half, width_scale * s.up);
+  out.lo = s.log ? std::exp(s.center - below) : s.center - below;
+  out.hi = s.log ? std::exp(s.center + above) : s.center + above;
+  if (s.down == -kInf) out.lo = -kInf;
+  if (s.up == kInf) out.hi = kInf;
+  return out;
+}
+
+std::vector<Interval> propagate(const Ore& ore, const FitCovariance& u,
+                                const std::function<std::vector<double>(const Ore&)>& f, double width_scale) {
+  const std::vector<Sensitivity> ss = sensitivities(ore, u, f);
+  const double q = t_quantile(0.975, u.dof) * width_scale;
+  std::vector<Interval> out;
+  for (const Sensitivity& s : ss) out.push_back(interval_of(s, u.matrix, q, width_scale));
+  return out;
+}
+
+std::string stale_covariance(const Ore& ore, const FitCovariance& u) {
+  auto differs = [](const OreParameter& p, double a, double b) {
+    const double scale = p.log ? std::max(std::fabs(a), std::fabs(b)) : std::max(p.hi - p.lo, 1e-300);
+    return std::fabs(a - b) > 1e-7 * scale;
+  };
+  for (std::size_t j = 0; j < u.names.size() && j < u.values.size(); ++j) {
+    const OreParameter* p = find_ore_parameter(u.names[j]);
+    const double now = p->get(ore), then = from_var(*p, u.values[j]);
+    if (differs(*p, now, then))
+      return fmt::format("{} = {:.6g}, the covariance is at {:.6g}", ore_file_key(u.names[j]), now, then);
+  }
+  for (const HeldParameter& h : u.held) {
+    const OreParameter* p = find_ore_parameter(h.name);
+    const double now = p->get(ore);
+    if (differs(*p, now, h.value))
+      return fmt::format("{} = {:.6g}, held at {:.6g} in the covariance", ore_file_key(h.name), now, h.value);
+  }
+  return "";
+}
+
+std::vector<Correlated> correlated_pairs(const FitCovariance& u, double limit) {
+  std::vector<Correlated> out;
+  for (std::size_t a = 0; a < u.names.size(); ++a)
+    for (std::size_t b = a + 1; b < u.names.size(); ++b) {
+      const double r = u.matrix[a][b] / std::sqrt(u.matrix[a][a] * u.matrix[b][b]);
+      if (std::fabs(r) > limit) out.push_back({variable_name(u.names[a]), variable_name(u.names[b]), r});
+    }
   return out;
 }
 

@@ -1,8 +1,11 @@
-// The fit's uncertainty carried to what a fitted ore makes (docs/grinding.md,
-// "Intervals"): what a batch-test fit leaves open (the covariance of its
-// free parameters, the range its held ones may take), and the 95 % interval
-// of any number computed from the ore by linearised propagation (the delta
-// method) widened by the held parameters' envelope.
+// The fit's uncertainty carried to what a fitted ore makes (docs/
+// grinding-intervals.md): what a batch-test fit leaves open (the covariance
+// of its free parameters, the range its held ones may take, alone and
+// together), and the 95 % interval of any number computed from the ore:
+// linearised propagation (the delta method) in the free parameters,
+// combined in quadrature with how far the held ones move the number.
+// One statistical basis throughout: Student's t with the fit's degrees of
+// freedom ν, as t for the delta method and as F(1, ν) = t² for the profiles.
 #pragma once
 
 #include <functional>
@@ -19,40 +22,107 @@ namespace mc::grind {
 std::string variable_name(const std::string& parameter);
 // The parameter a fitted variable's name names; "" when it is none.
 std::string parameter_of_variable(const std::string& variable);
+// The parameter's key in the ore file: "rates.efficiency", "breakage.phi".
+std::string ore_file_key(const std::string& parameter);
 
-// What the fit leaves open. A held parameter (unidentified, or on its bound)
-// is given the range over which the free ones, refitted with it there, stay
-// within the data: its profile, stepped out from where it is held (a factor
-// of e at a time for a scale, a quarter of its file range for a value) until
-// the sum of squares has risen by more than 3.84 s² (χ²₁ at 95 %) or the
-// ore file's range ends, at most 6 steps a side.
+// What the fit leaves open. A held parameter (unidentified, or on its
+// bound) is given the range over which the free ones, refitted with it
+// there, stay within the data: its profile. The limit is S_min (1 + t²/ν):
+// S the weighted sum of squares, S_min the least the profiles meet, t
+// Student's at 0.975 with the fit's ν (F(1, ν) = t² at 95 %).
+//  1. Where the held ones fit best: each in turn moved through the best
+//     point met (others there), stepped out (a factor of e for a scale, a
+//     quarter of its file range for a value) to the file's range or past
+//     the limit, its least S refined by golden sections (to a thousandth of
+//     a step, or a flat profile; at most 16 refits).
+//  2. Through that point, each one's stretch within the limit: its ends by
+//     halvings to a tenth of their distance from it (at most twenty), the
+//     range widened to hold where the parameter is held.
+//  3. Two to four held together, from the best point toward each corner of
+//     their ranges, as far as the limit allows (the corner, or four
+//     halvings); five or more: their ranges alone.
+// The best point and the edge points (2, 3) are kept with the covariance.
 FitCovariance fit_covariance(const BatchFit& fit, const std::vector<SpectrumBin>& spectrum, double power_W,
                              double holdup_kg, const BatchTest& test);
 // The same for tests fitted together (fit_batch_tests).
 FitCovariance fit_covariance(const BatchFit& fit, const std::vector<TestInMill>& tests);
+// The profile's limit of S: S_min (1 + t²/ν).
+double profile_limit(double ssr_min, int dof);
 
-// The two-sided quantile of Student's t with `dof` degrees of freedom at
-// probability p (0.975 for a 95 % interval); the normal's for dof <= 0.
+// The quantile of Student's t with `dof` degrees of freedom at probability
+// p (0.975 for a 95 % interval); the normal's for dof <= 0. Closed forms
+// for 1 and 2 degrees of freedom, else the distribution function (the
+// regularised incomplete beta function of pbm.h) inverted by bisection.
 double t_quantile(double p, int dof);
 
+// An interval; an end at ±infinity is open (the number goes past any
+// bound there: a throughput whose ore cannot reach the target).
 struct Interval {
   double lo = std::numeric_limits<double>::quiet_NaN(), hi = std::numeric_limits<double>::quiet_NaN();
   bool valid() const { return lo == lo && hi == hi; }
+  bool open_below() const { return lo == -std::numeric_limits<double>::infinity(); }
+  bool open_above() const { return hi == std::numeric_limits<double>::infinity(); }
 };
 
-// Intervals of the numbers f makes from the ore (NaN where one cannot be
-// made): f(ore) ± q sqrt(gᵀ C g) · width_scale, g by central differences
-// in the fitted variables (steps of a tenth of each one's standard error),
-// q Student's t at 0.975; each held parameter moves the interval's ends by
-// the furthest f reaches at its range's ends (the free ones there as
-// refitted), below and above. A number positive at every point is
-// propagated as its logarithm (its interval stays above 0). width_scale 1
-// but for tests of the coverage. An f that is NaN or throws at any point
-// leaves that number without one.
+// What propagation needs of one number f makes: its value, whether it is
+// taken as its logarithm, its gradient in the free variables (and, asked
+// for, in the held ones with the free ones fixed), and how far the held
+// parameters move it below and above (down <= 0 <= up; -inf or +inf: past
+// any bound).
+struct Sensitivity {
+  bool ok = false;
+  double value = std::numeric_limits<double>::quiet_NaN();
+  bool log = false;
+  std::vector<double> g, g_held;
+  // The centre the interval is built around (the logarithm where `log`):
+  // the number where the held parameters fit the data best, the free ones
+  // refitted there (FitCovariance::best); the value itself without held
+  // ones. down and up: the held parameters' reach from it, below and
+  // above, over their points and where they are held.
+  double center = std::numeric_limits<double>::quiet_NaN();
+  double down = 0, up = 0;
+  std::vector<double> down_by_held, up_by_held;  // each held parameter's range alone
+};
+
+// The numbers f makes from the ore, and their sensitivities: the gradient
+// by differences in the fitted variables (steps of a tenth of each one's
+// standard error: central, or one-sided of second order where a step
+// would cross the ore file's range); the held parameters at their best
+// point and their edge points, the free ones as refitted there (an ore
+// written without them: each held one at its range's ends). A number
+// positive at every point is taken as its logarithm (its interval stays
+// above 0). A NaN or a throw at a point leaves that number without one (ok
+// false); -inf or +inf at a held parameter's point opens that end.
+std::vector<Sensitivity> sensitivities(const Ore& ore, const FitCovariance& u,
+                                       const std::function<std::vector<double>(const Ore&)>& f,
+                                       bool held_gradient = false);
+// The interval of one number: around its centre, the delta method's
+// half-width q √(gᵀ C g) (q = t · width_scale) combined in quadrature with
+// the held parameters' reach to each side (times width_scale). For a
+// model linear in its parameters this is the interval of the number's
+// profile over every parameter at the limit S_min (1 + t²/ν).
+Interval interval_of(const Sensitivity& s, const std::vector<std::vector<double>>& C, double q, double width_scale);
+
+// The 95 % intervals of the numbers f makes (NaN where one cannot be made).
+// width_scale 1 but for tests of the coverage.
 std::vector<Interval> propagate(const Ore& ore, const FitCovariance& u,
                                 const std::function<std::vector<double>(const Ore&)>& f, double width_scale = 1.0);
 
 // The ore with the fitted variables x of u's free parameters.
 Ore with_variables(const Ore& ore, const FitCovariance& u, const std::vector<double>& x);
+
+// "" when the ore's free and held parameters have the values the
+// covariance was computed at (to 1e-7); else the first that differs, by its
+// ore file key: "rates.efficiency = 0.4, the covariance is at 0.3519"
+// (a hand edit: the covariance no longer describes this ore).
+std::string stale_covariance(const Ore& ore, const FitCovariance& u);
+
+// Pairs of fitted variables correlated beyond |r| > limit: the tests fix
+// only their combination.
+struct Correlated {
+  std::string a, b;  // variable names
+  double r = 0;
+};
+std::vector<Correlated> correlated_pairs(const FitCovariance& u, double limit = 0.99);
 
 }  // namespace mc::grind

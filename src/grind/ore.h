@@ -34,7 +34,7 @@ inline bool basis_of(const std::string& name, EnergyBasis* b) {
 }
 
 // What a fit to batch tests leaves open (the [fitted] table's covariance and
-// held parameters; docs/grinding.md, "Intervals"). The fitted variables are
+// held parameters; docs/grinding-intervals.md). The fitted variables are
 // the logarithm of a scale ("log(efficiency)") and any other parameter
 // itself, as the fit moves them.
 struct HeldParameter {
@@ -46,6 +46,12 @@ struct HeldParameter {
   // refit failed; the free ones then stay at their fitted values).
   std::vector<double> free_at_lo, free_at_hi;
 };
+// A point of the held parameters: each one's value, and the free variables
+// refitted there.
+struct HeldEdge {
+  std::vector<double> held;  // each held parameter's value (file units), in the order of `held`
+  std::vector<double> free;  // the free variables refitted there
+};
 struct FitCovariance {
   bool given = false;                       // the ore file has one (an ore fitted before has not)
   std::vector<std::string> names;           // the free parameters, ore file keys
@@ -54,6 +60,21 @@ struct FitCovariance {
   double residual_variance_pp2 = 0;         // s² of the fit
   int dof = 0;                              // data − free parameters
   std::vector<HeldParameter> held;          // unidentified, held at their start, or on their bound
+  // Where the held parameters fit the data best (the least sum of squares
+  // their profiles met), the free ones refitted there: the centre the held
+  // ones' reach is measured from. Empty held: none kept.
+  HeldEdge best;
+  // The edge of the data around `best`: each held parameter alone to its
+  // range's ends, and two to four together toward each corner of their
+  // ranges, as far as the data allow.
+  std::vector<HeldEdge> edges;
+  // The tests' information on every fitted variable at the fit, the free
+  // ones' then the held ones': JᵀJ / s² of the weighted residuals (what a
+  // next test adds to: next_test.h). Empty: not kept.
+  std::vector<std::vector<double>> information;
+  // The weighted sum of squares at the fit and at `best` (not kept in the
+  // file: what --fit says).
+  double ssr_fit = 0, ssr_best = 0;
 };
 
 // The contact law and parameters of the DEM run an ore was fitted through

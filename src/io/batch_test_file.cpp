@@ -149,7 +149,7 @@ BatchTestFile read_batch_test(const fs::path& path) {
 
 std::string batch_test_toml(const BatchTestFile& f) {
   const grind::BatchTest& t = f.test;
-  std::string s = "# A batch grinding test (docs/grinding.md): cumulative passing at each sieve,\n"
+  std::string s = "# A batch grinding test (docs/grinding-fit.md): cumulative passing at each sieve,\n"
                   "# the feed and the product after each grinding time.\n";
   if (!f.title.empty()) s += fmt::format("title = \"{}\"\n", f.title);
   if (!f.mill.empty()) s += fmt::format("mill = \"{}\"\n", f.mill);

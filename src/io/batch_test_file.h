@@ -1,5 +1,5 @@
 // Laboratory batch grinding test files for `millcharge grind --fit` (TOML,
-// docs/grinding.md documents the keys): read and validated to a
+// docs/grinding-fit.md documents the keys): read and validated to a
 // grind::BatchTest. Every error names the file, the line and the key, e.g.
 //   test.toml:14: product[3].time_min: 2 does not follow 4: times must ascend
 // and unknown keys are errors. Writing one back (a synthetic test made

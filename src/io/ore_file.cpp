@@ -7,6 +7,7 @@
 #include <limits>
 #include <optional>
 #include <set>
+#include <tuple>
 #include <stdexcept>
 #include <string>
 #include <toml++/toml.h>
@@ -90,7 +91,8 @@ std::vector<double> any_numbers(const OreReader& r, const toml::node* n, const s
 void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u) {
   const toml::node* dn = ft.get("degrees_of_freedom");
   if (!dn) {
-    for (const char* k : {"covariance_variables", "covariance_values", "covariance", "residual_variance_pp2", "held"})
+    for (const char* k :
+         {"covariance_variables", "covariance_values", "covariance", "residual_variance_pp2", "held", "edge", "best", "information"})
       if (ft.get(k)) r.fail(std::string("fitted.") + k, ft.get(k), "given without fitted.degrees_of_freedom");
     return;
   }
@@ -127,9 +129,8 @@ void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u
     r.fail("fitted.covariance", cn,
            fmt::format("must be a symmetric {} x {} matrix with a non-negative diagonal (one row per variable)", np, np));
   const toml::node* hn = ft.get("held");
-  if (!hn) return;
-  if (!hn->is_array_of_tables()) r.fail("fitted.held", hn, "must be an array of tables ([[fitted.held]])");
-  for (const toml::node& e : *hn->as_array()) {
+  if (hn && !hn->is_array_of_tables()) r.fail("fitted.held", hn, "must be an array of tables ([[fitted.held]])");
+  for (const toml::node& e : hn ? *hn->as_array() : toml::array{}) {
     const toml::table& t = *e.as_table();
     r.knows(t, "fitted.held.", {"name", "value", "lo", "hi", "why", "free_at_lo", "free_at_hi"});
     grind::HeldParameter h;
@@ -149,6 +150,42 @@ void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u
     }
     u.held.push_back(h);
   }
+  // Two arrays of numbers, one a held parameter and one a free variable:
+  // [fitted.best] and each [[fitted.edge]].
+  auto point = [&](const toml::table& t, const std::string& where, grind::HeldEdge& c) {
+    r.knows(t, where + ".", {"held", "free"});
+    for (auto [key, dst, want] : {std::tuple{"held", &c.held, u.held.size()}, std::tuple{"free", &c.free, np}}) {
+      const toml::node* fn = t.get(key);
+      if (!fn) r.fail(where + "." + key, nullptr, "missing");
+      *dst = any_numbers(r, fn, where + "." + key);
+      if (dst->size() != want)
+        r.fail(where + "." + key, fn,
+               fmt::format("{} values for {} {}", dst->size(), want,
+                           std::string(key) == "held" ? "held parameters ([[fitted.held]])" : "variables"));
+    }
+  };
+  if (const toml::node* bn = ft.get("best")) {
+    if (!bn->is_table()) r.fail("fitted.best", bn, "must be a table ([fitted.best])");
+    point(*bn->as_table(), "fitted.best", u.best);
+  }
+  if (const toml::node* in = ft.get("information")) {
+    const std::size_t nv = np + u.held.size();
+    if (!in->is_array()) r.fail("fitted.information", in, "must be an array of rows");
+    for (const toml::node& row : *in->as_array()) u.information.push_back(any_numbers(r, &row, "fitted.information"));
+    bool square = u.information.size() == nv;
+    for (const auto& row : u.information) square = square && row.size() == nv;
+    if (!square)
+      r.fail("fitted.information", in,
+             fmt::format("must be a {} x {} matrix (one row per variable, then per held parameter)", nv, nv));
+  }
+  const toml::node* kn = ft.get("edge");
+  if (!kn) return;
+  if (!kn->is_array_of_tables()) r.fail("fitted.edge", kn, "must be an array of tables ([[fitted.edge]])");
+  for (const toml::node& e : *kn->as_array()) {
+    grind::HeldEdge c;
+    point(*e.as_table(), "fitted.edge", c);
+    u.edges.push_back(c);
+  }
 }
 
 // [fitted]: the contact the ore was fitted under (grind::ContactRecord).
@@ -156,7 +193,7 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   r.knows(ft, "fitted.", {"contact_law", "restitution", "friction", "rolling_friction", "stiffness_N_m",
                           "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp",
                           "energy_basis", "covariance_variables", "covariance_values", "covariance",
-                          "residual_variance_pp2", "degrees_of_freedom", "held"});
+                          "residual_variance_pp2", "degrees_of_freedom", "held", "edge", "best", "information"});
   auto text = [&](const std::string& key) {
     const toml::node* n = ft.get(key);
     if (!n) return std::string();
@@ -396,7 +433,7 @@ std::string covariance_toml(const FitCovariance& u) {
     for (std::size_t k = 0; k < v.size(); ++k) s += (k ? ", " : "") + g(v[k]);
     return s + "]";
   };
-  std::string s = "# What the fit leaves open (docs/grinding.md, \"Intervals\"): the covariance of the fitted\n"
+  std::string s = "# What the fit leaves open (docs/grinding-intervals.md): the covariance of the fitted\n"
                   "# variables (the logarithm of a scale), and the range each held parameter may take\n";
   s += "covariance_variables = [";
   for (std::size_t k = 0; k < u.names.size(); ++k) s += (k ? ", \"" : "\"") + grind::variable_name(u.names[k]) + "\"";
@@ -404,6 +441,11 @@ std::string covariance_toml(const FitCovariance& u) {
   for (std::size_t a = 0; a < u.matrix.size(); ++a) s += (a ? ", " : "") + list(u.matrix[a]);
   s += "]\nresidual_variance_pp2 = " + g(u.residual_variance_pp2) + "\ndegrees_of_freedom = " +
        std::to_string(u.dof) + "\n";
+  if (!u.information.empty()) {
+    s += "information = [";  // JᵀJ / s² of the free variables, then the held parameters'
+    for (std::size_t a = 0; a < u.information.size(); ++a) s += (a ? ", " : "") + list(u.information[a]);
+    s += "]   # the tests' information: the variables, then the held parameters (log of a scale)\n";
+  }
   for (const grind::HeldParameter& h : u.held) {
     s += "\n[[fitted.held]]\nname = \"" + h.name + "\"\nvalue = " + g(h.value) + "\nlo = " + g(h.lo) +
          "\nhi = " + g(h.hi) + "\n";
@@ -413,6 +455,11 @@ std::string covariance_toml(const FitCovariance& u) {
     if (!h.free_at_lo.empty()) s += "free_at_lo = " + list(h.free_at_lo) + "\n";
     if (!h.free_at_hi.empty()) s += "free_at_hi = " + list(h.free_at_hi) + "\n";
   }
+  if (!u.best.held.empty())
+    s += "\n[fitted.best]           # where the held parameters fit the data best, the free ones refitted there\n"
+         "held = " + list(u.best.held) + "\nfree = " + list(u.best.free) + "\n";
+  for (const grind::HeldEdge& c : u.edges)
+    s += "\n[[fitted.edge]]\nheld = " + list(c.held) + "\nfree = " + list(c.free) + "\n";
   return s;
 }
 

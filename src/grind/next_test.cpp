@@ -1,0 +1,190 @@
+// Which batch test to run next (next_test.h).
+#include "grind/next_test.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace mc::grind {
+
+namespace {
+
+using Matrix = std::vector<std::vector<double>>;
+
+double to_var(const OreParameter& p, double v) { return p.log ? std::log(v) : v; }
+double from_var(const OreParameter& p, double x) { return p.log ? std::exp(x) : x; }
+double var_lo(const OreParameter& p) { return to_var(p, p.log ? std::max(p.lo, 1e-300) : p.lo); }
+double var_hi(const OreParameter& p) { return to_var(p, p.hi); }
+
+// The inverse of a small symmetric positive definite matrix (Cholesky);
+// false where it is not positive definite.
+bool invert_spd(const Matrix& A, Matrix& inv) {
+  const std::size_t n = A.size();
+  Matrix L(n, std::vector<double>(n, 0.0));
+  for (std::size_t j = 0; j < n; ++j) {
+    double d = A[j][j];
+    for (std::size_t k = 0; k < j; ++k) d -= L[j][k] * L[j][k];
+    if (!(d > 1e-300)) return false;
+    L[j][j] = std::sqrt(d);
+    for (std::size_t i = j + 1; i < n; ++i) {
+      double s = A[i][j];
+      for (std::size_t k = 0; k < j; ++k) s -= L[i][k] * L[j][k];
+      L[i][j] = s / L[j][j];
+    }
+  }
+  inv.assign(n, std::vector<double>(n, 0.0));
+  for (std::size_t c = 0; c < n; ++c) {  // solve A x = e_c
+    std::vector<double> y(n, 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      double s = i == c ? 1.0 : 0.0;
+      for (std::size_t k = 0; k < i; ++k) s -= L[i][k] * y[k];
+      y[i] = s / L[i][i];
+    }
+    for (std::size_t i = n; i-- > 0;) {
+      double s = y[i];
+      for (std::size_t k = i + 1; k < n; ++k) s -= L[k][i] * inv[k][c];
+      inv[i][c] = s / L[i][i];
+    }
+  }
+  return true;
+}
+
+// The candidate's readings (pp) at its informative sieves, for an ore.
+std::vector<double> readings(const Ore& o, const TestInMill& c, const std::vector<std::size_t>& sieves) {
+  const auto pred = batch_test_products(o, c.spectrum, c.power_W, c.holdup_kg, c.test);
+  std::vector<double> r;
+  for (std::size_t t = 0; t < c.test.times_min.size(); ++t)
+    for (std::size_t k : sieves) r.push_back(100 * pred[t][k]);
+  return r;
+}
+
+// The column of J_c for one variable: central differences, one-sided of
+// second order where a step would leave the ore file's range.
+std::vector<double> column(const OreParameter& p, const Ore& ore, const TestInMill& c,
+                           const std::vector<std::size_t>& sieves, const std::vector<double>& r0) {
+  const double x = to_var(p, p.get(ore)), lo = var_lo(p), hi = var_hi(p);
+  double h = 1e-4 * std::max(1.0, std::fabs(x));
+  if (x - h < lo && x + h > hi) h = std::max(hi - x, x - lo) / 2;
+  const int sign = x + h <= hi && x - h >= lo ? 0 : x + 2 * h <= hi ? +1 : -1;
+  auto at = [&](double xv) {
+    Ore o = ore;
+    p.set(o, from_var(p, xv));
+    return readings(o, c, sieves);
+  };
+  const std::vector<double> a = at(sign == 0 ? x + h : x + sign * h), b = at(sign == 0 ? x - h : x + 2 * sign * h);
+  std::vector<double> col(r0.size());
+  for (std::size_t i = 0; i < r0.size(); ++i)
+    col[i] = sign == 0 ? (a[i] - b[i]) / (2 * h) : sign * (-3 * r0[i] + 4 * a[i] - b[i]) / (2 * h);
+  return col;
+}
+
+}  // namespace
+
+BatchTest candidate_test(const Ore& ore, const std::vector<double>& times_min) {
+  BatchTest t;
+  std::vector<double> sieves = {3.35e-3};
+  for (int k = 0; k < 12; ++k) sieves.push_back(2.36e-3 / std::pow(std::sqrt(2.0), k));
+  for (double x : sieves)
+    if (x <= ore.sizes.top_m.front() * (1 + 1e-9) && x >= ore.sizes.top_m.back() * (1 - 1e-9)) t.sieve_m.push_back(x);
+  for (double x : t.sieve_m) t.feed_passing.push_back(passing_at(ore.sizes, ore.feed, x));
+  t.times_min = times_min;
+  return t;
+}
+
+NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensitivity& s,
+                             const TestInMill& candidate) {
+  NextTestWidth out;
+  const std::size_t np = u.names.size(), nh = u.held.size(), nv = np + nh;
+  if (!s.ok || s.g.size() != np || s.g_held.size() != nh) return out;
+  // The candidate's readings as the fitted ore makes them, at the sieves
+  // that carry information.
+  TestInMill c = candidate;
+  c.test.passing = batch_test_products(ore, c.spectrum, c.power_W, c.holdup_kg, c.test);
+  const std::vector<std::size_t> sieves = informative_sieves(c.test);
+  const std::vector<double> r0 = readings(ore, c, sieves);
+  out.data = static_cast<int>(r0.size());
+  std::vector<const OreParameter*> ps;
+  for (const std::string& n : u.names) ps.push_back(find_ore_parameter(n));
+  for (const HeldParameter& h : u.held) ps.push_back(find_ore_parameter(h.name));
+  Matrix Jc(r0.size(), std::vector<double>(nv));
+  for (std::size_t v = 0; v < nv; ++v) {
+    const std::vector<double> col = column(*ps[v], ore, c, sieves, r0);
+    for (std::size_t i = 0; i < r0.size(); ++i) Jc[i][v] = col[i];
+  }
+  // The current information: the tests' JᵀJ / s² on every variable, kept with the covariance.
+  if (u.information.size() != nv) return out;
+  Matrix L = u.information;
+  // The candidate's information: its readings scatter as the first test's (s²).
+  const double s2 = u.residual_variance_pp2;
+  if (!(s2 > 0)) return out;
+  for (std::size_t a = 0; a < nv; ++a)
+    for (std::size_t b = 0; b < nv; ++b) {
+      double v = 0;
+      for (std::size_t i = 0; i < r0.size(); ++i) v += Jc[i][a] * Jc[i][b];
+      L[a][b] += v / s2;
+    }
+  // The variables estimated after the test: the free ones and the held ones
+  // the sum fixes, dropping one held at a time (the fit's own rule).
+  std::vector<bool> in(nv, true);
+  Matrix Sigma;
+  std::vector<std::size_t> idx;
+  for (;;) {
+    idx.clear();
+    for (std::size_t v = 0; v < nv; ++v)
+      if (in[v]) idx.push_back(v);
+    Matrix sub(idx.size(), std::vector<double>(idx.size()));
+    for (std::size_t a = 0; a < idx.size(); ++a)
+      for (std::size_t b = 0; b < idx.size(); ++b) sub[a][b] = L[idx[a]][idx[b]];
+    const bool inverted = idx.empty() || invert_spd(sub, Sigma);
+    std::size_t drop = nv;
+    double worst = 0;
+    for (std::size_t a = 0; a < idx.size(); ++a) {
+      if (idx[a] < np) continue;
+      const OreParameter& p = *ps[idx[a]];
+      const double limit = p.log ? 1.0 : (p.hi - p.lo) / 4;
+      // Unfixed: beyond the limit, or (no inverse) the least information for its limit.
+      const double badness = inverted ? std::sqrt(std::max(Sigma[a][a], 0.0)) / limit
+                                      : 1 / std::sqrt(std::max(L[idx[a]][idx[a]], 1e-300) * limit * limit);
+      if ((!inverted || badness > 1) && badness >= worst) worst = badness, drop = idx[a];
+    }
+    if (drop == nv) {
+      if (!inverted) return out;  // the free ones alone cannot be inverted
+      break;
+    }
+    in[drop] = false;
+  }
+  double var = 0;
+  std::vector<double> g(idx.size());
+  for (std::size_t a = 0; a < idx.size(); ++a) g[a] = idx[a] < np ? s.g[idx[a]] : s.g_held[idx[a] - np];
+  for (std::size_t a = 0; a < idx.size(); ++a)
+    for (std::size_t b = 0; b < idx.size(); ++b) var += g[a] * Sigma[a][b] * g[b];
+  for (std::size_t j = 0; j < nh; ++j)
+    if (in[np + j]) out.fixes.push_back(u.held[j].name);
+  // The held ones left keep their reach: all of them together as now, or
+  // those left, each alone, in quadrature.
+  double down = 0, up = 0;
+  if (out.fixes.empty()) {
+    down = s.down, up = s.up;
+  } else {
+    for (std::size_t j = 0; j < nh; ++j)
+      if (!in[np + j] && j < s.down_by_held.size()) {
+        down = -std::hypot(down, s.down_by_held[j]);
+        up = std::hypot(up, s.up_by_held[j]);
+      }
+  }
+  const double half = t_quantile(0.975, u.dof + out.data) * std::sqrt(std::max(var, 0.0));
+  // Centred as now where held parameters keep their reach; at the value
+  // itself where the test fixes every one (the linear model's centre).
+  const double y0 = out.fixes.size() == nh ? (s.log ? std::log(s.value) : s.value) : s.center;
+  const double below = std::hypot(half, down), above = std::hypot(half, up);
+  out.expected.lo = s.log ? std::exp(y0 - below) : y0 - below;
+  out.expected.hi = s.log ? std::exp(y0 + above) : y0 + above;
+  if (s.down == -std::numeric_limits<double>::infinity() && down == s.down) out.expected.lo = -HUGE_VAL;
+  if (s.up == std::numeric_limits<double>::infinity() && up == s.up) out.expected.hi = HUGE_VAL;
+  out.width = out.expected.hi - out.expected.lo;
+  return out;
+}
+
+}  // namespace mc::grind

@@ -1,0 +1,45 @@
+// Which batch test to run next (docs/grinding-intervals.md, "Which test to
+// run next"): for a candidate test (a mill's run and grinding times, read
+// on the usual sieves), the 95 % interval a product of the fitted ore is
+// expected to have once that test is fitted with the others. Linear: the
+// current fit's information on its variables (free and held) plus the
+// candidate's Fisher information JᵀJ / s² at the fitted ore, inverted; a
+// held parameter the sum would fix (its expected standard error within the
+// fit's own limit for identifying it) joins the free ones, the others keep
+// their reach.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "grind/fit.h"
+#include "grind/interval.h"
+#include "grind/ore.h"
+
+namespace mc::grind {
+
+// The usual batch test's sieves, 3.35 mm and the √2 series from 2.36 mm
+// down to 53 µm (13), those within the ore's size classes; the ore's feed
+// read at them; the grinding times; noise as the first test's (weight 1).
+BatchTest candidate_test(const Ore& ore, const std::vector<double>& times_min);
+
+struct NextTestWidth {
+  Interval expected;               // the product's expected 95 % interval after the test
+  double width = std::numeric_limits<double>::quiet_NaN();  // expected.hi - expected.lo
+  std::vector<std::string> fixes;  // held parameters the test would fix
+  int data = 0;                    // the candidate's readings that carry information
+};
+
+// The expected interval, after the candidate test, of the product whose
+// sensitivity at the fitted ore is `s` (sensitivities(..., true): with its
+// gradient in the held parameters too). The current information is the
+// tests' JᵀJ / s² on the free and the held variables that the fit kept
+// (FitCovariance::information); the candidate adds J_cᵀ J_c / s², J_c the
+// derivatives of its readings (pp) at the fitted ore, its readings taken
+// to scatter as the first test's. The held parameters the sum fixes join
+// the free ones; the rest keep their reach. An ore without the
+// information matrix gets no interval (expected.valid() false).
+NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensitivity& s,
+                             const TestInMill& candidate);
+
+}  // namespace mc::grind

@@ -1,0 +1,433 @@
+// What a fit leaves open beyond its free parameters' covariance (src/grind/
+// interval.h, fit.h): held parameters combined jointly and in quadrature
+// around where they fit best, their profiles' limit from the profile's
+// minimum (F(1, ν) = t²), the coverage of an interval with a held
+// parameter, parameters at a bound, tests weighted by their noise, a
+// fitted ore edited by hand, strongly correlated parameters, and an
+// interval open at one end.
+#include <catch2/catch.hpp>
+
+#include <fmt/format.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "app/grind.h"
+#include "app/grind_interval.h"
+#include "bond_run.h"
+#include "grind/fit.h"
+#include "grind/interval.h"
+#include "grind_synthetic.h"
+#include "io/batch_test_file.h"
+#include "io/ore_file.h"
+#include "io/run_folder.h"
+
+using namespace mc::grind;
+using namespace mc::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A covariance made by hand: efficiency free (a standard error of 0.1 in
+// its logarithm), 50 degrees of freedom, no held parameter.
+FitCovariance one_free(const Ore& ore) {
+  FitCovariance u;
+  u.given = true;
+  u.names = {"efficiency"};
+  u.values = {std::log(ore.efficiency)};
+  u.matrix = {{0.01}};
+  u.residual_variance_pp2 = 0.3;
+  u.dof = 50;
+  return u;
+}
+
+HeldParameter held(const std::string& name, double value, double lo, double hi, const FitCovariance& u) {
+  HeldParameter h;
+  h.name = name;
+  h.value = value;
+  h.lo = lo;
+  h.hi = hi;
+  h.why = "held for the test";
+  h.free_at_lo = h.free_at_hi = u.values;
+  return h;
+}
+
+// The free parameters refitted with the ore's other parameters as they are:
+// the weighted sum of squares.
+double refit_ssr(const Ore& o, const std::vector<TestInMill>& tests, const std::vector<std::string>& free) {
+  return fit_batch_tests(o, tests, free, 300, false).ssr;
+}
+
+fs::path temp(const std::string& name) {
+  return fs::temp_directory_path() / ("millcharge_test_held_" + std::to_string(::getpid()) + "_" + name);
+}
+
+nlohmann::json json_of(const fs::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+// A command's exit status and what it wrote to stdout and stderr.
+std::string run_binary(const std::string& args, int& status) {
+  FILE* p = popen((std::string(MC_BINARY) + " " + args + " 2>&1").c_str(), "r");
+  std::string out;
+  char buf[512];
+  while (p && fgets(buf, sizeof buf, p)) out += buf;
+  const int rc = p ? pclose(p) : -1;
+  status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  return out;
+}
+
+int count_of(const std::string& text, const std::string& piece) {
+  int n = 0;
+  for (std::size_t at = text.find(piece); at != std::string::npos; at = text.find(piece, at + 1)) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("grind intervals: held parameters together at their corners, in quadrature with the free ones",
+          "[grind][interval][held]") {
+  const Ore ore = known_ore();
+  const double t = t_quantile(0.975, 50), half = t * 0.1, e = std::exp(1.0);
+  // η E∞ d₀: its logarithm is the sum of the three; E∞ and d₀ held, each
+  // over a factor of e either way, the free η unmoved at their ends.
+  auto product = [](const Ore& o) {
+    return std::vector<double>{o.efficiency * o.fracture.e_inf_J_kg * o.fracture.d0_m * 1e3};
+  };
+  const double p0 = product(ore)[0];
+  FitCovariance u = one_free(ore);
+  u.held = {held("e_inf_J_kg", 60, 60 / e, 60 * e, u), held("d0_mm", 2, 2 / e, 2 * e, u)};
+  for (double a : {60 / e, 60 * e})
+    for (double b : {2 / e, 2 * e}) u.edges.push_back({{a, b}, u.values});
+  u.best = {{60, 2}, u.values};
+  const Interval i = propagate(ore, u, product)[0];
+  // Together they reach a factor of e² (each alone, e); with the free one's
+  // half-width in quadrature, not added to it.
+  CHECK(i.hi == Approx(p0 * std::exp(std::hypot(half, 2.0))).epsilon(1e-6));
+  CHECK(i.lo == Approx(p0 * std::exp(-std::hypot(half, 2.0))).epsilon(1e-6));
+  // Around where the held ones fit best: E∞ held at 60, best at 60 e^½,
+  // its range 60 to 60 e: the interval spans e^½ either side of the best
+  // point (the held value inside it), the free half-width in quadrature.
+  FitCovariance v = one_free(ore);
+  v.held = {held("e_inf_J_kg", 60, 60, 60 * e, v)};
+  v.best = {{60 * std::exp(0.5)}, v.values};
+  const Interval j = propagate(ore, v, product)[0];
+  const double centre = p0 * std::exp(0.5);
+  CHECK(j.hi == Approx(centre * std::exp(std::hypot(half, 0.5))).epsilon(1e-6));
+  CHECK(j.lo == Approx(centre * std::exp(-std::hypot(half, 0.5))).epsilon(1e-6));
+}
+
+TEST_CASE("grind intervals: held parameters' ranges are limited from their least S, their edge points within it",
+          "[grind][interval][held]") {
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.sigma = 1.0;
+  start.fracture.e_inf_J_kg = 40;  // held wrong, with d₀
+  start.fracture.d0_m = 2.8e-3;
+  const std::vector<TestInMill> tests = {{synthetic_test(truth, 1.0, 41), synthetic_spectrum(), kPower_W, kHoldup_kg}};
+  const std::vector<std::string> free = {"efficiency", "sigma"};
+  BatchFit f = fit_batch_tests(start, tests, free);
+  for (const char* name : {"e_inf_J_kg", "d0_mm"}) {
+    FittedParameter h;
+    h.name = name;
+    h.start = h.value = find_ore_parameter(name)->get(start);
+    h.identified = false;
+    h.why = "held for the test";
+    f.parameters.push_back(h);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const FitCovariance u = fit_covariance(f, tests);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  REQUIRE(u.held.size() == 2);
+  REQUIRE(u.best.held.size() == 2);
+  // The least S met lies below the fit's own (the held values are wrong),
+  // and is what a refit there gives.
+  Ore at_best = with_variables(start, u, u.best.free);
+  for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(at_best, u.best.held[k]);
+  const double s_best = weighted_ssr(at_best, tests), limit = profile_limit(s_best, u.dof);
+  std::printf("held profiles: S %.3f at the fit, %.3f at the best point (E_inf %.4g, d0 %.4g); limit %.3f; "
+              "E_inf [%.4g, %.4g], d0 [%.4g, %.4g]; %zu edge points; %.2f s\n",
+              f.ssr, s_best, u.best.held[0], u.best.held[1], limit, u.held[0].lo, u.held[0].hi, u.held[1].lo,
+              u.held[1].hi, u.edges.size(), seconds);
+  CHECK(s_best < f.ssr - 0.5 * f.s2);
+  CHECK(s_best == Approx(refit_ssr(at_best, tests, free)).epsilon(1e-6));
+  // Each end the data set (not the file's range, not where it is held):
+  // within the limit, and past it a tenth of its reach further out.
+  int ends = 0;
+  for (std::size_t k = 0; k < 2; ++k) {
+    const HeldParameter& h = u.held[k];
+    const OreParameter& p = *find_ore_parameter(h.name);
+    for (int dir : {-1, +1}) {
+      const double end = dir < 0 ? h.lo : h.hi;
+      if (end == h.value || end <= p.lo || end >= p.hi) continue;
+      ++ends;
+      Ore o = at_best;
+      p.set(o, end);
+      const double s_end = refit_ssr(o, tests, free);
+      const double reach = std::fabs(std::log(end / u.best.held[k]));
+      p.set(o, end * std::exp(dir * 0.11 * reach));
+      const double s_past = refit_ssr(o, tests, free);
+      INFO(h.name << " end " << end << ": S " << s_end << ", a tenth further " << s_past << ", limit " << limit);
+      CHECK(s_end <= limit * (1 + 1e-6));
+      CHECK(s_past > limit * (1 - 1e-6));
+    }
+  }
+  CHECK(ends >= 2);
+  // The edge points (each alone, and toward the corners): each within the limit.
+  REQUIRE(u.edges.size() >= 4);
+  for (const HeldEdge& c : u.edges) {
+    Ore o = with_variables(start, u, c.free);
+    for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(o, c.held[k]);
+    CHECK(weighted_ssr(o, tests) <= limit * (1 + 1e-6));
+  }
+}
+
+TEST_CASE("grind intervals: with a held parameter, the interval still holds the truth in about 95 % of tests",
+          "[grind][interval][held]") {
+  // E∞ held at two thirds of its true value, η and σ fitted: the interval
+  // of a third mill's P80 (which E∞ moves) over N seeded tests, against
+  // the truth; and the delta method alone, as if E∞ were known.
+  const auto t0 = std::chrono::steady_clock::now();
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.sigma = 1.0;
+  start.fracture.e_inf_J_kg = 40;
+  const double true_p80 = p80_third_mill(truth)[0];
+  const int n = 100;
+  int held_in = 0, delta_in = 0;
+  double width = 0, width_delta = 0;
+  for (int seed = 0; seed < n; ++seed) {
+    const std::vector<TestInMill> tests = {
+        {synthetic_test(truth, 1.0, 7000 + seed), synthetic_spectrum(), kPower_W, kHoldup_kg}};
+    BatchFit f = fit_batch_tests(start, tests, {"efficiency", "sigma"});
+    FittedParameter h;
+    h.name = "e_inf_J_kg";
+    h.start = h.value = 40;
+    h.identified = false;
+    f.parameters.push_back(h);
+    const FitCovariance u = fit_covariance(f, tests);
+    const Sensitivity s = sensitivities(f.ore, u, p80_third_mill).front();
+    const Interval i = interval_of(s, u.matrix, t_quantile(0.975, u.dof), 1);
+    Sensitivity alone = s;  // E∞ taken as known: no reach, around the value
+    alone.down = alone.up = 0;
+    alone.center = std::log(alone.value);
+    const Interval d = interval_of(alone, u.matrix, t_quantile(0.975, u.dof), 1);
+    REQUIRE(i.valid());
+    held_in += i.lo <= true_p80 && true_p80 <= i.hi;
+    delta_in += d.lo <= true_p80 && true_p80 <= d.hi;
+    width += (i.hi - i.lo) / true_p80 / n;
+    width_delta += (d.hi - d.lo) / true_p80 / n;
+  }
+  const double coverage = static_cast<double>(held_in) / n, coverage_delta = static_cast<double>(delta_in) / n;
+  const double tolerance = 3 * std::sqrt(0.95 * 0.05 / n);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("interval coverage with E_inf held at 40 (true 60): third mill's P80 %.1f um, %d tests, mean width "
+              "%.1f %%: %.3f held; by the delta method alone %.3f, mean width %.1f %% (tolerance +-%.3f); %.1f s\n",
+              true_p80, n, 100 * width, coverage, coverage_delta, 100 * width_delta, tolerance, seconds);
+  CHECK(coverage >= 0.95 - tolerance);
+  CHECK(width < 3 * width_delta);  // wider where E∞ matters, not without bound
+}
+
+TEST_CASE("grind fit: a parameter within a whisker of its bound is held on it, its steps kept inside its range",
+          "[grind][interval][held]") {
+  // The truth's η a ten-millionth below its bound of 1, no scatter: the fit
+  // ends within the whisker and puts η on the bound.
+  Ore truth = known_ore();
+  truth.efficiency = 1 - 1e-7;
+  Ore start = truth;
+  start.efficiency = 0.5;
+  start.fracture.sigma = 1.0;
+  const std::vector<TestInMill> tests = {{synthetic_test(truth, 0.0, 1), synthetic_spectrum(), kPower_W, kHoldup_kg}};
+  const BatchFit f = fit_batch_tests(start, tests, {"efficiency", "sigma"});
+  REQUIRE(f.parameters.size() == 2);
+  CHECK(f.parameters[0].at_bound);
+  CHECK(f.parameters[0].value == 1.0);
+  CHECK(f.covariance_of == std::vector<std::size_t>{1});
+  const FitCovariance u = fit_covariance(f, tests);
+  REQUIRE(u.held.size() == 1);
+  CHECK(u.held[0].why == "on its bound");
+  CHECK(u.held[0].hi == 1.0);  // one-sided: the data can bound it below only
+  CHECK(u.held[0].lo <= 1.0);
+  // A free η a hundred-thousandth below 1 with a standard error of 0.1 in
+  // its logarithm: the differences step below it only (a number the ore
+  // cannot make past its range is NaN there), and the interval is the
+  // delta method's all the same.
+  Ore near = known_ore();
+  near.efficiency = 0.99999;
+  const FitCovariance v = one_free(near);
+  auto eta = [](const Ore& o) {
+    return std::vector<double>{o.efficiency > 1 ? std::numeric_limits<double>::quiet_NaN() : o.efficiency};
+  };
+  const Interval i = propagate(near, v, eta)[0];
+  const double half = t_quantile(0.975, 50) * 0.1;
+  REQUIRE(i.valid());
+  CHECK(i.lo == Approx(0.99999 * std::exp(-half)).epsilon(1e-6));
+  CHECK(i.hi == Approx(0.99999 * std::exp(half)).epsilon(1e-6));
+}
+
+TEST_CASE("grind --fit of tests of different noise: each counts by 1/noise^2", "[grind][interval][held]") {
+  // Two tests in the same mill of ores that differ (η 0.35 and 0.45), no
+  // scatter, η fitted to both: halving one test's noise pulls the fit to
+  // it; equal noises, whatever they are, give the unweighted fit.
+  Ore a = known_ore(), b = known_ore();
+  b.efficiency = 0.45;
+  Ore start = a;
+  start.efficiency = 0.6;
+  auto fit = [&](double noise_a, double noise_b) {
+    TestInMill ta{synthetic_test(a, 0.0, 1), synthetic_spectrum(), kPower_W, kHoldup_kg};
+    TestInMill tb{synthetic_test(b, 0.0, 2, synthetic_spectrum(), {1, 2, 4, 8, 16}), synthetic_spectrum(), kPower_W,
+                  kHoldup_kg};
+    ta.test.noise_pp = noise_a;
+    tb.test.noise_pp = noise_b;
+    return fit_batch_tests(start, {ta, tb}, {"efficiency"});
+  };
+  const BatchFit same = fit(1, 1), same_half = fit(0.5, 0.5), precise_a = fit(0.5, 1), precise_b = fit(1, 0.5);
+  const double eq = same.ore.efficiency, wa = precise_a.ore.efficiency, wb = precise_b.ore.efficiency;
+  std::printf("weighted by noise: eta %.5f with equal noises, %.5f with the 0.35 test at 0.5 pp, %.5f with the "
+              "0.45 test at 0.5 pp\n",
+              eq, wa, wb);
+  CHECK(same_half.ore.efficiency == Approx(eq).epsilon(1e-9));
+  CHECK(same_half.covariance[0][0] == Approx(same.covariance[0][0]).epsilon(1e-9));
+  CHECK(same_half.ssr == Approx(same.ssr).epsilon(1e-9));
+  CHECK(wa < eq - 0.01);  // toward 0.35
+  CHECK(wb > eq + 0.01);  // toward 0.45
+  // Four to one: the fit's distance from each test's η shrinks on the
+  // precise side.
+  CHECK((wa - 0.35) / (0.45 - wa) < 0.5 * (eq - 0.35) / (0.45 - eq));
+  // A noise of 0 beside a noise is an infinite weight: refused.
+  CHECK_THROWS_WITH(fit(0, 1), Catch::Contains("noise_pp 0"));
+}
+
+TEST_CASE("grind intervals: correlated pairs, and an interval open at one end", "[grind][interval][held]") {
+  FitCovariance u;
+  u.names = {"efficiency", "e_inf_J_kg", "sigma"};
+  u.matrix = {{1, 0.995, 0.5}, {0.995, 1, 0.2}, {0.5, 0.2, 4}};
+  const auto pairs = correlated_pairs(u);
+  REQUIRE(pairs.size() == 1);
+  CHECK(pairs[0].a == "log(efficiency)");
+  CHECK(pairs[0].b == "log(e_inf_J_kg)");
+  CHECK(pairs[0].r == Approx(0.995));
+  // A number past any bound at a held parameter's end (a target the moved
+  // ore cannot reach): that end is open.
+  const Ore ore = known_ore();
+  FitCovariance v = one_free(ore);
+  v.held = {held("e_inf_J_kg", 60, 30, 120, v)};
+  auto rate = [](double sign) {
+    return [sign](const Ore& o) {
+      return std::vector<double>{o.fracture.e_inf_J_kg > 100 ? sign * kInf : o.efficiency * o.fracture.e_inf_J_kg};
+    };
+  };
+  const Interval above = propagate(ore, v, rate(+1))[0], below = propagate(ore, v, rate(-1))[0];
+  REQUIRE(above.valid());
+  CHECK(above.open_above());
+  CHECK(std::isfinite(above.lo));
+  CHECK(below.open_below());
+  CHECK(std::isfinite(below.hi));
+  CHECK(mc::app::bracket(above, 1, "{:.3g}") == " [> " + fmt::format("{:.3g}", above.lo) + "]");
+  CHECK(mc::app::bracket(below, 1, "{:.3g}") == " [< " + fmt::format("{:.3g}", below.hi) + "]");
+}
+
+TEST_CASE("grind intervals through the command: an ore edited by hand, correlated pairs, a target out of reach",
+          "[grind][interval][held][outputs]") {
+  const fs::path run_dir = short_bond_run();
+  const mc::io::Run run = mc::io::read_run(run_dir, true);
+  const Ore truth = known_ore();
+  const TempDir dir{temp("command")};
+  fs::create_directories(dir.path);
+  mc::io::BatchTestFile tf;
+  tf.title = "synthetic";
+  tf.test = synthetic_test(truth, 1.0, 12, run.spectrum, {1, 2, 4, 8, 16}, true);
+  std::ofstream(dir.path / "test.toml") << mc::io::batch_test_toml(tf);
+  mc::app::GrindOptions o;
+  o.run_dir = run_dir.string();
+  o.ore = (fs::path(MC_ASSET_DIR) / "ores" / "example_spectrum.toml").string();
+  o.fit_tests = {(dir.path / "test.toml").string()};
+  o.fit_params = {"efficiency", "sigma"};
+  o.out = (dir.path / "fit").string();
+  o.quiet = true;
+  REQUIRE(mc::app::cmd_grind(o) == 0);
+  const fs::path fitted = dir.path / "fit" / "ore_fitted.toml";
+  std::stringstream text;
+  text << std::ifstream(fitted).rdbuf();
+  const std::string ore_text = text.str();
+  auto write = [&](const std::string& name, const std::string& body) {
+    std::ofstream(dir.path / name) << body;
+    return (dir.path / name).string();
+  };
+  auto grind = [&](const std::string& ore, const std::string& out, const std::string& more, int& status) {
+    return run_binary("grind " + run_dir.string() + " --ore " + ore + " --time 4 --out " + (dir.path / out).string() +
+                          " " + more,
+                      status);
+  };
+  int status = 0;
+  // As fitted: intervals.
+  grind(fitted.string(), "as_fitted", "", status);
+  REQUIRE(status == 0);
+  CHECK(json_of(dir.path / "as_fitted" / "grind.json")["products"][0].contains("P80_um_95"));
+  // η edited by hand: no intervals, said once, naming the key.
+  std::string edited = ore_text;
+  const std::size_t at = edited.find("\nefficiency = ");
+  REQUIRE(at != std::string::npos);
+  edited.replace(at, edited.find('\n', at + 1) - at, "\nefficiency = 0.9");
+  const std::string said = grind(write("edited.toml", edited), "edited", "", status);
+  INFO(said);
+  CHECK(status == 0);
+  CHECK(count_of(said, "rates.efficiency = 0.9") == 1);
+  CHECK(count_of(said, "products without intervals") == 1);
+  const nlohmann::json ej = json_of(dir.path / "edited" / "grind.json");
+  CHECK_FALSE(ej["products"][0].contains("P80_um_95"));
+  CHECK(ej["intervals"]["changed"].get<std::string>().find("rates.efficiency") != std::string::npos);
+  // Correlated beyond 0.99 (the covariance's off-diagonal made so): a note
+  // on the console and in grind.json.
+  std::string correlated = ore_text;
+  const std::size_t cv = correlated.find("\ncovariance = [[");
+  REQUIRE(cv != std::string::npos);
+  const Ore fo = mc::io::read_ore(fitted);
+  const auto& m = fo.fitted_under.covariance.matrix;
+  REQUIRE(m.size() == 2);
+  const double c = 0.995 * std::sqrt(m[0][0] * m[1][1]);
+  correlated.replace(cv, correlated.find('\n', cv + 1) - cv,
+                     fmt::format("\ncovariance = [[{:.10g}, {:.10g}], [{:.10g}, {:.10g}]]", m[0][0], c, c, m[1][1]));
+  const std::string noted = grind(write("correlated.toml", correlated), "correlated", "", status);
+  CHECK(status == 0);
+  CHECK(count_of(noted, "log(efficiency) and log(sigma) are correlated at r = +0.9950") == 1);
+  const nlohmann::json cj = json_of(dir.path / "correlated" / "grind.json");
+  REQUIRE(cj["intervals"]["correlated"].size() == 1);
+  CHECK(cj["intervals"]["correlated"][0]["r"].get<double>() == Approx(0.995));
+  // E∞ held with a range to 1e5 J/kg, where the ore hardly breaks: the
+  // throughput at the target has no lower end.
+  const double e_inf = fo.fracture.e_inf_J_kg;
+  const std::string values = fmt::format("[{:.10g}, {:.10g}]", fo.fitted_under.covariance.values[0],
+                                         fo.fitted_under.covariance.values[1]);
+  std::string without = ore_text;  // the tests' information is over the fit's variables: left out
+  const std::size_t info = without.find("\ninformation = ");
+  REQUIRE(info != std::string::npos);
+  without.erase(info, without.find('\n', info + 1) - info);
+  const std::string open = without + fmt::format("\n[[fitted.held]]\nname = \"e_inf_J_kg\"\nvalue = {:.10g}\nlo = "
+                                                  "{:.10g}\nhi = 100000\nfree_at_lo = {}\nfree_at_hi = {}\n",
+                                                  e_inf, e_inf, values, values);
+  const std::string shown = grind(write("open.toml", open), "open", "--target-p80 300", status);
+  INFO(shown);
+  REQUIRE(status == 0);
+  CHECK(shown.find("t/h [< ") != std::string::npos);
+  const nlohmann::json oj = json_of(dir.path / "open" / "grind.json");
+  REQUIRE(oj["throughput_at_target_t_h_95"].size() == 2);
+  CHECK(oj["throughput_at_target_t_h_95"][0].is_null());
+  CHECK(oj["throughput_at_target_t_h_95"][1].get<double>() > oj["throughput_at_target_t_h"].get<double>());
+  CHECK(oj["throughput_at_target_t_h_95_open"] == "below");
+}

@@ -1,0 +1,192 @@
+// Which batch test to run next (src/grind/next_test.h, `grind --next-test`):
+// the expected width of a product's interval after a candidate test,
+// against the widths that fits of simulated candidate tests give; the
+// ranking through the command, its files, and bad candidates refused.
+#include <catch2/catch.hpp>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "app/grind.h"
+#include "bond_run.h"
+#include "grind/fit.h"
+#include "grind/interval.h"
+#include "grind/next_test.h"
+#include "grind_synthetic.h"
+#include "io/batch_test_file.h"
+#include "io/ore_file.h"
+#include "io/run_folder.h"
+
+using namespace mc::grind;
+using namespace mc::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Candidate {
+  std::string name;
+  std::vector<SpectrumBin> spectrum;
+  std::vector<double> times;
+};
+
+fs::path temp(const std::string& name) {
+  return fs::temp_directory_path() / ("millcharge_test_next_" + std::to_string(::getpid()) + "_" + name);
+}
+
+std::string run_binary(const std::string& args, int& status) {
+  FILE* p = popen((std::string(MC_BINARY) + " " + args + " 2>&1").c_str(), "r");
+  std::string out;
+  char buf[512];
+  while (p && fgets(buf, sizeof buf, p)) out += buf;
+  const int rc = p ? pclose(p) : -1;
+  status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("grind next test: the expected width against refits of simulated tests", "[grind][next]") {
+  // One test in the first mill, η and σ fitted; the candidates: that mill
+  // or the harder one, short or long times. The product: a third mill's
+  // P80. The recommended and the worst candidate are simulated from the
+  // truth with seeded ±1 pp scatter and fitted with the first test: the
+  // mean width of their intervals against the predicted.
+  const auto t0 = std::chrono::steady_clock::now();
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.sigma = 1.0;
+  const std::vector<std::string> names = {"efficiency", "sigma"};
+  const TestInMill first{synthetic_test(truth, 1.0, 51), synthetic_spectrum(), kPower_W, kHoldup_kg};
+  const BatchFit f = fit_batch_tests(start, {first}, names);
+  const FitCovariance u = fit_covariance(f, {first});
+  REQUIRE(u.held.empty());
+  const Sensitivity s = sensitivities(f.ore, u, p80_third_mill, true).front();
+  const Interval now = propagate(f.ore, u, p80_third_mill)[0];
+  const std::vector<Candidate> candidates = {{"first mill, 0.5 to 8 min", synthetic_spectrum(), {0.5, 1, 2, 4, 8}},
+                                             {"first mill, 2 to 32 min", synthetic_spectrum(), {2, 4, 8, 16, 32}},
+                                             {"harder mill, 0.5 to 8 min", harder_spectrum(), {0.5, 1, 2, 4, 8}},
+                                             {"harder mill, 2 to 32 min", harder_spectrum(), {2, 4, 8, 16, 32}}};
+  std::vector<double> predicted;
+  for (const Candidate& c : candidates) {
+    const NextTestWidth w = expected_after(
+        f.ore, u, s, {candidate_test(f.ore, c.times), c.spectrum, kPower_W, kHoldup_kg});
+    REQUIRE(w.expected.valid());
+    predicted.push_back(w.width);
+  }
+  const std::size_t best = std::min_element(predicted.begin(), predicted.end()) - predicted.begin();
+  const std::size_t worst = std::max_element(predicted.begin(), predicted.end()) - predicted.begin();
+  REQUIRE(best != worst);
+  // The realised widths: the candidate made from the truth, fitted with
+  // the first test, seed after seed.
+  auto realised = [&](const Candidate& c) {
+    const int n = 20;
+    double sum = 0;
+    for (int seed = 0; seed < n; ++seed) {
+      const TestInMill next{synthetic_test(truth, 1.0, 900 + seed, c.spectrum, c.times), c.spectrum, kPower_W,
+                            kHoldup_kg};
+      const BatchFit fj = fit_batch_tests(start, {first, next}, names);
+      const Interval i = propagate(fj.ore, fit_covariance(fj, {first, next}), p80_third_mill)[0];
+      REQUIRE(i.valid());
+      sum += (i.hi - i.lo) / n;
+    }
+    return sum;
+  };
+  const double real_best = realised(candidates[best]), real_worst = realised(candidates[worst]);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("next test: third mill's P80 interval now %.1f um wide; predicted after each candidate:", now.hi - now.lo);
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    std::printf(" %s %.1f%s", candidates[k].name.c_str(), predicted[k], k + 1 < candidates.size() ? "," : "\n");
+  std::printf("next test: recommended (%s) predicted %.1f, realised %.1f (mean of 20 refits); worst (%s) predicted "
+              "%.1f, realised %.1f; %.1f s\n",
+              candidates[best].name.c_str(), predicted[best], real_best, candidates[worst].name.c_str(),
+              predicted[worst], real_worst, seconds);
+  CHECK(predicted[best] < now.hi - now.lo);  // one more test narrows it
+  CHECK(real_best == Approx(predicted[best]).epsilon(0.25));
+  CHECK(real_worst == Approx(predicted[worst]).epsilon(0.25));
+  CHECK(real_best < real_worst);
+}
+
+TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, bad candidates refused",
+          "[grind][next][outputs][failures]") {
+  const fs::path run_dir = short_bond_run();
+  const mc::io::Run run = mc::io::read_run(run_dir, true);
+  const Ore truth = known_ore();
+  const TempDir dir{temp("command")};
+  fs::create_directories(dir.path);
+  // A second candidate mill (a copy of the run), one without its spectrum.
+  fs::copy(run_dir, dir.path / "mill2", fs::copy_options::recursive);
+  fs::copy(run_dir, dir.path / "nospectrum", fs::copy_options::recursive);
+  fs::remove(dir.path / "nospectrum" / "spectra.csv");
+  mc::io::BatchTestFile tf;
+  tf.title = "synthetic";
+  tf.test = synthetic_test(truth, 1.0, 13, run.spectrum, {1, 2, 4, 8, 16}, true);
+  std::ofstream(dir.path / "test.toml") << mc::io::batch_test_toml(tf);
+  mc::app::GrindOptions o;
+  o.run_dir = run_dir.string();
+  o.ore = (fs::path(MC_ASSET_DIR) / "ores" / "example_spectrum.toml").string();
+  o.fit_tests = {(dir.path / "test.toml").string()};
+  o.fit_params = {"efficiency", "sigma"};
+  o.out = (dir.path / "fit").string();
+  o.quiet = true;
+  REQUIRE(mc::app::cmd_grind(o) == 0);
+  const std::string fitted = (dir.path / "fit" / "ore_fitted.toml").string();
+  const std::string grind = "grind " + run_dir.string() + " --ore " + fitted + " --bond 106 ";
+  int status = 0;
+  const std::string shown = run_binary(grind + "--next-test " + run_dir.string() + " --next-test " +
+                                           (dir.path / "mill2").string() + " --out " + (dir.path / "next").string(),
+                                       status);
+  INFO(shown);
+  REQUIRE(status == 0);
+  CHECK(shown.find("which test next, for the Bond Wi (kWh/t)") != std::string::npos);
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir.path / "next" / "grind.json"));
+  const nlohmann::json& nt = j["next_test"];
+  REQUIRE(nt["candidates"].size() == 6);  // two mills x the three default sets of times
+  const auto wi_95 = j["bond"]["work_index_kWh_t_95"].get<std::vector<double>>();
+  CHECK(nt["width_now"].get<double>() == Approx(wi_95[1] - wi_95[0]).epsilon(1e-9));
+  double last = 0;
+  for (const auto& c : nt["candidates"]) {
+    const double w = c["expected_width"].get<double>();
+    CHECK(w >= last);  // narrowest first
+    CHECK(w < nt["width_now"].get<double>());
+    last = w;
+  }
+  // The same rows in next_test.csv: a header and six.
+  std::ifstream csv(dir.path / "next" / "next_test.csv");
+  std::string line;
+  std::getline(csv, line);
+  CHECK(line == "rank,run,times_min,expected_lo,expected_hi,expected_width,width_now,fixes_held");
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  CHECK(rows == 6);
+  // Bad input: one message naming the option or the file, exit 2, nothing written.
+  auto refused = [&](const std::string& args, const std::string& message) {
+    const fs::path out = dir.path / "refused";
+    const std::string said = run_binary(args + " --out " + out.string(), status);
+    INFO(said);
+    CHECK(status == 2);
+    CHECK(said.find(message) != std::string::npos);
+    CHECK_FALSE(fs::exists(out));
+  };
+  refused(grind + "--next-test " + (dir.path / "nowhere").string(),
+          "--next-test " + (dir.path / "nowhere").string() + ": not a run folder");
+  refused(grind + "--next-test " + (dir.path / "nospectrum").string(),
+          "--next-test " + (dir.path / "nospectrum").string() + ": ");
+  refused(grind + "--next-test " + run_dir.string() + " --next-times 1,-2", "--next-times 1,-2: expected minutes > 0");
+  refused(grind + "--next-test " + run_dir.string() + " --next-times 2,1", "--next-times 2,1: 1 does not follow 2");
+  refused(grind + "--next-times 1,2", "--next-times: the times of a next test; give --next-test RUN");
+  refused("grind " + run_dir.string() + " --ore " + o.ore + " --bond 106 --next-test " + run_dir.string(),
+          "keeps no covariance");
+  refused(grind + "--next-test " + run_dir.string() + " --next-for throughput", "--next-for throughput: ");
+}
