@@ -37,7 +37,7 @@ struct PlotSeries {
   bool dashed = false;           // a dashed line (a model beside the data)
   // A shaded band under the line (an interval about each point), as long
   // as x where given; NaN breaks it.
-  std::vector<double> band_lo, band_hi;
+  std::vector<double> band_lo = {}, band_hi = {};
 };
 
 // A horizontal line at y = value (a mean, a target) from x_from to x_to
