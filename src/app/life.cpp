@@ -436,7 +436,11 @@ int cmd_life(const LifeOptions& o) {
       // three times those asked, until the hours are covered.
       const double step = o.hours / o.stages, left = o.hours - hours_now;
       const std::string hours_words = life::hours_label(st.relative());
-      if (left <= 0.05 * step) stopped = fmt::format("{:g} {} reached", o.hours, hours_words);
+      if (left <= 0.05 * step)
+        stopped = left > 1e-6 * o.hours
+                      ? fmt::format("{:g} {} reached (the last stage at {:.0f}, within 5 % of a stage of them)",
+                                    o.hours, hours_words, hours_now)
+                      : fmt::format("{:g} {} reached", o.hours, hours_words);
       else if (i >= 3 * o.stages)
         stopped = fmt::format("{} stages run; they cover {:.0f} of the {:g} {} asked", i, hours_now, o.hours, hours_words);
       else span = std::min(step, left) * st.factor;
