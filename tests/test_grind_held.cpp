@@ -165,6 +165,16 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
               u.held[1].hi, u.edges.size(), seconds);
   CHECK(s_best < f.ssr - 0.5 * f.s2);
   CHECK(s_best == Approx(refit_ssr(at_best, tests, free)).epsilon(1e-6));
+  // Both sums of squares and the limit kept (fitted.ssr_held, ssr_best,
+  // ssr_limit), and the held values said to lie outside the data's region
+  // exactly where S there is above the limit.
+  CHECK(u.ssr_fit == f.ssr);
+  CHECK(u.ssr_best == Approx(s_best).epsilon(1e-9));
+  CHECK(u.ssr_limit == Approx(limit).epsilon(1e-9));
+  const std::string outside = outside_region(u);
+  INFO(outside);
+  CHECK(outside.empty() == (f.ssr <= limit));
+  if (f.ssr > limit) CHECK(outside.find("e_inf_J_kg") != std::string::npos);
   // Each end the data set (not the file's range, not where it is held):
   // within the limit, and past it a tenth of its reach further out.
   int ends = 0;
@@ -430,4 +440,32 @@ TEST_CASE("grind intervals through the command: an ore edited by hand, correlate
   CHECK(oj["throughput_at_target_t_h_95"][0].is_null());
   CHECK(oj["throughput_at_target_t_h_95"][1].get<double>() > oj["throughput_at_target_t_h"].get<double>());
   CHECK(oj["throughput_at_target_t_h_95_open"] == "below");
+  // E∞ held, the data best at 0.8 of it: with S where it is held above the
+  // limit from there (the documented five-parameter fit's 20.61 against
+  // 19.66), a note once on the console and in grind.json; below it, none.
+  auto held_at = [&](double ssr_held) {
+    std::string t = without;
+    const std::size_t dof = t.find("\ndegrees_of_freedom = ");
+    REQUIRE(dof != std::string::npos);
+    t.insert(t.find('\n', dof + 1) + 1, fmt::format("ssr_held = {}\nssr_best = 18.37\nssr_limit = 19.66\n", ssr_held));
+    return t + fmt::format("\n[[fitted.held]]\nname = \"e_inf_J_kg\"\nvalue = {:.10g}\nlo = {:.10g}\nhi = {:.10g}\n"
+                           "\n[fitted.best]\nheld = [{:.10g}]\nfree = {}\n",
+                           e_inf, 0.5 * e_inf, 1.5 * e_inf, 0.8 * e_inf, values);
+  };
+  const std::string out_said = grind(write("outside.toml", held_at(20.61)), "outside", "", status);
+  INFO(out_said);
+  REQUIRE(status == 0);
+  CHECK(count_of(out_said, "lie outside the data's 95 % region: S 20.61 there against the limit 19.66") == 1);
+  CHECK(count_of(out_said, fmt::format("e_inf_J_kg {:.6g}, S 18.37", 0.8 * e_inf)) == 1);
+  const nlohmann::json xj = json_of(dir.path / "outside" / "grind.json");
+  CHECK(xj["products"][0].contains("P80_um_95"));
+  REQUIRE(xj["intervals"].contains("outside_data_region"));
+  CHECK(xj["intervals"]["outside_data_region"].get<std::string>().find("e_inf_J_kg") != std::string::npos);
+  const Ore back = mc::io::read_ore(dir.path / "outside.toml");
+  CHECK(back.fitted_under.covariance.ssr_fit == 20.61);
+  CHECK(back.fitted_under.covariance.ssr_limit == 19.66);
+  const std::string in_said = grind(write("inside.toml", held_at(19.5)), "inside", "", status);
+  REQUIRE(status == 0);
+  CHECK(count_of(in_said, "outside the data's 95 % region") == 0);
+  CHECK_FALSE(json_of(dir.path / "inside" / "grind.json")["intervals"].contains("outside_data_region"));
 }

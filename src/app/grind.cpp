@@ -463,6 +463,7 @@ void print(const GrindOptions& o, const Ore& ore, const io::Run& run, const Circ
                     "intervals describe this fit's neighbourhood only; another test or fewer parameters "
                     "(docs/grinding-intervals.md)\n",
                     h.name.c_str(), h.value);
+    if (!ci.outside.empty()) std::printf("  note: %s (docs/grinding-intervals.md)\n", ci.outside.c_str());
     for (const Correlated& c : ci.correlated)
       std::printf("  note: %s and %s are correlated at r = %+.4f: the tests fix only their combination, not "
                   "each\n",
@@ -576,6 +577,7 @@ void add_intervals(nlohmann::ordered_json& j, const GrindOptions& o, const Grind
   j["intervals"] = {{"level", 0.95},
                     {"method", "linearised propagation of the fit's covariance (Student's t), combined in quadrature "
                                "with how far the held parameters move each number (docs/grinding-intervals.md)"}};
+  if (!ci.outside.empty()) j["intervals"]["outside_data_region"] = ci.outside;
   if (!ci.correlated.empty()) {
     nlohmann::json pairs = nlohmann::json::array();
     for (const Correlated& c : ci.correlated)

@@ -42,6 +42,7 @@ GrindIntervals grind_intervals(const Ore& ore, const GrindNumbers& made,
   out.stale = stale_covariance(ore, u);
   if (!out.stale.empty()) return out;
   out.correlated = correlated_pairs(u);
+  out.outside = outside_region(u);
   const std::size_t n = flatten(made).size();
   const std::vector<Interval> all = propagate(ore, u, [&](const Ore& o) {
     const std::vector<double> v = flatten(make(o));

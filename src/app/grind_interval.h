@@ -38,6 +38,7 @@ struct GrindIntervals {
   // at (grind::stale_covariance); "" otherwise.
   std::string stale;
   std::vector<grind::Correlated> correlated;  // pairs beyond |r| > 0.99
+  std::string outside;  // grind::outside_region: the held values outside the data's 95 % region ("" : inside)
   std::vector<ProductInterval> products;
   grind::Interval work_index_kWh_t, bond_p80_um, gbp_g_rev, throughput_t_h;
 };

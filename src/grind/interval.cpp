@@ -226,6 +226,7 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
   u.best = {best.held, best.at.free};
   u.ssr_fit = fit.ssr;
   u.ssr_best = best.at.ssr;
+  u.ssr_limit = limit;
   for (std::size_t j = 0; j < nh; ++j) {
     // The last line runs through the best point already; the others again.
     std::vector<LinePoint> pts = lines[j];
@@ -591,6 +592,20 @@ std::string stale_covariance(const Ore& ore, const FitCovariance& u) {
       return fmt::format("{} = {:.6g}, held at {:.6g} in the covariance", ore_file_key(h.name), now, h.value);
   }
   return "";
+}
+
+std::string outside_region(const FitCovariance& u) {
+  if (u.held.empty() || !(u.ssr_limit > 0) || !(u.ssr_fit > u.ssr_limit)) return "";
+  std::string held, best;
+  for (std::size_t k = 0; k < u.held.size(); ++k) {
+    held += fmt::format("{}{} {:.6g}", k ? ", " : "", ore_file_key(u.held[k].name), u.held[k].value);
+    if (k < u.best.held.size())
+      best += fmt::format("{}{} {:.6g}", k ? ", " : "", ore_file_key(u.held[k].name), u.best.held[k]);
+  }
+  return fmt::format("the ore's held values ({}) lie outside the data's 95 % region: S {:.4g} there against the "
+                     "limit {:.4g} from where they fit best ({}, S {:.4g}); its numbers are not the data's best, and "
+                     "the intervals are built around that best point",
+                     held, u.ssr_fit, u.ssr_limit, best.empty() ? "not kept" : best, u.ssr_best);
 }
 
 std::vector<Correlated> correlated_pairs(const FitCovariance& u, double limit) {

@@ -117,6 +117,12 @@ Ore with_variables(const Ore& ore, const FitCovariance& u, const std::vector<dou
 // (a hand edit: the covariance no longer describes this ore).
 std::string stale_covariance(const Ore& ore, const FitCovariance& u);
 
+// "" unless the held parameters' own values lie outside the data's 95 %
+// region (the sum of squares where they are held above the limit from
+// where they fit best): then a sentence naming them, S there against the
+// limit, and where they fit best.
+std::string outside_region(const FitCovariance& u);
+
 // Pairs of fitted variables correlated beyond |r| > limit: the tests fix
 // only their combination.
 struct Correlated {

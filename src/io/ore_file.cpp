@@ -92,13 +92,19 @@ void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u
   const toml::node* dn = ft.get("degrees_of_freedom");
   if (!dn) {
     for (const char* k :
-         {"covariance_variables", "covariance_values", "covariance", "residual_variance_pp2", "held", "edge", "best", "information"})
+         {"covariance_variables", "covariance_values", "covariance", "residual_variance_pp2", "held", "edge", "best",
+          "information", "ssr_held", "ssr_best", "ssr_limit"})
       if (ft.get(k)) r.fail(std::string("fitted.") + k, ft.get(k), "given without fitted.degrees_of_freedom");
     return;
   }
   u.given = true;
   u.dof = static_cast<int>(r.number(ft, "fitted.", "degrees_of_freedom", 1, 1e9, "an integer >= 1"));
   u.residual_variance_pp2 = r.number(ft, "fitted.", "residual_variance_pp2", 0, kInf, ">= 0 (pp²)");
+  // The sums of squares where the held parameters are held and where they
+  // fit best, and the limit (none: an ore written before they were kept).
+  u.ssr_fit = r.number(ft, "fitted.", "ssr_held", 0, kInf, ">= 0", 0.0);
+  u.ssr_best = r.number(ft, "fitted.", "ssr_best", 0, kInf, ">= 0", 0.0);
+  u.ssr_limit = r.number(ft, "fitted.", "ssr_limit", 0, kInf, ">= 0", 0.0);
   const toml::node* vn = ft.get("covariance_variables");
   if (!vn || !vn->is_array()) r.fail("fitted.covariance_variables", vn, "missing (an array of names, maybe empty)");
   for (const toml::node& e : *vn->as_array()) {
@@ -193,7 +199,8 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   r.knows(ft, "fitted.", {"contact_law", "restitution", "friction", "rolling_friction", "stiffness_N_m",
                           "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp",
                           "energy_basis", "covariance_variables", "covariance_values", "covariance",
-                          "residual_variance_pp2", "degrees_of_freedom", "held", "edge", "best", "information"});
+                          "residual_variance_pp2", "degrees_of_freedom", "held", "edge", "best", "information",
+                          "ssr_held", "ssr_best", "ssr_limit"});
   auto text = [&](const std::string& key) {
     const toml::node* n = ft.get(key);
     if (!n) return std::string();
@@ -446,6 +453,10 @@ std::string covariance_toml(const FitCovariance& u) {
     for (std::size_t a = 0; a < u.information.size(); ++a) s += (a ? ", " : "") + list(u.information[a]);
     s += "]   # the tests' information: the variables, then the held parameters (log of a scale)\n";
   }
+  if (u.ssr_limit > 0)
+    s += "ssr_held = " + g(u.ssr_fit) + "   # the weighted sum of squares where the held parameters are held\nssr_best = " +
+         g(u.ssr_best) + "   # where they fit best ([fitted.best])\nssr_limit = " + g(u.ssr_limit) +
+         "  # the 95 % limit from there: ssr_held above it, the ore lies outside the data's 95 % region\n";
   for (const grind::HeldParameter& h : u.held) {
     s += "\n[[fitted.held]]\nname = \"" + h.name + "\"\nvalue = " + g(h.value) + "\nlo = " + g(h.lo) +
          "\nhi = " + g(h.hi) + "\n";
