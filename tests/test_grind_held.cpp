@@ -402,6 +402,23 @@ TEST_CASE("grind intervals through the command: an ore edited by hand, correlate
   const nlohmann::json ej = json_of(dir.path / "edited" / "grind.json");
   CHECK_FALSE(ej["products"][0].contains("P80_um_95"));
   CHECK(ej["intervals"]["changed"].get<std::string>().find("rates.efficiency") != std::string::npos);
+  // breakage.beta edited, neither free nor held: the tables' hash kept by
+  // --fit (fitted.tables_fnv1a) differs; no intervals, said once.
+  CHECK(ore_text.find("\ntables_fnv1a = \"sizes ") != std::string::npos);
+  std::string beta = ore_text;
+  const std::size_t bt = beta.find("\nbeta = ");
+  REQUIRE(bt != std::string::npos);
+  beta.replace(bt, beta.find('\n', bt + 1) - bt, "\nbeta = 3.9");
+  const std::string beta_said = grind(write("beta.toml", beta), "beta", "", status);
+  INFO(beta_said);
+  CHECK(status == 0);
+  CHECK(count_of(beta_said, "[breakage] differ from the tables the ore was fitted with ([fitted] tables_fnv1a)") == 1);
+  CHECK(count_of(beta_said, "products without intervals") == 1);
+  const nlohmann::json bj = json_of(dir.path / "beta" / "grind.json");
+  CHECK_FALSE(bj["products"][0].contains("P80_um_95"));
+  CHECK(bj["intervals"]["changed"].get<std::string>().find("[breakage]") != std::string::npos);
+  // The ore written again as read (its numbers to 10 digits): the same hash.
+  CHECK(mc::io::changed_tables(mc::io::read_ore(fitted), mc::io::ore_tables_hash(mc::io::read_ore(fitted))).empty());
   // Correlated beyond 0.99 (the covariance's off-diagonal made so): a note
   // on the console and in grind.json.
   std::string correlated = ore_text;

@@ -666,10 +666,10 @@ int cmd_grind(const GrindOptions& o) {
                                             [&](const Ore& moved) { return numbers(o, make(o, moved, run, lab, times, true)); });
   if (!ci.stale.empty() && !o.quiet)
     std::fprintf(stderr,
-                 "millcharge: note: %s: %s ([fitted] covariance_values): the ore was changed after its fit, and "
+                 "millcharge: note: %s: %s ([fitted] %s): the ore was changed after its fit, and "
                  "the covariance describes the fitted ore only: products without intervals; fit it again with "
                  "--fit for them\n",
-                 o.ore.c_str(), ci.stale.c_str());
+                 o.ore.c_str(), ci.stale.c_str(), ci.stale_key.c_str());
   // Which test next: every candidate's expected interval of the product.
   NextRanking ranking;
   if (next.asked) {

@@ -325,6 +325,8 @@ int fit_batch(const GrindOptions& o) {
   fit.ore.fitted_under = record(run, test_names, run_names, names, fit.rms_pp);
   // What the fit leaves open, kept with the ore for the intervals of its products.
   fit.ore.fitted_under.covariance = fit_covariance(fit, in_mills);
+  // Its tables as fitted: a later hand edit of any key leaves the covariance stale.
+  fit.ore.fitted_under.covariance.tables_hash = io::ore_tables_hash(fit.ore);
   const FitCovariance& cov = fit.ore.fitted_under.covariance;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
