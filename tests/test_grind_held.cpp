@@ -250,6 +250,12 @@ TEST_CASE("grind intervals: with a held parameter, the interval still holds the 
               "%.1f %%: %.3f held; by the delta method alone %.3f, mean width %.1f %% (tolerance +-%.3f); %.1f s\n",
               true_p80, n, 100 * width, coverage, coverage_delta, 100 * width_delta, tolerance, seconds);
   CHECK(coverage >= 0.95 - tolerance);
+  // The held reach must earn its place: the delta method alone covers
+  // 0.910 here, itself above the bound, so without the reach the check
+  // above would still pass. The held interval must cover more, and be
+  // wider by more than a fifth, than the delta method's.
+  CHECK(coverage > coverage_delta);
+  CHECK(width > 1.2 * width_delta);
   CHECK(width < 3 * width_delta);  // wider where E∞ matters, not without bound
 }
 
@@ -457,6 +463,10 @@ TEST_CASE("grind intervals through the command: an ore edited by hand, correlate
   CHECK(oj["throughput_at_target_t_h_95"][0].is_null());
   CHECK(oj["throughput_at_target_t_h_95"][1].get<double>() > oj["throughput_at_target_t_h"].get<double>());
   CHECK(oj["throughput_at_target_t_h_95_open"] == "below");
+  // Its range reaches the file's (1e5 J/kg): said once, no 95 % statement.
+  CHECK(count_of(shown, "the data do not bound e_inf_J_kg (60 to 100000) within the ore file's range") == 1);
+  REQUIRE(oj["intervals"].contains("open_held"));
+  CHECK(oj["intervals"]["open_held"]["parameters"][0].get<std::string>().find("e_inf_J_kg") == 0);
   // E∞ held, the data best at 0.8 of it: with S where it is held above the
   // limit from there (the documented five-parameter fit's 20.61 against
   // 19.66), a note once on the console and in grind.json; below it, none.
@@ -485,4 +495,5 @@ TEST_CASE("grind intervals through the command: an ore edited by hand, correlate
   REQUIRE(status == 0);
   CHECK(count_of(in_said, "outside the data's 95 % region") == 0);
   CHECK_FALSE(json_of(dir.path / "inside" / "grind.json")["intervals"].contains("outside_data_region"));
+  CHECK(count_of(in_said, "the data do not bound") == 0);  // its range inside the file's
 }

@@ -51,6 +51,7 @@ GrindIntervals grind_intervals(const Ore& ore, const GrindNumbers& made,
   if (!out.stale.empty()) return out;
   out.correlated = correlated_pairs(u);
   out.outside = outside_region(u);
+  out.open_held = open_held(u);
   const std::size_t n = flatten(made).size();
   const std::vector<Interval> all = propagate(ore, u, [&](const Ore& o) {
     const std::vector<double> v = flatten(make(o));

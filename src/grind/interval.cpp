@@ -598,14 +598,26 @@ std::string outside_region(const FitCovariance& u) {
   if (u.held.empty() || !(u.ssr_limit > 0) || !(u.ssr_fit > u.ssr_limit)) return "";
   std::string held, best;
   for (std::size_t k = 0; k < u.held.size(); ++k) {
-    held += fmt::format("{}{} {:.6g}", k ? ", " : "", ore_file_key(u.held[k].name), u.held[k].value);
+    held += fmt::format("{}{} {:.6g}", k ? ", " : "", u.held[k].name, u.held[k].value);
     if (k < u.best.held.size())
-      best += fmt::format("{}{} {:.6g}", k ? ", " : "", ore_file_key(u.held[k].name), u.best.held[k]);
+      best += fmt::format("{}{} {:.6g}", k ? ", " : "", u.held[k].name, u.best.held[k]);
   }
   return fmt::format("the ore's held values ({}) lie outside the data's 95 % region: S {:.4g} there against the "
                      "limit {:.4g} from where they fit best ({}, S {:.4g}); its numbers are not the data's best, and "
                      "the intervals are built around that best point",
                      held, u.ssr_fit, u.ssr_limit, best.empty() ? "not kept" : best, u.ssr_best);
+}
+
+std::vector<std::string> open_held(const FitCovariance& u) {
+  std::vector<std::string> out;
+  for (const HeldParameter& h : u.held) {
+    const OreParameter* p = find_ore_parameter(h.name);
+    const double span = p->hi - p->lo, tol = 1e-9 * span;
+    if (h.value <= p->lo + tol || h.value >= p->hi - tol) continue;  // on its bound: said as such
+    if (h.lo <= p->lo + tol || h.hi >= p->hi - tol)
+      out.push_back(fmt::format("{} ({:.6g} to {:.6g})", h.name, h.lo, h.hi));
+  }
+  return out;
 }
 
 std::vector<Correlated> correlated_pairs(const FitCovariance& u, double limit) {
