@@ -497,3 +497,40 @@ TEST_CASE("grind intervals through the command: an ore edited by hand, correlate
   CHECK_FALSE(json_of(dir.path / "inside" / "grind.json")["intervals"].contains("outside_data_region"));
   CHECK(count_of(in_said, "the data do not bound") == 0);  // its range inside the file's
 }
+
+TEST_CASE("grind --fit: one test at 0.5 pp is four copies of it at 1 pp", "[grind][interval][held]") {
+  // The weights' exact equivalence: 1/noise² counts a test at half the
+  // noise as four. η and σ come out the same, and so does the information
+  // JᵀWJ / noise². S and s² are in pp² of the first test's noise: S of the
+  // four copies, in (1 pp)², is 4 S of the one, in (0.5 pp)²; s² = S / ν
+  // counts readings (ν = 4n − 2 against n − 2), so the covariance
+  // s² (JᵀWJ)⁻¹ times ν is what agrees, not the covariance itself.
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.sigma = 1.0;
+  TestInMill one{synthetic_test(truth, 0.5, 61), synthetic_spectrum(), kPower_W, kHoldup_kg};
+  one.test.noise_pp = 0.5;
+  TestInMill copy = one;
+  copy.test.noise_pp = 1.0;
+  const std::vector<std::string> names = {"efficiency", "sigma"};
+  const BatchFit a = fit_batch_tests(start, {one}, names), b = fit_batch_tests(start, {copy, copy, copy, copy}, names);
+  std::printf("one test at 0.5 pp against four at 1 pp: eta %.12g / %.12g, sigma %.12g / %.12g, S %.10g / %.10g, "
+              "dof %d / %d, var(log eta) x dof %.10g / %.10g\n",
+              a.ore.efficiency, b.ore.efficiency, a.ore.fracture.sigma, b.ore.fracture.sigma, a.ssr, b.ssr, a.dof,
+              b.dof, a.covariance[0][0] * a.dof, b.covariance[0][0] * b.dof);
+  REQUIRE(a.covariance.size() == 2);
+  REQUIRE(b.covariance.size() == 2);
+  // The two are the same minimum, but each fit stops on its own: when the
+  // residuals are within a cosine of 1e-8 of orthogonal to the Jacobian
+  // (fit.cpp), so the parameters agree to about 1e-8, not 1e-9 (measured:
+  // 3e-9 and 4e-9); S, stationary there, to 1e-9; the covariance, a
+  // numerical Jacobian at points 1e-8 apart, to about 1e-8 (measured 8e-9).
+  CHECK(b.dof == 4 * (a.dof + 2) - 2);
+  CHECK(b.ore.efficiency == Approx(a.ore.efficiency).epsilon(1e-8));
+  CHECK(b.ore.fracture.sigma == Approx(a.ore.fracture.sigma).epsilon(1e-8));
+  CHECK(b.ssr == Approx(4 * a.ssr).epsilon(1e-9));
+  for (std::size_t i = 0; i < 2; ++i)
+    for (std::size_t j = 0; j < 2; ++j)
+      CHECK(b.covariance[i][j] * b.dof == Approx(a.covariance[i][j] * a.dof).epsilon(1e-7));
+}
