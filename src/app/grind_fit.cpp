@@ -221,8 +221,9 @@ void print_covariance(const FitCovariance& u) {
     std::printf("  note: %s and %s are correlated at r = %+.4f: the tests fix only their combination, not each\n",
                 c.a.c_str(), c.b.c_str(), c.r);
   for (const HeldParameter& h : u.held)
-    std::printf("  %-16s held at %.6g; 95 %% range %s (the free ones refitted there)\n", h.name.c_str(), h.value,
-                held_range(h).c_str());
+    std::printf("  %-16s held at %.6g; 95 %% range %s (the free ones refitted there%s)\n", h.name.c_str(), h.value,
+                held_range(h).c_str(),
+                u.held.size() > 1 ? "; conditional: the other held ones at their best" : "");
   if (!u.held.empty() && u.best.held.size() == u.held.size()) {
     std::string at;
     for (std::size_t k = 0; k < u.held.size(); ++k)
