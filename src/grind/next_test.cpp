@@ -177,7 +177,9 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
       }
   }
   out.sd = std::sqrt(std::max(var, 0.0));
-  const double half = t_quantile(0.975, u.dof + out.data) * out.sd;
+  // The held parameters the test fixes join the free ones: each takes a
+  // degree of freedom from the readings the candidate adds.
+  const double half = t_quantile(0.975, u.dof + out.data - static_cast<int>(out.fixes.size())) * out.sd;
   // Centred as now where held parameters keep their reach; at the value
   // itself where the test fixes every one (the linear model's centre).
   const double y0 = out.fixes.size() == nh ? (s.log ? std::log(s.value) : s.value) : s.center;
