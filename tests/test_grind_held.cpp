@@ -199,11 +199,34 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
   CHECK(ends >= 2);
   // The edge points (each alone, and toward the corners): each within the limit.
   REQUIRE(u.edges.size() >= 4);
+  int corners = 0, past = 0;
   for (const HeldEdge& c : u.edges) {
     Ore o = with_variables(start, u, c.free);
     for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(o, c.held[k]);
     CHECK(weighted_ssr(o, tests) <= limit * (1 + 1e-6));
+    // A corner point (both moved): on the limit or the file's range, not
+    // short of them at the corner of the (conditional) ranges. An eighth
+    // further out along its ray from the best point is past the limit,
+    // or past the file's range.
+    bool both = true, in_file = true;
+    Ore further = at_best;
+    for (std::size_t k = 0; k < 2; ++k) {
+      const OreParameter& p = *find_ore_parameter(u.held[k].name);  // both scales: their logarithms
+      both = both && c.held[k] != u.best.held[k];
+      const double v = u.best.held[k] * std::pow(c.held[k] / u.best.held[k], 1.125);
+      in_file = in_file && v >= p.lo && v <= p.hi;
+      if (in_file) p.set(further, v);
+    }
+    if (!both) continue;
+    ++corners;
+    if (!in_file) continue;
+    const double s_further = refit_ssr(further, tests, free);
+    past += s_further > limit * (1 - 1e-6);
+    INFO("corner " << c.held[0] << ", " << c.held[1] << ": an eighth further S " << s_further << ", limit " << limit);
+    CHECK(s_further > limit * (1 - 1e-6));
   }
+  std::printf("held corners: %d corner points, %d checked an eighth further past the limit\n", corners, past);
+  CHECK(corners >= 1);
 }
 
 TEST_CASE("grind intervals: with a held parameter, the interval still holds the truth in about 95 % of tests",
@@ -533,4 +556,59 @@ TEST_CASE("grind --fit: one test at 0.5 pp is four copies of it at 1 pp", "[grin
   for (std::size_t i = 0; i < 2; ++i)
     for (std::size_t j = 0; j < 2; ++j)
       CHECK(b.covariance[i][j] * b.dof == Approx(a.covariance[i][j] * a.dof).epsilon(1e-7));
+}
+
+TEST_CASE("grind intervals: held parameters on a ridge: the corner search runs on past the ranges' corner",
+          "[grind][interval][held]") {
+  // η and E∞ both held, σ free: the two trade against each other (a
+  // ridge), so each one's range, the other at its best, is short, and the
+  // corners along the ridge lie inside the limit. The search toward them
+  // runs on to the limit (or the file's range): an eighth further is past.
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.fracture.sigma = 1.0;
+  const std::vector<TestInMill> tests = {{synthetic_test(truth, 1.0, 43), synthetic_spectrum(), kPower_W, kHoldup_kg}};
+  const std::vector<std::string> free = {"sigma"};
+  BatchFit f = fit_batch_tests(start, tests, free);
+  for (const char* name : {"efficiency", "e_inf_J_kg"}) {
+    FittedParameter h;
+    h.name = name;
+    h.start = h.value = find_ore_parameter(name)->get(start);
+    h.identified = false;
+    h.why = "held for the test";
+    f.parameters.push_back(h);
+  }
+  const FitCovariance u = fit_covariance(f, tests);
+  REQUIRE(u.held.size() == 2);
+  Ore at_best = with_variables(start, u, u.best.free);
+  for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(at_best, u.best.held[k]);
+  const double limit = profile_limit(weighted_ssr(at_best, tests), u.dof);
+  int corners = 0, beyond = 0;
+  for (const HeldEdge& c : u.edges) {
+    bool both = true, in_file = true, past_box = false;
+    Ore further = at_best;
+    for (std::size_t k = 0; k < 2; ++k) {
+      const OreParameter& p = *find_ore_parameter(u.held[k].name);  // both scales: their logarithms
+      both = both && c.held[k] != u.best.held[k];
+      past_box = past_box || c.held[k] < u.held[k].lo * (1 - 1e-9) || c.held[k] > u.held[k].hi * (1 + 1e-9);
+      const double v = u.best.held[k] * std::pow(c.held[k] / u.best.held[k], 1.125);
+      in_file = in_file && v >= p.lo && v <= p.hi;
+      if (in_file) p.set(further, v);
+    }
+    if (!both) continue;
+    ++corners;
+    beyond += past_box;
+    Ore o = with_variables(start, u, c.free);
+    for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(o, c.held[k]);
+    CHECK(weighted_ssr(o, tests) <= limit * (1 + 1e-6));
+    if (!in_file) continue;
+    const double s_further = refit_ssr(further, tests, free);
+    INFO("corner " << c.held[0] << ", " << c.held[1] << ": an eighth further S " << s_further << ", limit " << limit);
+    CHECK(s_further > limit * (1 - 1e-6));
+  }
+  std::printf("held on a ridge: eta [%.4g, %.4g], E_inf [%.4g, %.4g] (each, the other at its best); %d corner points, "
+              "%d beyond those ranges\n",
+              u.held[0].lo, u.held[0].hi, u.held[1].lo, u.held[1].hi, corners, beyond);
+  CHECK(corners >= 2);
+  CHECK(beyond >= 1);  // the joint region reaches past the conditional ranges
 }

@@ -264,8 +264,34 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
     };
     double s_in = 0, s_out = 1;
     HeldPoint in = at(1, best.at.ore);
+    std::size_t moving = 0;
+    for (std::size_t j = 0; j < nh; ++j) moving += x1[j] != x0[j];
     if (in.at.ok && in.at.ssr <= limit) {
       s_in = 1;
+      // The corner of the ranges lies inside the limit (each range is
+      // conditional, the others at their best): with two or more moving
+      // (one alone is its own profile, at its limit already), on toward
+      // the limit, by doublings up to the file's range, then four halvings.
+      double s_max = moving >= 2 ? kInf : 1;
+      for (std::size_t j = 0; j < nh; ++j) {
+        const double d = x1[j] - x0[j];
+        if (d > 0) s_max = std::min(s_max, (var_hi(*ps[j]) - x0[j]) / d);
+        if (d < 0) s_max = std::min(s_max, (var_lo(*ps[j]) - x0[j]) / d);
+      }
+      if (s_max == kInf) s_max = 1;  // the corner is the best point itself
+      s_out = kInf;
+      while (s_in < s_max && s_out == kInf) {
+        const double s = std::min(2 * s_in, s_max);
+        const HeldPoint q = at(s, in.at.ore);
+        if (q.at.ok && q.at.ssr <= limit) s_in = s, in = q;
+        else s_out = s;
+      }
+      for (int b = 0; b < 4 && s_out < kInf; ++b) {
+        const double s = 0.5 * (s_in + s_out);
+        const HeldPoint q = at(s, in.at.ore);
+        if (q.at.ok && q.at.ssr <= limit) s_in = s, in = q;
+        else s_out = s;
+      }
     } else {
       for (int b = 0; b < 4; ++b) {
         const double s = 0.5 * (s_in + s_out);
