@@ -118,6 +118,75 @@ TEST_CASE("grind next test: the expected width against refits of simulated tests
   CHECK(real_best < real_worst);
 }
 
+TEST_CASE("grind next test: the same test again divides the standard deviation by the square root of 2",
+          "[grind][next]") {
+  // The information now is exactly the candidate's own (J_cᵀ J_c / s²):
+  // the same test run again doubles it, so the product's log standard
+  // deviation after over now is 1/√2, exactly for the linear model.
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.sigma = 1.0;
+  const TestInMill first{synthetic_test(truth, 1.0, 51), synthetic_spectrum(), kPower_W, kHoldup_kg};
+  const BatchFit f = fit_batch_tests(start, {first}, {"efficiency", "sigma"});
+  FitCovariance u = fit_covariance(f, {first});
+  REQUIRE(u.held.empty());
+  const Sensitivity s = sensitivities(f.ore, u, p80_third_mill, true).front();
+  REQUIRE(s.log);
+  const TestInMill again{candidate_test(f.ore, {1, 2, 4, 8}), synthetic_spectrum(), kPower_W, kHoldup_kg};
+  // The fit's own information against the candidate's: the two estimates of the test.
+  const NextTestWidth real = expected_after(f.ore, u, s, again);
+  REQUIRE(real.added.size() == 2);
+  u.information = real.added;
+  const NextTestWidth twice = expected_after(f.ore, u, s, again);
+  const auto& I = real.added;
+  const double det = I[0][0] * I[1][1] - I[0][1] * I[1][0];
+  const double var_now = (s.g[0] * s.g[0] * I[1][1] - 2 * s.g[0] * s.g[1] * I[0][1] + s.g[1] * s.g[1] * I[0][0]) / det;
+  const double ratio = twice.sd / std::sqrt(var_now);
+  double var_fit = 0;
+  for (std::size_t a = 0; a < 2; ++a)
+    for (std::size_t b = 0; b < 2; ++b) var_fit += s.g[a] * u.matrix[a][b] * s.g[b];
+  std::printf("next test, the same test again: log sd after/now %.9f (1/sqrt 2 = %.9f); the fit's covariance gives "
+              "sd %.6g now, the candidate's information %.6g; after the candidate on the fit's information %.6g\n",
+              ratio, 1 / std::sqrt(2.0), std::sqrt(var_fit), std::sqrt(var_now), real.sd);
+  CHECK(ratio == Approx(1 / std::sqrt(2.0)).epsilon(1e-6));
+}
+
+TEST_CASE("grind next test: held parameters the test fixes take their degrees of freedom", "[grind][next]") {
+  // E∞ and d₀ held wrong, η and σ fitted; a long test in the harder mill
+  // fixes both: the expected half-width is Student's t with the fit's
+  // degrees of freedom, plus the candidate's readings, less the two.
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.sigma = 1.0;
+  start.fracture.e_inf_J_kg = 40;
+  start.fracture.d0_m = 2.8e-3;
+  const std::vector<TestInMill> tests = {{synthetic_test(truth, 1.0, 41), synthetic_spectrum(), kPower_W, kHoldup_kg}};
+  BatchFit f = fit_batch_tests(start, tests, {"efficiency", "sigma"});
+  for (const char* name : {"e_inf_J_kg", "d0_mm"}) {
+    FittedParameter h;
+    h.name = name;
+    h.start = h.value = find_ore_parameter(name)->get(start);
+    h.identified = false;
+    h.why = "held for the test";
+    f.parameters.push_back(h);
+  }
+  const FitCovariance u = fit_covariance(f, tests);
+  REQUIRE(u.held.size() == 2);
+  const Sensitivity s = sensitivities(f.ore, u, p80_third_mill, true).front();
+  const NextTestWidth w =
+      expected_after(f.ore, u, s, {candidate_test(f.ore, {2, 4, 8, 16, 32}), harder_spectrum(), kPower_W, kHoldup_kg});
+  REQUIRE(w.expected.valid());
+  REQUIRE(w.fixes.size() == 2);
+  REQUIRE(s.log);
+  const int nu = u.dof + w.data - 2;
+  const double half = std::log(w.expected.hi) - std::log(s.value);  // centred on the value where all are fixed
+  std::printf("next test, both held fixed: dof %d + %d readings - 2 = %d; half-width %.9g against t %.9g x sd %.9g\n",
+              u.dof, w.data, nu, half, t_quantile(0.975, nu), w.sd);
+  CHECK(half == Approx(t_quantile(0.975, nu) * w.sd).epsilon(1e-9));
+}
+
 TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, bad candidates refused",
           "[grind][next][outputs][failures]") {
   const fs::path run_dir = short_bond_run();

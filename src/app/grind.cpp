@@ -463,6 +463,11 @@ void print(const GrindOptions& o, const Ore& ore, const io::Run& run, const Circ
                     "intervals describe this fit's neighbourhood only; another test or fewer parameters "
                     "(docs/grinding-intervals.md)\n",
                     h.name.c_str(), h.value);
+    for (const std::string& h : ci.open_held)
+      std::printf("  note: the data do not bound %s within the ore file's range: its reach there is the file's "
+                  "range, not the data's, and the intervals are no 95 %% statement (docs/grinding-intervals.md)\n",
+                  h.c_str());
+    if (!ci.outside.empty()) std::printf("  note: %s (docs/grinding-intervals.md)\n", ci.outside.c_str());
     for (const Correlated& c : ci.correlated)
       std::printf("  note: %s and %s are correlated at r = %+.4f: the tests fix only their combination, not "
                   "each\n",
@@ -576,6 +581,11 @@ void add_intervals(nlohmann::ordered_json& j, const GrindOptions& o, const Grind
   j["intervals"] = {{"level", 0.95},
                     {"method", "linearised propagation of the fit's covariance (Student's t), combined in quadrature "
                                "with how far the held parameters move each number (docs/grinding-intervals.md)"}};
+  if (!ci.outside.empty()) j["intervals"]["outside_data_region"] = ci.outside;
+  if (!ci.open_held.empty())
+    j["intervals"]["open_held"] = {{"parameters", ci.open_held},
+                                   {"note", "the data do not bound these within the ore file's range: the intervals "
+                                            "reach as far as the file's range, and are no 95 % statement"}};
   if (!ci.correlated.empty()) {
     nlohmann::json pairs = nlohmann::json::array();
     for (const Correlated& c : ci.correlated)
@@ -664,10 +674,10 @@ int cmd_grind(const GrindOptions& o) {
                                             [&](const Ore& moved) { return numbers(o, make(o, moved, run, lab, times, true)); });
   if (!ci.stale.empty() && !o.quiet)
     std::fprintf(stderr,
-                 "millcharge: note: %s: %s ([fitted] covariance_values): the ore was changed after its fit, and "
+                 "millcharge: note: %s: %s ([fitted] %s): the ore was changed after its fit, and "
                  "the covariance describes the fitted ore only: products without intervals; fit it again with "
                  "--fit for them\n",
-                 o.ore.c_str(), ci.stale.c_str());
+                 o.ore.c_str(), ci.stale.c_str(), ci.stale_key.c_str());
   // Which test next: every candidate's expected interval of the product.
   NextRanking ranking;
   if (next.asked) {

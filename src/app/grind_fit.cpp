@@ -221,8 +221,9 @@ void print_covariance(const FitCovariance& u) {
     std::printf("  note: %s and %s are correlated at r = %+.4f: the tests fix only their combination, not each\n",
                 c.a.c_str(), c.b.c_str(), c.r);
   for (const HeldParameter& h : u.held)
-    std::printf("  %-16s held at %.6g; 95 %% range %s (the free ones refitted there)\n", h.name.c_str(), h.value,
-                held_range(h).c_str());
+    std::printf("  %-16s held at %.6g; 95 %% range %s (the free ones refitted there%s)\n", h.name.c_str(), h.value,
+                held_range(h).c_str(),
+                u.held.size() > 1 ? "; conditional: the other held ones at their best" : "");
   if (!u.held.empty() && u.best.held.size() == u.held.size()) {
     std::string at;
     for (std::size_t k = 0; k < u.held.size(); ++k)
@@ -230,6 +231,7 @@ void print_covariance(const FitCovariance& u) {
     std::printf("  the held parameters fit the data best at %s (the free ones refitted there; S %.4g there, %.4g "
                 "where they are held, the limit %.4g): the intervals are built around it\n",
                 at.c_str(), u.ssr_best, u.ssr_fit, profile_limit(u.ssr_best, u.dof));
+    if (const std::string out = outside_region(u); !out.empty()) std::printf("  note: %s\n", out.c_str());
   }
 }
 
@@ -324,6 +326,8 @@ int fit_batch(const GrindOptions& o) {
   fit.ore.fitted_under = record(run, test_names, run_names, names, fit.rms_pp);
   // What the fit leaves open, kept with the ore for the intervals of its products.
   fit.ore.fitted_under.covariance = fit_covariance(fit, in_mills);
+  // Its tables as fitted: a later hand edit of any key leaves the covariance stale.
+  fit.ore.fitted_under.covariance.tables_hash = io::ore_tables_hash(fit.ore);
   const FitCovariance& cov = fit.ore.fitted_under.covariance;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 

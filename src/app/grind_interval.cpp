@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "grind/pbm.h"
+#include "io/ore_file.h"
 
 namespace mc::app {
 
@@ -40,8 +41,17 @@ GrindIntervals grind_intervals(const Ore& ore, const GrindNumbers& made,
   const FitCovariance& u = ore.fitted_under.covariance;
   if (!u.given) return out;
   out.stale = stale_covariance(ore, u);
+  out.stale_key = "covariance_values";
+  if (out.stale.empty()) {
+    // Any other key of the ore's tables edited (breakage.beta, sizes, the basis).
+    const std::string t = io::changed_tables(ore, u.tables_hash);
+    if (!t.empty()) out.stale = t + " differ from the tables the ore was fitted with";
+    out.stale_key = "tables_fnv1a";
+  }
   if (!out.stale.empty()) return out;
   out.correlated = correlated_pairs(u);
+  out.outside = outside_region(u);
+  out.open_held = open_held(u);
   const std::size_t n = flatten(made).size();
   const std::vector<Interval> all = propagate(ore, u, [&](const Ore& o) {
     const std::vector<double> v = flatten(make(o));

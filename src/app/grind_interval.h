@@ -35,9 +35,14 @@ struct GrindIntervals {
   bool given = false;
   // Why none were made though the ore has a covariance: a fitted or held
   // parameter of the ore differs from the value the covariance was computed
-  // at (grind::stale_covariance); "" otherwise.
+  // at (grind::stale_covariance), or another key of its [sizes],
+  // [breakage] or [rates] tables was edited (io::changed_tables); ""
+  // otherwise.
   std::string stale;
+  std::string stale_key;  // the [fitted] key it differs from: covariance_values or tables_fnv1a
   std::vector<grind::Correlated> correlated;  // pairs beyond |r| > 0.99
+  std::vector<std::string> open_held;  // grind::open_held: held parameters the data do not bound in the file's range
+  std::string outside;  // grind::outside_region: the held values outside the data's 95 % region ("" : inside)
   std::vector<ProductInterval> products;
   grind::Interval work_index_kWh_t, bond_p80_um, gbp_g_rev, throughput_t_h;
 };

@@ -226,6 +226,7 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
   u.best = {best.held, best.at.free};
   u.ssr_fit = fit.ssr;
   u.ssr_best = best.at.ssr;
+  u.ssr_limit = limit;
   for (std::size_t j = 0; j < nh; ++j) {
     // The last line runs through the best point already; the others again.
     std::vector<LinePoint> pts = lines[j];
@@ -263,8 +264,34 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
     };
     double s_in = 0, s_out = 1;
     HeldPoint in = at(1, best.at.ore);
+    std::size_t moving = 0;
+    for (std::size_t j = 0; j < nh; ++j) moving += x1[j] != x0[j];
     if (in.at.ok && in.at.ssr <= limit) {
       s_in = 1;
+      // The corner of the ranges lies inside the limit (each range is
+      // conditional, the others at their best): with two or more moving
+      // (one alone is its own profile, at its limit already), on toward
+      // the limit, by doublings up to the file's range, then four halvings.
+      double s_max = moving >= 2 ? kInf : 1;
+      for (std::size_t j = 0; j < nh; ++j) {
+        const double d = x1[j] - x0[j];
+        if (d > 0) s_max = std::min(s_max, (var_hi(*ps[j]) - x0[j]) / d);
+        if (d < 0) s_max = std::min(s_max, (var_lo(*ps[j]) - x0[j]) / d);
+      }
+      if (s_max == kInf) s_max = 1;  // the corner is the best point itself
+      s_out = kInf;
+      while (s_in < s_max && s_out == kInf) {
+        const double s = std::min(2 * s_in, s_max);
+        const HeldPoint q = at(s, in.at.ore);
+        if (q.at.ok && q.at.ssr <= limit) s_in = s, in = q;
+        else s_out = s;
+      }
+      for (int b = 0; b < 4 && s_out < kInf; ++b) {
+        const double s = 0.5 * (s_in + s_out);
+        const HeldPoint q = at(s, in.at.ore);
+        if (q.at.ok && q.at.ssr <= limit) s_in = s, in = q;
+        else s_out = s;
+      }
     } else {
       for (int b = 0; b < 4; ++b) {
         const double s = 0.5 * (s_in + s_out);
@@ -591,6 +618,32 @@ std::string stale_covariance(const Ore& ore, const FitCovariance& u) {
       return fmt::format("{} = {:.6g}, held at {:.6g} in the covariance", ore_file_key(h.name), now, h.value);
   }
   return "";
+}
+
+std::string outside_region(const FitCovariance& u) {
+  if (u.held.empty() || !(u.ssr_limit > 0) || !(u.ssr_fit > u.ssr_limit)) return "";
+  std::string held, best;
+  for (std::size_t k = 0; k < u.held.size(); ++k) {
+    held += fmt::format("{}{} {:.6g}", k ? ", " : "", u.held[k].name, u.held[k].value);
+    if (k < u.best.held.size())
+      best += fmt::format("{}{} {:.6g}", k ? ", " : "", u.held[k].name, u.best.held[k]);
+  }
+  return fmt::format("the ore's held values ({}) lie outside the data's 95 % region: S {:.4g} there against the "
+                     "limit {:.4g} from where they fit best ({}, S {:.4g}); its numbers are not the data's best, and "
+                     "the intervals are built around that best point",
+                     held, u.ssr_fit, u.ssr_limit, best.empty() ? "not kept" : best, u.ssr_best);
+}
+
+std::vector<std::string> open_held(const FitCovariance& u) {
+  std::vector<std::string> out;
+  for (const HeldParameter& h : u.held) {
+    const OreParameter* p = find_ore_parameter(h.name);
+    const double span = p->hi - p->lo, tol = 1e-9 * span;
+    if (h.value <= p->lo + tol || h.value >= p->hi - tol) continue;  // on its bound: said as such
+    if (h.lo <= p->lo + tol || h.hi >= p->hi - tol)
+      out.push_back(fmt::format("{} ({:.6g} to {:.6g})", h.name, h.lo, h.hi));
+  }
+  return out;
 }
 
 std::vector<Correlated> correlated_pairs(const FitCovariance& u, double limit) {

@@ -117,6 +117,17 @@ Ore with_variables(const Ore& ore, const FitCovariance& u, const std::vector<dou
 // (a hand edit: the covariance no longer describes this ore).
 std::string stale_covariance(const Ore& ore, const FitCovariance& u);
 
+// "" unless the held parameters' own values lie outside the data's 95 %
+// region (the sum of squares where they are held above the limit from
+// where they fit best): then a sentence naming them, S there against the
+// limit, and where they fit best.
+std::string outside_region(const FitCovariance& u);
+
+// The held parameters (not on a bound) whose range reaches the ore file's
+// range on a side, "d0_mm (0.0001 to 1000)": there the data do not bound
+// them, and a product's reach is the file's range, not a 95 % statement.
+std::vector<std::string> open_held(const FitCovariance& u);
+
 // Pairs of fitted variables correlated beyond |r| > limit: the tests fix
 // only their combination.
 struct Correlated {

@@ -119,10 +119,12 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
   // The candidate's information: its readings scatter as the first test's (s²).
   const double s2 = u.residual_variance_pp2;
   if (!(s2 > 0)) return out;
+  out.added.assign(nv, std::vector<double>(nv));
   for (std::size_t a = 0; a < nv; ++a)
     for (std::size_t b = 0; b < nv; ++b) {
       double v = 0;
       for (std::size_t i = 0; i < r0.size(); ++i) v += Jc[i][a] * Jc[i][b];
+      out.added[a][b] = v / s2;
       L[a][b] += v / s2;
     }
   // The variables estimated after the test: the free ones and the held ones
@@ -174,7 +176,10 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
         up = std::hypot(up, s.up_by_held[j]);
       }
   }
-  const double half = t_quantile(0.975, u.dof + out.data) * std::sqrt(std::max(var, 0.0));
+  out.sd = std::sqrt(std::max(var, 0.0));
+  // The held parameters the test fixes join the free ones: each takes a
+  // degree of freedom from the readings the candidate adds.
+  const double half = t_quantile(0.975, u.dof + out.data - static_cast<int>(out.fixes.size())) * out.sd;
   // Centred as now where held parameters keep their reach; at the value
   // itself where the test fixes every one (the linear model's centre).
   const double y0 = out.fixes.size() == nh ? (s.log ? std::log(s.value) : s.value) : s.center;

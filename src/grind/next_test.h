@@ -28,6 +28,8 @@ struct NextTestWidth {
   double width = std::numeric_limits<double>::quiet_NaN();  // expected.hi - expected.lo
   std::vector<std::string> fixes;  // held parameters the test would fix
   int data = 0;                    // the candidate's readings that carry information
+  double sd = std::numeric_limits<double>::quiet_NaN();  // √(gᵀ Σ_after g): the free part's standard deviation
+  std::vector<std::vector<double>> added;  // the candidate's information J_cᵀ J_c / s² (every variable)
 };
 
 // The expected interval, after the candidate test, of the product whose

@@ -72,9 +72,15 @@ struct FitCovariance {
   // ones' then the held ones': JᵀJ / s² of the weighted residuals (what a
   // next test adds to: next_test.h). Empty: not kept.
   std::vector<std::vector<double>> information;
-  // The weighted sum of squares at the fit and at `best` (not kept in the
-  // file: what --fit says).
-  double ssr_fit = 0, ssr_best = 0;
+  // The weighted sum of squares at the fit (where the held parameters are
+  // held) and at `best`, and the profile limit from `best`
+  // (fitted.ssr_held, ssr_best, ssr_limit): ssr_fit > ssr_limit says the
+  // ore's own values lie outside the data's 95 % region. 0: not kept.
+  double ssr_fit = 0, ssr_best = 0, ssr_limit = 0;
+  // The fitted ore's tables hashed (io::ore_tables_hash; fitted.tables_fnv1a):
+  // a hand edit of any key, fitted or not, leaves the covariance stale. "":
+  // not kept.
+  std::string tables_hash;
 };
 
 // The contact law and parameters of the DEM run an ore was fitted through

@@ -4,6 +4,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <set>
@@ -92,13 +94,23 @@ void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u
   const toml::node* dn = ft.get("degrees_of_freedom");
   if (!dn) {
     for (const char* k :
-         {"covariance_variables", "covariance_values", "covariance", "residual_variance_pp2", "held", "edge", "best", "information"})
+         {"covariance_variables", "covariance_values", "covariance", "residual_variance_pp2", "held", "edge", "best",
+          "information", "ssr_held", "ssr_best", "ssr_limit", "tables_fnv1a"})
       if (ft.get(k)) r.fail(std::string("fitted.") + k, ft.get(k), "given without fitted.degrees_of_freedom");
     return;
   }
   u.given = true;
   u.dof = static_cast<int>(r.number(ft, "fitted.", "degrees_of_freedom", 1, 1e9, "an integer >= 1"));
   u.residual_variance_pp2 = r.number(ft, "fitted.", "residual_variance_pp2", 0, kInf, ">= 0 (pp²)");
+  // The sums of squares where the held parameters are held and where they
+  // fit best, and the limit (none: an ore written before they were kept).
+  u.ssr_fit = r.number(ft, "fitted.", "ssr_held", 0, kInf, ">= 0", 0.0);
+  u.ssr_best = r.number(ft, "fitted.", "ssr_best", 0, kInf, ">= 0", 0.0);
+  u.ssr_limit = r.number(ft, "fitted.", "ssr_limit", 0, kInf, ">= 0", 0.0);
+  if (const toml::node* hn = ft.get("tables_fnv1a")) {
+    if (!hn->is_string()) r.fail("fitted.tables_fnv1a", hn, "must be a string (\"sizes HEX breakage HEX rates HEX\")");
+    u.tables_hash = hn->value<std::string>().value();
+  }
   const toml::node* vn = ft.get("covariance_variables");
   if (!vn || !vn->is_array()) r.fail("fitted.covariance_variables", vn, "missing (an array of names, maybe empty)");
   for (const toml::node& e : *vn->as_array()) {
@@ -193,7 +205,8 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   r.knows(ft, "fitted.", {"contact_law", "restitution", "friction", "rolling_friction", "stiffness_N_m",
                           "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp",
                           "energy_basis", "covariance_variables", "covariance_values", "covariance",
-                          "residual_variance_pp2", "degrees_of_freedom", "held", "edge", "best", "information"});
+                          "residual_variance_pp2", "degrees_of_freedom", "held", "edge", "best", "information",
+                          "ssr_held", "ssr_best", "ssr_limit", "tables_fnv1a"});
   auto text = [&](const std::string& key) {
     const toml::node* n = ft.get(key);
     if (!n) return std::string();
@@ -424,6 +437,88 @@ grind::Ore read_ore(const fs::path& path) {
 
 namespace {
 
+// The [sizes], [breakage] and [rates] tables as ore_toml writes them.
+struct OreTables {
+  std::string sizes, breakage, rates;
+};
+OreTables tables(const grind::Ore& o) {
+  auto g = [](double v) { return fmt::format("{:.10g}", v); };
+  auto list = [&](const std::vector<double>& v, double scale) {
+    std::string s = "[";
+    for (std::size_t k = 0; k < v.size(); ++k) s += (k ? ", " : "") + g(v[k] * scale);
+    return s + "]";
+  };
+  auto quoted = [](const std::string& s) {
+    std::string q = "\"";
+    for (char c : s) q += c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c);
+    return q + "\"";
+  };
+  OreTables t;
+  std::string s;
+  s += "\n[sizes]\ntop_mm = " + g(o.sizes.top_m.front() * 1e3) + "\nratio = " + g(o.ratio) +
+       "\nclasses = " + std::to_string(o.sizes.size()) + "\n";
+  t.sizes = s;
+  s.clear();
+  if (o.appearance == Appearance::t10)
+    s += "\n[breakage]\nmodel = \"t10\"\nt10_max_percent = " + g(100 * o.t10.a) + "\nb_prime = " + g(o.t10.b_prime) +
+         "\ntn_n = " + list(o.t10.n, 1) + "\ntn_alpha = " + list(o.t10.alpha, 1) + "\ntn_beta = " + list(o.t10.beta, 1) +
+         "\n";
+  else
+    s += "\n[breakage]\nphi = " + g(o.breakage.phi) + "\ngamma = " + g(o.breakage.gamma) + "\nbeta = " +
+         g(o.breakage.beta) + "\n";
+  s += "\n[rates]\n";
+  if (o.model == RateModel::austin)
+    s += "model = \"austin\"\na_per_min = " + g(o.austin.a_per_min) + "\nalpha = " + g(o.austin.alpha) +
+         "\nmu_mm = " + g(o.austin.mu_m * 1e3) + "\nlambda = " + g(o.austin.lambda) + "\n";
+  if (o.model == RateModel::energy)
+    s += "model = \"energy\"\ns1e_t_per_kWh = " + g(o.energy.s1e_t_per_kWh) + "\nx1_mm = " + g(o.energy.x1_m * 1e3) +
+         "\nzeta1 = " + g(o.energy.zeta1) + "\nzeta2 = " + g(o.energy.zeta2) + "\n";
+  if (o.model == RateModel::spectrum)
+    s += "model = \"spectrum\"\ne_inf_J_kg = " + g(o.fracture.e_inf_J_kg) + "\nd0_mm = " + g(o.fracture.d0_m * 1e3) +
+         "\nphi = " + g(o.fracture.phi) + "\nsigma = " + g(o.fracture.sigma) + "\nemax_ratio = " +
+         g(o.fracture.emax_ratio) + "\npacking = " + g(o.packing) + "\nefficiency = " + g(o.efficiency) +
+         "\nenergy_basis = " + quoted(grind::basis_name(o.energy_basis)) + "\n";
+  t.rates = s.substr(s.find("\n[rates]"));
+  t.breakage = s.substr(0, s.find("\n[rates]"));
+  return t;
+}
+
+std::uint64_t fnv1a(const std::string& s) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+}  // namespace
+
+std::string ore_tables_hash(const grind::Ore& o) {
+  const OreTables t = tables(o);
+  // The basis too: an ore of another rate model keeps it outside [rates].
+  return fmt::format("sizes {:016x} breakage {:016x} rates {:016x}", fnv1a(t.sizes), fnv1a(t.breakage),
+                     fnv1a(t.rates + "energy_basis " + grind::basis_name(o.energy_basis)));
+}
+
+std::string changed_tables(const grind::Ore& o, const std::string& kept) {
+  if (kept.empty()) return "";
+  const std::string now = ore_tables_hash(o);
+  if (now == kept) return "";
+  std::string out;
+  std::vector<std::string> which;
+  for (const char* name : {"sizes", "breakage", "rates"}) {
+    auto field = [&](const std::string& h) {
+      const std::size_t at = h.find(std::string(name) + " ");
+      return at == std::string::npos ? std::string() : h.substr(at, std::strlen(name) + 17);
+    };
+    if (field(now) != field(kept)) which.push_back(std::string("[") + name + "]");
+  }
+  if (which.empty()) return "the ore's tables";
+  for (std::size_t k = 0; k < which.size(); ++k)
+    out += (k == 0 ? "" : k + 1 == which.size() ? " and " : ", ") + which[k];
+  return out;
+}
+
+namespace {
+
 // [fitted]'s covariance and held parameters, as read_covariance reads them.
 std::string covariance_toml(const FitCovariance& u) {
   if (!u.given) return "";
@@ -446,6 +541,12 @@ std::string covariance_toml(const FitCovariance& u) {
     for (std::size_t a = 0; a < u.information.size(); ++a) s += (a ? ", " : "") + list(u.information[a]);
     s += "]   # the tests' information: the variables, then the held parameters (log of a scale)\n";
   }
+  if (!u.tables_hash.empty())
+    s += "tables_fnv1a = \"" + u.tables_hash + "\"   # [sizes], [breakage], [rates] as fitted: an edit leaves no intervals\n";
+  if (u.ssr_limit > 0)
+    s += "ssr_held = " + g(u.ssr_fit) + "   # the weighted sum of squares where the held parameters are held\nssr_best = " +
+         g(u.ssr_best) + "   # where they fit best ([fitted.best])\nssr_limit = " + g(u.ssr_limit) +
+         "  # the 95 % limit from there: ssr_held above it, the ore lies outside the data's 95 % region\n";
   for (const grind::HeldParameter& h : u.held) {
     s += "\n[[fitted.held]]\nname = \"" + h.name + "\"\nvalue = " + g(h.value) + "\nlo = " + g(h.lo) +
          "\nhi = " + g(h.hi) + "\n";
@@ -485,28 +586,10 @@ std::string ore_toml(const grind::Ore& o, const std::string& header) {
   s += "bed_porosity = " + g(o.bed_porosity) + "\n";
   if (o.bulk_density > 0) s += "bulk_density = " + g(o.bulk_density) + "\n";
   s += "tanks = " + std::to_string(o.tanks) + "\n";
-  s += "\n[sizes]\ntop_mm = " + g(o.sizes.top_m.front() * 1e3) + "\nratio = " + g(o.ratio) +
-       "\nclasses = " + std::to_string(o.sizes.size()) + "\n";
+  const OreTables t = tables(o);
+  s += t.sizes;
   s += "\n[feed]\nsieve_mm = " + list(o.sieve_m, 1e3) + "\npassing = " + list(o.sieve_passing, 1) + "\n";
-  if (o.appearance == Appearance::t10)
-    s += "\n[breakage]\nmodel = \"t10\"\nt10_max_percent = " + g(100 * o.t10.a) + "\nb_prime = " + g(o.t10.b_prime) +
-         "\ntn_n = " + list(o.t10.n, 1) + "\ntn_alpha = " + list(o.t10.alpha, 1) + "\ntn_beta = " + list(o.t10.beta, 1) +
-         "\n";
-  else
-    s += "\n[breakage]\nphi = " + g(o.breakage.phi) + "\ngamma = " + g(o.breakage.gamma) + "\nbeta = " +
-         g(o.breakage.beta) + "\n";
-  s += "\n[rates]\n";
-  if (o.model == RateModel::austin)
-    s += "model = \"austin\"\na_per_min = " + g(o.austin.a_per_min) + "\nalpha = " + g(o.austin.alpha) +
-         "\nmu_mm = " + g(o.austin.mu_m * 1e3) + "\nlambda = " + g(o.austin.lambda) + "\n";
-  if (o.model == RateModel::energy)
-    s += "model = \"energy\"\ns1e_t_per_kWh = " + g(o.energy.s1e_t_per_kWh) + "\nx1_mm = " + g(o.energy.x1_m * 1e3) +
-         "\nzeta1 = " + g(o.energy.zeta1) + "\nzeta2 = " + g(o.energy.zeta2) + "\n";
-  if (o.model == RateModel::spectrum)
-    s += "model = \"spectrum\"\ne_inf_J_kg = " + g(o.fracture.e_inf_J_kg) + "\nd0_mm = " + g(o.fracture.d0_m * 1e3) +
-         "\nphi = " + g(o.fracture.phi) + "\nsigma = " + g(o.fracture.sigma) + "\nemax_ratio = " +
-         g(o.fracture.emax_ratio) + "\npacking = " + g(o.packing) + "\nefficiency = " + g(o.efficiency) +
-         "\nenergy_basis = " + quoted(grind::basis_name(o.energy_basis)) + "\n";
+  s += t.breakage + t.rates;
   const ContactRecord& f = o.fitted_under;
   if (!f.law.empty()) {
     s += "\n[fitted]                # the run the ore was fitted through: its parameters hold under this contact\n";

@@ -19,4 +19,12 @@ grind::Ore read_ore(const std::filesystem::path& path);
 // fitted (the contact it holds under). `header`: comment lines put first.
 std::string ore_toml(const grind::Ore& ore, const std::string& header);
 
+// The ore's [sizes], [breakage] and [rates] tables (and its energy basis)
+// as ore_toml writes them, each hashed (FNV-1a, 64 bits): "sizes HEX
+// breakage HEX rates HEX", kept in [fitted] as tables_fnv1a when the ore is
+// fitted. changed_tables: "" when `kept` is "" or the ore's tables hash to
+// it; else the tables that differ ("[breakage]", "[sizes] and [rates]").
+std::string ore_tables_hash(const grind::Ore& ore);
+std::string changed_tables(const grind::Ore& ore, const std::string& kept);
+
 }  // namespace mc::io
