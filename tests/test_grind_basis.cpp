@@ -235,7 +235,7 @@ TEST_CASE("grind reads the severity spectrum of the ore's basis, each bin with i
     std::getline(rc, line);  // class 0
     const double s0 = std::stod(line.substr(line.rfind(',', line.rfind(',') - 1) + 1));
     Ore ob = ore;
-    EnergyBasis eb;
+    EnergyBasis eb = EnergyBasis::impact;
     REQUIRE(basis_of(b, &eb));
     const mc::io::Run rb = mc::io::read_run(dir, true, eb);
     const double holdup = mill_holdup_kg(ob, rb.porosity, rb.filling, rb.mill_volume);
