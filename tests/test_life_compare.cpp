@@ -62,9 +62,11 @@ TEST_CASE("life-compare: a study's figures between its stages are interpolated i
   CHECK(a.at(0, 1000) == Approx(24.0).margin(1e-9));
   CHECK(a.at(1, 2500) == Approx(150 - 50.0).margin(1e-9));
   CHECK(a.at(3, 4200) == Approx(42.0).margin(1e-9));  // the last stage exactly
-  // The standard errors' variances likewise: 0.1 s at stage s, so 1000 h is 300/700 of the way from 0.1 to 0.2.
-  CHECK(a.at(0, 1000, true) == Approx(std::sqrt(0.01 + 0.03 * 300.0 / 700)).margin(1e-9));
-  CHECK(a.at(0, 350, true) == Approx(std::sqrt(0.5 * 0.01)).margin(1e-9));  // up from the new liner's 0
+  // The standard errors: 0.1 s at stage s; 1000 h is t = 300/700 of the way from 0.1 to 0.2, the stage's own
+  // error (its variance 0.03 at the end) grown in proportion to t.
+  const double t = 300.0 / 700;
+  CHECK(a.at(0, 1000, true) == Approx(std::sqrt(0.01 + t * t * 0.03)).margin(1e-9));
+  CHECK(a.at(0, 350, true) == Approx(0.5 * 0.1).margin(1e-9));  // up from the new liner's 0: in proportion
   const StudyPath none = read_study_path(write_study(dir / "b", 700, 6, false), "b", 0);
   CHECK(std::isnan(none.at(0, 1000, true)));  // a study without errors has none between its stages
   CHECK(std::isnan(a.at(0, 4300)));       // beyond the study
@@ -78,7 +80,7 @@ TEST_CASE("life-compare: a study's figures between its stages are interpolated i
   const Against x = against(a, m);
   CHECK(x.value == Approx(54.0).margin(1e-9));
   CHECK(x.difference == Approx(6.9).margin(1e-9));
-  const double se4000 = std::sqrt(0.25 + (0.36 - 0.25) * 500.0 / 700);
+  const double se4000 = std::sqrt(0.25 + (0.36 - 0.25) * (500.0 / 700) * (500.0 / 700));
   CHECK(x.se == Approx(se4000).margin(1e-9));
   CHECK(x.in_se == Approx(6.9 / se4000).margin(1e-9));
   fs::remove_all(dir);

@@ -85,16 +85,41 @@ TEST_CASE("a bar worn on its top loses the booked volume, by its own enclosed vo
   // Independent of the swept volume: the enclosed volume lost.
   CHECK(before - closed_mesh_volume(w.triangles) == Approx(w.booked_m3).epsilon(1e-9));
   CHECK(w.removed_m3 == Approx(w.booked_m3).epsilon(1e-9));
-  // The top's edge vertices share their move with the unworn sides: the
-  // top's middle goes deeper than 4 mm to make up the volume.
-  double lowest = 1;
+  // Each face keeps its own depth: the top goes down 4 mm all over, edges
+  // and corners too, and the sides stay in their planes.
+  CHECK(w.scale == Approx(1).epsilon(1e-9));
   for (int t = 0; t < 72; ++t)
-    for (int k = 0; k < 3; ++k) lowest = std::min(lowest, w.triangles[t].v[k].y);
-  CHECK(lowest < 0.15 - 0.004);
-  CHECK(lowest > 0.15 - 0.008);
+    for (int k = 0; k < 3; ++k) CHECK(w.triangles[t].v[k].y == Approx(0.15 - 0.004).epsilon(1e-9));
+  for (std::size_t t = 0; t < bar.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      CHECK(w.triangles[t].v[k].x == Approx(bar[t].v[k].x).margin(1e-12));
+      CHECK(w.triangles[t].v[k].z == Approx(bar[t].v[k].z).margin(1e-12));
+    }
   // The bottom does not move.
   for (int t = 72; t < 144; ++t)
     for (int k = 0; k < 3; ++k) CHECK(w.triangles[t].v[k].y == 0);
+  // A finer mesh: a 100 x 150 mm bar, 24 x 24 quads a face (rows of
+  // 6.25 mm on its sides): 5 mm off its top leaves it 145 mm high with its
+  // sides in place; 15 mm would take the top past the sides' first row,
+  // which the mesh cannot follow without new triangles: refused, naming
+  // shorter stages.
+  const std::vector<Triangle> fine = box({-0.05, 0, 0}, {0.05, 0.15, 0.2}, 24);
+  for (const double d : {0.005, 0.015}) {
+    std::vector<double> deep(fine.size(), 0.0);
+    for (int t = 0; t < 2 * 24 * 24; ++t) deep[t] = area(fine[t]) * d;
+    if (d > 0.00625) {
+      CHECK_THROWS_WITH(wear_mesh(fine, deep, MeshBounds{}, 0, "bar.stl"),
+                        Catch::Contains("turns it over") && Catch::Contains("shorter stages"));
+      continue;
+    }
+    const mc::life::MeshWear f = wear_mesh(fine, deep, MeshBounds{});
+    CHECK(closed_mesh_volume(fine) - closed_mesh_volume(f.triangles) == Approx(f.booked_m3).epsilon(1e-9));
+    double top = 0, widest = 0;
+    for (const Triangle& t : f.triangles)
+      for (int k = 0; k < 3; ++k) top = std::max(top, t.v[k].y), widest = std::max(widest, std::abs(t.v[k].x));
+    CHECK(top == Approx(0.145).epsilon(1e-9));
+    CHECK(widest == Approx(0.05).epsilon(1e-12));
+  }
 }
 
 TEST_CASE("smoothing evens noisy wear and keeps the volume", "[life][mesh_wear]") {
@@ -111,8 +136,8 @@ TEST_CASE("smoothing evens noisy wear and keeps the volume", "[life][mesh_wear]"
     return std::sqrt(std::max(0.0, s2 / n - (s / n) * (s / n)));
   };
   const mc::life::MeshWear raw = wear_mesh(plate, vol, MeshBounds{}, 0);
-  const mc::life::MeshWear smooth = wear_mesh(plate, vol, MeshBounds{}, 4);
-  CHECK(smooth.smoothing == 4);
+  const mc::life::MeshWear smooth = wear_mesh(plate, vol, MeshBounds{}, 8);
+  CHECK(smooth.smoothing == 8);
   CHECK(raw.removed_m3 == Approx(raw.booked_m3).epsilon(1e-9));
   CHECK(smooth.removed_m3 == Approx(smooth.booked_m3).epsilon(1e-9));
   CHECK(roughness(smooth) < 0.5 * roughness(raw));
@@ -120,7 +145,7 @@ TEST_CASE("smoothing evens noisy wear and keeps the volume", "[life][mesh_wear]"
 
 TEST_CASE("a worn mesh that leaves the mill or is worn through is refused by name", "[life][mesh_wear]") {
   // A liner patch 2 mm inside a 1 m shell, facing the axis (-x), worn 5 mm.
-  const std::vector<Triangle> patch = grid({0.998, -0.05, 0.1}, {0, 0, 0.1}, {0, 0.1, 0}, 4);
+  const std::vector<Triangle> patch = grid({0.998, -0.02, 0.1}, {0, 0, 0.1}, {0, 0.04, 0}, 4);
   std::vector<double> vol;
   for (const Triangle& t : patch) vol.push_back(area(t) * 0.005);
   CHECK_THROWS_WITH(wear_mesh(patch, vol, MeshBounds{1.0, 0, 1}, 0, "liner.stl"),

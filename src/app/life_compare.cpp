@@ -52,9 +52,10 @@ double StudyPath::at(int figure, double h, bool want_se) const {
   for (std::size_t i = 1; i < n; ++i)
     if (h < hours[i]) {
       const double t = (h - hours[i - 1]) / (hours[i] - hours[i - 1]);
-      // A standard error's variance grows with the hours of wear behind
-      // it: interpolated as a variance.
-      if (want_se) return std::sqrt(y[i - 1] * y[i - 1] + t * (y[i] * y[i] - y[i - 1] * y[i - 1]));
+      // Within a stage one window's error in the wear rate acts over the
+      // hours so far: the stage's own error grows in proportion to them,
+      // added in quadrature to the error the stage began with.
+      if (want_se) return std::sqrt(y[i - 1] * y[i - 1] + t * t * (y[i] * y[i] - y[i - 1] * y[i - 1]));
       return y[i - 1] + t * (y[i] - y[i - 1]);
     }
   return y.back();
@@ -243,7 +244,7 @@ int cmd_life_compare(const LifeCompareOptions& o) {
     for (const Measured& m : measured)
       for (const StudyPath& s : paths) {
         const Against a = against(s, m);
-        if (!std::isfinite(a.value)) {  // beyond the study: drawn, not compared
+        if (m.hours > s.hours.back() * (1 + 1e-9)) {  // beyond the study: drawn, not compared
           std::cout << fmt::format("{:<15} {} at {:g} h, {}: the study ends at {:g} h\n", "measured",
                                    kCompared[m.figure], m.hours, s.label, s.hours.back());
           continue;

@@ -27,8 +27,9 @@ struct StudyPath {
   std::string basis;  // life.csv's wear_basis: what its hours stand on
   std::vector<double> hours;
   std::vector<std::vector<double>> value, se;  // [figure][stage]
-  // Interpolated linearly between the stages around `h` (the standard
-  // error's variance likewise); NaN outside the study's hours.
+  // Interpolated linearly between the stages around `h`; the standard
+  // error as the stage's own error grows, in proportion to its hours, in
+  // quadrature with the error it began with. NaN outside the study's hours.
   double at(int figure, double h, bool want_se = false) const;
 };
 

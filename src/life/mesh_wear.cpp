@@ -21,6 +21,54 @@ Vec3 area_vector(const Vec3& a, const Vec3& b, const Vec3& c) { return cross(b -
 // Six times the signed volume of the tetrahedron (o, a, b, c).
 double tet6(const Vec3& a, const Vec3& b, const Vec3& c) { return a.dot(cross(b, c)); }
 
+// The normals of triangles that meet at less than this angle count as one
+// direction: a crease sharper than it is an edge whose faces each keep
+// their own depth.
+constexpr double kCreaseDegrees = 13.0;
+
+// x with M x = b over the eigen-directions of the symmetric M whose
+// eigenvalue is at least sin²(crease) of the largest (Jacobi rotations);
+// the others, where the normals around a vertex hardly differ, left out.
+Vec3 crease_solve(std::array<double, 9> a, const Vec3& b) {
+  double v[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    const double off = a[1] * a[1] + a[2] * a[2] + a[5] * a[5];
+    if (off < 1e-30 * (a[0] * a[0] + a[4] * a[4] + a[8] * a[8]) || off == 0) break;
+    for (int p = 0; p < 2; ++p)
+      for (int q = p + 1; q < 3; ++q) {
+        const double apq = a[3 * p + q];
+        if (apq == 0) continue;
+        const double theta = 0.5 * (a[3 * q + q] - a[3 * p + p]) / apq;
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1));
+        const double c = 1 / std::sqrt(t * t + 1), s = t * c;
+        for (int k = 0; k < 3; ++k) {  // a = Jᵀ a J
+          const double akp = a[3 * k + p], akq = a[3 * k + q];
+          a[3 * k + p] = c * akp - s * akq, a[3 * k + q] = s * akp + c * akq;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double apk = a[3 * p + k], aqk = a[3 * q + k];
+          a[3 * p + k] = c * apk - s * aqk, a[3 * q + k] = s * apk + c * aqk;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double vkp = v[3 * k + p], vkq = v[3 * k + q];
+          v[3 * k + p] = c * vkp - s * vkq, v[3 * k + q] = s * vkp + c * vkq;
+        }
+      }
+  }
+  const double top = std::max({a[0], a[4], a[8]});
+  const double floor = top * std::pow(std::sin(kCreaseDegrees * 3.14159265358979323846 / 180), 2);
+  const double bb[3] = {b.x, b.y, b.z};
+  double x[3] = {0, 0, 0};
+  for (int e = 0; e < 3; ++e) {
+    const double lambda = a[4 * e];
+    if (!(lambda > floor) || !(lambda > 0)) continue;
+    double proj = 0;
+    for (int k = 0; k < 3; ++k) proj += v[3 * k + e] * bb[k];
+    for (int k = 0; k < 3; ++k) x[k] += v[3 * k + e] * proj / lambda;
+  }
+  return {x[0], x[1], x[2]};
+}
+
 }  // namespace
 
 WeldedMesh weld(const std::vector<Triangle>& triangles) {
@@ -70,12 +118,11 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     throw std::invalid_argument(fmt::format("{}: {} wear volumes for {} triangles", name, volume_m3.size(),
                                             triangles.size()));
   const WeldedMesh w = weld(triangles);
-  const std::size_t nv = w.points.size();
-  std::vector<Vec3> normal(nv);       // area-weighted, summed
-  std::vector<double> area(nv, 0.0);  // of the triangles around
-  std::vector<double> depth(nv, 0.0); // area-weighted depth, summed
+  const std::size_t nv = w.points.size(), nt = triangles.size();
+  std::vector<Vec3> unit(nt);            // each triangle's unit normal
+  std::vector<double> area(nt, 0.0), depth(nt, 0.0);
   MeshWear out;
-  for (std::size_t t = 0; t < triangles.size(); ++t) {
+  for (std::size_t t = 0; t < nt; ++t) {
     const double v = volume_m3[t];
     if (!(std::isfinite(v) && v >= 0))
       throw std::invalid_argument(fmt::format("{}: triangle {}: wear volume {} is not a volume (finite, >= 0)", name,
@@ -83,47 +130,56 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     out.booked_m3 += v;
     const auto& c = w.corners[t];
     const Vec3 av = area_vector(w.points[c[0]], w.points[c[1]], w.points[c[2]]);
-    const double a = 0.5 * av.norm();
-    for (int k = 0; k < 3; ++k) {
-      normal[c[k]] = normal[c[k]] + av * 0.5;
-      area[c[k]] += a;
-      depth[c[k]] += v;  // a · (v / a): the triangle's depth weighed by its area
-    }
+    area[t] = 0.5 * av.norm();
+    unit[t] = area[t] > 0 ? av * (0.5 / area[t]) : Vec3{};
+    depth[t] = area[t] > 0 ? v / area[t] : 0.0;
   }
-  for (std::size_t i = 0; i < nv; ++i) {
-    depth[i] = area[i] > 0 ? depth[i] / area[i] : 0.0;
-    const double n = normal[i].norm();
-    normal[i] = n > 0 ? normal[i] * (1.0 / n) : Vec3{};
-  }
-  // Smoothing: each pass averages a vertex's depth with the mean of its
-  // neighbours' (those it shares a triangle with).
+  // Smoothing: each pass averages a triangle's depth with the mean of its
+  // neighbours' (those it shares a vertex with), weighed by their areas.
   if (smoothing > 0) {
-    std::vector<std::vector<int>> near(nv);
-    for (const auto& c : w.corners)
-      for (int k = 0; k < 3; ++k)
-        for (int j = 0; j < 3; ++j)
-          if (j != k) near[c[k]].push_back(c[j]);
-    for (auto& n : near) {
-      std::sort(n.begin(), n.end());
-      n.erase(std::unique(n.begin(), n.end()), n.end());
-    }
+    std::vector<std::vector<int>> at_vertex(nv);
+    for (std::size_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 3; ++k) at_vertex[w.corners[t][k]].push_back(static_cast<int>(t));
     for (int pass = 0; pass < smoothing; ++pass) {
-      std::vector<double> next(nv);
-      for (std::size_t i = 0; i < nv; ++i) {
-        double sum = 0;
-        for (int j : near[i]) sum += depth[j];
-        next[i] = near[i].empty() ? depth[i] : 0.5 * (depth[i] + sum / near[i].size());
+      std::vector<double> next(nt);
+      for (std::size_t t = 0; t < nt; ++t) {
+        double sum = 0, weight = 0;
+        for (int k = 0; k < 3; ++k)
+          for (int u : at_vertex[w.corners[t][k]])
+            if (u != static_cast<int>(t)) sum += area[u] * depth[u], weight += area[u];
+        next[t] = weight > 0 ? 0.5 * (depth[t] + sum / weight) : depth[t];
       }
       depth.swap(next);
     }
     out.smoothing = smoothing;
+  }
+  // Each vertex's move: the least-squares offset that takes each triangle
+  // around it its own depth along its normal, sum a (n.x + d)^2 least,
+  // over the directions in which the triangles' normals differ by more
+  // than a crease (a flat or gently curved patch moves along its mean
+  // normal; an edge or a corner moves each face by its own depth, so that
+  // a worn top leaves its unworn sides where they are).
+  std::vector<Vec3> move(nv);
+  {
+    std::vector<std::array<double, 9>> m(nv, std::array<double, 9>{});
+    std::vector<Vec3> b(nv);
+    for (std::size_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 3; ++k) {
+        const int i = w.corners[t][k];
+        const Vec3& n = unit[t];
+        const double nn[3] = {n.x, n.y, n.z};
+        for (int r = 0; r < 3; ++r)
+          for (int q = 0; q < 3; ++q) m[i][3 * r + q] += area[t] * nn[r] * nn[q];
+        b[i] = b[i] + n * (area[t] * depth[t]);
+      }
+    for (std::size_t i = 0; i < nv; ++i) move[i] = crease_solve(m[i], b[i]) * -1.0;
   }
   auto moved = [&](double scale) {
     std::vector<Triangle> m(triangles.size());
     for (std::size_t t = 0; t < triangles.size(); ++t)
       for (int k = 0; k < 3; ++k) {
         const int i = w.corners[t][k];
-        m[t].v[k] = w.points[i] - normal[i] * (scale * depth[i]);
+        m[t].v[k] = w.points[i] + move[i] * scale;
       }
     return m;
   };
@@ -144,9 +200,14 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     }
     scale = s1;
     out.removed_m3 = v1;
+    if (!(std::abs(v1 - out.booked_m3) <= 1e-6 * out.booked_m3))
+      throw std::invalid_argument(fmt::format(
+          "{}: no move of the mesh removes the {:.6g} m3 booked (the nearest removes {:.6g} m3); the wear is too "
+          "deep for the mesh: more smoothing or shorter stages",
+          name, out.booked_m3, v1));
   }
   out.scale = scale;
-  for (std::size_t i = 0; i < nv; ++i) out.deepest_m = std::max(out.deepest_m, scale * depth[i]);
+  for (std::size_t i = 0; i < nv; ++i) out.deepest_m = std::max(out.deepest_m, scale * move[i].norm());
   // The worn mesh must be one.
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const auto& a = triangles[t].v;
@@ -155,16 +216,16 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     if (nb.dot(na) <= 0)
       throw std::invalid_argument(fmt::format(
           "{}: triangle {}: the wear turns it over (its vertices move past each other, {:.3g} mm deep at most); the "
-          "wear is too deep for the mesh: a finer mesh, more smoothing or shorter stages",
+          "wear is too deep for the mesh: more smoothing or shorter stages",
           name, t + 1, out.deepest_m * 1000));
     if (nb.norm() < 1e-3 * na.norm())
       throw std::invalid_argument(fmt::format(
-          "{}: triangle {}: the wear shrinks it to under a thousandth of its area; a finer mesh, more smoothing or "
-          "shorter stages",
+          "{}: triangle {}: the wear shrinks it to under a thousandth of its area; more smoothing or shorter "
+          "stages",
           name, t + 1));
     for (int k = 0; k < 3; ++k) {
       const Vec3& p = b[k];
-      if (bounds.shell_radius > 0 && std::hypot(p.x, p.y) > bounds.shell_radius * (1 + 1e-3))
+      if (bounds.shell_radius > 0 && std::hypot(p.x, p.y) > bounds.shell_radius + 1e-6)
         throw std::invalid_argument(fmt::format(
             "{}: triangle {}: the wear takes a vertex to radius {:.4f} m, beyond the shell ({:.4f} m): the liner is "
             "worn through there",

@@ -1,12 +1,14 @@
-// A mesh liner worn by its booked wear (docs/liner-life.md, "Mesh liners
-// wear"): each triangle's booked volume is a depth over its area; each
-// vertex (welded where triangles share its coordinates) moves against its
-// area-weighted normal, into the liner, by the area-weighted mean depth of
-// the triangles around it, so that to first order the volume removed is
-// the volume booked; a depth scale then makes the swept volume equal the
-// booked one exactly (as core/liner_wear.h does for a bar's outline). Where
-// the booked depths are noisy, passes of smoothing average each vertex's
-// depth with its neighbours' first (the booked volume kept). The worn mesh
+// A mesh liner worn by its booked wear: each triangle's booked volume is a
+// depth over its area; each vertex (welded where triangles share its
+// coordinates) moves into the liner by the least-squares offset that
+// takes each triangle around it its own depth along its normal (over the
+// directions in which their normals differ by more than a crease: a flat
+// patch moves along its mean normal, an edge moves each face by its own
+// depth), so that to first order the volume removed is the volume booked;
+// a depth scale then makes the swept volume equal the booked one exactly
+// (as core/liner_wear.h does for a bar's outline). Where the booked depths
+// are noisy, passes of smoothing average each triangle's depth with its
+// neighbours' first (the booked volume kept by the scale). The worn mesh
 // is checked: no triangle turned over or shrunk to nothing, no vertex
 // beyond the shell or the mill's ends. No OpenCL: the unit tests reach it.
 #pragma once
@@ -19,7 +21,7 @@
 namespace mc::life {
 
 // Where a worn mesh must stay: inside the shell (radius at most
-// shell_radius · (1 + 1e-3); 0: not checked) and between z0 and z1 (not
+// shell_radius + 1 µm; 0: not checked) and between z0 and z1 (not
 // checked where z1 <= z0).
 struct MeshBounds {
   double shell_radius = 0;
@@ -52,7 +54,8 @@ double swept_volume(const std::vector<Triangle>& before, const std::vector<Trian
 // with `smoothing` passes over the depths. Throws std::invalid_argument
 // naming `name` and the triangle (from 1) where the wear would turn a
 // triangle over or shrink it below a thousandth of its area, or take a
-// vertex beyond `bounds`; std::invalid_argument for a negative or
+// vertex beyond `bounds` (the shell within a micrometre), and naming `name`
+// where no move removes the volume booked; std::invalid_argument for a negative or
 // non-finite volume, or a count that is not the triangles'.
 MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,
                    const MeshBounds& bounds, int smoothing = 0, const std::string& name = "mesh");
