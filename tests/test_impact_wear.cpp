@@ -126,6 +126,25 @@ struct Struck {
   double elements = 0, stations = 0, impacts = 0;
 };
 
+// A shell of radius R turning at omega, 0.1 m long, no gravity; the liner
+// with impact wear and threshold K; a contact of 60 steps for mass m.
+Scene turning_scene(Precision precision, double K, double R, double omega, double m) {
+  Interaction in;
+  in.restitution = 0.5;
+  in.mu_slide = 0.3;
+  in.mu_roll = 0;
+  in.kn = 1e6;
+  Material liner = kSteel;
+  liner.impact_wear_coefficient = 1e-11;
+  liner.impact_wear_threshold_speed = K;
+  Scene sc = bare_scene(kSteel, liner, in, ContactLaw::linear, precision);
+  sc.numerics.dt = kPi * std::sqrt(m / in.kn) / 60;
+  sc.walls.shell_radius = R;
+  sc.walls.length = 0.1;
+  sc.mill_omega = omega;
+  return sc;
+}
+
 Struck strikes_of(const Scene& sc, int steps) {
   auto s = make_solver(context(), sc);
   s->advance(steps);
@@ -149,22 +168,10 @@ TEST_CASE("a turning lifter face sweeping into a ball at rest books 1/2 m (w rho
   const double R = 0.25, h = 0.03, w = 0.02, r = 0.008, omega = 4.0, m = sphere_mass(7800, r);
   for (const Precision precision : {Precision::double_, Precision::single})
     for (const double threshold : {0.0, 0.3}) {
-      Interaction in;
-      in.restitution = 0.5;
-      in.mu_slide = 0.3;
-      in.mu_roll = 0;
-      in.kn = 1e6;
-      Material liner = kSteel;
-      liner.impact_wear_coefficient = 1e-11;
-      liner.impact_wear_threshold_speed = threshold;
-      Scene sc = bare_scene(kSteel, liner, in, ContactLaw::linear, precision);
-      sc.numerics.dt = kPi * std::sqrt(m / in.kn) / 60;
-      sc.walls.shell_radius = R;
-      sc.walls.length = 0.1;
+      Scene sc = turning_scene(precision, threshold, R, omega, m);
       LifterProfile bar;
       bar.height = h, bar.top_width = w, bar.face_angle_deg = 0;
       sc.walls.lifters = lifter_rows(R, 8, {bar}, 0.0);
-      sc.mill_omega = omega;
       const double rho = R - 0.5 * h;
       Ball b;
       b.radius = r;
@@ -186,19 +193,7 @@ TEST_CASE("a ball dropped onto the turning shell books its radial speed alone, n
   // would give 1/2 m (1.5^2 + 1^2).
   const double R = 0.25, r = 0.008, omega = 4.0, speed = 1.5, m = sphere_mass(7800, r);
   for (const Precision precision : {Precision::double_, Precision::single}) {
-    Interaction in;
-    in.restitution = 0.5;
-    in.mu_slide = 0.3;
-    in.mu_roll = 0;
-    in.kn = 1e6;
-    Material liner = kSteel;
-    liner.impact_wear_coefficient = 1e-11;
-    liner.impact_wear_threshold_speed = 0.2;
-    Scene sc = bare_scene(kSteel, liner, in, ContactLaw::linear, precision);
-    sc.numerics.dt = kPi * std::sqrt(m / in.kn) / 60;
-    sc.walls.shell_radius = R;
-    sc.walls.length = 0.1;
-    sc.mill_omega = omega;
+    Scene sc = turning_scene(precision, 0.2, R, omega, m);
     Ball b;
     b.radius = r;
     b.position = {0, -(R - r - 1e-6), 0.05};

@@ -437,22 +437,24 @@ grind::Ore read_ore(const fs::path& path) {
 
 namespace {
 
+// How ore_toml writes a number, a list and a string.
+std::string g(double v) { return fmt::format("{:.10g}", v); }
+std::string list(const std::vector<double>& v, double scale) {
+  std::string s = "[";
+  for (std::size_t k = 0; k < v.size(); ++k) s += (k ? ", " : "") + g(v[k] * scale);
+  return s + "]";
+}
+std::string quoted(const std::string& s) {
+  std::string q = "\"";
+  for (char c : s) q += c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c);
+  return q + "\"";
+}
+
 // The [sizes], [breakage] and [rates] tables as ore_toml writes them.
 struct OreTables {
   std::string sizes, breakage, rates;
 };
 OreTables tables(const grind::Ore& o) {
-  auto g = [](double v) { return fmt::format("{:.10g}", v); };
-  auto list = [&](const std::vector<double>& v, double scale) {
-    std::string s = "[";
-    for (std::size_t k = 0; k < v.size(); ++k) s += (k ? ", " : "") + g(v[k] * scale);
-    return s + "]";
-  };
-  auto quoted = [](const std::string& s) {
-    std::string q = "\"";
-    for (char c : s) q += c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c);
-    return q + "\"";
-  };
   OreTables t;
   std::string s;
   s += "\n[sizes]\ntop_mm = " + g(o.sizes.top_m.front() * 1e3) + "\nratio = " + g(o.ratio) +
@@ -567,17 +569,6 @@ std::string covariance_toml(const FitCovariance& u) {
 }  // namespace
 
 std::string ore_toml(const grind::Ore& o, const std::string& header) {
-  auto g = [](double v) { return fmt::format("{:.10g}", v); };
-  auto list = [&](const std::vector<double>& v, double scale) {
-    std::string s = "[";
-    for (std::size_t k = 0; k < v.size(); ++k) s += (k ? ", " : "") + g(v[k] * scale);
-    return s + "]";
-  };
-  auto quoted = [](const std::string& s) {
-    std::string q = "\"";
-    for (char c : s) q += c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c);
-    return q + "\"";
-  };
   std::string s = header;
   s += "name = " + quoted(o.name) + "\n";
   s += "density = " + g(o.density) + "\n";
