@@ -7,11 +7,17 @@
 
 #include <unistd.h>
 
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <system_error>
 
 #include "app/commands.h"
+#include "app/grind.h"
+#include "grind_synthetic.h"
+#include "io/batch_test_file.h"
+#include "io/run_folder.h"
 
 namespace mc::test {
 
@@ -40,6 +46,28 @@ inline const std::filesystem::path& short_bond_run() {
     return dir;
   }()};
   return out.path;
+}
+
+// A synthetic 5 x 13 test of `truth` (±1 pp, seed `seed`) in the short
+// Bond run, written to DIR/test.toml and fitted from the example spectrum
+// ore with η and σ free: DIR/fit/ore_fitted.toml.
+inline std::filesystem::path fit_synthetic_in_bond_run(const grind::Ore& truth, std::uint64_t seed,
+                                                       const std::filesystem::path& dir) {
+  const std::filesystem::path run_dir = short_bond_run();
+  const mc::io::Run run = mc::io::read_run(run_dir, true);
+  mc::io::BatchTestFile tf;
+  tf.title = "synthetic";
+  tf.test = synthetic_test(truth, 1.0, seed, run.spectrum, {1, 2, 4, 8, 16}, true);
+  std::ofstream(dir / "test.toml") << mc::io::batch_test_toml(tf);
+  mc::app::GrindOptions o;
+  o.run_dir = run_dir.string();
+  o.ore = (std::filesystem::path(MC_ASSET_DIR) / "ores" / "example_spectrum.toml").string();
+  o.fit_tests = {(dir / "test.toml").string()};
+  o.fit_params = {"efficiency", "sigma"};
+  o.out = (dir / "fit").string();
+  o.quiet = true;
+  REQUIRE(mc::app::cmd_grind(o) == 0);
+  return dir / "fit" / "ore_fitted.toml";
 }
 
 }  // namespace mc::test

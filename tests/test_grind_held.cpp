@@ -384,23 +384,10 @@ TEST_CASE("grind intervals: correlated pairs, and an interval open at one end", 
 TEST_CASE("grind intervals through the command: an ore edited by hand, correlated pairs, a target out of reach",
           "[grind][interval][held][outputs]") {
   const fs::path run_dir = short_bond_run();
-  const mc::io::Run run = mc::io::read_run(run_dir, true);
   const Ore truth = known_ore();
   const TempDir dir{temp("command")};
   fs::create_directories(dir.path);
-  mc::io::BatchTestFile tf;
-  tf.title = "synthetic";
-  tf.test = synthetic_test(truth, 1.0, 12, run.spectrum, {1, 2, 4, 8, 16}, true);
-  std::ofstream(dir.path / "test.toml") << mc::io::batch_test_toml(tf);
-  mc::app::GrindOptions o;
-  o.run_dir = run_dir.string();
-  o.ore = (fs::path(MC_ASSET_DIR) / "ores" / "example_spectrum.toml").string();
-  o.fit_tests = {(dir.path / "test.toml").string()};
-  o.fit_params = {"efficiency", "sigma"};
-  o.out = (dir.path / "fit").string();
-  o.quiet = true;
-  REQUIRE(mc::app::cmd_grind(o) == 0);
-  const fs::path fitted = dir.path / "fit" / "ore_fitted.toml";
+  const fs::path fitted = fit_synthetic_in_bond_run(truth, 12, dir.path);
   std::stringstream text;
   text << std::ifstream(fitted).rdbuf();
   const std::string ore_text = text.str();

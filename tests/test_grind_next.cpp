@@ -190,7 +190,6 @@ TEST_CASE("grind next test: held parameters the test fixes take their degrees of
 TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, bad candidates refused",
           "[grind][next][outputs][failures]") {
   const fs::path run_dir = short_bond_run();
-  const mc::io::Run run = mc::io::read_run(run_dir, true);
   const Ore truth = known_ore();
   const TempDir dir{temp("command")};
   fs::create_directories(dir.path);
@@ -198,19 +197,7 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
   fs::copy(run_dir, dir.path / "mill2", fs::copy_options::recursive);
   fs::copy(run_dir, dir.path / "nospectrum", fs::copy_options::recursive);
   fs::remove(dir.path / "nospectrum" / "spectra.csv");
-  mc::io::BatchTestFile tf;
-  tf.title = "synthetic";
-  tf.test = synthetic_test(truth, 1.0, 13, run.spectrum, {1, 2, 4, 8, 16}, true);
-  std::ofstream(dir.path / "test.toml") << mc::io::batch_test_toml(tf);
-  mc::app::GrindOptions o;
-  o.run_dir = run_dir.string();
-  o.ore = (fs::path(MC_ASSET_DIR) / "ores" / "example_spectrum.toml").string();
-  o.fit_tests = {(dir.path / "test.toml").string()};
-  o.fit_params = {"efficiency", "sigma"};
-  o.out = (dir.path / "fit").string();
-  o.quiet = true;
-  REQUIRE(mc::app::cmd_grind(o) == 0);
-  const std::string fitted = (dir.path / "fit" / "ore_fitted.toml").string();
+  const std::string fitted = fit_synthetic_in_bond_run(truth, 13, dir.path).string();
   const std::string grind = "grind " + run_dir.string() + " --ore " + fitted + " --bond 106 ";
   int status = 0;
   const std::string shown = run_binary(grind + "--next-test " + run_dir.string() + " --next-test " +
@@ -255,7 +242,7 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
   refused(grind + "--next-test " + run_dir.string() + " --next-times 1,-2", "--next-times 1,-2: expected minutes > 0");
   refused(grind + "--next-test " + run_dir.string() + " --next-times 2,1", "--next-times 2,1: 1 does not follow 2");
   refused(grind + "--next-times 1,2", "--next-times: the times of a next test; give --next-test RUN");
-  refused("grind " + run_dir.string() + " --ore " + o.ore + " --bond 106 --next-test " + run_dir.string(),
+  refused("grind " + run_dir.string() + " --ore " + (fs::path(MC_ASSET_DIR) / "ores" / "example_spectrum.toml").string() + " --bond 106 --next-test " + run_dir.string(),
           "keeps no covariance");
   refused(grind + "--next-test " + run_dir.string() + " --next-for throughput", "--next-for throughput: ");
 }

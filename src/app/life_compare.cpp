@@ -233,7 +233,6 @@ int cmd_life_compare(const LifeCompareOptions& o) {
   io::draw_or_warn(out / "compare.png", [&] { io::write_line_plots_png(out / "compare.png", plots, 960, 380); });
 
   if (!o.quiet) {
-    std::set<std::string> folders;
     for (const StudyPath& s : paths) {
       std::cout << fmt::format("{:<15} {} ({} stages to {:g} h)\n", "study", s.label, s.hours.size() - 1, s.hours.back());
       for (double h : at)
