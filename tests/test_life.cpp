@@ -24,52 +24,12 @@
 #include "core/liner_wear.h"
 #include "io/case_file.h"
 #include "io/csv_read.h"
+#include "life_cli.h"
 #include "text_file.h"
 
 namespace fs = std::filesystem;
+using namespace life_cli;
 
-namespace {
-
-// Stages of 0.3 s of turning after 0.05 s of settling (about 17,500 steps).
-const std::string kShort =
-    " --quiet --set run.duration=0.3 --set run.settle=0.05 --set run.warmup=0.1"
-    " --set run.checkpoint_interval=0.05 --set run.snapshot_interval=0";
-
-fs::path scratch(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("millcharge-life-" + std::to_string(::getpid()) + "-" + name);
-  fs::remove_all(p);
-  return p;
-}
-
-
-int life(const std::string& args, std::string* err = nullptr) {
-  const fs::path log = scratch("stderr.txt");
-  const int st =
-      std::system((std::string(MC_BINARY) + " life " + args + " >/dev/null 2>'" + log.string() + "'").c_str());
-  if (err) *err = read_text(log);
-  fs::remove(log);
-  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
-
-// A CSV file millcharge wrote (read strictly) as rows of named fields.
-std::vector<std::map<std::string, std::string>> read_csv(const fs::path& p) {
-  const mc::io::CsvTable t = mc::io::read_csv_strict(p);
-  std::vector<std::map<std::string, std::string>> rows;
-  for (const auto& f : t.rows) {
-    std::map<std::string, std::string> r;
-    for (std::size_t k = 0; k < t.header.size(); ++k) r[t.header[k]] = f[k];
-    rows.push_back(r);
-  }
-  return rows;
-}
-
-double num(const std::map<std::string, std::string>& r, const std::string& key) {
-  const auto it = r.find(key);
-  REQUIRE(it != r.end());
-  return std::stod(it->second);
-}
-
-}  // namespace
 
 TEST_CASE("a life study of the lab mill removes what its runs booked and resumes after a kill", "[life][cli]") {
   const fs::path a = scratch("unbroken"), b = scratch("killed");
@@ -277,8 +237,18 @@ TEST_CASE("bad life study requests are refused by name, status 2 and nothing wri
       {"--stages 2 --hours 10 --set materials.liner.impact_wear_threshold_speed=-1",
        "materials.liner.impact_wear_threshold_speed"},
       {"--stages 2 --hours 10 --set lifters.profile.0.height=0.5", "lifters.profile[0].height"},
-      {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10",
-       "walls.mesh[0]: a life study wears the shell and the lifter bars of [lifters]; a mesh liner is not worn"},
+      {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --until-height 5",
+       "--until-height: lifters.rows = 0: the lifters' height is followed on the bars of [lifters]"},
+      {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --calibrate-loss 5 --calibrate-hours 9",
+       "--calibrate-loss: lifters.rows = 0"},
+      {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --shell-wear-ratio 2",
+       "--shell-wear-ratio 2: walls.mesh[0] is worn as a liner of its own"},
+      {std::string(MC_ASSET_DIR) +
+           "/cases/lab_stl.toml --stages 2 --hours 10 --set walls.mesh.0.material=steel --set "
+           "materials.steel.wear_coefficient=1e-12",
+       "walls.mesh[0].material = \"steel\": a life study wears its meshes at the liner's"},
+      {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --mesh-smoothing 0",
+       "--mesh-smoothing"},
   };
   for (const auto& [args, expect] : bad) {
     std::string err;

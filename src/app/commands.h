@@ -16,6 +16,7 @@ struct CaseOptions {
   double duration = 0;                // --duration, 0: the case's
   bool duration_auto = false;         // --duration auto
   std::string write_lifters;          // check --write-lifters FILE: the lifter bars as STL
+  double lifter_mesh_mm = 0;          // check --lifter-mesh MM: their triangles at most MM across (0: one per face)
 };
 
 struct RunOptions {
@@ -70,6 +71,8 @@ struct LifeOptions {
   double calibrate_consumption_g_kWh = 0;  // --calibrate-consumption G_PER_KWH: the new shell and lifters' g/kWh
   double shell_wear_ratio = 1;  // --shell-wear-ratio R: the shell's wear coefficients over the bars'
   double impact_share = -1;     // --impact-share S: the share of the new liner's wear that impact does (< 0: the case's)
+  double mesh_smoothing_mm = 0; // --mesh-smoothing MM: a mesh liner's wear averaged over MM across the axis (0: the largest ball's radius)
+  double mesh_smoothing_along_mm = 0;  // --mesh-smoothing-along MM: and along it (0: four times across)
   bool force = false;           // --force: start again in an --out that holds another study
   bool quiet = false;
 };

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "app/commands.h"
+#include "app/life_mesh.h"
 #include "app/life_picture.h"
 #include "app/life_state.h"
 #include "app/prepare.h"
@@ -59,6 +60,8 @@ json request_with_consumption(const LifeOptions& o, const Prepared& p) {
   if (o.calibrate_consumption_g_kWh > 0) r["calibrate_consumption_g_per_kWh"] = o.calibrate_consumption_g_kWh;
   if (o.impact_share >= 0) r["impact_share"] = o.impact_share;
   if (o.shell_wear_ratio != 1) r["shell_wear_ratio"] = o.shell_wear_ratio;
+  if (o.mesh_smoothing_mm > 0) r["mesh_smoothing_mm"] = o.mesh_smoothing_mm;
+  if (o.mesh_smoothing_along_mm > 0) r["mesh_smoothing_along_mm"] = o.mesh_smoothing_along_mm;
   return r;
 }
 
@@ -186,11 +189,12 @@ fs::path stage_dir(const fs::path& out, int i) { return out / fmt::format("stage
 // The stage's case: the study's case with the stage's liner. A worn mill
 // turns at the new one's rpm (a fixed-speed drive) and holds the same charge
 // (the filling of its larger free volume).
-MillCase stage_case(const Prepared& base, const Stage& s) {
+MillCase stage_case(const Prepared& base, const Stage& s, const fs::path& out) {
   MillCase c = base.c;
   if (s.index == 0) return c;
   c.diameter = s.diameter;
-  for (std::size_t k = 0; k < c.lifter_pattern.size(); ++k) {
+  life::put_stage_meshes(c, out, s);
+  for (std::size_t k = 0; k < s.outlines.size(); ++k) {
     LifterProfile p;
     p.points = s.outlines[k];
     c.lifter_pattern[k] = p;
@@ -240,6 +244,15 @@ void write_table(const fs::path& out, const Study& st, double length) {
           se(errors[s.index].trailing_deg[k]));
       if (carried) worn[k] += s.removed_mm2[k];
     }
+    // A liner whose bars are meshes (life_meshes.csv follows them): the
+    // stage's row without a profile.
+    if (s.outlines.empty())
+      t += fmt::format("{},{:.6g},{:.6g},,,,,,,,{:.4f},{:.6f},{:.6g},{:.4g},{:.3f},{:.3f},{:.3f},{:.4f},{:.6g},{:.6g},,{},,,{},{:.4f},,,\n",
+                       s.index, s.case_hours / st.factor, s.case_hours, s.shell_wear_m * 1000, s.diameter, s.r.power_W,
+                       s.r.power_sem_W, s.r.toe_deg, s.r.shoulder_deg, s.r.impact_deg, s.r.bare_share,
+                       s.r.liner_kg_h * st.factor, grams_per_kWh(s.r.liner_kg_h, s.r.power_W) * st.factor,
+                       s.span_case_hours > 0 ? fmt::format("{:.6g}", s.span_case_hours / st.factor) : "", st.basis(),
+                       impact_share_of(st, s.r));
   }
   io::write_file_atomic(out / "life.csv", t);
   // The worn liner of each stage in ParaView, on the study's hours.
@@ -300,14 +313,21 @@ int cmd_life(const LifeOptions& o) {
   check_options(o);
   const Prepared base = prepare(o.c);
   const MillCase& c = base.c;
-  for (std::size_t m = 0; m < c.meshes.size(); ++m)
-    if (c.meshes[m].part != MeshPart::ends)
-      throw std::invalid_argument(fmt::format("walls.mesh[{}]: a life study wears the shell and the lifter bars of "
-                                              "[lifters]; a mesh liner is not worn (leave it out, or give its bars as "
-                                              "[[lifters.profile]] points)",
-                                              m));
-  if (c.lifter_rows == 0)
-    throw std::invalid_argument("lifters.rows = 0: a life study wears lifter bars; this mill has none");
+  const std::vector<int> worn = life::worn_meshes(c);
+  // The bars of [lifters] (none where rows = 0: a mesh liner's bars are its own).
+  const std::size_t profiles = c.lifter_rows > 0 ? c.lifter_pattern.size() : 0;
+  if (profiles == 0 && worn.empty())
+    throw std::invalid_argument("lifters.rows = 0: a life study wears lifter bars, of [lifters] or of a [[walls.mesh]] "
+                                "of part \"lifters\" or \"shell\" that turns with the mill; this mill has neither");
+  if (profiles == 0 && (o.until_height_mm > 0 || o.calibrate_loss_mm > 0))
+    throw std::invalid_argument(std::string(o.until_height_mm > 0 ? "--until-height" : "--calibrate-loss") +
+                                ": lifters.rows = 0: the lifters' height is followed on the bars of [lifters], and "
+                                "this mill's bars are a mesh; give --hours, and calibrate by --calibrate-consumption "
+                                "or --calibrate-rate");
+  if (!worn.empty() && o.shell_wear_ratio != 1)
+    throw std::invalid_argument(fmt::format("--shell-wear-ratio {:g}: walls.mesh[{}] is worn as a liner of its own; "
+                                            "the ratio sets the shell plates' wear against the bars' of [lifters] only",
+                                            o.shell_wear_ratio, worn.front()));
   for (std::size_t k = 0; k < c.sizes.size() && o.impact_share > 0; ++k)
     if (!c.sizes[k].shape.empty())
       throw std::invalid_argument(fmt::format(
@@ -327,7 +347,8 @@ int cmd_life(const LifeOptions& o) {
                                 "--calibrate-consumption, --calibrate-loss or --calibrate-rate fix those)");
   const double h_new = [&] {
     double h = 0;
-    for (const LifterProfile& p : c.lifter_pattern) h = std::max(h, measure_profile(profile_outline(p)).height);
+    for (std::size_t k = 0; k < profiles; ++k)
+      h = std::max(h, measure_profile(profile_outline(c.lifter_pattern[k])).height);
     return h;
   }();
   if (o.until_height_mm > 0 && !(o.until_height_mm < h_new * 1000))
@@ -344,7 +365,7 @@ int cmd_life(const LifeOptions& o) {
   st.impact_coefficient = base.scene.wall_material.impact_wear_coefficient;
   st.density = base.scene.wall_material.density;
   st.mix.impact = st.impact_coefficient;
-  for (std::size_t k = 0; k < c.lifter_pattern.size(); ++k)
+  for (std::size_t k = 0; k < profiles; ++k)
     if (measure_profile(profile_outline(c.lifter_pattern[k])).height >
         measure_profile(profile_outline(c.lifter_pattern[st.tallest])).height)
       st.tallest = static_cast<int>(k);
@@ -355,7 +376,7 @@ int cmd_life(const LifeOptions& o) {
     // The whole state is read and checked before anything is written: a
     // damaged one is refused and the study left as it is.
     life::LifeState state = life::read_life_state(
-        out / "life.json", {c.lifter_pattern.size(), base.d.largest_ball_diameter});
+        out / "life.json", {profiles, base.d.largest_ball_diameter, worn});
     const std::string differs = life::request_difference(state.request, request);
     if (!differs.empty())
       throw std::invalid_argument("--out " + out.string() + " holds a life study of another case or options (" +
@@ -368,13 +389,14 @@ int cmd_life(const LifeOptions& o) {
       throw std::invalid_argument("--out " + out.string() + ": exists and holds no life study; choose another folder");
     if (o.force) {
       for (int i = 0; fs::exists(stage_dir(out, i), ec); ++i) fs::remove_all(stage_dir(out, i), ec);
-      for (const char* f : {"life.json", "life.csv", "life.png", "life.pvd"}) fs::remove(out / f, ec);
+      for (const char* f : {"life.json", "life.csv", "life.png", "life.pvd", "life_meshes.csv"}) fs::remove(out / f, ec);
       fs::remove_all(out / "cases", ec);
     }
     Stage s0;
     s0.diameter = c.diameter;
     s0.filling = c.filling;
-    for (const LifterProfile& p : c.lifter_pattern) s0.outlines.push_back(profile_outline(p));
+    for (std::size_t k = 0; k < profiles; ++k) s0.outlines.push_back(profile_outline(c.lifter_pattern[k]));
+    for (int k : worn) s0.meshes.push_back({k, ""});
     st.stages.push_back(s0);
     // The state before the first run, so that a study killed in stage 0
     // resumes.
@@ -386,6 +408,10 @@ int cmd_life(const LifeOptions& o) {
   if (ec) throw std::runtime_error("cannot create " + (out / "cases").string() + ": " + ec.message());
   const double length = c.length;
   const double V0 = base.d.mill_volume;
+  // How far a mesh liner's booked wear is spread (life/mesh_wear.h smooth_wear).
+  life::MeshSmoothing smoothing;
+  smoothing.across_m = o.mesh_smoothing_mm > 0 ? o.mesh_smoothing_mm * 1e-3 : 0.5 * base.d.largest_ball_diameter;
+  smoothing.along_m = o.mesh_smoothing_along_mm > 0 ? o.mesh_smoothing_along_mm * 1e-3 : 4 * smoothing.across_m;
 
   for (;;) {
     Stage& s = st.stages.back();
@@ -401,7 +427,7 @@ int cmd_life(const LifeOptions& o) {
         if (fs::exists(dir / "checkpoint.bin", ec) && fs::exists(dir / "case.toml", ec)) {
           ro.resume = dir.string();
         } else {
-          io::write_file_atomic(case_file, io::case_to_toml(stage_case(base, s)));
+          io::write_file_atomic(case_file, io::case_to_toml(stage_case(base, s, out)));
           ro.c.case_path = case_file.string();
           ro.out = dir.string();
           ro.force = true;
@@ -410,23 +436,27 @@ int cmd_life(const LifeOptions& o) {
         std::fflush(stdout);
         if (const int rc = cmd_run(ro); rc != 0) return rc;
       }
-      s.r = life::read_stage_result(dir, static_cast<int>(c.lifter_pattern.size()));
+      s.r = life::read_stage_result(dir, static_cast<int>(profiles), worn, st.density);
       s.ran = true;
     }
     mix_stages(st, o);
     calibrate(st, o, length);
     save(out, request, st, "");
     write_table(out, st, length);
+    if (!worn.empty())
+      life::write_mesh_table(out, c, st.stages, {st.factor, st.basis(), st.mix, st.density, smoothing});
     if (s.index == 0 && !o.quiet) print_new_liner(st);
     io::draw_or_warn(out / "life.png", [&] {
-      life::write_life_picture(out / "life.png", c.name, st.stages, {st.factor, st.relative(), length});
+      life::write_life_picture(out / "life.png", c.name,
+                               profiles == 0 && !worn.empty() ? life::stages_drawn(out, c, st.stages) : st.stages,
+                               {st.factor, st.relative(), length});
     });
 
     // Stop, or plan the next stage's wear (in hours at the case's wear
     // coefficient: the shapes depend on those alone).
     const int i = s.index;
     const double hours_now = s.case_hours / st.factor;
-    const double h_now = height_of(s, st.tallest) * 1000;
+    const double h_now = s.outlines.empty() ? 0.0 : height_of(s, st.tallest) * 1000;
     std::string stopped;
     double span = 0;
     if (o.hours > 0) {
@@ -515,10 +545,21 @@ int cmd_life(const LifeOptions& o) {
         s.se_height_mm.clear(), s.se_leading_deg.clear(), s.se_trailing_deg.clear();
     next.diameter = s.diameter + 2 * s.shell_depth_m;
     next.shell_wear_m = s.shell_wear_m + s.shell_depth_m;
+    // The mesh liners by their triangles' wear, written for the next stage.
+    try {
+      life::wear_meshes(out, c, s, next, st.mix, span, 0.5 * next.diameter, smoothing);
+    } catch (const std::invalid_argument& e) {
+      const std::string why = fmt::format("{}; the study stops at stage {} (life.csv holds stages 0 to {}); ask for "
+                                          "shorter stages (more --stages) or a wider --mesh-smoothing",
+                                          e.what(), i, i);
+      s.span_case_hours = 0;
+      save(out, request, st, why);
+      throw std::invalid_argument(why);
+    }
     // The same charge in the larger free volume.
     Stage probe = next;
     probe.filling = c.filling;
-    MillCase nc = stage_case(base, probe);
+    MillCase nc = stage_case(base, probe, out);
     try {
       const MillDerived nd = derive(nc);
       next.filling = c.filling * V0 / nd.mill_volume;
@@ -529,6 +570,11 @@ int cmd_life(const LifeOptions& o) {
       std::printf("life            stage %d -> %d: profile %zu worn %.4g mm2 (booked %.4g mm2, depth scale %.3f, "
                   "smoothed %dx), shell %.3f mm\n",
                   i, i + 1, k, s.removed_mm2[k], s.booked_mm2[k], s.scale[k], s.spread[k], s.shell_depth_m * 1000);
+    for (const life::StageMesh& m : s.meshes)
+      std::printf("life            stage %d -> %d: walls.mesh[%d] worn %.4g cm3 (booked %.4g cm3, depth scale %.3f, "
+                  "deepest %.3f mm): %s\n",
+                  i, i + 1, m.walls_mesh, m.removed_m3 * 1e6, m.booked_m3 * 1e6, m.scale, m.deepest_m * 1000,
+                  (out / next.meshes[&m - s.meshes.data()].file).string().c_str());
     st.stages.push_back(next);
     save(out, request, st, "");
   }

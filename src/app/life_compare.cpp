@@ -78,6 +78,11 @@ StudyPath read_study_path(const fs::path& folder, const std::string& label, int 
   }
   int profiles = 0;
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    if (t.rows[r][c_profile].empty())
+      throw std::invalid_argument(fmt::format(
+          "{}: the study's bars are a mesh (its life_meshes.csv follows them); life-compare sets studies of "
+          "[lifters] bars side by side",
+          file.string()));
     const double p = t.number(r, c_profile);
     profiles = std::max(profiles, static_cast<int>(p) + 1);
     if (static_cast<int>(p) != profile) continue;

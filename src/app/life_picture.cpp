@@ -227,7 +227,8 @@ std::vector<io::LinePlot> life_plots(const std::string& name, const std::vector<
   io::LinePlot rate = over_hours("reline criterion: wear rate",
                                  axis.relative ? "mm per 1000 h (relative)" : "mm per 1000 operating hours");
   rate.y_cover_lo = 0;
-  for (int k = 0; k < kinds; ++k)
+  // (the bars' wear stations: none where the bars are a mesh)
+  for (int k = 0; k < kinds && k < static_cast<int>(ran.front()->r.station_m3_s.size()); ++k)
     rate.series.push_back(series(named("lifter top", k), profile_colour(k, 0), [&axis, k](const Stage& s) {
       const BarWearRates r{s.r.station_m3_s[k], axis.length};
       return top_wear_m_per_h(s.outlines[k], 0.5 * s.diameter, r) * 1e6 * axis.factor;

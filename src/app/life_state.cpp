@@ -57,6 +57,18 @@ json stage_json(const Stage& s) {
                    {"station_wear_m3_per_s", r.station_m3_s}};
     j["result"].update(parts_json(r.parts));
     if (!r.halves.empty()) j["result"]["halves"] = {parts_json(r.halves[0]), parts_json(r.halves[1])};
+    if (!s.meshes.empty())
+      j["result"]["mesh_sliding_wear_m3_per_s"] = r.mesh_sliding_m3_s, j["result"]["mesh_strike_W"] = r.mesh_strike_W;
+  }
+  if (!s.meshes.empty()) {
+    j["meshes"] = json::array();
+    for (const StageMesh& m : s.meshes) {
+      json x = {{"walls_mesh", m.walls_mesh}, {"file", m.file}};
+      if (s.span_case_hours > 0)
+        x["wear"] = {{"booked_m3", m.booked_m3}, {"removed_m3", m.removed_m3}, {"scale", m.scale},
+                     {"deepest_m", m.deepest_m}};
+      j["meshes"].push_back(x);
+    }
   }
   if (s.span_case_hours > 0)
     j["wear"] = {{"span_case_hours", s.span_case_hours}, {"shell_depth_m", s.shell_depth_m},
@@ -108,9 +120,17 @@ WearParts parts_of(const JsonAt& r, std::size_t profiles) {
   return x;
 }
 
-StageResult result_of(const JsonAt& r, std::size_t profiles) {
+StageResult result_of(const JsonAt& r, std::size_t profiles, std::size_t meshes) {
   StageResult x;
   r.object();
+  if (meshes > 0) {
+    x.mesh_sliding_m3_s = r["mesh_sliding_wear_m3_per_s"].numbers(meshes, "worn meshes");
+    x.mesh_strike_W = r["mesh_strike_W"].numbers(meshes, "worn meshes");
+    for (std::size_t k = 0; k < meshes; ++k) {
+      if (x.mesh_sliding_m3_s[k] < 0) r["mesh_sliding_wear_m3_per_s"][k].fail("below 0");
+      if (x.mesh_strike_W[k] < 0) r["mesh_strike_W"][k].fail("below 0");
+    }
+  }
   x.power_W = r["power_W"].number();
   x.power_sem_W = r["power_sem_W"].number_or_nan();
   x.toe_deg = r["toe_deg"].number_or_nan();
@@ -189,8 +209,29 @@ Stage stage_of(const JsonAt& j, int i, const StateShape& shape, const Stage* bef
   for (std::size_t k = 0; k < shape.profiles; ++k)
     s.outlines.push_back(outline_of(profiles[k], 0.5 * s.diameter, shape.largest_ball_m));
   s.ran = j["ran"].boolean();
-  if (s.ran) s.r = result_of(j["result"], shape.profiles);
+  if (s.ran) s.r = result_of(j["result"], shape.profiles, shape.meshes.size());
   if (j.has("wear")) wear_of(j["wear"], shape.profiles, s);
+  if (!shape.meshes.empty() || j.has("meshes")) {
+    const JsonAt m = j["meshes"];
+    m.size(shape.meshes.size(), "worn meshes of the case ([[walls.mesh]] of part \"lifters\" or \"shell\" that turn)");
+    for (std::size_t k = 0; k < shape.meshes.size(); ++k) {
+      StageMesh x;
+      x.walls_mesh = static_cast<int>(m[k]["walls_mesh"].whole());
+      if (x.walls_mesh != shape.meshes[k])
+        m[k]["walls_mesh"].fail(fmt::format("{} where the case's worn mesh is walls.mesh[{}]", x.walls_mesh, shape.meshes[k]));
+      x.file = m[k]["file"].text();
+      if (i == 0 && !x.file.empty()) m[k]["file"].fail("stage 0 runs on the case's own mesh (\"\")");
+      if (i > 0 && x.file.empty()) m[k]["file"].fail("empty: a worn stage runs on the mesh its study wrote");
+      if (m[k].has("wear")) {
+        const JsonAt w = m[k]["wear"];
+        x.booked_m3 = w["booked_m3"].number_at_least(0);
+        x.removed_m3 = w["removed_m3"].number_at_least(0);
+        x.scale = w["scale"].number_at_least(0);
+        x.deepest_m = w["deepest_m"].number_at_least(0);
+      }
+      s.meshes.push_back(x);
+    }
+  }
   return s;
 }
 
@@ -277,7 +318,38 @@ void save_life_state(const fs::path& out, const json& request, const std::vector
   io::write_file_atomic(out / "life.json", j.dump(1) + "\n");
 }
 
-StageResult read_stage_result(const fs::path& dir, int profiles) {
+TriangleWear read_triangle_wear(const fs::path& wear_csv, int mesh, std::size_t triangles) {
+  const io::CsvTable t = io::read_csv_strict(wear_csv, "the stage's run wrote no liner wear");
+  const int c_part = t.column("part"), c_row = t.column("row"), c_bin = t.column("face_or_bin"),
+            c_area = t.column("area_m2"), c_sl = t.column("sliding_wear_mm_per_1000h"), c_st = t.column("strike_W");
+  TriangleWear w;
+  w.sliding_m3_s.assign(triangles, NAN);
+  w.strike_W.assign(triangles, NAN);
+  std::size_t found = 0;
+  for (std::size_t k = 0; k < t.rows.size(); ++k) {
+    if (t.rows[k][c_part] != "mesh" || t.number(k, c_row) != mesh) continue;
+    const double b = t.number(k, c_bin), area = t.number(k, c_area), sl = t.number(k, c_sl), st = t.number(k, c_st);
+    if (!(b >= 0 && b < static_cast<double>(triangles) && b == std::floor(b)))
+      throw std::invalid_argument(fmt::format("{}: triangle {} of mesh {} is not one of its {} triangles", t.where(k),
+                                              t.rows[k][c_bin], mesh, triangles));
+    const std::size_t i = static_cast<std::size_t>(b);
+    if (!std::isnan(w.strike_W[i]))
+      throw std::invalid_argument(fmt::format("{}: triangle {} of mesh {} booked twice", t.where(k), i, mesh));
+    for (const auto& [v, col] : {std::pair{area, c_area}, std::pair{sl, c_sl}, std::pair{st, c_st}})
+      if (!(std::isfinite(v) && v >= 0))
+        throw std::invalid_argument(t.where(k) + ": " + t.header[col] + " " + t.rows[k][col] +
+                                    " is not finite and >= 0; the file is damaged");
+    w.sliding_m3_s[i] = sl * area / 3.6e9;  // mm per 1000 h over the area: m³/s
+    w.strike_W[i] = st;
+    ++found;
+  }
+  if (found != triangles)
+    throw std::invalid_argument(fmt::format("{}: mesh {} has {} triangle rows where its mesh has {} triangles",
+                                            wear_csv.string(), mesh, found, triangles));
+  return w;
+}
+
+StageResult read_stage_result(const fs::path& dir, int profiles, const std::vector<int>& meshes, double density) {
   StageResult r;
   const fs::path sj = dir / "summary.json";
   const json doc = io::read_json_file(sj, "the stage's run wrote no summary");
@@ -330,7 +402,10 @@ StageResult read_stage_result(const fs::path& dir, int profiles) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(e.what() + not_run);
   }
-  const io::CsvTable t = io::read_csv_strict(dir / "lifter_wear.csv", "the stage's run wrote no lifter wear");
+  if (profiles == 0) r.halves.clear();  // a liner whose bars are meshes: no lifter stations
+  const io::CsvTable t = profiles == 0 ? io::CsvTable{}
+                                       : io::read_csv_strict(dir / "lifter_wear.csv", "the stage's run wrote no lifter wear");
+  if (profiles > 0) {
   const int c_p = t.column("profile"), c_s = t.column("station"), c_w = t.column("wear_m3_per_s");
   const bool split = t.has("sliding_wear_m3_per_s");  // a run before impact wear has sliding wear alone
   const int c_sl = split ? t.column("sliding_wear_m3_per_s") : c_w, c_st = split ? t.column("strike_W") : -1;
@@ -365,6 +440,32 @@ StageResult read_stage_result(const fs::path& dir, int profiles) {
     for (std::size_t h = 0; h < r.halves.size(); ++h) {
       r.halves[h].station_sliding_m3_s[pi][si] = rate(c_h[2 * h]);
       r.halves[h].station_strike_W[pi][si] = rate(c_h[2 * h + 1]);
+    }
+  }
+  }
+  // The worn meshes' triangles: their sums, part of the liner's.
+  if (!meshes.empty()) {
+    const io::CsvTable t = io::read_csv_strict(dir / "wear.csv", "the stage's run wrote no liner wear");
+    const int c_part = t.column("part"), c_row = t.column("row"), c_area = t.column("area_m2"),
+              c_sl = t.column("sliding_wear_mm_per_1000h"), c_st = t.column("strike_W"), c_kg = t.column("wear_kg_per_h");
+    r.mesh_sliding_m3_s.assign(meshes.size(), 0.0);
+    r.mesh_strike_W.assign(meshes.size(), 0.0);
+    for (std::size_t k = 0; k < t.rows.size(); ++k) {
+      if (t.rows[k][c_part] != "mesh") continue;
+      const auto it = std::find(meshes.begin(), meshes.end(), static_cast<int>(t.number(k, c_row)));
+      if (it == meshes.end()) continue;
+      const double area = t.number(k, c_area), sl = t.number(k, c_sl), st = t.number(k, c_st), kg = t.number(k, c_kg);
+      if (!(std::isfinite(area) && std::isfinite(sl) && std::isfinite(st) && std::isfinite(kg) && area >= 0 &&
+            sl >= 0 && st >= 0 && kg >= 0))
+        throw std::invalid_argument(t.where(k) + ": a mesh triangle's wear that is not finite and >= 0; the file is damaged");
+      const std::size_t m = static_cast<std::size_t>(it - meshes.begin());
+      r.mesh_sliding_m3_s[m] += sl * area / 3.6e9;
+      r.mesh_strike_W[m] += st;
+      r.liner_kg_h += kg;
+    }
+    for (std::size_t m = 0; m < meshes.size(); ++m) {
+      r.parts.liner_sliding_kg_h += r.mesh_sliding_m3_s[m] * density * 3600.0;
+      r.parts.liner_strike_W += r.mesh_strike_W[m];
     }
   }
   return r;

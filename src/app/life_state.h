@@ -41,6 +41,10 @@ struct StageResult {
   // The parts over each half of the run's averaging window (none where the
   // run has no halves): how far the stage's wear can be trusted.
   std::vector<WearParts> halves;
+  // Per worn mesh (Stage::meshes), what its triangles booked: sliding wear
+  // at the case's coefficient (m³/s) and strike energy (J/s); part of
+  // `parts`' liner figures.
+  std::vector<double> mesh_sliding_m3_s, mesh_strike_W;
 };
 
 // How a study mixes the two wears: volume = sliding · (Archard's volume at
@@ -79,11 +83,23 @@ double impact_share(const StageResult& r, const WearMix& mix, double density);
 // The stage's wear figures at that mix, from their parts.
 void apply_mix(StageResult& r, const WearMix& mix, double density);
 
+// A worn mesh liner at a stage: a [[walls.mesh]] of part "lifters" or
+// "shell" that turns with the mill.
+struct StageMesh {
+  int walls_mesh = 0;  // its index in the case's [[walls.mesh]]
+  std::string file;    // the STL the stage ran on, relative to the study's folder; "": the case's own
+  // The wear carried to the next stage (none for the last): the volume its
+  // triangles booked, the volume the move removed, the depth scale that
+  // makes them equal, the largest vertex move.
+  double booked_m3 = 0, removed_m3 = 0, scale = 1, deepest_m = 0;
+};
+
 struct Stage {
   int index = 0;
   double case_hours = 0;  // at its start, at the case's wear coefficient
   double diameter = 0, filling = 0, shell_wear_m = 0;  // shell_wear_m: since the new liner
   std::vector<std::vector<Vec2>> outlines;              // per profile, the bar's frame
+  std::vector<StageMesh> meshes;                        // the worn mesh liners
   bool ran = false;
   StageResult r;
   // The wear carried to the next stage (none for the last).
@@ -111,6 +127,7 @@ std::vector<StageSe> cumulative_se(const std::vector<Stage>& stages);
 struct StateShape {
   std::size_t profiles = 0;
   double largest_ball_m = 0;
+  std::vector<int> meshes;  // the worn meshes' indices in [[walls.mesh]]
 };
 
 struct LifeState {
@@ -142,7 +159,22 @@ struct Calibration {
 void save_life_state(const std::filesystem::path& out, const nlohmann::json& request, const std::vector<Stage>& stages,
                      const Calibration& calibration, const std::string& stopped);
 
-// A stage's run folder: its summary.json and lifter_wear.csv, checked.
-StageResult read_stage_result(const std::filesystem::path& dir, int profiles);
+// A stage's run folder: its summary.json and lifter_wear.csv, checked; and
+// where the study wears meshes (their [[walls.mesh]] indices), what their
+// triangles booked in its wear.csv, added to the liner's parts.
+// (density: the liner's, kg/m³, for the meshes' sliding wear in kg/h).
+StageResult read_stage_result(const std::filesystem::path& dir, int profiles, const std::vector<int>& meshes = {},
+                              double density = 0);
+
+// What each triangle of mesh `mesh` ([[walls.mesh]] index) booked in a
+// run's wear.csv: sliding wear at the case's coefficient (m³/s) and strike
+// energy (J/s), in the order of the mesh's triangles in the run (a periodic
+// slice's seam caps left out). std::invalid_argument naming the file and
+// the row where a row is damaged, or where the mesh's triangles are not
+// `triangles` in number.
+struct TriangleWear {
+  std::vector<double> sliding_m3_s, strike_W;
+};
+TriangleWear read_triangle_wear(const std::filesystem::path& wear_csv, int mesh, std::size_t triangles);
 
 }  // namespace mc::app::life

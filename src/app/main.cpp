@@ -165,6 +165,15 @@ int main(int argc, char** argv) {
                    "shell wears R times what the bars' coefficients give it")
       ->check(mc::app::cli::between(0.01, 100))
       ->type_name("R");
+  life->add_option("--mesh-smoothing", lo.mesh_smoothing_mm,
+                   "a mesh liner's booked wear averaged over the surface around each triangle, a Gaussian of MM "
+                   "standard deviation across the mill's axis (default: the largest ball's radius)")
+      ->check(mc::app::cli::between(0.1, 1000))
+      ->type_name("MM");
+  life->add_option("--mesh-smoothing-along", lo.mesh_smoothing_along_mm,
+                   "and of MM along the axis (default: four times --mesh-smoothing)")
+      ->check(mc::app::cli::between(0.1, 10000))
+      ->type_name("MM");
   life->add_flag("--force", lo.force, "start the study again in an --out that holds one");
   life->add_flag("--quiet", lo.quiet, "no progress lines from the stages' runs");
 
@@ -201,6 +210,11 @@ int main(int argc, char** argv) {
                     "write the case's lifter bars, cut at the shell, as a binary STL (metres, mill frame): a start "
                     "for CAD, or a [[walls.mesh]] file")
       ->type_name("FILE");
+  check->add_option("--lifter-mesh", co.lifter_mesh_mm,
+                    "with --write-lifters: cut each face into triangles at most MM across (default: two per face), "
+                    "a mesh fine enough for a life study to round its edges")
+      ->check(mc::app::cli::between(0.5, 1000))
+      ->type_name("MM");
 
   mc::app::BenchOptions bo;
   auto* bench = app.add_subcommand("bench", "time the solver on a turning charge; prints one JSON line");

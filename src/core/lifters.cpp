@@ -276,18 +276,44 @@ std::vector<std::vector<Vec2>> lifter_rows(double shell_radius, int rows,
   return out;
 }
 
-std::vector<Triangle> lifter_triangles(const std::vector<std::vector<Vec2>>& bars, double length) {
+std::vector<Triangle> lifter_triangles(const std::vector<std::vector<Vec2>>& bars, double length, double max_edge) {
   std::vector<Triangle> out;
+  const int nz = max_edge > 0 ? std::max(1, static_cast<int>(std::ceil(length / max_edge - 1e-9))) : 1;
   for (const auto& poly : bars) {
     const std::size_t n = poly.size();
-    auto at = [&](std::size_t k, double z) { return Vec3{poly[k % n].x, poly[k % n].y, z}; };
-    for (std::size_t k = 0; k < n; ++k) {  // counter-clockwise polygon: (dy, -dx) points out
-      out.push_back({{at(k, 0), at(k + 1, 0), at(k + 1, length)}});
-      out.push_back({{at(k, 0), at(k + 1, length), at(k, length)}});
+    // The outline with each edge cut into pieces of at most max_edge.
+    std::vector<Vec2> ring;
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vec2 a = poly[k], b = poly[(k + 1) % n];
+      const double len = std::hypot(b.x - a.x, b.y - a.y);
+      const int na = max_edge > 0 ? std::max(1, static_cast<int>(std::ceil(len / max_edge - 1e-9))) : 1;
+      for (int i = 0; i < na; ++i) {
+        const double f = static_cast<double>(i) / na;
+        ring.push_back({a.x + f * (b.x - a.x), a.y + f * (b.y - a.y)});
+      }
     }
-    for (std::size_t k = 1; k + 1 < n; ++k) {
-      out.push_back({{at(0, 0), at(k + 1, 0), at(k, 0)}});                 // z = 0, facing -z
-      out.push_back({{at(0, length), at(k, length), at(k + 1, length)}});  // z = length, facing +z
+    const std::size_t m = ring.size();
+    auto at = [&](std::size_t k, int j) {
+      return Vec3{ring[k % m].x, ring[k % m].y, j == nz ? length : length * j / nz};
+    };
+    for (std::size_t k = 0; k < m; ++k)  // counter-clockwise polygon: (dy, -dx) points out
+      for (int j = 0; j < nz; ++j) {
+        out.push_back({{at(k, j), at(k + 1, j), at(k + 1, j + 1)}});
+        out.push_back({{at(k, j), at(k + 1, j + 1), at(k, j + 1)}});
+      }
+    if (m == n) {  // the ends as fans from the first vertex
+      for (std::size_t k = 1; k + 1 < n; ++k) {
+        out.push_back({{at(0, 0), at(k + 1, 0), at(k, 0)}});     // z = 0, facing -z
+        out.push_back({{at(0, nz), at(k, nz), at(k + 1, nz)}});  // z = length, facing +z
+      }
+    } else {  // fans from the centroid, through every point of the cut edges
+      Vec2 c{0, 0};
+      for (const Vec2& v : poly) c = {c.x + v.x / n, c.y + v.y / n};
+      const Vec3 c0{c.x, c.y, 0}, c1{c.x, c.y, length};
+      for (std::size_t k = 0; k < m; ++k) {
+        out.push_back({{c0, at(k + 1, 0), at(k, 0)}});
+        out.push_back({{c1, at(k, nz), at(k + 1, nz)}});
+      }
     }
   }
   return out;

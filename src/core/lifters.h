@@ -89,8 +89,12 @@ std::vector<std::vector<Vec2>> lifter_rows(double shell_radius, int rows,
 // The bars of lifter_rows as closed triangle meshes from z = 0 to `length`:
 // each bar's faces (its polygon's edges extruded) and its two end caps, every
 // triangle facing out of the bar. What a CAD tool would export for the same
-// liner (an STL of the parametric lifters).
-std::vector<Triangle> lifter_triangles(const std::vector<std::vector<Vec2>>& bars, double length);
+// liner (an STL of the parametric lifters). With max_edge > 0 (m), each
+// face is cut into rows and columns of at most that size (the ends fanned
+// from the bar's centroid through every point of its cut outline): a mesh
+// fine enough for its wear to round a bar's edges (app/life_mesh.h).
+std::vector<Triangle> lifter_triangles(const std::vector<std::vector<Vec2>>& bars, double length,
+                                       double max_edge = 0);
 
 // The bars cut where they enter the shell of radius R (the part behind the
 // shell dropped; a chord closes each): the cross-sections a CAD model of

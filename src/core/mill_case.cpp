@@ -361,6 +361,29 @@ MillDerived derive(const MillCase& c) {
   return d;
 }
 
+std::vector<Triangle> placed_mesh_triangles(const MeshSpec& spec) {
+  const double th = spec.angle_deg * kPi / 180.0, ct = std::cos(th), st = std::sin(th);
+  std::vector<Triangle> placed;
+  for (const Triangle& t0 : spec.triangles) {
+    Triangle t = t0;
+    if (spec.flip) std::swap(t.v[1], t.v[2]);
+    for (Vec3& v : t.v) v = Vec3{ct * v.x - st * v.y, st * v.x + ct * v.y, v.z} + spec.offset;
+    placed.push_back(t);
+  }
+  return placed;
+}
+
+bool on_periodic_seam(const Triangle& t, const MillCase& c) {
+  if (!c.periodic) return false;
+  const double z_tol = 1e-6 * std::max(1.0, c.length);
+  bool low = true, high = true;
+  for (const Vec3& v : t.v) {
+    low = low && std::fabs(v.z) <= z_tol;
+    high = high && std::fabs(v.z - c.length) <= z_tol;
+  }
+  return low || high;
+}
+
 std::vector<WallMesh> place_meshes(const MillCase& c) {
   std::vector<WallMesh> out;
   const int nm = static_cast<int>(c.materials.size());
@@ -388,27 +411,10 @@ std::vector<WallMesh> place_meshes(const MillCase& c) {
     if (mi < 0) fail(key + ".material", "unknown material \"" + mat + "\"");
     m.material = c.materials[mi];
     m.interactions = interactions_with(mat);
-    const double th = spec.angle_deg * kPi / 180.0, ct = std::cos(th), st = std::sin(th);
-    const double z_tol = 1e-6 * std::max(1.0, c.length);
-    std::vector<Triangle> placed;
-    for (const Triangle& t0 : spec.triangles) {
-      Triangle t = t0;
-      if (spec.flip) std::swap(t.v[1], t.v[2]);
-      for (Vec3& v : t.v) v = Vec3{ct * v.x - st * v.y, st * v.x + ct * v.y, v.z} + spec.offset;
-      placed.push_back(t);
-    }
+    const std::vector<Triangle> placed = placed_mesh_triangles(spec);
     m.volume = closed_mesh_volume(placed);
-    for (const Triangle& t : placed) {
-      if (c.periodic) {  // caps on the seams are inside the repeating slice
-        bool low = true, high = true;
-        for (const Vec3& v : t.v) {
-          low = low && std::fabs(v.z) <= z_tol;
-          high = high && std::fabs(v.z - c.length) <= z_tol;
-        }
-        if (low || high) continue;
-      }
-      m.triangles.push_back(t);
-    }
+    for (const Triangle& t : placed)
+      if (!on_periodic_seam(t, c)) m.triangles.push_back(t);
     out.push_back(std::move(m));
   }
   // The ends (mill.ends = "cones", [end_lifters]): cone heads with their trunnion discs, and end

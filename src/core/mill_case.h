@@ -169,6 +169,15 @@ Scene build_scene(const MillCase& c, const MillDerived& d);
 // ("walls.mesh[0].material: ...") or the file and the triangle.
 std::vector<WallMesh> place_meshes(const MillCase& c);
 
+// A [[walls.mesh]]'s triangles placed in the mill frame (flipped, turned
+// about the axis, offset), every one of them in the file's order.
+std::vector<Triangle> placed_mesh_triangles(const MeshSpec& spec);
+
+// Whether a placed triangle lies on a periodic slice's seam (all its
+// corners at z = 0 or at z = length): place_meshes drops those caps, which
+// are inside the repeating slice.
+bool on_periodic_seam(const Triangle& t, const MillCase& c);
+
 // The index of a material name in c.materials, or −1.
 int material_index(const MillCase& c, const std::string& name);
 

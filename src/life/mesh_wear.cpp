@@ -87,6 +87,83 @@ WeldedMesh weld(const std::vector<Triangle>& triangles) {
   return w;
 }
 
+std::vector<std::vector<int>> connected_parts(const std::vector<Triangle>& triangles) {
+  const WeldedMesh w = weld(triangles);
+  std::vector<int> up(w.points.size());
+  for (std::size_t i = 0; i < up.size(); ++i) up[i] = static_cast<int>(i);
+  auto root = [&](int i) {
+    while (up[i] != i) i = up[i] = up[up[i]];
+    return i;
+  };
+  for (const auto& c : w.corners)
+    for (int k = 1; k < 3; ++k) up[root(c[k])] = root(c[0]);
+  std::vector<std::vector<int>> parts;
+  std::map<int, std::size_t> part_of;  // root to part
+  for (std::size_t t = 0; t < w.corners.size(); ++t) {
+    auto [it, fresh] = part_of.emplace(root(w.corners[t][0]), parts.size());
+    if (fresh) parts.emplace_back();
+    parts[it->second].push_back(static_cast<int>(t));
+  }
+  return parts;
+}
+
+std::vector<double> smooth_wear(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,
+                                double across, double along) {
+  const std::size_t nt = triangles.size();
+  if (!(across > 0) || nt == 0) return volume_m3;
+  if (!(along > 0)) along = across;
+  std::vector<int> part(nt, 0);
+  {
+    const std::vector<std::vector<int>> parts = connected_parts(triangles);
+    for (std::size_t p = 0; p < parts.size(); ++p)
+      for (int t : parts[p]) part[t] = static_cast<int>(p);
+  }
+  std::vector<Vec3> centre(nt), unit(nt);
+  std::vector<double> area(nt);
+  for (std::size_t t = 0; t < nt; ++t) {
+    const auto& v = triangles[t].v;
+    centre[t] = (v[0] + v[1] + v[2]) * (1.0 / 3.0);
+    const Vec3 av = area_vector(v[0], v[1], v[2]);
+    area[t] = 0.5 * av.norm();
+    unit[t] = area[t] > 0 ? av * (0.5 / area[t]) : Vec3{};
+  }
+  // Cells of three standard deviations: the neighbours within them.
+  const double cx = 3 * across, cz = 3 * along;
+  using Cell = std::tuple<long, long, long>;
+  auto cell_of = [&](const Vec3& p) {
+    return Cell{static_cast<long>(std::floor(p.x / cx)), static_cast<long>(std::floor(p.y / cx)),
+                static_cast<long>(std::floor(p.z / cz))};
+  };
+  std::map<Cell, std::vector<int>> cells;
+  for (std::size_t t = 0; t < nt; ++t) cells[cell_of(centre[t])].push_back(static_cast<int>(t));
+  const double cos_limit = std::cos(30.0 * 3.14159265358979323846 / 180);
+  std::vector<double> depth(nt, 0.0);
+  double total = 0, smoothed = 0;
+  for (std::size_t t = 0; t < nt; ++t) {
+    total += volume_m3[t];
+    const auto [ix, iy, iz] = cell_of(centre[t]);
+    double v = 0, a = 0;
+    for (long dx = -1; dx <= 1; ++dx)
+      for (long dy = -1; dy <= 1; ++dy)
+        for (long dz = -1; dz <= 1; ++dz) {
+          const auto it = cells.find(Cell{ix + dx, iy + dy, iz + dz});
+          if (it == cells.end()) continue;
+          for (int u : it->second) {
+            if (part[u] != part[t] || unit[u].dot(unit[t]) < cos_limit) continue;
+            const Vec3 d = centre[u] - centre[t];
+            const double w = std::exp(-0.5 * ((d.x * d.x + d.y * d.y) / (across * across) + d.z * d.z / (along * along)));
+            v += w * volume_m3[u], a += w * area[u];
+          }
+        }
+    depth[t] = a > 0 ? v / a : 0.0;
+    smoothed += depth[t] * area[t];
+  }
+  std::vector<double> out(nt);
+  const double keep = smoothed > 0 ? total / smoothed : 0.0;  // the volumes' sum kept
+  for (std::size_t t = 0; t < nt; ++t) out[t] = depth[t] * area[t] * keep;
+  return out;
+}
+
 double swept_volume(const std::vector<Triangle>& before, const std::vector<Triangle>& after) {
   // The closed solid between each triangle and its moved self: the old
   // triangle (facing out of the solid, as it faced the charge), the new

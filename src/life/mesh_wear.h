@@ -50,6 +50,24 @@ WeldedMesh weld(const std::vector<Triangle>& triangles);
 // triangles' normals. For a closed mesh it is the enclosed volume lost.
 double swept_volume(const std::vector<Triangle>& before, const std::vector<Triangle>& after);
 
+// The connected parts of a mesh (triangles that share a welded vertex):
+// each part's triangles, ascending, the parts in the order of their first
+// triangle. A mesh of lifter bars has a part per bar.
+std::vector<std::vector<int>> connected_parts(const std::vector<Triangle>& triangles);
+
+// The booked volumes averaged over the surface around each triangle, as a
+// depth: each triangle's depth becomes the sum of the volumes over the sum
+// of the areas of the triangles of its own part whose normals lie within
+// 30° of its own, weighed by a Gaussian of the distance between their
+// centroids, `across` (m, its standard deviation across the mill's axis)
+// and `along` (m, along it). A short run books its wear on a few of a fine
+// mesh's triangles; this spreads it over the surface that wears alike
+// (wear varies slowly along a mill, fast round a bar's edge), keeping
+// creases sharp. The volumes returned sum to those given. across <= 0:
+// the volumes unchanged.
+std::vector<double> smooth_wear(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,
+                                double across, double along);
+
 // The mesh worn by `volume_m3` per triangle (>= 0, as many as triangles),
 // with `smoothing` passes over the depths. Throws std::invalid_argument
 // naming `name` and the triangle (from 1) where the wear would turn a

@@ -1,0 +1,200 @@
+// A life study's mesh liners (life_mesh.h).
+#include "app/life_mesh.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+#include "io/atomic_file.h"
+#include "io/stl.h"
+#include "life/mesh_section.h"
+#include "life/mesh_wear.h"
+
+namespace mc::app::life {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The file name of worn mesh `walls_mesh` in a stage folder.
+std::string mesh_file_name(const MillCase& c, int walls_mesh) {
+  return worn_meshes(c).size() == 1 ? std::string("liner.stl") : fmt::format("liner-{}.stl", walls_mesh);
+}
+
+}  // namespace
+
+std::vector<int> worn_meshes(const MillCase& c) {
+  std::vector<int> out;
+  const int liner = material_index(c, c.liner);
+  for (std::size_t k = 0; k < c.meshes.size(); ++k) {
+    const MeshSpec& m = c.meshes[k];
+    if (!m.turning || m.part == MeshPart::ends) continue;
+    const int mi = m.material.empty() ? liner : material_index(c, m.material);
+    if (mi >= 0 && liner >= 0 && mi != liner) {
+      const Material& a = c.materials[mi];
+      const Material& b = c.materials[liner];
+      if (a.wear_coefficient != b.wear_coefficient || a.impact_wear_coefficient != b.impact_wear_coefficient ||
+          a.density != b.density || a.impact_wear_threshold_speed != b.impact_wear_threshold_speed)
+        throw std::invalid_argument(fmt::format(
+            "walls.mesh[{}].material = \"{}\": a life study wears its meshes at the liner's (\"{}\") wear "
+            "coefficients and density, and \"{}\" has others; give the mesh the liner's material, or make it part "
+            "= \"ends\" (not worn)",
+            k, m.material, c.liner, m.material));
+    }
+    out.push_back(static_cast<int>(k));
+  }
+  return out;
+}
+
+std::vector<Triangle> stage_mesh_triangles(const fs::path& out, const MillCase& c, const StageMesh& m) {
+  if (m.file.empty()) return placed_mesh_triangles(c.meshes.at(m.walls_mesh));
+  return io::read_stl(out / m.file).triangles;
+}
+
+void put_stage_meshes(MillCase& c, const fs::path& out, const Stage& s) {
+  for (const StageMesh& m : s.meshes) {
+    if (m.file.empty()) continue;
+    MeshSpec& spec = c.meshes.at(m.walls_mesh);
+    const fs::path p = fs::absolute(out / m.file).lexically_normal();
+    spec.file = spec.path = p.string();
+    spec.units = "m";
+    spec.offset = Vec3{};
+    spec.angle_deg = 0;
+    spec.flip = false;
+    spec.triangles = io::read_stl(p).triangles;
+  }
+}
+
+void wear_meshes(const fs::path& out, const MillCase& c, Stage& s, Stage& next, const WearMix& mix,
+                 double span_case_hours, double next_R, const MeshSmoothing& smoothing) {
+  next.meshes.clear();
+  const fs::path run = out / fmt::format("stage-{:02d}", s.index);
+  for (StageMesh& m : s.meshes) {
+    const std::vector<Triangle> placed = stage_mesh_triangles(out, c, m);
+    std::size_t kept = 0;
+    for (const Triangle& t : placed) kept += on_periodic_seam(t, c) ? 0 : 1;
+    const TriangleWear tw = read_triangle_wear(run / "wear.csv", m.walls_mesh, kept);
+    std::vector<double> volume(placed.size(), 0.0);
+    for (std::size_t t = 0, i = 0; t < placed.size(); ++t)
+      if (!on_periodic_seam(placed[t], c)) {
+        volume[t] = (mix.sliding * tw.sliding_m3_s[i] + mix.impact * tw.strike_W[i]) * span_case_hours * 3600.0;
+        ++i;
+      }
+    const double z_tol = 1e-6 * std::max(1.0, c.length);
+    const mc::life::MeshBounds bounds{next_R, -z_tol, c.length + z_tol};
+    volume = mc::life::smooth_wear(placed, volume, smoothing.across_m, smoothing.along_m);
+    const mc::life::MeshWear w = mc::life::wear_mesh(
+        placed, volume, bounds, 0, fmt::format("walls.mesh[{}] worn from stage {} to {}", m.walls_mesh, s.index, next.index));
+    m.booked_m3 = w.booked_m3;
+    m.removed_m3 = w.removed_m3;
+    m.scale = w.scale;
+    m.deepest_m = w.deepest_m;
+    StageMesh n;
+    n.walls_mesh = m.walls_mesh;
+    n.file = fmt::format("stage-{:02d}/{}", next.index, mesh_file_name(c, m.walls_mesh));
+    std::error_code ec;
+    fs::create_directories((out / n.file).parent_path(), ec);
+    if (ec) throw std::runtime_error("cannot create " + (out / n.file).parent_path().string() + ": " + ec.message());
+    io::write_file_atomic(out / n.file, io::stl_binary(w.triangles, fmt::format("millcharge life: walls.mesh[{}] "
+                                                                                "worn to stage {}, m",
+                                                                                m.walls_mesh, next.index)));
+    next.meshes.push_back(n);
+  }
+}
+
+namespace {
+
+// Mean and standard error (standard deviation over √n) of a list; NaN
+// where it is empty (the error where it has one value).
+std::pair<double, double> mean_se(const std::vector<double>& v) {
+  if (v.empty()) return {NAN, NAN};
+  const double n = static_cast<double>(v.size()), mean = std::accumulate(v.begin(), v.end(), 0.0) / n;
+  double ss = 0;
+  for (double x : v) ss += (x - mean) * (x - mean);
+  return {mean, v.size() > 1 ? std::sqrt(ss / (n - 1) / n) : NAN};
+}
+
+std::string opt(double v, int digits) { return std::isfinite(v) ? fmt::format("{:.{}f}", v, digits) : std::string(); }
+
+}  // namespace
+
+namespace {
+
+// Each worn mesh's bars' frames, from the new mesh: their centres' angles.
+std::vector<std::vector<double>> bar_angles(const fs::path& out, const MillCase& c, const std::vector<Stage>& stages) {
+  std::vector<std::vector<double>> angles;
+  for (const StageMesh& m : stages.front().meshes) {
+    const std::vector<Triangle> tris = stage_mesh_triangles(out, c, m);
+    angles.emplace_back();
+    for (const std::vector<int>& part : mc::life::connected_parts(tris))
+      angles.back().push_back(mc::life::part_angle(tris, part));
+  }
+  return angles;
+}
+
+}  // namespace
+
+std::vector<Stage> stages_drawn(const fs::path& out, const MillCase& c, const std::vector<Stage>& stages) {
+  std::vector<Stage> shown = stages;
+  if (stages.empty() || stages.front().meshes.empty()) return shown;
+  const std::vector<double> angles = bar_angles(out, c, stages).front();
+  for (Stage& s : shown) {
+    s.se_height_mm.clear(), s.se_leading_deg.clear(), s.se_trailing_deg.clear();
+    if (!s.ran) continue;
+    const std::vector<Triangle> tris = stage_mesh_triangles(out, c, s.meshes.front());
+    const std::vector<Vec2> mean =
+        mc::life::mean_outline(mc::life::bar_sections(tris, angles, 0.5 * c.length, 0.5 * s.diameter));
+    if (!mean.empty()) s.outlines = {mean};
+  }
+  return shown;
+}
+
+void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<Stage>& stages,
+                      const MeshTableBasis& b) {
+  std::string t =
+      "stage,hours,case_hours,mesh,file,triangles,parts,"
+      "mid_height_mm,mid_height_mm_se,mid_leading_angle_deg,mid_leading_angle_deg_se,mid_trailing_angle_deg,"
+      "mid_trailing_angle_deg_se,ends_height_mm,ends_leading_angle_deg,ends_leading_angle_deg_se,"
+      "ends_trailing_angle_deg,wear_kg_per_h,impact_wear_share,booked_cm3,removed_cm3,depth_scale,deepest_mm,"
+      "smoothing_across_mm,smoothing_along_mm,wear_basis\n";
+  if (stages.empty()) return;
+  const std::vector<std::vector<double>> angles = bar_angles(out, c, stages);
+  for (const Stage& s : stages) {
+    if (!s.ran) break;
+    const double R = 0.5 * s.diameter;
+    for (std::size_t j = 0; j < s.meshes.size(); ++j) {
+      const StageMesh& m = s.meshes[j];
+      const std::vector<Triangle> tris = stage_mesh_triangles(out, c, m);
+      const std::size_t parts = mc::life::connected_parts(tris).size();
+      // The bars cut across at mid-length and a tenth of the length from each end.
+      const mc::life::BarMeasures mid = mc::life::measure_bars(tris, angles.at(j), 0.5 * c.length, R);
+      mc::life::BarMeasures ends = mc::life::measure_bars(tris, angles.at(j), 0.1 * c.length, R);
+      const mc::life::BarMeasures far = mc::life::measure_bars(tris, angles.at(j), 0.9 * c.length, R);
+      ends.height.insert(ends.height.end(), far.height.begin(), far.height.end());
+      ends.leading_deg.insert(ends.leading_deg.end(), far.leading_deg.begin(), far.leading_deg.end());
+      ends.trailing_deg.insert(ends.trailing_deg.end(), far.trailing_deg.begin(), far.trailing_deg.end());
+      const auto mh = mean_se(mid.height), ml = mean_se(mid.leading_deg), mt = mean_se(mid.trailing_deg);
+      const auto eh = mean_se(ends.height), el = mean_se(ends.leading_deg), et = mean_se(ends.trailing_deg);
+      const double sliding = b.mix.sliding * s.r.mesh_sliding_m3_s.at(j), impact = b.mix.impact * s.r.mesh_strike_W.at(j);
+      const bool carried = s.span_case_hours > 0;
+      t += fmt::format("{},{:.6g},{:.6g},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{},{},{},{},{:.4g},{:.4g},{}\n",
+                       s.index, s.case_hours / b.factor, s.case_hours, m.walls_mesh,
+                       m.file.empty() ? c.meshes.at(m.walls_mesh).file : m.file, tris.size(), parts, opt(mh.first * 1000, 4),
+                       opt(mh.second * 1000, 4), opt(ml.first, 3), opt(ml.second, 3), opt(mt.first, 3), opt(mt.second, 3),
+                       opt(eh.first * 1000, 4), opt(el.first, 3), opt(el.second, 3), opt(et.first, 3),
+                       (sliding + impact) * b.density * 3600.0 * b.factor,
+                       sliding + impact > 0 ? impact / (sliding + impact) : 0.0,
+                       carried ? fmt::format("{:.6g}", m.booked_m3 * 1e6) : "",
+                       carried ? fmt::format("{:.6g}", m.removed_m3 * 1e6) : "",
+                       carried ? fmt::format("{:.6g}", m.scale) : "",
+                       carried ? fmt::format("{:.4f}", m.deepest_m * 1000) : "", b.smoothing.across_m * 1000,
+                       b.smoothing.along_m * 1000, b.basis);
+    }
+  }
+  io::write_file_atomic(out / "life_meshes.csv", t);
+}
+
+}  // namespace mc::app::life

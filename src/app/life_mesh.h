@@ -1,0 +1,68 @@
+// A life study's mesh liners (docs/liner-life.md "Mesh liners"): the
+// case's [[walls.mesh]] of part "lifters" or "shell" that turn with the
+// mill wear by what their triangles booked in each stage's run
+// (life/mesh_wear.h moves them); each worn stage runs on the meshes the
+// study wrote for it, stage-NN/liner.stl (liner-K.stl, K the [[walls.mesh]]
+// index, where the case has several), and life_meshes.csv follows them.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "app/life_state.h"
+#include "core/mill_case.h"
+
+namespace mc::app::life {
+
+// The [[walls.mesh]] indices a study wears: those of part "lifters" or
+// "shell" that turn with the mill (an "ends" mesh, or one that stands
+// still, is left as it is). std::invalid_argument naming the key where a
+// worn mesh's material wears otherwise than the liner (the study's wear
+// coefficients and calibration are the liner's).
+std::vector<int> worn_meshes(const MillCase& c);
+
+// A stage's mesh as placed in the mill frame, every triangle (a periodic
+// slice's seam caps too): the case's own at stage 0, else the STL the study
+// wrote (relative to `out`).
+std::vector<Triangle> stage_mesh_triangles(const std::filesystem::path& out, const MillCase& c, const StageMesh& m);
+
+// The case's [[walls.mesh]] entries for stage s: each worn mesh from the
+// STL the study wrote for it (placed already: offset 0, angle 0, no flip).
+void put_stage_meshes(MillCase& c, const std::filesystem::path& out, const Stage& s);
+
+// The wear of stage s's `span_case_hours` (at the case's wear coefficient;
+// volumes at `mix`) on its meshes, written as next's STLs (in its stage
+// folder), next.meshes set and s.meshes' step figures; the booked wear
+// spread by `smoothing` first. `next_R`: the worn
+// shell's radius, which no vertex may pass. std::invalid_argument from
+// the mesh move (life/mesh_wear.h) naming walls.mesh[K] and the stage.
+// How far the booked wear is spread before the mesh moves (m; life/mesh_wear.h smooth_wear).
+struct MeshSmoothing {
+  double across_m = 0, along_m = 0;
+};
+void wear_meshes(const std::filesystem::path& out, const MillCase& c, Stage& s, Stage& next, const WearMix& mix,
+                 double span_case_hours, double next_R, const MeshSmoothing& smoothing);
+
+// life_meshes.csv: per stage and worn mesh, its triangles, its parts (bars)
+// measured across at mid-length and a tenth of the length from each end
+// (life/mesh_section.h: height and face angles, the mean over the bars and
+// its standard error from their spread), what it wears per hour at the
+// study's mix and calibration, and the step's booked and removed volume,
+// depth scale and deepest move.
+struct MeshTableBasis {
+  double factor = 1;  // calibrated hours = case hours / factor
+  std::string basis;  // life.csv's wear_basis
+  WearMix mix;
+  double density = 0;
+  MeshSmoothing smoothing;
+};
+void write_mesh_table(const std::filesystem::path& out, const MillCase& c, const std::vector<Stage>& stages,
+                      const MeshTableBasis& b);
+
+// The stages as life.png draws them where the bars are a mesh: each ran
+// stage's outline the mean of the first worn mesh's bars cut across at
+// mid-length (life/mesh_section.h mean_outline), without standard errors.
+std::vector<Stage> stages_drawn(const std::filesystem::path& out, const MillCase& c, const std::vector<Stage>& stages);
+
+}  // namespace mc::app::life

@@ -1,0 +1,122 @@
+// A life study of a mesh liner end to end (app/life_mesh.h): the lab mill
+// with its 12 bars from an STL (assets/cases/lab_stl.toml) over two short
+// stages. The volume each worn mesh lost, by its own enclosed volume,
+// against what its triangles booked in the stage's wear.csv; the next
+// stage's case naming the worn mesh; the bars measured across as the
+// parametric bar they were cut from; a resumed study; a wear too deep for
+// the mesh stopped by name with its stages kept.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/mill_case.h"
+#include "core/wall_mesh.h"
+#include "io/case_file.h"
+#include "io/csv_read.h"
+#include "io/stl.h"
+#include "life_cli.h"
+#include "text_file.h"
+
+namespace fs = std::filesystem;
+using namespace life_cli;
+
+TEST_CASE("a mesh liner wears by what its triangles booked, stage by stage", "[life][cli][mesh_wear]") {
+  const fs::path a = scratch("mesh");
+  const std::string study =
+      std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 4000" + kShort + " --out '" + a.string() + "'";
+  std::string err;
+  REQUIRE(life(study, &err) == 0);
+  INFO(err);
+  const auto meshes = read_csv(a / "life_meshes.csv");
+  const auto rows = read_csv(a / "life.csv");
+  REQUIRE(meshes.size() == 3);
+  REQUIRE(rows.size() == 3);
+  const fs::path files[3] = {fs::path(MC_ASSET_DIR) / "meshes" / "lab_lifters.stl", a / "stage-01" / "liner.stl",
+                             a / "stage-02" / "liner.stl"};
+  // The new bars as the parametric lab bar (25 mm, 20° faces).
+  CHECK(num(meshes[0], "parts") == 12);
+  CHECK(num(meshes[0], "mid_height_mm") == Approx(25).margin(1e-3));
+  CHECK(num(meshes[0], "mid_leading_angle_deg") == Approx(20).margin(1e-3));
+  CHECK(num(meshes[0], "mid_trailing_angle_deg") == Approx(20).margin(1e-3));
+  double R[3];
+  for (int i = 0; i < 3; ++i) R[i] = 0.5 * num(rows[i], "diameter_m");
+  for (int i = 0; i < 2; ++i) {
+    INFO("stage " << i);
+    const fs::path run = a / ("stage-0" + std::to_string(i));
+    const double hours = num(rows[i], "stage_hours");
+    CHECK(hours == Approx(2000));
+    // Booked: the stage's wear.csv, mesh 0's triangles, each its depth rate
+    // (mm per 1000 h, both wears at the case's coefficients) over its area
+    // for the stage's hours.
+    const mc::io::CsvTable wear = mc::io::read_csv_strict(run / "wear.csv");
+    double booked = 0, mesh_kg_h = 0;
+    int triangles = 0;
+    for (std::size_t k = 0; k < wear.rows.size(); ++k)
+      if (wear.rows[k][wear.column("part")] == "mesh") {
+        CHECK(wear.number(k, wear.column("row")) == 0);
+        booked += wear.number(k, wear.column("wear_mm_per_1000h")) * wear.number(k, wear.column("area_m2")) / 3.6e9 *
+                  hours * 3600;
+        mesh_kg_h += wear.number(k, wear.column("wear_kg_per_h"));
+        ++triangles;
+      }
+    CHECK(triangles == 144);
+    REQUIRE(booked > 1e-6);
+    CHECK(num(meshes[i], "booked_cm3") * 1e-6 == Approx(booked).epsilon(1e-4));
+    CHECK(num(meshes[i], "removed_cm3") == Approx(num(meshes[i], "booked_cm3")).epsilon(1e-5));
+    // Removed: what the closed bars enclose, before against after (the
+    // worn mesh as the study wrote it, binary STL in float).
+    const auto before = mc::io::read_stl(files[i]).triangles, after = mc::io::read_stl(files[i + 1]).triangles;
+    REQUIRE(after.size() == before.size());
+    CHECK(mc::closed_mesh_volume(before) - mc::closed_mesh_volume(after) == Approx(booked).epsilon(0.01));
+    // Inside the worn shell and between the end plates.
+    for (const mc::Triangle& t : after)
+      for (const mc::Vec3& v : t.v) {
+        CHECK(std::hypot(v.x, v.y) <= R[i + 1] + 1e-6);
+        CHECK(v.z >= -1e-6);
+        CHECK(v.z <= 0.15 + 1e-6);
+      }
+    // The shell and lifters' wear: the run's shell part and the mesh's triangles.
+    const nlohmann::json summary = nlohmann::json::parse(read_text(run / "summary.json"));
+    double shell = 0;
+    for (const auto& part : summary.at("liner").at("parts"))
+      if (part.at("part") == "shell") shell = part.at("wear_kg_per_h").get<double>();
+    CHECK(num(rows[i], "shell_lifters_wear_kg_per_h") == Approx(shell + mesh_kg_h).epsilon(1e-4));
+    // The next stage's case names the worn mesh, and its run read it.
+    for (const fs::path& c : {a / "cases" / ("stage-0" + std::to_string(i + 1) + ".toml"),
+                              a / ("stage-0" + std::to_string(i + 1)) / "case.toml"}) {
+      const mc::MillCase next = mc::io::read_case(c);
+      REQUIRE(next.meshes.size() == 1);
+      CHECK(fs::equivalent(next.meshes[0].path, files[i + 1]));
+    }
+  }
+  // The worn bars lower, measured across.
+  CHECK(num(meshes[2], "mid_height_mm") < num(meshes[0], "mid_height_mm") + 1000 * (R[2] - R[0]));
+  CHECK(rows[2].at("profile").empty());
+  // Resumed: nothing runs again, nothing changes.
+  const std::string table = read_text(a / "life_meshes.csv"), stl = read_text(files[2]);
+  REQUIRE(life(study, &err) == 0);
+  CHECK(read_text(a / "life_meshes.csv") == table);
+  CHECK(read_text(files[2]) == stl);
+  fs::remove_all(a);
+}
+
+TEST_CASE("a mesh worn too deep in a stage stops the study by name and keeps its stages", "[life][cli][mesh_wear]") {
+  const fs::path a = scratch("mesh-deep");
+  std::string err;
+  // A thousand times the hours: the bars are worn through in the one stage.
+  CHECK(life(std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 1 --hours 4000000" + kShort + " --out '" +
+                 a.string() + "'",
+             &err) == 2);
+  INFO(err);
+  CHECK(err.find("walls.mesh[0] worn from stage 0 to 1: ") != std::string::npos);
+  CHECK(err.find("the study stops at stage 0") != std::string::npos);
+  CHECK_FALSE(fs::exists(a / "stage-01" / "liner.stl"));
+  const nlohmann::json state = nlohmann::json::parse(read_text(a / "life.json"));
+  CHECK(state.at("stages").size() == 1);
+  CHECK(state.at("stopped").get<std::string>().find("walls.mesh[0]") != std::string::npos);
+  CHECK(read_csv(a / "life_meshes.csv").size() == 1);
+  fs::remove_all(a);
+}
