@@ -249,6 +249,10 @@ TEST_CASE("bad life study requests are refused by name, status 2 and nothing wri
        "walls.mesh[0].material = \"steel\": a life study wears its meshes at the liner's"},
       {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --mesh-smoothing 0",
        "--mesh-smoothing"},
+      {"--stages 2 --hours 10 --axial-segments 3", "--axial-segments 3: the bars of [lifters] wear alike along the mill"},
+      {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --axial-segments 7",
+       "--axial-segments 7: segments of 0.02143 m, shorter than the largest ball (0.0254 m); give at most 5"},
+      {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --axial-segments 0", "--axial-segments"},
   };
   for (const auto& [args, expect] : bad) {
     std::string err;

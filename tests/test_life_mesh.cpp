@@ -95,11 +95,37 @@ TEST_CASE("a mesh liner wears by what its triangles booked, stage by stage", "[l
   // The worn bars lower, measured across.
   CHECK(num(meshes[2], "mid_height_mm") < num(meshes[0], "mid_height_mm") + 1000 * (R[2] - R[0]));
   CHECK(rows[2].at("profile").empty());
-  // Resumed: nothing runs again, nothing changes.
+  // Resumed: nothing runs again, nothing changes; asked for segments
+  // along the mill, it tables them.
   const std::string table = read_text(a / "life_meshes.csv"), stl = read_text(files[2]);
-  REQUIRE(life(study, &err) == 0);
+  REQUIRE(life(study + " --axial-segments 2", &err) == 0);
   CHECK(read_text(a / "life_meshes.csv") == table);
   CHECK(read_text(files[2]) == stl);
+  const auto seg = read_csv(a / "life_segments.csv");
+  REQUIRE(seg.size() == 6);
+  for (int i = 0; i < 3; ++i) {
+    INFO("stage " << i);
+    double booked = 0, smoothed = 0, removed = 0;
+    for (int g = 0; g < 2; ++g) {
+      const auto& r = seg[2 * i + g];
+      CHECK(num(r, "stage") == i);
+      CHECK(num(r, "segment") == g);
+      CHECK(num(r, "z_from_m") == Approx(0.075 * g));
+      CHECK(num(r, "z_to_m") == Approx(0.075 * (g + 1)));
+      CHECK(num(r, "bars") == 12);
+      if (i == 0) CHECK(num(r, "leading_angle_deg") == Approx(20).margin(1e-3));
+      if (i < 2) {
+        booked += num(r, "booked_cm3"), smoothed += num(r, "smoothed_cm3"), removed += num(r, "removed_cm3");
+        // The move removes each segment's share of the smoothed wear.
+        CHECK(num(r, "removed_cm3") == Approx(num(r, "smoothed_cm3")).epsilon(0.05));
+      }
+    }
+    if (i < 2) {
+      CHECK(booked == Approx(num(meshes[i], "booked_cm3")).epsilon(1e-4));
+      CHECK(smoothed == Approx(booked).epsilon(1e-4));
+      CHECK(removed == Approx(num(meshes[i], "removed_cm3")).epsilon(1e-3));
+    }
+  }
   fs::remove_all(a);
 }
 

@@ -72,6 +72,7 @@ struct LifeOptions {
   double shell_wear_ratio = 1;  // --shell-wear-ratio R: the shell's wear coefficients over the bars'
   double impact_share = -1;     // --impact-share S: the share of the new liner's wear that impact does (< 0: the case's)
   double mesh_smoothing_mm = 0; // --mesh-smoothing MM: a mesh liner's wear averaged over MM across the axis (0: the largest ball's radius)
+  int axial_segments = 0;       // --axial-segments N: a mesh liner measured in N spans along the mill (0: none)
   double mesh_smoothing_along_mm = 0;  // --mesh-smoothing-along MM: and along it (0: four times across)
   bool force = false;           // --force: start again in an --out that holds another study
   bool quiet = false;

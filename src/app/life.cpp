@@ -60,8 +60,6 @@ json request_with_consumption(const LifeOptions& o, const Prepared& p) {
   if (o.calibrate_consumption_g_kWh > 0) r["calibrate_consumption_g_per_kWh"] = o.calibrate_consumption_g_kWh;
   if (o.impact_share >= 0) r["impact_share"] = o.impact_share;
   if (o.shell_wear_ratio != 1) r["shell_wear_ratio"] = o.shell_wear_ratio;
-  if (o.mesh_smoothing_mm > 0) r["mesh_smoothing_mm"] = o.mesh_smoothing_mm;
-  if (o.mesh_smoothing_along_mm > 0) r["mesh_smoothing_along_mm"] = o.mesh_smoothing_along_mm;
   return r;
 }
 
@@ -324,6 +322,19 @@ int cmd_life(const LifeOptions& o) {
                                 ": lifters.rows = 0: the lifters' height is followed on the bars of [lifters], and "
                                 "this mill's bars are a mesh; give --hours, and calibrate by --calibrate-consumption "
                                 "or --calibrate-rate");
+  if (o.axial_segments > 0 && profiles > 0)
+    throw std::invalid_argument(fmt::format(
+        "--axial-segments {}: the bars of [lifters] wear alike along the mill (their stations are a row's mean); "
+        "give them as a mesh, which wears triangle by triangle: millcharge check CASE --write-lifters bars.stl "
+        "--lifter-mesh 5, then in the case lifters.rows = 0 and a [[walls.mesh]] file = \"bars.stl\" "
+        "(assets/cases/lab_stl.toml is the lab mill's)",
+        o.axial_segments));
+  if (o.axial_segments > 0 && !(c.length / o.axial_segments >= base.d.largest_ball_diameter))
+    throw std::invalid_argument(fmt::format("--axial-segments {}: segments of {:.4g} m, shorter than the largest ball "
+                                            "({:.4g} m); give at most {}",
+                                            o.axial_segments, c.length / o.axial_segments,
+                                            base.d.largest_ball_diameter,
+                                            static_cast<int>(std::floor(c.length / base.d.largest_ball_diameter))));
   if (!worn.empty() && o.shell_wear_ratio != 1)
     throw std::invalid_argument(fmt::format("--shell-wear-ratio {:g}: walls.mesh[{}] is worn as a liner of its own; "
                                             "the ratio sets the shell plates' wear against the bars' of [lifters] only",
@@ -359,7 +370,13 @@ int cmd_life(const LifeOptions& o) {
                                             o.calibrate_loss_mm, h_new * 1000));
 
   const fs::path out = o.out.empty() ? fs::path("runs") / (c.name + "-life") : fs::path(o.out);
-  const json request = request_with_consumption(o, base);
+  // How far a mesh liner's booked wear is spread (life/mesh_wear.h smooth_wear).
+  life::MeshSmoothing smoothing;
+  smoothing.across_m = o.mesh_smoothing_mm > 0 ? o.mesh_smoothing_mm * 1e-3 : 0.5 * base.d.largest_ball_diameter;
+  smoothing.along_m = o.mesh_smoothing_along_mm > 0 ? o.mesh_smoothing_along_mm * 1e-3 : 4 * smoothing.across_m;
+  json request = request_with_consumption(o, base);
+  if (!worn.empty())  // as resolved: a study resumes with the smoothing it began with
+    request["mesh_smoothing_mm"] = smoothing.across_m * 1e3, request["mesh_smoothing_along_mm"] = smoothing.along_m * 1e3;
   Study st;
   st.wear_coefficient = base.scene.wall_material.wear_coefficient;
   st.impact_coefficient = base.scene.wall_material.impact_wear_coefficient;
@@ -389,7 +406,7 @@ int cmd_life(const LifeOptions& o) {
       throw std::invalid_argument("--out " + out.string() + ": exists and holds no life study; choose another folder");
     if (o.force) {
       for (int i = 0; fs::exists(stage_dir(out, i), ec); ++i) fs::remove_all(stage_dir(out, i), ec);
-      for (const char* f : {"life.json", "life.csv", "life.png", "life.pvd", "life_meshes.csv"}) fs::remove(out / f, ec);
+      for (const char* f : {"life.json", "life.csv", "life.png", "life.pvd", "life_meshes.csv", "life_segments.csv"}) fs::remove(out / f, ec);
       fs::remove_all(out / "cases", ec);
     }
     Stage s0;
@@ -408,10 +425,6 @@ int cmd_life(const LifeOptions& o) {
   if (ec) throw std::runtime_error("cannot create " + (out / "cases").string() + ": " + ec.message());
   const double length = c.length;
   const double V0 = base.d.mill_volume;
-  // How far a mesh liner's booked wear is spread (life/mesh_wear.h smooth_wear).
-  life::MeshSmoothing smoothing;
-  smoothing.across_m = o.mesh_smoothing_mm > 0 ? o.mesh_smoothing_mm * 1e-3 : 0.5 * base.d.largest_ball_diameter;
-  smoothing.along_m = o.mesh_smoothing_along_mm > 0 ? o.mesh_smoothing_along_mm * 1e-3 : 4 * smoothing.across_m;
 
   for (;;) {
     Stage& s = st.stages.back();
@@ -445,6 +458,9 @@ int cmd_life(const LifeOptions& o) {
     write_table(out, st, length);
     if (!worn.empty())
       life::write_mesh_table(out, c, st.stages, {st.factor, st.basis(), st.mix, st.density, smoothing});
+    if (o.axial_segments > 0)
+      life::write_segment_table(out, c, st.stages, {st.factor, st.basis(), st.mix, st.density, smoothing},
+                                o.axial_segments);
     if (s.index == 0 && !o.quiet) print_new_liner(st);
     io::draw_or_warn(out / "life.png", [&] {
       life::write_life_picture(out / "life.png", c.name,

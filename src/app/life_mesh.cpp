@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "io/atomic_file.h"
+#include "io/csv_read.h"
 #include "io/stl.h"
 #include "life/mesh_section.h"
 #include "life/mesh_wear.h"
@@ -195,6 +196,77 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
     }
   }
   io::write_file_atomic(out / "life_meshes.csv", t);
+}
+
+void write_segment_table(const fs::path& out, const MillCase& c, const std::vector<Stage>& stages,
+                         const MeshTableBasis& b, int segments) {
+  std::string t =
+      "stage,hours,case_hours,mesh,segment,z_from_m,z_to_m,bars,height_mm,height_mm_se,leading_angle_deg,"
+      "leading_angle_deg_se,trailing_angle_deg,trailing_angle_deg_se,shell_wear_mm_per_1000h,booked_cm3,smoothed_cm3,"
+      "removed_cm3,"
+      "wear_basis\n";
+  if (stages.empty() || segments < 1) return;
+  const std::vector<std::vector<double>> angles = bar_angles(out, c, stages);
+  const double span = c.length / segments;
+  auto segment_of = [&](double z) { return std::clamp(static_cast<int>(std::floor(z / span)), 0, segments - 1); };
+  for (std::size_t i = 0; i < stages.size(); ++i) {
+    const Stage& s = stages[i];
+    if (!s.ran) break;
+    const double R = 0.5 * s.diameter;
+    const fs::path run = out / fmt::format("stage-{:02d}", s.index);
+    // The shell's depth rate per segment, from the stage's elements.
+    std::vector<double> shell_rate(segments, 0.0), shell_area(segments, 0.0);
+    {
+      const io::CsvTable w = io::read_csv_strict(run / "wear.csv", "the stage's run wrote no liner wear");
+      const int c_part = w.column("part"), c_z0 = w.column("z_from_m"), c_z1 = w.column("z_to_m"),
+                c_area = w.column("area_m2"), c_sl = w.column("sliding_wear_mm_per_1000h"), c_st = w.column("strike_W");
+      for (std::size_t k = 0; k < w.rows.size(); ++k) {
+        if (w.rows[k][c_part] != "shell") continue;
+        const double area = w.number(k, c_area);
+        if (!(area > 0)) continue;
+        const int g = segment_of(0.5 * (w.number(k, c_z0) + w.number(k, c_z1)));
+        const double mm = b.mix.sliding * w.number(k, c_sl) + b.mix.impact * w.number(k, c_st) / area * 3.6e9;
+        shell_rate[g] += mm * area, shell_area[g] += area;
+      }
+    }
+    for (std::size_t j = 0; j < s.meshes.size(); ++j) {
+      const StageMesh& m = s.meshes[j];
+      const std::vector<Triangle> tris = stage_mesh_triangles(out, c, m);
+      // The step's volumes per segment: booked by the triangles, removed by their move.
+      std::vector<double> booked(segments, 0.0), smoothed(segments, 0.0), removed(segments, 0.0);
+      const bool carried = s.span_case_hours > 0 && i + 1 < stages.size() && j < stages[i + 1].meshes.size();
+      if (carried) {
+        std::size_t kept = 0;
+        for (const Triangle& tr : tris) kept += on_periodic_seam(tr, c) ? 0 : 1;
+        const TriangleWear tw = read_triangle_wear(run / "wear.csv", m.walls_mesh, kept);
+        const std::vector<Triangle> next = stage_mesh_triangles(out, c, stages[i + 1].meshes[j]);
+        const std::vector<double> swept = mc::life::swept_volumes(tris, next);
+        std::vector<double> volume(tris.size(), 0.0);
+        for (std::size_t q = 0, n = 0; q < tris.size(); ++q)
+          if (!on_periodic_seam(tris[q], c))
+            volume[q] = (b.mix.sliding * tw.sliding_m3_s[n] + b.mix.impact * tw.strike_W[n]) * s.span_case_hours * 3600.0,
+            ++n;
+        const std::vector<double> spread = mc::life::smooth_wear(tris, volume, b.smoothing.across_m, b.smoothing.along_m);
+        for (std::size_t q = 0; q < tris.size(); ++q) {
+          const int g = segment_of((tris[q].v[0].z + tris[q].v[1].z + tris[q].v[2].z) / 3);
+          booked[g] += volume[q], smoothed[g] += spread[q], removed[g] += swept[q];
+        }
+      }
+      for (int g = 0; g < segments; ++g) {
+        const mc::life::BarMeasures bars = mc::life::measure_bars(tris, angles.at(j), (g + 0.5) * span, R);
+        const auto h = mean_se(bars.height), l = mean_se(bars.leading_deg), tr = mean_se(bars.trailing_deg);
+        t += fmt::format("{},{:.6g},{:.6g},{},{},{:.6g},{:.6g},{},{},{},{},{},{},{},{},{},{},{},{}\n", s.index,
+                         s.case_hours / b.factor, s.case_hours, m.walls_mesh, g, g * span, (g + 1) * span,
+                         bars.height.size(), opt(h.first * 1000, 4), opt(h.second * 1000, 4), opt(l.first, 3),
+                         opt(l.second, 3), opt(tr.first, 3), opt(tr.second, 3),
+                         shell_area[g] > 0 ? fmt::format("{:.6g}", shell_rate[g] / shell_area[g] * b.factor) : "",
+                         carried ? fmt::format("{:.6g}", booked[g] * 1e6) : "",
+                         carried ? fmt::format("{:.6g}", smoothed[g] * 1e6) : "",
+                         carried ? fmt::format("{:.6g}", removed[g] * 1e6) : "", b.basis);
+      }
+    }
+  }
+  io::write_file_atomic(out / "life_segments.csv", t);
 }
 
 }  // namespace mc::app::life

@@ -60,6 +60,17 @@ struct MeshTableBasis {
 void write_mesh_table(const std::filesystem::path& out, const MillCase& c, const std::vector<Stage>& stages,
                       const MeshTableBasis& b);
 
+// life_segments.csv: per stage, worn mesh and axial segment (the mill's
+// length cut into `segments` equal spans): its bars cut across at the
+// segment's middle (mean height and face angles over the bars, each with
+// its standard error from their spread), the shell's wear rate there (the
+// area-weighted mean of its elements whose middle lies in it, at the
+// study's mix and calibration: the shell itself moves by its mean), and
+// for each stage but the last the volume the segment's triangles booked,
+// the same spread by the smoothing, and the volume their move removed.
+void write_segment_table(const std::filesystem::path& out, const MillCase& c, const std::vector<Stage>& stages,
+                         const MeshTableBasis& b, int segments);
+
 // The stages as life.png draws them where the bars are a mesh: each ran
 // stage's outline the mean of the first worn mesh's bars cut across at
 // mid-length (life/mesh_section.h mean_outline), without standard errors.

@@ -170,6 +170,10 @@ int main(int argc, char** argv) {
                    "standard deviation across the mill's axis (default: the largest ball's radius)")
       ->check(mc::app::cli::between(0.1, 1000))
       ->type_name("MM");
+  life->add_option("--axial-segments", lo.axial_segments,
+                   "a mesh liner's bars and the shell measured in N equal spans along the mill: life_segments.csv")
+      ->check(mc::app::cli::count(1, 32))
+      ->type_name("N");
   life->add_option("--mesh-smoothing-along", lo.mesh_smoothing_along_mm,
                    "and of MM along the axis (default: four times --mesh-smoothing)")
       ->check(mc::app::cli::between(0.1, 10000))

@@ -165,12 +165,19 @@ std::vector<double> smooth_wear(const std::vector<Triangle>& triangles, const st
 }
 
 double swept_volume(const std::vector<Triangle>& before, const std::vector<Triangle>& after) {
+  double v = 0;
+  for (double x : swept_volumes(before, after)) v += x;
+  return v;
+}
+
+std::vector<double> swept_volumes(const std::vector<Triangle>& before, const std::vector<Triangle>& after) {
   // The closed solid between each triangle and its moved self: the old
   // triangle (facing out of the solid, as it faced the charge), the new
   // one reversed, and the three sides, each a quad cut in two. Summed by
   // the divergence theorem; the sides of neighbours cancel.
-  double v6 = 0;
+  std::vector<double> out(before.size());
   for (std::size_t i = 0; i < before.size(); ++i) {
+    double v6 = 0;
     const auto& a = before[i].v;
     const auto& b = after[i].v;
     v6 += tet6(a[0], a[1], a[2]);
@@ -185,8 +192,9 @@ double swept_volume(const std::vector<Triangle>& before, const std::vector<Trian
       if (key(a[k]) < key(a[n])) v6 += tet6(a[k], b[k], b[n]) + tet6(a[k], b[n], a[n]);
       else v6 += tet6(a[k], b[k], a[n]) + tet6(b[k], b[n], a[n]);
     }
+    out[i] = v6 / 6.0;
   }
-  return v6 / 6.0;
+  return out;
 }
 
 MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,

@@ -49,6 +49,10 @@ WeldedMesh weld(const std::vector<Triangle>& triangles);
 // moved (corner for corner): positive where they moved against the
 // triangles' normals. For a closed mesh it is the enclosed volume lost.
 double swept_volume(const std::vector<Triangle>& before, const std::vector<Triangle>& after);
+// The same per triangle: the prism between each triangle and its moved self
+// (its sides cut as swept_volume cuts them, so that the sum is the whole's
+// and any set of triangles has its own part of it).
+std::vector<double> swept_volumes(const std::vector<Triangle>& before, const std::vector<Triangle>& after);
 
 // The connected parts of a mesh (triangles that share a welded vertex):
 // each part's triangles, ascending, the parts in the order of their first
