@@ -101,7 +101,9 @@ int count_of(const std::string& text, const std::string& piece) {
 TEST_CASE("grind intervals: held parameters together at their corners, in quadrature with the free ones",
           "[grind][interval][held]") {
   const Ore ore = known_ore();
-  const double t = t_quantile(0.975, 50), half = t * 0.1, e = std::exp(1.0);
+  // Two held with S_min 12: ν = 50 − 2 = 48, s² = 12 / 48 against the
+  // fit's 0.3, so the free half-width is t₄₈ · 0.1 · √(0.25 / 0.3).
+  const double t = t_quantile(0.975, 48), half = t * 0.1 * std::sqrt(0.25 / 0.3), e = std::exp(1.0);
   // η E∞ d₀: its logarithm is the sum of the three; E∞ and d₀ held, each
   // over a factor of e either way, the free η unmoved at their ends.
   auto product = [](const Ore& o) {
@@ -113,6 +115,8 @@ TEST_CASE("grind intervals: held parameters together at their corners, in quadra
   for (double a : {60 / e, 60 * e})
     for (double b : {2 / e, 2 * e}) u.edges.push_back({{a, b}, u.values});
   u.best = {{60, 2}, u.values};
+  u.ssr_best = 12;
+  REQUIRE(interval_dof(u) == 48);
   const Interval i = propagate(ore, u, product)[0];
   // Together they reach a factor of e² (each alone, e); with the free one's
   // half-width in quadrature, not added to it.
@@ -121,13 +125,17 @@ TEST_CASE("grind intervals: held parameters together at their corners, in quadra
   // Around where the held ones fit best: E∞ held at 60, best at 60 e^½,
   // its range 60 to 60 e: the interval spans e^½ either side of the best
   // point (the held value inside it), the free half-width in quadrature.
+  // No S_min kept: the fit's S (0.3 × 50) over ν = 49.
   FitCovariance v = one_free(ore);
   v.held = {held("e_inf_J_kg", 60, 60, 60 * e, v)};
   v.best = {{60 * std::exp(0.5)}, v.values};
   const Interval j = propagate(ore, v, product)[0];
-  const double centre = p0 * std::exp(0.5);
-  CHECK(j.hi == Approx(centre * std::exp(std::hypot(half, 0.5))).epsilon(1e-6));
-  CHECK(j.lo == Approx(centre * std::exp(-std::hypot(half, 0.5))).epsilon(1e-6));
+  const double centre = p0 * std::exp(0.5), half_v = t_quantile(0.975, 49) * 0.1 * std::sqrt(50.0 / 49);
+  CHECK(j.hi == Approx(centre * std::exp(std::hypot(half_v, 0.5))).epsilon(1e-6));
+  CHECK(j.lo == Approx(centre * std::exp(-std::hypot(half_v, 0.5))).epsilon(1e-6));
+  // Without held ones, the fit's own ν and s².
+  const Interval k = propagate(ore, one_free(ore), product)[0];
+  CHECK(k.hi == Approx(p0 * std::exp(t_quantile(0.975, 50) * 0.1)).epsilon(1e-9));
 }
 
 TEST_CASE("grind intervals: held parameters' ranges are limited from their least S, their edge points within it",
@@ -158,7 +166,7 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
   // and is what a refit there gives.
   Ore at_best = with_variables(start, u, u.best.free);
   for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(at_best, u.best.held[k]);
-  const double s_best = weighted_ssr(at_best, tests), limit = profile_limit(s_best, u.dof);
+  const double s_best = weighted_ssr(at_best, tests), limit = profile_limit(s_best, interval_dof(u));
   std::printf("held profiles: S %.3f at the fit, %.3f at the best point (E_inf %.4g, d0 %.4g); limit %.3f; "
               "E_inf [%.4g, %.4g], d0 [%.4g, %.4g]; %zu edge points; %.2f s\n",
               f.ssr, s_best, u.best.held[0], u.best.held[1], limit, u.held[0].lo, u.held[0].hi, u.held[1].lo,
@@ -255,8 +263,8 @@ TEST_CASE("grind intervals: with a held parameter, the interval still holds the 
     f.parameters.push_back(h);
     const FitCovariance u = fit_covariance(f, tests);
     const Sensitivity s = sensitivities(f.ore, u, p80_third_mill).front();
-    const Interval i = interval_of(s, u.matrix, t_quantile(0.975, u.dof), 1);
-    Sensitivity alone = s;  // E∞ taken as known: no reach, around the value
+    const Interval i = interval_of(s, interval_covariance(u), t_quantile(0.975, interval_dof(u)), 1);
+    Sensitivity alone = s;  // E∞ taken as known: no reach, around the value, the fit's own s² and ν
     alone.down = alone.up = 0;
     alone.center = std::log(alone.value);
     const Interval d = interval_of(alone, u.matrix, t_quantile(0.975, u.dof), 1);
@@ -569,7 +577,7 @@ TEST_CASE("grind intervals: held parameters on a ridge: the corner search runs o
   REQUIRE(u.held.size() == 2);
   Ore at_best = with_variables(start, u, u.best.free);
   for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(at_best, u.best.held[k]);
-  const double limit = profile_limit(weighted_ssr(at_best, tests), u.dof);
+  const double limit = profile_limit(weighted_ssr(at_best, tests), interval_dof(u));
   int corners = 0, beyond = 0;
   for (const HeldEdge& c : u.edges) {
     bool both = true, in_file = true, past_box = false;

@@ -152,10 +152,11 @@ TEST_CASE("grind next test: the same test again divides the standard deviation b
   CHECK(ratio == Approx(1 / std::sqrt(2.0)).epsilon(1e-6));
 }
 
-TEST_CASE("grind next test: held parameters the test fixes take their degrees of freedom", "[grind][next]") {
+TEST_CASE("grind next test: Student's t counts every parameter, held ones included", "[grind][next]") {
   // E∞ and d₀ held wrong, η and σ fitted; a long test in the harder mill
-  // fixes both: the expected half-width is Student's t with the fit's
-  // degrees of freedom, plus the candidate's readings, less the two.
+  // fixes both: the expected half-width is Student's t with the intervals'
+  // degrees of freedom (the fit's less the two held), plus the
+  // candidate's readings.
   const Ore truth = known_ore();
   Ore start = truth;
   start.efficiency = 0.6;
@@ -180,9 +181,10 @@ TEST_CASE("grind next test: held parameters the test fixes take their degrees of
   REQUIRE(w.expected.valid());
   REQUIRE(w.fixes.size() == 2);
   REQUIRE(s.log);
-  const int nu = u.dof + w.data - 2;
+  const int nu = interval_dof(u) + w.data;  // u.dof less the two held, plus the candidate's readings
   const double half = std::log(w.expected.hi) - std::log(s.value);  // centred on the value where all are fixed
-  std::printf("next test, both held fixed: dof %d + %d readings - 2 = %d; half-width %.9g against t %.9g x sd %.9g\n",
+  std::printf("next test, both held fixed: dof %d - 2 held + %d readings = %d; half-width %.9g against t %.9g x sd "
+              "%.9g\n",
               u.dof, w.data, nu, half, t_quantile(0.975, nu), w.sd);
   CHECK(half == Approx(t_quantile(0.975, nu) * w.sd).epsilon(1e-9));
 }

@@ -230,7 +230,7 @@ void print_covariance(const FitCovariance& u) {
       at += fmt::format("{}{} {:.6g}", k ? ", " : "", u.held[k].name, u.best.held[k]);
     std::printf("  the held parameters fit the data best at %s (the free ones refitted there; S %.4g there, %.4g "
                 "where they are held, the limit %.4g): the intervals are built around it\n",
-                at.c_str(), u.ssr_best, u.ssr_fit, profile_limit(u.ssr_best, u.dof));
+                at.c_str(), u.ssr_best, u.ssr_fit, profile_limit(u.ssr_best, interval_dof(u)));
     if (const std::string out = outside_region(u); !out.empty()) std::printf("  note: %s\n", out.c_str());
   }
 }

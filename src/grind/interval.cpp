@@ -104,7 +104,7 @@ std::vector<LinePoint> line(const FitCovariance& u, std::size_t j, const HeldPoi
       const Refit& r = pts.back().p.at;
       if (!r.ok) break;
       ssr_min = std::min(ssr_min, r.ssr);
-      if (r.ssr > profile_limit(ssr_min, u.dof)) break;
+      if (r.ssr > profile_limit(ssr_min, interval_dof(u))) break;
       warm = r.ore;
     }
   }
@@ -215,14 +215,15 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
   for (const HeldParameter& h : u.held) held.push_back(h.value);
   HeldPoint best{held, at_fit};
   double ssr_min = fit.ssr;
-  const double margin = profile_limit(fit.ssr, u.dof) - fit.ssr;
+  const int nu = interval_dof(u);
+  const double margin = profile_limit(fit.ssr, nu) - fit.ssr;
   std::vector<std::vector<LinePoint>> lines(nh);
   for (std::size_t j = 0; j < nh; ++j) {
     lines[j] = line(u, j, best, tests, ssr_min);
     const std::size_t k = refine(lines[j], u, j, tests, margin);
     if (lines[j][k].p.at.ssr < best.at.ssr) best = lines[j][k].p;
   }
-  const double limit = profile_limit(best.at.ssr, u.dof);
+  const double limit = profile_limit(best.at.ssr, nu);
   u.best = {best.held, best.at.free};
   u.ssr_fit = fit.ssr;
   u.ssr_best = best.at.ssr;
@@ -376,6 +377,25 @@ double profile_limit(double ssr_min, int dof) {
   return dof > 0 ? ssr_min * (1 + std::pow(t_quantile(0.975, dof), 2) / dof) : kNaN;
 }
 
+int interval_dof(const FitCovariance& u) { return u.dof - static_cast<int>(u.held.size()); }
+
+double interval_variance(const FitCovariance& u) {
+  if (u.held.empty()) return u.residual_variance_pp2;
+  const int nu = interval_dof(u);
+  if (nu <= 0) return kNaN;
+  const double s_min = u.ssr_best > 0 ? u.ssr_best : u.residual_variance_pp2 * u.dof;
+  return s_min / nu;
+}
+
+std::vector<std::vector<double>> interval_covariance(const FitCovariance& u) {
+  std::vector<std::vector<double>> C = u.matrix;
+  if (u.held.empty() || !(u.residual_variance_pp2 > 0)) return C;
+  const double scale = interval_variance(u) / u.residual_variance_pp2;
+  for (auto& row : C)
+    for (double& c : row) c *= scale;
+  return C;
+}
+
 std::string variable_name(const std::string& parameter) {
   const OreParameter* p = find_ore_parameter(parameter);
   return p && p->log ? "log(" + parameter + ")" : parameter;
@@ -414,7 +434,7 @@ FitCovariance fit_covariance(const BatchFit& fit, const std::vector<TestInMill>&
     h.why = f.identified ? "on its bound" : f.why;
     u.held.push_back(h);
   }
-  if (!u.held.empty() && u.dof > 0) held_ranges(u, fit, tests);
+  if (!u.held.empty() && interval_dof(u) > 0) held_ranges(u, fit, tests);
   u.information = information(u, fit, tests);
   return u;
 }
@@ -594,9 +614,10 @@ Interval interval_of(const Sensitivity& s, const std::vector<std::vector<double>
 std::vector<Interval> propagate(const Ore& ore, const FitCovariance& u,
                                 const std::function<std::vector<double>(const Ore&)>& f, double width_scale) {
   const std::vector<Sensitivity> ss = sensitivities(ore, u, f);
-  const double q = t_quantile(0.975, u.dof) * width_scale;
+  const double q = t_quantile(0.975, interval_dof(u)) * width_scale;
+  const std::vector<std::vector<double>> C = interval_covariance(u);
   std::vector<Interval> out;
-  for (const Sensitivity& s : ss) out.push_back(interval_of(s, u.matrix, q, width_scale));
+  for (const Sensitivity& s : ss) out.push_back(interval_of(s, C, q, width_scale));
   return out;
 }
 

@@ -113,12 +113,16 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
     const std::vector<double> col = column(*ps[v], ore, c, sieves, r0);
     for (std::size_t i = 0; i < r0.size(); ++i) Jc[i][v] = col[i];
   }
-  // The current information: the tests' JᵀJ / s² on every variable, kept with the covariance.
+  // The current information: the tests' JᵀJ / s² on every variable, kept
+  // with the covariance (s² the fit's), taken at the intervals' s²
+  // (interval_variance: S_min over the data less every parameter).
   if (u.information.size() != nv) return out;
+  const double s2 = interval_variance(u);
+  if (!(s2 > 0) || !(u.residual_variance_pp2 > 0)) return out;
   Matrix L = u.information;
+  for (auto& row : L)
+    for (double& v : row) v *= u.residual_variance_pp2 / s2;
   // The candidate's information: its readings scatter as the first test's (s²).
-  const double s2 = u.residual_variance_pp2;
-  if (!(s2 > 0)) return out;
   out.added.assign(nv, std::vector<double>(nv));
   for (std::size_t a = 0; a < nv; ++a)
     for (std::size_t b = 0; b < nv; ++b) {
@@ -177,9 +181,9 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
       }
   }
   out.sd = std::sqrt(std::max(var, 0.0));
-  // The held parameters the test fixes join the free ones: each takes a
-  // degree of freedom from the readings the candidate adds.
-  const double half = t_quantile(0.975, u.dof + out.data - static_cast<int>(out.fixes.size())) * out.sd;
+  // Student's t with the intervals' degrees of freedom (every parameter,
+  // free and held, counted already) and the candidate's readings.
+  const double half = t_quantile(0.975, interval_dof(u) + out.data) * out.sd;
   // Centred as now where held parameters keep their reach; at the value
   // itself where the test fixes every one (the linear model's centre).
   const double y0 = out.fixes.size() == nh ? (s.log ? std::log(s.value) : s.value) : s.center;
