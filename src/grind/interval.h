@@ -29,21 +29,25 @@ std::string parameter_of_variable(const std::string& variable);
 std::string ore_file_key(const std::string& parameter);
 
 // What the fit leaves open. A held parameter (unidentified, or on its
-// bound) is given the range over which the free ones, refitted with it
-// there, stay within the data: its profile. The limit is S_min (1 + t²/ν):
-// S the weighted sum of squares, S_min the least the profiles meet, t
-// Student's at 0.975 with ν = interval_dof (F(1, ν) = t² at 95 %).
+// bound) is given the range over which the free ones and the other held
+// ones, refitted with it there, stay within the data: its profile. The
+// limit is S_min (1 + t²/ν): S the weighted sum of squares, S_min the
+// least the profiles meet, t Student's at 0.975 with ν = interval_dof
+// (F(1, ν) = t² at 95 %). A profile's point is the lower S of two refits
+// from the point before: everything else refitted, and (where that one is
+// past the limit or fails: a refit along a flat direction can end in a
+// worse valley) the free ones alone, the other held ones kept.
 //  1. Where the held ones fit best: each in turn moved through the best
-//     point met (others there), stepped out (a factor of e for a scale, a
-//     quarter of its file range for a value) to the file's range or past
-//     the limit, its least S refined by golden sections (to a thousandth of
-//     a step, or a flat profile; at most 16 refits).
+//     point met, stepped out (a factor of e for a scale, a quarter of its
+//     file range for a value) to the file's range or past the limit, its
+//     least S refined by golden sections (to a thousandth of a step, or a
+//     flat profile; at most 16 refits).
 //  2. Through that point, each one's stretch within the limit: its ends by
 //     halvings to a tenth of their distance from it (at most twenty), the
 //     range widened to hold where the parameter is held.
 //  3. Two to four held together, from the best point toward each corner of
-//     their ranges, as far as the limit allows (the corner, or four
-//     halvings); five or more: their ranges alone.
+//     their ranges, as far as the limit allows (the corner, or six
+//     halvings short of it; four past it); five or more: their ranges alone.
 // The best point and the edge points (2, 3) are kept with the covariance.
 FitCovariance fit_covariance(const BatchFit& fit, const std::vector<SpectrumBin>& spectrum, double power_W,
                              double holdup_kg, const BatchTest& test);
