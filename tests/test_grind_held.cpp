@@ -1,8 +1,10 @@
 // What a fit leaves open beyond its free parameters' covariance (src/grind/
 // interval.h, fit.h): held parameters combined jointly and in quadrature
 // around where they fit best, their profiles' limit from the profile's
-// minimum (F(1, ν) = t²), the coverage of an interval with a held
-// parameter, parameters at a bound, tests weighted by their noise, a
+// minimum (F(1, ν) = t², ν counting the held ones), true profiles (the
+// other held ones refitted), the search's reach against a brute-force
+// grid, the coverage of an interval with a held parameter, parameters at
+// a bound, tests weighted by their noise, a
 // fitted ore edited by hand, strongly correlated parameters, and an
 // interval open at one end.
 #include <catch2/catch.hpp>

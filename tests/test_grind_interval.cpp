@@ -4,7 +4,9 @@
 // kept, bad covariance keys refused by name, and the coverage of the 95 %
 // intervals over many synthetic batch tests with seeded scatter, on a
 // synthetic spectrum (no DEM run): about 95 %, and far below at half the
-// width, so the check fails for intervals too narrow.
+// width, so the check fails for intervals too narrow; and with sieve
+// errors correlated between sieves, where it covers less (the figures of
+// docs/grinding-intervals.md).
 #include <catch2/catch.hpp>
 
 #include <unistd.h>

@@ -1,7 +1,9 @@
 // Which batch test to run next (src/grind/next_test.h, `grind --next-test`):
 // the expected width of a product's interval after a candidate test,
-// against the widths that fits of simulated candidate tests give; the
-// ranking through the command, its files, and bad candidates refused.
+// against the widths that fits of simulated candidate tests give, and
+// with held parameters against the definitions computed by hand; the
+// ranking through the command (two different mills), its files, and bad
+// candidates refused.
 #include <catch2/catch.hpp>
 
 #include <sys/wait.h>

@@ -201,7 +201,7 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
   // continuously from the reach now as the candidate's information grows.
   const double linear = t * std::sqrt(std::max(var_all - var_free, 0.0));
   double rest_down = 0, rest_up = 0;
-  bool by_held = s.down_by_held.size() == nh && s.up_by_held.size() == nh;
+  const bool by_held = s.down_by_held.size() == nh && s.up_by_held.size() == nh;
   for (std::size_t j = 0; j < nh; ++j)
     if (!in[np + j]) {
       if (!by_held) rest_down = s.down, rest_up = s.up;
