@@ -345,6 +345,10 @@ TEST_CASE("grind intervals through the command: --fit keeps the covariance, grin
   const nlohmann::json fj = json_of(dir.path / "fit" / "fit.json");
   REQUIRE(fj["covariance"]["correlation"].size() == u.names.size());
   for (std::size_t a = 0; a < u.names.size(); ++a) CHECK(fj["covariance"]["correlation"][a][a].get<double>() == Approx(1));
+  // The intervals' ν: the fit's less the held parameters.
+  CHECK(fj["covariance"]["interval_degrees_of_freedom"].get<int>() ==
+        fj["covariance"]["degrees_of_freedom"].get<int>() - static_cast<int>(u.held.size()));
+  CHECK(fj.contains("covariance_seconds"));
 
   // The fitted ore's products, and the truth's, in the same run.
   auto grind = [&](const fs::path& ore, const std::string& out) {

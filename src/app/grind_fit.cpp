@@ -194,6 +194,10 @@ nlohmann::ordered_json covariance_json(const FitCovariance& u) {
   j["correlation"] = r;
   j["residual_variance_pp2"] = u.residual_variance_pp2;
   j["degrees_of_freedom"] = u.dof;
+  // The intervals' ν and s²: every parameter named, held ones too, fitted at S_min.
+  j["interval_degrees_of_freedom"] = interval_dof(u);
+  const double s2 = interval_variance(u);
+  j["interval_variance_pp2"] = std::isfinite(s2) ? nlohmann::json(s2) : nlohmann::json();
   j["held"] = nlohmann::json::array();
   for (const HeldParameter& h : u.held) {
     std::string kind;
