@@ -146,7 +146,13 @@ TEST_CASE("grind intervals: the fit's covariance kept with the ore and read back
   REQUIRE(v.held.size() == u.held.size());
   REQUIRE(v.information.size() == u.names.size() + u.held.size());
   CHECK(v.information[0][0] == Approx(u.information[0][0]).epsilon(1e-9));
-  CHECK(v.edges.size() == u.edges.size());
+  REQUIRE(v.edges.size() == u.edges.size());
+  int profile_ends = 0;
+  for (std::size_t e = 0; e < u.edges.size(); ++e) {
+    CHECK(v.edges[e].of == u.edges[e].of);  // a profile's end says whose (profile_of)
+    profile_ends += u.edges[e].of >= 0;
+  }
+  if (!u.held.empty()) CHECK(profile_ends >= 1);
   REQUIRE(v.best.held.size() == u.best.held.size());
   for (std::size_t k = 0; k < u.best.held.size(); ++k) CHECK(v.best.held[k] == Approx(u.best.held[k]).epsilon(1e-9));
   for (std::size_t k = 0; k < u.held.size(); ++k) {

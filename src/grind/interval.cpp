@@ -246,7 +246,7 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
     const HeldPoint start = profile_point(u, 0, held[0], fit.ore, tests);
     if (start.at.ok && start.at.ssr < best.at.ssr) best = start;
   }
-  double ssr_min = fit.ssr;
+  double ssr_min = best.at.ssr;
   const int nu = interval_dof(u);
   const double margin = profile_limit(fit.ssr, nu) - fit.ssr;
   std::vector<std::vector<LinePoint>> lines(nh);
