@@ -1,8 +1,10 @@
 // What a fit leaves open beyond its free parameters' covariance (src/grind/
 // interval.h, fit.h): held parameters combined jointly and in quadrature
 // around where they fit best, their profiles' limit from the profile's
-// minimum (F(1, ν) = t²), the coverage of an interval with a held
-// parameter, parameters at a bound, tests weighted by their noise, a
+// minimum (F(1, ν) = t², ν counting the held ones), true profiles (the
+// other held ones refitted), the search's reach against a brute-force
+// grid, the coverage of an interval with a held parameter, parameters at
+// a bound, tests weighted by their noise, a
 // fitted ore edited by hand, strongly correlated parameters, and an
 // interval open at one end.
 #include <catch2/catch.hpp>
@@ -101,7 +103,9 @@ int count_of(const std::string& text, const std::string& piece) {
 TEST_CASE("grind intervals: held parameters together at their corners, in quadrature with the free ones",
           "[grind][interval][held]") {
   const Ore ore = known_ore();
-  const double t = t_quantile(0.975, 50), half = t * 0.1, e = std::exp(1.0);
+  // Two held with S_min 12: ν = 50 − 2 = 48, s² = 12 / 48 against the
+  // fit's 0.3, so the free half-width is t₄₈ · 0.1 · √(0.25 / 0.3).
+  const double t = t_quantile(0.975, 48), half = t * 0.1 * std::sqrt(0.25 / 0.3), e = std::exp(1.0);
   // η E∞ d₀: its logarithm is the sum of the three; E∞ and d₀ held, each
   // over a factor of e either way, the free η unmoved at their ends.
   auto product = [](const Ore& o) {
@@ -113,6 +117,8 @@ TEST_CASE("grind intervals: held parameters together at their corners, in quadra
   for (double a : {60 / e, 60 * e})
     for (double b : {2 / e, 2 * e}) u.edges.push_back({{a, b}, u.values});
   u.best = {{60, 2}, u.values};
+  u.ssr_best = 12;
+  REQUIRE(interval_dof(u) == 48);
   const Interval i = propagate(ore, u, product)[0];
   // Together they reach a factor of e² (each alone, e); with the free one's
   // half-width in quadrature, not added to it.
@@ -121,13 +127,17 @@ TEST_CASE("grind intervals: held parameters together at their corners, in quadra
   // Around where the held ones fit best: E∞ held at 60, best at 60 e^½,
   // its range 60 to 60 e: the interval spans e^½ either side of the best
   // point (the held value inside it), the free half-width in quadrature.
+  // No S_min kept: the fit's S (0.3 × 50) over ν = 49.
   FitCovariance v = one_free(ore);
   v.held = {held("e_inf_J_kg", 60, 60, 60 * e, v)};
   v.best = {{60 * std::exp(0.5)}, v.values};
   const Interval j = propagate(ore, v, product)[0];
-  const double centre = p0 * std::exp(0.5);
-  CHECK(j.hi == Approx(centre * std::exp(std::hypot(half, 0.5))).epsilon(1e-6));
-  CHECK(j.lo == Approx(centre * std::exp(-std::hypot(half, 0.5))).epsilon(1e-6));
+  const double centre = p0 * std::exp(0.5), half_v = t_quantile(0.975, 49) * 0.1 * std::sqrt(50.0 / 49);
+  CHECK(j.hi == Approx(centre * std::exp(std::hypot(half_v, 0.5))).epsilon(1e-6));
+  CHECK(j.lo == Approx(centre * std::exp(-std::hypot(half_v, 0.5))).epsilon(1e-6));
+  // Without held ones, the fit's own ν and s².
+  const Interval k = propagate(ore, one_free(ore), product)[0];
+  CHECK(k.hi == Approx(p0 * std::exp(t_quantile(0.975, 50) * 0.1)).epsilon(1e-9));
 }
 
 TEST_CASE("grind intervals: held parameters' ranges are limited from their least S, their edge points within it",
@@ -158,7 +168,7 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
   // and is what a refit there gives.
   Ore at_best = with_variables(start, u, u.best.free);
   for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(at_best, u.best.held[k]);
-  const double s_best = weighted_ssr(at_best, tests), limit = profile_limit(s_best, u.dof);
+  const double s_best = weighted_ssr(at_best, tests), limit = profile_limit(s_best, interval_dof(u));
   std::printf("held profiles: S %.3f at the fit, %.3f at the best point (E_inf %.4g, d0 %.4g); limit %.3f; "
               "E_inf [%.4g, %.4g], d0 [%.4g, %.4g]; %zu edge points; %.2f s\n",
               f.ssr, s_best, u.best.held[0], u.best.held[1], limit, u.held[0].lo, u.held[0].hi, u.held[1].lo,
@@ -175,27 +185,40 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
   INFO(outside);
   CHECK(outside.empty() == (f.ssr <= limit));
   if (f.ssr > limit) CHECK(outside.find("e_inf_J_kg") != std::string::npos);
-  // Each end the data set (not the file's range, not where it is held):
-  // within the limit, and past it a tenth of its reach further out.
-  int ends = 0;
-  for (std::size_t k = 0; k < 2; ++k) {
+  // Each end of a profile the data set (not the file's range): the other
+  // held one and the free ones refitted there, S within the limit; a
+  // tenth of its reach further out, everything else refitted from there,
+  // past it. The profile is a true one: at one end at least the other held
+  // parameter has moved from its best value, and S with it kept at its
+  // best (the conditional profile) lies above S at the end.
+  int ends = 0, others_moved = 0;
+  for (const HeldEdge& e : u.edges) {
+    if (e.of < 0) continue;
+    const std::size_t k = static_cast<std::size_t>(e.of), other = 1 - k;
     const HeldParameter& h = u.held[k];
     const OreParameter& p = *find_ore_parameter(h.name);
-    for (int dir : {-1, +1}) {
-      const double end = dir < 0 ? h.lo : h.hi;
-      if (end == h.value || end <= p.lo || end >= p.hi) continue;
-      ++ends;
-      Ore o = at_best;
-      p.set(o, end);
-      const double s_end = refit_ssr(o, tests, free);
-      const double reach = std::fabs(std::log(end / u.best.held[k]));
-      p.set(o, end * std::exp(dir * 0.11 * reach));
-      const double s_past = refit_ssr(o, tests, free);
-      INFO(h.name << " end " << end << ": S " << s_end << ", a tenth further " << s_past << ", limit " << limit);
-      CHECK(s_end <= limit * (1 + 1e-6));
-      CHECK(s_past > limit * (1 - 1e-6));
-    }
+    const double end = e.held[k];
+    if (end <= p.lo || end >= p.hi) continue;
+    ++ends;
+    Ore o = with_variables(start, u, e.free);
+    for (std::size_t m = 0; m < 2; ++m) find_ore_parameter(u.held[m].name)->set(o, e.held[m]);
+    const double s_end = weighted_ssr(o, tests);
+    const double step = std::log(end / u.best.held[k]);
+    p.set(o, end * std::exp(0.11 * step));
+    std::vector<std::string> all = free;
+    all.push_back(u.held[other].name);
+    const double s_past = refit_ssr(o, tests, all);
+    Ore conditional = at_best;
+    p.set(conditional, end);
+    const double s_conditional = refit_ssr(conditional, tests, free);
+    const bool moved = std::fabs(e.held[other] / u.best.held[other] - 1) > 1e-3;
+    others_moved += moved && s_conditional > s_end * (1 + 1e-6);
+    INFO(h.name << " end " << end << " (" << u.held[other].name << " " << e.held[other] << "): S " << s_end
+                << ", a tenth further " << s_past << ", the other at its best " << s_conditional << ", limit " << limit);
+    CHECK(s_end <= limit * (1 + 1e-6));
+    CHECK(s_past > limit * (1 - 1e-6));
   }
+  CHECK(others_moved >= 1);
   CHECK(ends >= 2);
   // The edge points (each alone, and toward the corners): each within the limit.
   REQUIRE(u.edges.size() >= 4);
@@ -205,7 +228,7 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
     for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(o, c.held[k]);
     CHECK(weighted_ssr(o, tests) <= limit * (1 + 1e-6));
     // A corner point (both moved): on the limit or the file's range, not
-    // short of them at the corner of the (conditional) ranges. An eighth
+    // short of them at the corner of the ranges. An eighth
     // further out along its ray from the best point is past the limit,
     // or past the file's range.
     bool both = true, in_file = true;
@@ -255,8 +278,8 @@ TEST_CASE("grind intervals: with a held parameter, the interval still holds the 
     f.parameters.push_back(h);
     const FitCovariance u = fit_covariance(f, tests);
     const Sensitivity s = sensitivities(f.ore, u, p80_third_mill).front();
-    const Interval i = interval_of(s, u.matrix, t_quantile(0.975, u.dof), 1);
-    Sensitivity alone = s;  // E∞ taken as known: no reach, around the value
+    const Interval i = interval_of(s, interval_covariance(u), t_quantile(0.975, interval_dof(u)), 1);
+    Sensitivity alone = s;  // E∞ taken as known: no reach, around the value, the fit's own s² and ν
     alone.down = alone.up = 0;
     alone.center = std::log(alone.value);
     const Interval d = interval_of(alone, u.matrix, t_quantile(0.975, u.dof), 1);
@@ -545,12 +568,13 @@ TEST_CASE("grind --fit: one test at 0.5 pp is four copies of it at 1 pp", "[grin
       CHECK(b.covariance[i][j] * b.dof == Approx(a.covariance[i][j] * a.dof).epsilon(1e-7));
 }
 
-TEST_CASE("grind intervals: held parameters on a ridge: the corner search runs on past the ranges' corner",
+TEST_CASE("grind intervals: held parameters on a ridge: each profile runs along it, past the conditional range",
           "[grind][interval][held]") {
   // η and E∞ both held, σ free: the two trade against each other (a
-  // ridge), so each one's range, the other at its best, is short, and the
-  // corners along the ridge lie inside the limit. The search toward them
-  // runs on to the limit (or the file's range): an eighth further is past.
+  // ridge), so each one's range with the other kept at its best (the
+  // conditional range) is short; its profile, the other refitted, runs
+  // along the ridge. Every point the search kept lies within the profiles'
+  // ranges, and the corner points on the limit: an eighth further is past.
   const Ore truth = known_ore();
   Ore start = truth;
   start.fracture.sigma = 1.0;
@@ -569,33 +593,175 @@ TEST_CASE("grind intervals: held parameters on a ridge: the corner search runs o
   REQUIRE(u.held.size() == 2);
   Ore at_best = with_variables(start, u, u.best.free);
   for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(at_best, u.best.held[k]);
-  const double limit = profile_limit(weighted_ssr(at_best, tests), u.dof);
-  int corners = 0, beyond = 0;
+  const double limit = profile_limit(weighted_ssr(at_best, tests), interval_dof(u));
+  int corners = 0, beyond = 0, past_conditional = 0;
   for (const HeldEdge& c : u.edges) {
-    bool both = true, in_file = true, past_box = false;
+    Ore o = with_variables(start, u, c.free);
+    for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(o, c.held[k]);
+    CHECK(weighted_ssr(o, tests) <= limit * (1 + 1e-6));
+    // Within the ranges, to the accuracy of their ends (a tenth of their
+    // distance from the best point, in the logarithm).
+    for (std::size_t k = 0; k < 2; ++k) {
+      const double lo = std::log(u.held[k].lo), hi = std::log(u.held[k].hi), x = std::log(c.held[k]);
+      const double b = std::log(u.best.held[k]);
+      beyond += x < lo - 0.1 * (b - lo) - 1e-9 || x > hi + 0.1 * (hi - b) + 1e-9;
+    }
+    if (c.of >= 0) {
+      // A profile's end: the conditional refit there (the other at its best) is past the limit.
+      const OreParameter& p = *find_ore_parameter(u.held[static_cast<std::size_t>(c.of)].name);
+      Ore conditional = at_best;
+      p.set(conditional, c.held[static_cast<std::size_t>(c.of)]);
+      past_conditional += refit_ssr(conditional, tests, free) > limit;
+      continue;
+    }
+    bool in_file = true;
     Ore further = at_best;
     for (std::size_t k = 0; k < 2; ++k) {
       const OreParameter& p = *find_ore_parameter(u.held[k].name);  // both scales: their logarithms
-      both = both && c.held[k] != u.best.held[k];
-      past_box = past_box || c.held[k] < u.held[k].lo * (1 - 1e-9) || c.held[k] > u.held[k].hi * (1 + 1e-9);
       const double v = u.best.held[k] * std::pow(c.held[k] / u.best.held[k], 1.125);
       in_file = in_file && v >= p.lo && v <= p.hi;
       if (in_file) p.set(further, v);
     }
-    if (!both) continue;
     ++corners;
-    beyond += past_box;
-    Ore o = with_variables(start, u, c.free);
-    for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(o, c.held[k]);
-    CHECK(weighted_ssr(o, tests) <= limit * (1 + 1e-6));
     if (!in_file) continue;
     const double s_further = refit_ssr(further, tests, free);
     INFO("corner " << c.held[0] << ", " << c.held[1] << ": an eighth further S " << s_further << ", limit " << limit);
     CHECK(s_further > limit * (1 - 1e-6));
   }
-  std::printf("held on a ridge: eta [%.4g, %.4g], E_inf [%.4g, %.4g] (each, the other at its best); %d corner points, "
-              "%d beyond those ranges\n",
-              u.held[0].lo, u.held[0].hi, u.held[1].lo, u.held[1].hi, corners, beyond);
+  std::printf("held on a ridge: eta [%.4g, %.4g], E_inf [%.4g, %.4g] (profiles); %d corner points, %d ends past "
+              "the conditional range, %d coordinates beyond the ranges\n",
+              u.held[0].lo, u.held[0].hi, u.held[1].lo, u.held[1].hi, corners, past_conditional, beyond);
   CHECK(corners >= 2);
-  CHECK(beyond >= 1);  // the joint region reaches past the conditional ranges
+  CHECK(past_conditional >= 2);  // the profiles reach past the conditional ranges
+  CHECK(beyond == 0);            // and hold every point of the region the search found
+}
+
+TEST_CASE("grind intervals: the held parameters' reach against a brute-force grid over them",
+          "[grind][interval][held]") {
+  // η and E∞ held on a ridge, σ free (the case above). A grid over the
+  // logarithms of the two, σ refitted at each point: the extreme of each
+  // product over the points within the limit, against the reach
+  // sensitivities() takes from the kept points (the profiles' ends and the
+  // corner points). The region is a thin ridge, so the grid is a band
+  // along it: 41 columns across η's range (a tenth wider), in each 21
+  // points of E∞ about the ridge (through η's profile: its ends and the
+  // best point), a band wide enough that its edge rows lie past the limit
+  // (doubled until they do). And the reach of the profiles' ends alone
+  // (down_by_held, up_by_held): without the corner search, the P80 after
+  // 20 min falls short of the grid's.
+  const auto t0 = std::chrono::steady_clock::now();
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.fracture.sigma = 1.0;
+  const std::vector<TestInMill> tests = {{synthetic_test(truth, 1.0, 43), synthetic_spectrum(), kPower_W, kHoldup_kg}};
+  const std::vector<std::string> free = {"sigma"};
+  BatchFit f = fit_batch_tests(start, tests, free);
+  for (const char* name : {"efficiency", "e_inf_J_kg"}) {
+    FittedParameter h;
+    h.name = name;
+    h.start = h.value = find_ore_parameter(name)->get(start);
+    h.identified = false;
+    h.why = "held for the test";
+    f.parameters.push_back(h);
+  }
+  const FitCovariance u = fit_covariance(f, tests);
+  REQUIRE(u.held.size() == 2);
+  Ore at_best = with_variables(start, u, u.best.free);
+  for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(at_best, u.best.held[k]);
+  const double limit = profile_limit(weighted_ssr(at_best, tests), interval_dof(u));
+  // Products: a third mill's P80, the first mill's after 20 min, E∞ / η² (a number across the ridge).
+  auto products = [](const Ore& o) {
+    return std::vector<double>{p80_third_mill(o)[0], p80_at_20_min(o)[0],
+                               o.fracture.e_inf_J_kg / (o.efficiency * o.efficiency)};
+  };
+  const std::vector<Sensitivity> ss = sensitivities(f.ore, u, products);
+  const std::size_t np = ss.size();
+  const OreParameter &pe = *find_ore_parameter("efficiency"), &pE = *find_ore_parameter("e_inf_J_kg");
+  // The ridge through η's profile: log E∞ against log η, piecewise linear
+  // through its two ends and the best point.
+  std::vector<std::pair<double, double>> ridge = {{std::log(u.best.held[0]), std::log(u.best.held[1])}};
+  for (const HeldEdge& e : u.edges)
+    if (e.of == 0) ridge.push_back({std::log(e.held[0]), std::log(e.held[1])});
+  REQUIRE(ridge.size() == 3);
+  std::sort(ridge.begin(), ridge.end());
+  auto ridge_at = [&](double x) {
+    const std::size_t k = x < ridge[1].first ? 0 : 1;
+    const double dx = ridge[k + 1].first - ridge[k].first;
+    return dx > 0 ? ridge[k].second + (x - ridge[k].first) / dx * (ridge[k + 1].second - ridge[k].second)
+                  : ridge[k].second;
+  };
+  const double a = std::log(u.held[0].lo), b = std::log(u.held[0].hi);
+  const double x_lo = std::max(a - 0.1 * (b - a), std::log(pe.lo)), x_hi = std::min(b + 0.1 * (b - a), std::log(pe.hi));
+  const int nx = 41, ny = 21;
+  std::vector<double> grid_up(np, 0), grid_down(np, 0);
+  int inside = 0, fits = 0;
+  double band = 0.05;  // half-width in log E∞
+  for (int tries = 0; tries < 4; ++tries, band *= 2) {
+    std::fill(grid_up.begin(), grid_up.end(), 0.0);
+    std::fill(grid_down.begin(), grid_down.end(), 0.0);
+    inside = 0;
+    bool edge_inside = false;
+    for (int i = 0; i < nx; ++i) {
+      const double x = x_lo + (x_hi - x_lo) * i / (nx - 1);
+      for (int j = 0; j < ny; ++j) {
+        const double y = ridge_at(x) + band * (2.0 * j / (ny - 1) - 1);
+        if (y < std::log(pE.lo) || y > std::log(pE.hi)) continue;
+        Ore o = at_best;
+        pe.set(o, std::exp(x));
+        pE.set(o, std::exp(y));
+        BatchFit g;
+        ++fits;
+        try {
+          g = fit_batch_tests(o, tests, free, 300, false);
+        } catch (const std::exception&) {
+          continue;
+        }
+        if (g.ssr > limit) continue;
+        ++inside;
+        edge_inside = edge_inside || j == 0 || j == ny - 1;
+        const std::vector<double> v = products(g.ore);
+        for (std::size_t m = 0; m < np; ++m) {
+          grid_up[m] = std::max(grid_up[m], std::log(v[m]) - ss[m].center);
+          grid_down[m] = std::min(grid_down[m], std::log(v[m]) - ss[m].center);
+        }
+      }
+    }
+    if (!edge_inside) break;
+  }
+  // The held point counts as a point of the reach (the products are made there).
+  for (std::size_t m = 0; m < np; ++m) {
+    const double at_held = std::log(ss[m].value) - ss[m].center;
+    grid_up[m] = std::max(grid_up[m], at_held);
+    grid_down[m] = std::min(grid_down[m], at_held);
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("held reach against a grid of %d x %d along the ridge (band +-%.2f in log E_inf; %d points within the "
+              "limit, %d fits), in logarithms below / above the centre; %.1f s\n",
+              nx, ny, band, inside, fits, seconds);
+  int ends_short = 0;
+  for (std::size_t m = 0; m < np; ++m) {
+    REQUIRE(ss[m].ok);
+    REQUIRE(ss[m].log);
+    double ends_down = 0, ends_up = 0;
+    for (std::size_t k = 0; k < 2; ++k) {
+      ends_down = std::min(ends_down, ss[m].down_by_held[k]);
+      ends_up = std::max(ends_up, ss[m].up_by_held[k]);
+    }
+    std::printf("  product %zu: search %.4f / %.4f, grid %.4f / %.4f, profiles' ends alone %.4f / %.4f\n", m,
+                ss[m].down, ss[m].up, grid_down[m], grid_up[m], ends_down, ends_up);
+    // Within 15 % of the grid's reach (and 0.001, a tenth of a per cent
+    // of the product, for a reach near 0); measured: 3 to 13 % short,
+    // 6 % past (the grid's columns are 0.04 apart in log η, which moves
+    // E∞ / η² by 0.08: the grid misses some of the extreme too).
+    auto close = [](double reach, double grid) { return std::fabs(reach - grid) <= 0.15 * std::fabs(grid) + 1e-3; };
+    INFO("product " << m);
+    CHECK(close(ss[m].down, grid_down[m]));
+    CHECK(close(ss[m].up, grid_up[m]));
+    ends_short += !close(ends_down, grid_down[m]);
+    ends_short += !close(ends_up, grid_up[m]);
+  }
+  // Without the rays beyond the profiles' ends the reach misses the grid's
+  // on three sides of the six (measured: the third mill's P80 below, 84 %
+  // short; the P80 after 20 min 46 and 55 % short on both sides).
+  CHECK(ends_short >= 3);
 }

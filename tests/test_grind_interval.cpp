@@ -4,7 +4,9 @@
 // kept, bad covariance keys refused by name, and the coverage of the 95 %
 // intervals over many synthetic batch tests with seeded scatter, on a
 // synthetic spectrum (no DEM run): about 95 %, and far below at half the
-// width, so the check fails for intervals too narrow.
+// width, so the check fails for intervals too narrow; and with sieve
+// errors correlated between sieves, where it covers less (the figures of
+// docs/grinding-intervals.md).
 #include <catch2/catch.hpp>
 
 #include <unistd.h>
@@ -144,7 +146,13 @@ TEST_CASE("grind intervals: the fit's covariance kept with the ore and read back
   REQUIRE(v.held.size() == u.held.size());
   REQUIRE(v.information.size() == u.names.size() + u.held.size());
   CHECK(v.information[0][0] == Approx(u.information[0][0]).epsilon(1e-9));
-  CHECK(v.edges.size() == u.edges.size());
+  REQUIRE(v.edges.size() == u.edges.size());
+  int profile_ends = 0;
+  for (std::size_t e = 0; e < u.edges.size(); ++e) {
+    CHECK(v.edges[e].of == u.edges[e].of);  // a profile's end says whose (profile_of)
+    profile_ends += u.edges[e].of >= 0;
+  }
+  if (!u.held.empty()) CHECK(profile_ends >= 1);
   REQUIRE(v.best.held.size() == u.best.held.size());
   for (std::size_t k = 0; k < u.best.held.size(); ++k) CHECK(v.best.held[k] == Approx(u.best.held[k]).epsilon(1e-9));
   for (std::size_t k = 0; k < u.held.size(); ++k) {
@@ -343,6 +351,10 @@ TEST_CASE("grind intervals through the command: --fit keeps the covariance, grin
   const nlohmann::json fj = json_of(dir.path / "fit" / "fit.json");
   REQUIRE(fj["covariance"]["correlation"].size() == u.names.size());
   for (std::size_t a = 0; a < u.names.size(); ++a) CHECK(fj["covariance"]["correlation"][a][a].get<double>() == Approx(1));
+  // The intervals' ν: the fit's less the held parameters.
+  CHECK(fj["covariance"]["interval_degrees_of_freedom"].get<int>() ==
+        fj["covariance"]["degrees_of_freedom"].get<int>() - static_cast<int>(u.held.size()));
+  CHECK(fj.contains("covariance_seconds"));
 
   // The fitted ore's products, and the truth's, in the same run.
   auto grind = [&](const fs::path& ore, const std::string& out) {
@@ -503,4 +515,93 @@ TEST_CASE("grind --fit twice through the command: the run key, the tests side by
     std::ofstream(dir.path / "tests" / "coarse.toml") << text;
   }
   refused({t1, (dir.path / "tests" / "coarse.toml").string()}, "coarse.toml: sieve_mm: 4.75 to");
+}
+
+namespace {
+
+// A 5 x 13 test of `truth` in the first mill whose sieve errors are
+// correlated between sieves. "adjacent": along each product's sieves,
+// e_k = ρ e_{k−1} + √(1 − ρ²) ξ_k, ξ uniform in ±1 pp (every reading's
+// scatter as the independent tests': ±1 pp uniform, 1/3 pp²). "cumulative":
+// an independent error in each size class's mass (uniform, ±a pp), the
+// passing at a sieve carrying the sum of the classes below it, so that
+// the coarser the sieve the larger its error, and neighbours share most of
+// theirs; a chosen so that the readings' mean square is 1/3 pp² as well.
+BatchTest correlated_test(const Ore& truth, const std::string& model, double rho, std::uint64_t seed) {
+  BatchTest t = synthetic_test(truth, 0.0, seed);
+  t.noise_pp = 1.0;
+  Scatter s(seed);
+  const std::size_t ns = t.sieve_m.size();  // readings at sieves 1 .. ns − 1 (the top passes 1)
+  // The reading at sieve k carries ns − k classes' errors, ns / 2 on
+  // average over k = 1 .. ns − 1: a² / 3 · ns / 2 = 1/3.
+  const double a = std::sqrt(2.0 / static_cast<double>(ns));
+  for (auto& row : t.passing) {
+    std::vector<double> e(ns, 0.0);
+    if (model == "adjacent") {
+      for (std::size_t k = 1; k < ns; ++k)
+        e[k] = (k == 1 ? 0.0 : rho * e[k - 1]) + (k == 1 ? 1.0 : std::sqrt(1 - rho * rho)) * s.next();
+    } else {
+      double below = 0;
+      for (std::size_t k = ns; k-- > 1;) {
+        below += a * s.next();
+        e[k] = below;
+      }
+    }
+    for (std::size_t k = 1; k < ns; ++k) row[k] += e[k] / 100;
+  }
+  return t;
+}
+
+}  // namespace
+
+TEST_CASE("grind intervals: coverage with sieve errors correlated between sieves", "[grind][interval][correlated]") {
+  // The coverage check's setting (the P80 after 20 min, η and σ fitted,
+  // the same ±1 pp scatter per reading) with errors correlated between
+  // sieves: adjacent sieves at ρ = 0.7, and the cumulative model. The
+  // method assumes independent readings; these are not, so it can cover
+  // less than 95 %: the measured figures are docs/grinding-intervals.md's,
+  // and the check holds each within three binomial standard deviations of
+  // its figure.
+  const auto t0 = std::chrono::steady_clock::now();
+  const Ore truth = known_ore();
+  const double true_p80 = p80_at_20_min(truth)[0];
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.sigma = 1.0;
+  const auto spectrum = synthetic_spectrum();
+  const int n = 400;
+  const BatchTest exact = synthetic_test(truth, 0.0, 1);
+  for (const std::string model : {"adjacent", "cumulative"}) {
+    int held = 0;
+    double width = 0, ms = 0, s2 = 0, z2 = 0;  // z: the P80's distance from the truth in its standard errors
+    for (int seed = 0; seed < n; ++seed) {
+      const BatchTest t = correlated_test(truth, model, 0.7, 20000 + seed);
+      for (std::size_t i = 0; i < t.passing.size(); ++i)
+        for (std::size_t k = 1; k < t.passing[i].size(); ++k) {
+          const double e = 100 * (t.passing[i][k] - exact.passing[i][k]);
+          ms += e * e / (n * t.passing.size() * (t.passing[i].size() - 1));
+        }
+      const BatchFit f = fit_batch_test(start, spectrum, kPower_W, kHoldup_kg, t, {"efficiency", "sigma"});
+      const FitCovariance u = fit_covariance(f, spectrum, kPower_W, kHoldup_kg, t);
+      const Interval i = propagate(f.ore, u, p80_at_20_min)[0];
+      REQUIRE(i.valid());
+      held += i.lo <= true_p80 && true_p80 <= i.hi;
+      width += (i.hi - i.lo) / true_p80 / n;
+      s2 += u.residual_variance_pp2 / n;
+      const double z = std::log(std::sqrt(i.lo * i.hi) / true_p80) /
+                       (0.5 * std::log(i.hi / i.lo) / t_quantile(0.975, interval_dof(u)));
+      z2 += z * z / n;
+    }
+    const double coverage = static_cast<double>(held) / n;
+    std::printf("interval coverage, sieve errors %s: %d tests, readings' mean square %.3f pp2, s2 %.3f pp2, mean "
+                "width %.2f %%: %.3f held; z rms %.2f (%.1f s so far)\n",
+                model.c_str(), n, ms, s2, 100 * width, coverage, std::sqrt(z2),
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    // The figures docs/grinding-intervals.md gives, each within three
+    // binomial standard deviations of n; both well below 95 % (its three
+    // standard deviations: 0.033): the method under-covers here.
+    const double documented = model == "adjacent" ? 0.718 : 0.695;
+    CHECK(std::fabs(coverage - documented) <= 3 * std::sqrt(documented * (1 - documented) / n));
+    CHECK(coverage < 0.95 - 3 * std::sqrt(0.95 * 0.05 / n));
+  }
 }

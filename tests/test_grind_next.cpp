@@ -1,7 +1,9 @@
 // Which batch test to run next (src/grind/next_test.h, `grind --next-test`):
 // the expected width of a product's interval after a candidate test,
-// against the widths that fits of simulated candidate tests give; the
-// ranking through the command, its files, and bad candidates refused.
+// against the widths that fits of simulated candidate tests give, and
+// with held parameters against the definitions computed by hand; the
+// ranking through the command (two different mills), its files, and bad
+// candidates refused.
 #include <catch2/catch.hpp>
 
 #include <sys/wait.h>
@@ -18,8 +20,11 @@
 #include <string>
 #include <vector>
 
+#include "app/commands.h"
 #include "app/grind.h"
 #include "bond_run.h"
+#include "grind/bond.h"
+#include "grind/circuit.h"
 #include "grind/fit.h"
 #include "grind/interval.h"
 #include "grind/next_test.h"
@@ -152,10 +157,111 @@ TEST_CASE("grind next test: the same test again divides the standard deviation b
   CHECK(ratio == Approx(1 / std::sqrt(2.0)).epsilon(1e-6));
 }
 
-TEST_CASE("grind next test: held parameters the test fixes take their degrees of freedom", "[grind][next]") {
-  // E∞ and d₀ held wrong, η and σ fitted; a long test in the harder mill
-  // fixes both: the expected half-width is Student's t with the fit's
-  // degrees of freedom, plus the candidate's readings, less the two.
+namespace {
+
+// The inverse of a small matrix by Gauss–Jordan with partial pivoting.
+std::vector<std::vector<double>> inverse(std::vector<std::vector<double>> a) {
+  const std::size_t n = a.size();
+  std::vector<std::vector<double>> inv(n, std::vector<double>(n, 0.0));
+  for (std::size_t i = 0; i < n; ++i) inv[i][i] = 1;
+  for (std::size_t c = 0; c < n; ++c) {
+    std::size_t piv = c;
+    for (std::size_t r = c + 1; r < n; ++r)
+      if (std::fabs(a[r][c]) > std::fabs(a[piv][c])) piv = r;
+    std::swap(a[c], a[piv]);
+    std::swap(inv[c], inv[piv]);
+    const double d = a[c][c];
+    for (std::size_t k = 0; k < n; ++k) a[c][k] /= d, inv[c][k] /= d;
+    for (std::size_t r = 0; r < n; ++r) {
+      if (r == c) continue;
+      const double f = a[r][c];
+      for (std::size_t k = 0; k < n; ++k) a[r][k] -= f * a[c][k], inv[r][k] -= f * inv[c][k];
+    }
+  }
+  return inv;
+}
+
+double quad(const std::vector<double>& g, const std::vector<std::vector<double>>& m) {
+  double v = 0;
+  for (std::size_t a = 0; a < g.size(); ++a)
+    for (std::size_t b = 0; b < g.size(); ++b) v += g[a] * m[a][b] * g[b];
+  return v;
+}
+
+// The expected interval after a candidate, computed here from the
+// definitions (docs/grinding-intervals.md, "How it works"), not through
+// expected_after: the candidate's readings (pp) at its informative sieves
+// differenced by hand (central steps of 10⁻³ in each variable, every
+// variable a logarithm here), its information J_cᵀJ_c / s² with
+// s² = S_min / (dof − held), the fit's information rescaled to that s²,
+// the sum inverted by Gauss–Jordan; the free part t √(gᵀ L_ff⁻¹ g), the
+// held reach each side the lesser of the reach now and
+// t √(cᵀ L⁻¹ c − gᵀ L_ff⁻¹ g); around the centre now.
+struct ByHand {
+  double lo = 0, hi = 0, linear = 0;
+  int data = 0;
+};
+ByHand expected_by_hand(const Ore& ore, const FitCovariance& u, const Sensitivity& s, TestInMill c) {
+  std::vector<std::string> vars = u.names;
+  for (const HeldParameter& h : u.held) vars.push_back(h.name);
+  const std::size_t nv = vars.size(), np = u.names.size(), nh = u.held.size();
+  c.test.passing = batch_test_products(ore, c.spectrum, c.power_W, c.holdup_kg, c.test);
+  const std::vector<std::size_t> sieves = informative_sieves(c.test);
+  auto readings = [&](const Ore& o) {
+    const auto pred = batch_test_products(o, c.spectrum, c.power_W, c.holdup_kg, c.test);
+    std::vector<double> r;
+    for (const auto& row : pred)
+      for (std::size_t k : sieves) r.push_back(100 * row[k]);
+    return r;
+  };
+  std::vector<std::vector<double>> J;  // [variable][reading]
+  for (const std::string& name : vars) {
+    const OreParameter& p = *find_ore_parameter(name);
+    REQUIRE(p.log);
+    Ore up = ore, down = ore;
+    p.set(up, p.get(ore) * std::exp(1e-3));
+    p.set(down, p.get(ore) * std::exp(-1e-3));
+    const std::vector<double> a = readings(up), b = readings(down);
+    std::vector<double> col;
+    for (std::size_t i = 0; i < a.size(); ++i) col.push_back((a[i] - b[i]) / 2e-3);
+    J.push_back(col);
+  }
+  ByHand out;
+  out.data = static_cast<int>(J[0].size());
+  const int nu = u.dof - static_cast<int>(nh);
+  const double s2 = nh ? u.ssr_best / nu : u.residual_variance_pp2;  // S_min over ν
+  std::vector<std::vector<double>> L(nv, std::vector<double>(nv));
+  for (std::size_t a = 0; a < nv; ++a)
+    for (std::size_t b = 0; b < nv; ++b) {
+      double v = 0;
+      for (std::size_t i = 0; i < J[a].size(); ++i) v += J[a][i] * J[b][i];
+      L[a][b] = u.information[a][b] * u.residual_variance_pp2 / s2 + v / s2;
+    }
+  std::vector<double> all = s.g;
+  all.insert(all.end(), s.g_held.begin(), s.g_held.end());
+  std::vector<std::vector<double>> Lff(np, std::vector<double>(np));
+  for (std::size_t a = 0; a < np; ++a)
+    for (std::size_t b = 0; b < np; ++b) Lff[a][b] = L[a][b];
+  const double var_all = quad(all, inverse(L)), var_free = quad(s.g, inverse(Lff));
+  const double t = t_quantile(0.975, nu + out.data);
+  out.linear = t * std::sqrt(var_all - var_free);
+  const double below = std::hypot(t * std::sqrt(var_free), std::min(-s.down, out.linear));
+  const double above = std::hypot(t * std::sqrt(var_free), std::min(s.up, out.linear));
+  out.lo = std::exp(s.center - below);
+  out.hi = std::exp(s.center + above);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("grind next test: a held parameter the candidate informs, its reach against the definitions",
+          "[grind][next]") {
+  // E∞ and d₀ held wrong, η and σ fitted. Two candidates: a long test in
+  // the harder mill, which informs both held ones, and a short one in the
+  // first mill, which hardly does. Each expected interval against the one
+  // computed by hand from the definitions; the reach of the held ones
+  // falls to the linear reach where the candidate informs them, and stays
+  // as now on the side where it does not.
   const Ore truth = known_ore();
   Ore start = truth;
   start.efficiency = 0.6;
@@ -174,17 +280,45 @@ TEST_CASE("grind next test: held parameters the test fixes take their degrees of
   }
   const FitCovariance u = fit_covariance(f, tests);
   REQUIRE(u.held.size() == 2);
+  REQUIRE(u.information.size() == 4);
   const Sensitivity s = sensitivities(f.ore, u, p80_third_mill, true).front();
-  const NextTestWidth w =
-      expected_after(f.ore, u, s, {candidate_test(f.ore, {2, 4, 8, 16, 32}), harder_spectrum(), kPower_W, kHoldup_kg});
-  REQUIRE(w.expected.valid());
-  REQUIRE(w.fixes.size() == 2);
   REQUIRE(s.log);
-  const int nu = u.dof + w.data - 2;
-  const double half = std::log(w.expected.hi) - std::log(s.value);  // centred on the value where all are fixed
-  std::printf("next test, both held fixed: dof %d + %d readings - 2 = %d; half-width %.9g against t %.9g x sd %.9g\n",
-              u.dof, w.data, nu, half, t_quantile(0.975, nu), w.sd);
-  CHECK(half == Approx(t_quantile(0.975, nu) * w.sd).epsilon(1e-9));
+  const Interval now = propagate(f.ore, u, p80_third_mill)[0];
+  const double width_now = now.hi - now.lo;
+  struct Case {
+    const char* name;
+    TestInMill c;
+  };
+  const std::vector<Case> cases = {
+      {"harder mill, 2 to 32 min",
+       {candidate_test(f.ore, {2, 4, 8, 16, 32}), harder_spectrum(), kPower_W, kHoldup_kg}},
+      {"first mill, 0.5 to 8 min", {candidate_test(f.ore, {0.5, 1, 2, 4, 8}), synthetic_spectrum(), kPower_W, kHoldup_kg}}};
+  std::printf("next test with two held (E_inf, d0): interval now [%.2f, %.2f], width %.2f um; reach now %.4f / %.4f\n",
+              now.lo, now.hi, width_now, s.down, s.up);
+  std::vector<NextTestWidth> ws;
+  for (const Case& k : cases) {
+    const NextTestWidth w = expected_after(f.ore, u, s, k.c);
+    const ByHand h = expected_by_hand(f.ore, u, s, k.c);
+    REQUIRE(w.expected.valid());
+    std::printf("  %s: expected [%.3f, %.3f] width %.3f (by hand [%.3f, %.3f]); held reach %.4f / %.4f, linear "
+                "%.4f; fixes %zu\n",
+                k.name, w.expected.lo, w.expected.hi, w.width, h.lo, h.hi, w.reach_down, w.reach_up, h.linear,
+                w.fixes.size());
+    CHECK(w.data == h.data);
+    CHECK(w.expected.lo == Approx(h.lo).epsilon(1e-4));
+    CHECK(w.expected.hi == Approx(h.hi).epsilon(1e-4));
+    // By how much the width shrinks, against the hand's.
+    CHECK(width_now - w.width == Approx(width_now - (h.hi - h.lo)).epsilon(1e-3));
+    ws.push_back(w);
+  }
+  // The harder mill's long test: below, the linear reach the information
+  // after leaves E∞ and d₀ (less than now); above, the reach now (less
+  // than the linear): the lesser, side by side.
+  CHECK(ws[0].reach_down == Approx(expected_by_hand(f.ore, u, s, cases[0].c).linear).epsilon(1e-4));
+  CHECK(ws[0].reach_down < -s.down);
+  CHECK(ws[0].reach_up == Approx(s.up).epsilon(1e-12));
+  CHECK(expected_by_hand(f.ore, u, s, cases[0].c).linear > s.up);
+  for (const NextTestWidth& w : ws) CHECK(w.width < width_now);
 }
 
 TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, bad candidates refused",
@@ -193,8 +327,18 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
   const Ore truth = known_ore();
   const TempDir dir{temp("command")};
   fs::create_directories(dir.path);
-  // A second candidate mill (a copy of the run), one without its spectrum.
-  fs::copy(run_dir, dir.path / "mill2", fs::copy_options::recursive);
+  // A second candidate mill, another: the Bond mill at 55 rpm instead of
+  // 70 (a short run, as short_bond_run's); a copy without its spectrum.
+  {
+    mc::app::RunOptions ro;
+    ro.c.case_path = std::string(MC_ASSET_DIR) + "/cases/bond.toml";
+    ro.c.overrides = {"run.settle=0.05", "run.warmup=0.1", "run.output_interval=0.01", "run.snapshot_interval=0",
+                      "run.checkpoint_interval=0", "mill.speed_rpm=55"};
+    ro.c.duration = 0.4;
+    ro.out = (dir.path / "mill2").string();
+    ro.quiet = true;
+    REQUIRE(mc::app::cmd_run(ro) == 0);
+  }
   fs::copy(run_dir, dir.path / "nospectrum", fs::copy_options::recursive);
   fs::remove(dir.path / "nospectrum" / "spectra.csv");
   const std::string fitted = fit_synthetic_in_bond_run(truth, 13, dir.path).string();
@@ -218,6 +362,45 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
     CHECK(w < nt["width_now"].get<double>());
     last = w;
   }
+  // Each row's expected width against the one computed here from the
+  // definitions (expected_by_hand), the product Bond's Wi in the first
+  // run's mill as run_bond makes it, each candidate the usual test in its
+  // mill at the ore's hold-up there; the ranking the same. The two mills
+  // differ: their best candidates' widths by more than 1 %.
+  const Ore fo = mc::io::read_ore(fitted);
+  const FitCovariance& fu = fo.fitted_under.covariance;
+  const mc::io::Run bond_mill = mc::io::read_run(run_dir, true, fo.energy_basis);
+  auto wi = [&](const Ore& o) {
+    Ore b = o;
+    put_sieve_on_class_top(b, 106e-6);
+    const double charge = bond_charge_kg(b);
+    const MillRates r = mill_rates(b, bond_mill.spectrum, bond_mill.power_W, charge);
+    return std::vector<double>{bond_test(b.sizes, b.feed, r.S_per_min, appearance_matrix(b, bond_mill.spectrum),
+                                         bond_mill.speed_rpm, charge, 106e-6)
+                                   .wi_kWh_t};
+  };
+  const Sensitivity fs_wi = sensitivities(fo, fu, wi, true).front();
+  CHECK(fs_wi.value == Approx(j["bond"]["work_index_kWh_t"].get<double>()).epsilon(1e-9));
+  std::vector<double> by_hand;
+  double best_of[2] = {HUGE_VAL, HUGE_VAL};
+  for (const auto& c : nt["candidates"]) {
+    const std::string run = c["run"].get<std::string>();
+    const mc::io::Run r = mc::io::read_run(run, true, fo.energy_basis);
+    const TestInMill cand{candidate_test(fo, c["times_min"].get<std::vector<double>>()), r.spectrum, r.power_W,
+                          mill_holdup_kg(fo, r.porosity, r.filling, r.mill_volume)};
+    const ByHand h = expected_by_hand(fo, fu, fs_wi, cand);
+    INFO(run << " " << c["times_min"].dump());
+    CHECK(c["expected_width"].get<double>() == Approx(h.hi - h.lo).epsilon(1e-3));
+    by_hand.push_back(h.hi - h.lo);
+    double& b = best_of[run == run_dir.string() ? 0 : 1];
+    b = std::min(b, h.hi - h.lo);
+  }
+  REQUIRE(by_hand.size() == 6);
+  CHECK(std::is_sorted(by_hand.begin(), by_hand.end()));
+  std::printf("next test through the command: Bond Wi width now %.4g; the narrowest expected %.4g in the 70 rpm mill, "
+              "%.4g at 55 rpm\n",
+              nt["width_now"].get<double>(), best_of[0], best_of[1]);
+  CHECK(std::fabs(best_of[0] / best_of[1] - 1) > 0.01);
   // The same rows in next_test.csv: a header and six.
   std::ifstream csv(dir.path / "next" / "next_test.csv");
   std::string line;

@@ -194,6 +194,10 @@ nlohmann::ordered_json covariance_json(const FitCovariance& u) {
   j["correlation"] = r;
   j["residual_variance_pp2"] = u.residual_variance_pp2;
   j["degrees_of_freedom"] = u.dof;
+  // The intervals' ν and s²: every parameter named, held ones too, fitted at S_min.
+  j["interval_degrees_of_freedom"] = interval_dof(u);
+  const double s2 = interval_variance(u);
+  j["interval_variance_pp2"] = std::isfinite(s2) ? nlohmann::json(s2) : nlohmann::json();
   j["held"] = nlohmann::json::array();
   for (const HeldParameter& h : u.held) {
     std::string kind;
@@ -223,14 +227,14 @@ void print_covariance(const FitCovariance& u) {
   for (const HeldParameter& h : u.held)
     std::printf("  %-16s held at %.6g; 95 %% range %s (the free ones refitted there%s)\n", h.name.c_str(), h.value,
                 held_range(h).c_str(),
-                u.held.size() > 1 ? "; conditional: the other held ones at their best" : "");
+                u.held.size() > 1 ? " with the other held ones" : "");
   if (!u.held.empty() && u.best.held.size() == u.held.size()) {
     std::string at;
     for (std::size_t k = 0; k < u.held.size(); ++k)
       at += fmt::format("{}{} {:.6g}", k ? ", " : "", u.held[k].name, u.best.held[k]);
     std::printf("  the held parameters fit the data best at %s (the free ones refitted there; S %.4g there, %.4g "
                 "where they are held, the limit %.4g): the intervals are built around it\n",
-                at.c_str(), u.ssr_best, u.ssr_fit, profile_limit(u.ssr_best, u.dof));
+                at.c_str(), u.ssr_best, u.ssr_fit, profile_limit(u.ssr_best, interval_dof(u)));
     if (const std::string out = outside_region(u); !out.empty()) std::printf("  note: %s\n", out.c_str());
   }
 }
@@ -325,7 +329,9 @@ int fit_batch(const GrindOptions& o) {
   const io::Run& run = tests.front().run;
   fit.ore.fitted_under = record(run, test_names, run_names, names, fit.rms_pp);
   // What the fit leaves open, kept with the ore for the intervals of its products.
+  const auto t_cov = std::chrono::steady_clock::now();
   fit.ore.fitted_under.covariance = fit_covariance(fit, in_mills);
+  const double cov_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_cov).count();
   // Its tables as fitted: a later hand edit of any key leaves the covariance stale.
   fit.ore.fitted_under.covariance.tables_hash = io::ore_tables_hash(fit.ore);
   const FitCovariance& cov = fit.ore.fitted_under.covariance;
@@ -383,6 +389,7 @@ int fit_batch(const GrindOptions& o) {
   j["condition"] = std::isfinite(fit.condition) ? nlohmann::json(fit.condition) : nlohmann::json();
   j["covariance"] = covariance_json(cov);
   j["seconds"] = seconds;
+  j["covariance_seconds"] = cov_seconds;
   j["contact"] = {{"law", run.contact.law},
                   {"restitution", run.contact.restitution},
                   {"friction", run.contact.friction},
@@ -432,8 +439,9 @@ int fit_batch(const GrindOptions& o) {
     print_covariance(cov);
     if (fit.free == 0)
       std::printf("  no parameter left free: every one is held, the residuals are the starting ore's\n");
-    std::printf("  rms residual %.4g pp; %d iterations, %d evaluations, %.2f s\n", fit.rms_pp, fit.iterations,
-                fit.evaluations, seconds);
+    std::printf("  rms residual %.4g pp; %d iterations, %d evaluations, %.2f s (%.2f s of it what the fit leaves "
+                "open: covariance, profiles)\n",
+                fit.rms_pp, fit.iterations, fit.evaluations, seconds, cov_seconds);
     if (fit.rms_pp > 2 * noise_pp && fit.free > 0)
       std::printf("  note: the rms residual is above twice the test's noise_pp (%g pp): the model cannot reproduce "
                   "the test with these parameters free%s\n",

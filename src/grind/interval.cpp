@@ -35,8 +35,9 @@ std::vector<double> variables_of(const Ore& ore, const std::vector<std::string>&
 // ------------------------------------------------------------ profiles
 
 // The free parameters refitted with some held ones moved (none of them
-// held in turn: they are free at the fit): the weighted sum of squares
-// there and the free variables; ok false where no fit is found.
+// held in turn: they are free at the fit), and `also` (held ones refitted
+// with them, for a profile): the weighted sum of squares there and the
+// free variables; ok false where no fit is found.
 struct Refit {
   bool ok = false;
   double ssr = kInf;
@@ -44,12 +45,15 @@ struct Refit {
   Ore ore;
 };
 
-Refit refit(const Ore& from, const FitCovariance& u, const std::vector<TestInMill>& tests) {
+Refit refit(const Ore& from, const FitCovariance& u, const std::vector<TestInMill>& tests,
+            const std::vector<std::string>& also = {}) {
   Refit r;
   r.ore = from;
+  std::vector<std::string> names = u.names;
+  names.insert(names.end(), also.begin(), also.end());
   try {
-    if (!u.names.empty()) {
-      const BatchFit f = fit_batch_tests(from, tests, u.names, 300, false);
+    if (!names.empty()) {
+      const BatchFit f = fit_batch_tests(from, tests, names, 300, false);
       r.ore = f.ore;
       r.ssr = f.ssr;
     } else {
@@ -77,12 +81,39 @@ HeldPoint held_point(const FitCovariance& u, const std::vector<double>& held, co
   return {held, refit(o, u, tests)};
 }
 
+// A point of held parameter j's profile: j at `value`, the free ones and
+// the other held ones refitted from `warm` (where they start). A refit
+// along a flat direction can end in a worse valley than where it started:
+// the free ones are also refitted alone, the other held ones as in `warm`,
+// and the lower S of the two kept (the profile is the least S over the
+// others; each refit is a point above it), where the first is past
+// `limit` or found no fit (within it, the point is inside the profile's
+// stretch either way).
+HeldPoint profile_point(const FitCovariance& u, std::size_t j, double value, const Ore& warm,
+                        const std::vector<TestInMill>& tests, double limit = 0) {
+  Ore o = warm;
+  find_ore_parameter(u.held[j].name)->set(o, value);
+  std::vector<std::string> others;
+  for (std::size_t k = 0; k < u.held.size(); ++k)
+    if (k != j) others.push_back(u.held[k].name);
+  Refit r = refit(o, u, tests, others);
+  if (!others.empty() && !(r.ok && r.ssr <= limit)) {
+    Refit alone = refit(o, u, tests);
+    if (alone.ok && (!r.ok || alone.ssr < r.ssr)) r = alone;
+  }
+  std::vector<double> held;
+  for (const HeldParameter& h : u.held) held.push_back(find_ore_parameter(h.name)->get(r.ok ? r.ore : o));
+  held[j] = value;
+  return {held, r};
+}
+
 struct LinePoint {
   double x = 0;  // the moving held parameter's variable
   HeldPoint p;
 };
 
-// Held parameter j moved through the point `from` (the others there): each
+// Held parameter j moved through the point `from` (its profile: the others
+// refitted at each point, from the point before): each
 // side stepped out (a factor of e for a scale, a quarter of its file
 // range for a value) to the file's range, or to the first point past the
 // limit of the least S met so far (which only falls: a point past it stays
@@ -98,13 +129,11 @@ std::vector<LinePoint> line(const FitCovariance& u, std::size_t j, const HeldPoi
     Ore warm = from.at.ore;
     while (dir < 0 ? x > end : x < end) {
       x = dir < 0 ? std::max(x - step, end) : std::min(x + step, end);
-      std::vector<double> v = from.held;
-      v[j] = from_var(p, x);
-      pts.push_back({x, held_point(u, v, warm, tests)});
+      pts.push_back({x, profile_point(u, j, from_var(p, x), warm, tests, profile_limit(ssr_min, interval_dof(u)))});
       const Refit& r = pts.back().p.at;
       if (!r.ok) break;
       ssr_min = std::min(ssr_min, r.ssr);
-      if (r.ssr > profile_limit(ssr_min, u.dof)) break;
+      if (r.ssr > profile_limit(ssr_min, interval_dof(u))) break;
       warm = r.ore;
     }
   }
@@ -131,10 +160,9 @@ std::size_t refine(std::vector<LinePoint>& pts, const FitCovariance& u, std::siz
   LinePoint lowest = pts[k];
   double a = k > 0 ? pts[k - 1].x : pts[k].x, b = k + 1 < pts.size() ? pts[k + 1].x : pts[k].x;
   if (!(b > a)) return k;
+  const double limit = profile_limit(lowest.p.at.ssr, interval_dof(u));
   auto at = [&](double x) {
-    std::vector<double> v = lowest.p.held;
-    v[j] = from_var(p, x);
-    return LinePoint{x, held_point(u, v, lowest.p.at.ore, tests)};
+    return LinePoint{x, profile_point(u, j, from_var(p, x), lowest.p.at.ore, tests, limit)};
   };
   auto keep = [&](const LinePoint& q) {
     if (q.p.at.ok && q.p.at.ssr < lowest.p.at.ssr) lowest = q;
@@ -174,10 +202,8 @@ std::pair<LinePoint, LinePoint> stretch(const std::vector<LinePoint>& pts, std::
     if (dir < 0 ? i > 0 : i + 1 < pts.size()) {
       double x_out = pts[dir < 0 ? i - 1 : i + 1].x;
       for (int b = 0; b < 20 && std::fabs(x_out - in.x) > 0.1 * std::fabs(in.x - pts[k].x); ++b) {
-        std::vector<double> v = in.p.held;
         const double x = 0.5 * (in.x + x_out);
-        v[j] = from_var(p, x);
-        LinePoint q{x, held_point(u, v, in.p.at.ore, tests)};
+        LinePoint q{x, profile_point(u, j, from_var(p, x), in.p.at.ore, tests, limit)};
         if (within(q)) in = q;
         else x_out = x;
       }
@@ -189,11 +215,11 @@ std::pair<LinePoint, LinePoint> stretch(const std::vector<LinePoint>& pts, std::
 
 // An edge point, unless it is the best point or one kept already.
 void add_edge(FitCovariance& u, const std::vector<double>& best, const std::vector<double>& held,
-              const std::vector<double>& free) {
+              const std::vector<double>& free, int of = -1) {
   if (held == best) return;
   for (const HeldEdge& e : u.edges)
     if (e.held == held) return;
-  u.edges.push_back({held, free});
+  u.edges.push_back({held, free, of});
 }
 
 // What the data leave open to the held parameters (fit_covariance):
@@ -203,7 +229,7 @@ void add_edge(FitCovariance& u, const std::vector<double>& best, const std::vect
 //    range (widened to hold where it is held) and two edge points;
 // 3. two to four together, from the best point toward each corner of their
 //    ranges, as far as the limit allows (the corner itself, or found by
-//    four halvings): more edge points.
+//    six halvings): more edge points.
 void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestInMill>& tests) {
   const std::size_t nh = u.held.size();
   Refit at_fit;
@@ -214,19 +240,27 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
   std::vector<double> held;
   for (const HeldParameter& h : u.held) held.push_back(h.value);
   HeldPoint best{held, at_fit};
-  double ssr_min = fit.ssr;
-  const double margin = profile_limit(fit.ssr, u.dof) - fit.ssr;
+  // With two or more, the first profile starts where the others are
+  // refitted at the first one's held value.
+  if (nh >= 2) {
+    const HeldPoint start = profile_point(u, 0, held[0], fit.ore, tests);
+    if (start.at.ok && start.at.ssr < best.at.ssr) best = start;
+  }
+  double ssr_min = best.at.ssr;
+  const int nu = interval_dof(u);
+  const double margin = profile_limit(fit.ssr, nu) - fit.ssr;
   std::vector<std::vector<LinePoint>> lines(nh);
   for (std::size_t j = 0; j < nh; ++j) {
     lines[j] = line(u, j, best, tests, ssr_min);
     const std::size_t k = refine(lines[j], u, j, tests, margin);
     if (lines[j][k].p.at.ssr < best.at.ssr) best = lines[j][k].p;
   }
-  const double limit = profile_limit(best.at.ssr, u.dof);
+  const double limit = profile_limit(best.at.ssr, nu);
   u.best = {best.held, best.at.free};
   u.ssr_fit = fit.ssr;
   u.ssr_best = best.at.ssr;
   u.ssr_limit = limit;
+  std::vector<std::pair<std::vector<double>, std::vector<double>>> profile_ends;  // each one's low and high end
   for (std::size_t j = 0; j < nh; ++j) {
     // The last line runs through the best point already; the others again.
     std::vector<LinePoint> pts = lines[j];
@@ -246,61 +280,131 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
     h.hi = hi.x > x_held ? from_var(p, hi.x) : h.value;
     h.free_at_lo = lo.x < x_held ? lo.p.at.free : u.values;
     h.free_at_hi = hi.x > x_held ? hi.p.at.free : u.values;
-    for (const LinePoint* e : {&lo, &hi}) add_edge(u, best.held, e->p.held, e->p.at.free);
+    for (const LinePoint* e : {&lo, &hi}) add_edge(u, best.held, e->p.held, e->p.at.free, static_cast<int>(j));
+    // Its ends in the variables, every held parameter, for the region's shape.
+    if (lo.x < hi.x) {
+      std::pair<std::vector<double>, std::vector<double>> e;
+      for (std::size_t k = 0; k < nh; ++k) {
+        const OreParameter& q = *find_ore_parameter(u.held[k].name);
+        e.first.push_back(to_var(q, lo.p.held[k]));
+        e.second.push_back(to_var(q, hi.p.held[k]));
+      }
+      profile_ends.push_back(e);
+    }
   }
   if (nh < 2 || nh > 4) return;
   std::vector<const OreParameter*> ps;
   for (const HeldParameter& h : u.held) ps.push_back(find_ore_parameter(h.name));
-  for (unsigned c = 0; c < (1u << nh); ++c) {
-    std::vector<double> x0(nh), x1(nh);
+  std::vector<double> x0(nh);
+  for (std::size_t j = 0; j < nh; ++j) x0[j] = to_var(*ps[j], best.held[j]);
+  // From the best point along d, as far as the limit allows. S along a
+  // ray rises about as the square of the distance (exactly so for a model
+  // linear in its parameters), so each refit predicts where S meets the
+  // limit, s √((limit − S_b) / (S − S_b)), and the next is taken there
+  // (2 % short of it where the last was past), kept inside the bracket of
+  // the last point within and the first past: from x0 + d (or where the
+  // ray leaves the file's range, or s_cap), until a point within lies
+  // within 2 % of the prediction, at most six refits; then, where none is
+  // within, four halvings toward the best point. The last point within is
+  // an edge point.
+  auto ray = [&](const std::vector<double>& d, double s_cap) {
+    double s_max = s_cap;
+    bool moves = false;
     for (std::size_t j = 0; j < nh; ++j) {
-      x0[j] = to_var(*ps[j], best.held[j]);
-      x1[j] = to_var(*ps[j], (c >> j) & 1u ? u.held[j].hi : u.held[j].lo);
+      if (d[j] > 0) s_max = std::min(s_max, (var_hi(*ps[j]) - x0[j]) / d[j]);
+      if (d[j] < 0) s_max = std::min(s_max, (var_lo(*ps[j]) - x0[j]) / d[j]);
+      moves = moves || d[j] != 0;
     }
+    if (!moves || !(s_max > 0)) return;
+    if (s_max == kInf) s_max = 1;
     auto at = [&](double s, const Ore& warm) {
       std::vector<double> v(nh);
-      for (std::size_t j = 0; j < nh; ++j) v[j] = from_var(*ps[j], x0[j] + s * (x1[j] - x0[j]));
+      for (std::size_t j = 0; j < nh; ++j) v[j] = from_var(*ps[j], x0[j] + s * d[j]);
       return held_point(u, v, warm, tests);
     };
-    double s_in = 0, s_out = 1;
-    HeldPoint in = at(1, best.at.ore);
-    std::size_t moving = 0;
-    for (std::size_t j = 0; j < nh; ++j) moving += x1[j] != x0[j];
-    if (in.at.ok && in.at.ssr <= limit) {
-      s_in = 1;
-      // The corner of the ranges lies inside the limit (each range is
-      // conditional, the others at their best): with two or more moving
-      // (one alone is its own profile, at its limit already), on toward
-      // the limit, by doublings up to the file's range, then four halvings.
-      double s_max = moving >= 2 ? kInf : 1;
-      for (std::size_t j = 0; j < nh; ++j) {
-        const double d = x1[j] - x0[j];
-        if (d > 0) s_max = std::min(s_max, (var_hi(*ps[j]) - x0[j]) / d);
-        if (d < 0) s_max = std::min(s_max, (var_lo(*ps[j]) - x0[j]) / d);
-      }
-      if (s_max == kInf) s_max = 1;  // the corner is the best point itself
-      s_out = kInf;
-      while (s_in < s_max && s_out == kInf) {
-        const double s = std::min(2 * s_in, s_max);
-        const HeldPoint q = at(s, in.at.ore);
-        if (q.at.ok && q.at.ssr <= limit) s_in = s, in = q;
-        else s_out = s;
-      }
-      for (int b = 0; b < 4 && s_out < kInf; ++b) {
-        const double s = 0.5 * (s_in + s_out);
-        const HeldPoint q = at(s, in.at.ore);
-        if (q.at.ok && q.at.ssr <= limit) s_in = s, in = q;
-        else s_out = s;
-      }
-    } else {
-      for (int b = 0; b < 4; ++b) {
-        const double s = 0.5 * (s_in + s_out);
-        const HeldPoint q = at(s, s_in > 0 ? in.at.ore : best.at.ore);
-        if (q.at.ok && q.at.ssr <= limit) s_in = s, in = q;
-        else s_out = s;
-      }
+    const double s_b = best.at.ssr;
+    double s_in = 0, s_out = kInf, s = std::min(1.0, s_max);
+    HeldPoint in = best;
+    for (int k = 0; k < 6; ++k) {
+      const HeldPoint q = at(s, s_in > 0 ? in.at.ore : best.at.ore);
+      const bool within = q.at.ok && q.at.ssr <= limit;
+      if (within) s_in = s, in = q;
+      else s_out = std::min(s_out, s);
+      if (within && s_in >= s_max) break;  // on the file's range
+      double next = q.at.ok && q.at.ssr > s_b ? s * std::sqrt((limit - s_b) / (q.at.ssr - s_b)) : 2 * s;
+      if (!within) next *= 0.98;
+      if (within && std::fabs(next - s) <= 0.02 * s) break;
+      next = std::min(next, s_max);
+      if (!(next > s_in && next < s_out)) next = s_out < kInf ? 0.5 * (s_in + s_out) : std::min(2 * s_in, s_max);
+      s = next;
+    }
+    for (int b = 0; b < 4 && s_in == 0 && s_out < kInf; ++b) {
+      s = 0.5 * s_out;
+      const HeldPoint q = at(s, best.at.ore);
+      if (q.at.ok && q.at.ssr <= limit) s_in = s, in = q;
+      else s_out = s;
     }
     if (s_in > 0) add_edge(u, best.held, in.held, in.at.free);
+  };
+  // The region's shape from the profiles' ends: for a model linear in its
+  // parameters the region is an ellipsoid Δ Σ, and the end of k's profile
+  // lies at √Δ Σ e_k / √Σ_kk from its centre, so Δ Σ_lk = P_k[l] P_k[k],
+  // P_k half the vector from k's low end to its high one. Rays along the
+  // ± axes and the diagonals of the space that makes the ellipsoid a ball
+  // (L w, L Lᵀ = Δ Σ, L lower triangular; ±e₀ left out, L e₀ being held
+  // 0's profile end): in two dimensions, with the profiles' ends, no two
+  // directions more than 45° apart, so a linear number's extreme is within
+  // cos 22.5° of the point nearest it whatever the correlation. Where that shape cannot be had (a profile
+  // without two ends, Σ not positive definite): toward each corner of the
+  // ranges, as before.
+  std::vector<std::vector<double>> A(nh, std::vector<double>(nh, 0.0)), L(nh, std::vector<double>(nh, 0.0));
+  bool shaped = profile_ends.size() == nh;
+  for (std::size_t k = 0; k < nh && shaped; ++k)
+    for (std::size_t l = 0; l < nh; ++l) {
+      const double pk = 0.5 * (profile_ends[k].second[k] - profile_ends[k].first[k]);
+      A[l][k] += 0.5 * 0.5 * (profile_ends[k].second[l] - profile_ends[k].first[l]) * pk;
+      A[k][l] += 0.5 * 0.5 * (profile_ends[k].second[l] - profile_ends[k].first[l]) * pk;
+    }
+  for (std::size_t j = 0; j < nh && shaped; ++j) {  // Cholesky
+    double dd = A[j][j];
+    for (std::size_t k = 0; k < j; ++k) dd -= L[j][k] * L[j][k];
+    if (!(dd > 1e-12 * std::max(A[j][j], 1e-300)) || !std::isfinite(dd)) shaped = false;
+    else L[j][j] = std::sqrt(dd);
+    for (std::size_t i = j + 1; i < nh && shaped; ++i) {
+      double v = A[i][j];
+      for (std::size_t k = 0; k < j; ++k) v -= L[i][k] * L[j][k];
+      L[i][j] = v / L[j][j];
+    }
+  }
+  if (shaped) {
+    std::vector<std::vector<double>> ws;
+    for (std::size_t i = 1; i < nh; ++i)  // L e₀ is held 0's own profile end: no ray
+      for (double sign : {-1.0, 1.0}) {
+        std::vector<double> w(nh, 0.0);
+        w[i] = sign;
+        ws.push_back(w);
+      }
+    for (unsigned c = 0; c < (1u << nh); ++c) {
+      std::vector<double> w(nh);
+      for (std::size_t j = 0; j < nh; ++j) w[j] = ((c >> j) & 1u ? 1.0 : -1.0) / std::sqrt(static_cast<double>(nh));
+      ws.push_back(w);
+    }
+    for (const std::vector<double>& w : ws) {
+      std::vector<double> d(nh, 0.0);
+      for (std::size_t i = 0; i < nh; ++i)
+        for (std::size_t k = 0; k <= i; ++k) d[i] += L[i][k] * w[k];
+      ray(d, kInf);
+    }
+    return;
+  }
+  for (unsigned c = 0; c < (1u << nh); ++c) {
+    std::vector<double> d(nh);
+    std::size_t moving = 0;
+    for (std::size_t j = 0; j < nh; ++j) {
+      d[j] = to_var(*ps[j], (c >> j) & 1u ? u.held[j].hi : u.held[j].lo) - x0[j];
+      moving += d[j] != 0;
+    }
+    ray(d, moving >= 2 ? kInf : 1);  // one moving alone: its own range's end, no further
   }
 }
 
@@ -376,6 +480,25 @@ double profile_limit(double ssr_min, int dof) {
   return dof > 0 ? ssr_min * (1 + std::pow(t_quantile(0.975, dof), 2) / dof) : kNaN;
 }
 
+int interval_dof(const FitCovariance& u) { return u.dof - static_cast<int>(u.held.size()); }
+
+double interval_variance(const FitCovariance& u) {
+  if (u.held.empty()) return u.residual_variance_pp2;
+  const int nu = interval_dof(u);
+  if (nu <= 0) return kNaN;
+  const double s_min = u.ssr_best > 0 ? u.ssr_best : u.residual_variance_pp2 * u.dof;
+  return s_min / nu;
+}
+
+std::vector<std::vector<double>> interval_covariance(const FitCovariance& u) {
+  std::vector<std::vector<double>> C = u.matrix;
+  if (u.held.empty() || !(u.residual_variance_pp2 > 0)) return C;
+  const double scale = interval_variance(u) / u.residual_variance_pp2;
+  for (auto& row : C)
+    for (double& c : row) c *= scale;
+  return C;
+}
+
 std::string variable_name(const std::string& parameter) {
   const OreParameter* p = find_ore_parameter(parameter);
   return p && p->log ? "log(" + parameter + ")" : parameter;
@@ -414,7 +537,7 @@ FitCovariance fit_covariance(const BatchFit& fit, const std::vector<TestInMill>&
     h.why = f.identified ? "on its bound" : f.why;
     u.held.push_back(h);
   }
-  if (!u.held.empty() && u.dof > 0) held_ranges(u, fit, tests);
+  if (!u.held.empty() && interval_dof(u) > 0) held_ranges(u, fit, tests);
   u.information = information(u, fit, tests);
   return u;
 }
@@ -498,13 +621,18 @@ std::vector<Sensitivity> sensitivities(const Ore& ore, const FitCovariance& u,
   std::vector<std::vector<double>> ends;
   std::vector<int> end_of;  // the held parameter a point moves alone from the centre; -1: several
   if (!u.edges.empty()) {
+    // An ore that marks its profiles' ends names each one's; one written
+    // before: a point that moves one parameter alone is that one's.
+    bool marked = false;
+    for (const HeldEdge& e : u.edges) marked = marked || e.of >= 0;
     for (const HeldEdge& e : u.edges) {
       if (e.held.size() != nh) continue;
       ends.push_back(at_point(e));
       int alone = -1, moved = 0;
       for (std::size_t k = 0; k < nh; ++k)
         if (!centred || e.held[k] != u.best.held[k]) alone = static_cast<int>(k), ++moved;
-      end_of.push_back(moved == 1 ? alone : -1);
+      // A profile's end (the others refitted there), else one moved alone.
+      end_of.push_back(marked ? (static_cast<std::size_t>(e.of) < nh ? e.of : -1) : moved == 1 ? alone : -1);
     }
   } else {  // an ore written before the edge points were kept: each at its range's ends
     for (std::size_t k = 0; k < nh; ++k) {
@@ -594,9 +722,10 @@ Interval interval_of(const Sensitivity& s, const std::vector<std::vector<double>
 std::vector<Interval> propagate(const Ore& ore, const FitCovariance& u,
                                 const std::function<std::vector<double>(const Ore&)>& f, double width_scale) {
   const std::vector<Sensitivity> ss = sensitivities(ore, u, f);
-  const double q = t_quantile(0.975, u.dof) * width_scale;
+  const double q = t_quantile(0.975, interval_dof(u)) * width_scale;
+  const std::vector<std::vector<double>> C = interval_covariance(u);
   std::vector<Interval> out;
-  for (const Sensitivity& s : ss) out.push_back(interval_of(s, u.matrix, q, width_scale));
+  for (const Sensitivity& s : ss) out.push_back(interval_of(s, C, q, width_scale));
   return out;
 }
 

@@ -4,8 +4,11 @@
 // together), and the 95 % interval of any number computed from the ore:
 // linearised propagation (the delta method) in the free parameters,
 // combined in quadrature with how far the held ones move the number.
-// One statistical basis throughout: Student's t with the fit's degrees of
-// freedom ν, as t for the delta method and as F(1, ν) = t² for the profiles.
+// One statistical basis throughout: S_min, the least weighted sum of
+// squares over every parameter named (free and held), and its degrees of
+// freedom ν = data − free − held (interval_dof); s² = S_min / ν scales the
+// free parameters' covariance, Student's t with ν is the delta method's
+// quantile, and F(1, ν) = t² the profiles'.
 #pragma once
 
 #include <functional>
@@ -26,21 +29,25 @@ std::string parameter_of_variable(const std::string& variable);
 std::string ore_file_key(const std::string& parameter);
 
 // What the fit leaves open. A held parameter (unidentified, or on its
-// bound) is given the range over which the free ones, refitted with it
-// there, stay within the data: its profile. The limit is S_min (1 + t²/ν):
-// S the weighted sum of squares, S_min the least the profiles meet, t
-// Student's at 0.975 with the fit's ν (F(1, ν) = t² at 95 %).
+// bound) is given the range over which the free ones and the other held
+// ones, refitted with it there, stay within the data: its profile. The
+// limit is S_min (1 + t²/ν): S the weighted sum of squares, S_min the
+// least the profiles meet, t Student's at 0.975 with ν = interval_dof
+// (F(1, ν) = t² at 95 %). A profile's point is the lower S of two refits
+// from the point before: everything else refitted, and (where that one is
+// past the limit or fails: a refit along a flat direction can end in a
+// worse valley) the free ones alone, the other held ones kept.
 //  1. Where the held ones fit best: each in turn moved through the best
-//     point met (others there), stepped out (a factor of e for a scale, a
-//     quarter of its file range for a value) to the file's range or past
-//     the limit, its least S refined by golden sections (to a thousandth of
-//     a step, or a flat profile; at most 16 refits).
+//     point met, stepped out (a factor of e for a scale, a quarter of its
+//     file range for a value) to the file's range or past the limit, its
+//     least S refined by golden sections (to a thousandth of a step, or a
+//     flat profile; at most 16 refits).
 //  2. Through that point, each one's stretch within the limit: its ends by
 //     halvings to a tenth of their distance from it (at most twenty), the
 //     range widened to hold where the parameter is held.
 //  3. Two to four held together, from the best point toward each corner of
-//     their ranges, as far as the limit allows (the corner, or four
-//     halvings); five or more: their ranges alone.
+//     their ranges, as far as the limit allows (the corner, or six
+//     halvings short of it; four past it); five or more: their ranges alone.
 // The best point and the edge points (2, 3) are kept with the covariance.
 FitCovariance fit_covariance(const BatchFit& fit, const std::vector<SpectrumBin>& spectrum, double power_W,
                              double holdup_kg, const BatchTest& test);
@@ -48,6 +55,18 @@ FitCovariance fit_covariance(const BatchFit& fit, const std::vector<SpectrumBin>
 FitCovariance fit_covariance(const BatchFit& fit, const std::vector<TestInMill>& tests);
 // The profile's limit of S: S_min (1 + t²/ν).
 double profile_limit(double ssr_min, int dof);
+
+// The degrees of freedom of the intervals: the data less every parameter
+// fitted at S_min, the free and the held ones (the fit's dof less the held
+// count). S_min is the least S over all of them, so its ν counts them all.
+int interval_dof(const FitCovariance& u);
+// s² of the intervals: S_min / interval_dof, S_min where the held
+// parameters fit best (ssr_best); the fit's own s² without held ones. An
+// ore that kept no ssr_best: the fit's S over interval_dof.
+double interval_variance(const FitCovariance& u);
+// The free parameters' covariance at that s²: the fit's, whose s² is S at
+// the held point over the fit's dof, scaled by interval_variance / s².
+std::vector<std::vector<double>> interval_covariance(const FitCovariance& u);
 
 // The quantile of Student's t with `dof` degrees of freedom at probability
 // p (0.975 for a 95 % interval); the normal's for dof <= 0. Closed forms
@@ -103,8 +122,9 @@ std::vector<Sensitivity> sensitivities(const Ore& ore, const FitCovariance& u,
 // profile over every parameter at the limit S_min (1 + t²/ν).
 Interval interval_of(const Sensitivity& s, const std::vector<std::vector<double>>& C, double q, double width_scale);
 
-// The 95 % intervals of the numbers f makes (NaN where one cannot be made).
-// width_scale 1 but for tests of the coverage.
+// The 95 % intervals of the numbers f makes (NaN where one cannot be made):
+// interval_of with interval_covariance and t at interval_dof. width_scale 1
+// but for tests of the coverage.
 std::vector<Interval> propagate(const Ore& ore, const FitCovariance& u,
                                 const std::function<std::vector<double>(const Ore&)>& f, double width_scale = 1.0);
 

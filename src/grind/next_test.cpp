@@ -113,12 +113,16 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
     const std::vector<double> col = column(*ps[v], ore, c, sieves, r0);
     for (std::size_t i = 0; i < r0.size(); ++i) Jc[i][v] = col[i];
   }
-  // The current information: the tests' JᵀJ / s² on every variable, kept with the covariance.
+  // The current information: the tests' JᵀJ / s² on every variable, kept
+  // with the covariance (s² the fit's), taken at the intervals' s²
+  // (interval_variance: S_min over the data less every parameter).
   if (u.information.size() != nv) return out;
+  const double s2 = interval_variance(u);
+  if (!(s2 > 0) || !(u.residual_variance_pp2 > 0)) return out;
   Matrix L = u.information;
+  for (auto& row : L)
+    for (double& v : row) v *= u.residual_variance_pp2 / s2;
   // The candidate's information: its readings scatter as the first test's (s²).
-  const double s2 = u.residual_variance_pp2;
-  if (!(s2 > 0)) return out;
   out.added.assign(nv, std::vector<double>(nv));
   for (std::size_t a = 0; a < nv; ++a)
     for (std::size_t b = 0; b < nv; ++b) {
@@ -127,8 +131,11 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
       out.added[a][b] = v / s2;
       L[a][b] += v / s2;
     }
-  // The variables estimated after the test: the free ones and the held ones
-  // the sum fixes, dropping one held at a time (the fit's own rule).
+  // The variables estimated after the test: the free ones and every held
+  // one the sum's information reaches (positive definite); a held one
+  // without information, even with the candidate's, is dropped, one at a
+  // time, the least informed for its limit first. No inverse of the free
+  // ones alone: no interval.
   std::vector<bool> in(nv, true);
   Matrix Sigma;
   std::vector<std::size_t> idx;
@@ -139,55 +146,77 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
     Matrix sub(idx.size(), std::vector<double>(idx.size()));
     for (std::size_t a = 0; a < idx.size(); ++a)
       for (std::size_t b = 0; b < idx.size(); ++b) sub[a][b] = L[idx[a]][idx[b]];
-    const bool inverted = idx.empty() || invert_spd(sub, Sigma);
+    if (idx.empty() || invert_spd(sub, Sigma)) break;
     std::size_t drop = nv;
-    double worst = 0;
-    for (std::size_t a = 0; a < idx.size(); ++a) {
-      if (idx[a] < np) continue;
-      const OreParameter& p = *ps[idx[a]];
+    double least = HUGE_VAL;
+    for (std::size_t v : idx) {
+      if (v < np) continue;
+      const OreParameter& p = *ps[v];
       const double limit = p.log ? 1.0 : (p.hi - p.lo) / 4;
-      // Unfixed: beyond the limit, or (no inverse) the least information for its limit.
-      const double badness = inverted ? std::sqrt(std::max(Sigma[a][a], 0.0)) / limit
-                                      : 1 / std::sqrt(std::max(L[idx[a]][idx[a]], 1e-300) * limit * limit);
-      if ((!inverted || badness > 1) && badness >= worst) worst = badness, drop = idx[a];
+      const double info = std::max(L[v][v], 0.0) * limit * limit;
+      if (info <= least) least = info, drop = v;
     }
-    if (drop == nv) {
-      if (!inverted) return out;  // the free ones alone cannot be inverted
-      break;
-    }
+    if (drop == nv) return out;  // the free ones alone cannot be inverted
     in[drop] = false;
   }
-  double var = 0;
-  std::vector<double> g(idx.size());
-  for (std::size_t a = 0; a < idx.size(); ++a) g[a] = idx[a] < np ? s.g[idx[a]] : s.g_held[idx[a] - np];
+  // The product's variance over all of them (cᵀ Σ c) and over the free
+  // ones given the held (gᵀ L_ff⁻¹ g): for a model linear in its
+  // parameters the first is the second plus the held parameters' part,
+  // wᵀ S⁻¹ w (w the product's slope in them with the free ones refitted,
+  // S their information with the free ones refitted: a Schur complement).
+  std::vector<double> grad(idx.size());
+  for (std::size_t a = 0; a < idx.size(); ++a) grad[a] = idx[a] < np ? s.g[idx[a]] : s.g_held[idx[a] - np];
+  double var_all = 0;
   for (std::size_t a = 0; a < idx.size(); ++a)
-    for (std::size_t b = 0; b < idx.size(); ++b) var += g[a] * Sigma[a][b] * g[b];
-  for (std::size_t j = 0; j < nh; ++j)
-    if (in[np + j]) out.fixes.push_back(u.held[j].name);
-  // The held ones left keep their reach: all of them together as now, or
-  // those left, each alone, in quadrature.
-  double down = 0, up = 0;
-  if (out.fixes.empty()) {
-    down = s.down, up = s.up;
-  } else {
-    for (std::size_t j = 0; j < nh; ++j)
-      if (!in[np + j] && j < s.down_by_held.size()) {
-        down = -std::hypot(down, s.down_by_held[j]);
-        up = std::hypot(up, s.up_by_held[j]);
-      }
+    for (std::size_t b = 0; b < idx.size(); ++b) var_all += grad[a] * Sigma[a][b] * grad[b];
+  double var_free = var_all;
+  if (idx.size() > np) {
+    Matrix Lff(np, std::vector<double>(np)), Cff;
+    for (std::size_t a = 0; a < np; ++a)
+      for (std::size_t b = 0; b < np; ++b) Lff[a][b] = L[a][b];
+    if (!invert_spd(Lff, Cff)) return out;
+    var_free = 0;
+    for (std::size_t a = 0; a < np; ++a)
+      for (std::size_t b = 0; b < np; ++b) var_free += s.g[a] * Cff[a][b] * s.g[b];
   }
-  out.sd = std::sqrt(std::max(var, 0.0));
-  // The held parameters the test fixes join the free ones: each takes a
-  // degree of freedom from the readings the candidate adds.
-  const double half = t_quantile(0.975, u.dof + out.data - static_cast<int>(out.fixes.size())) * out.sd;
-  // Centred as now where held parameters keep their reach; at the value
-  // itself where the test fixes every one (the linear model's centre).
-  const double y0 = out.fixes.size() == nh ? (s.log ? std::log(s.value) : s.value) : s.center;
-  const double below = std::hypot(half, down), above = std::hypot(half, up);
+  // Which held ones the sum fixes, by the fit's own rule (an expected
+  // standard error within a factor of e for a scale, a quarter of its
+  // range for a value): said, not used.
+  for (std::size_t a = 0; a < idx.size(); ++a) {
+    if (idx[a] < np) continue;
+    const OreParameter& p = *ps[idx[a]];
+    const double limit = p.log ? 1.0 : (p.hi - p.lo) / 4;
+    if (std::sqrt(std::max(Sigma[a][a], 0.0)) <= limit) out.fixes.push_back(u.held[idx[a] - np].name);
+  }
+  out.sd = std::sqrt(std::max(var_free, 0.0));
+  out.sd_all = std::sqrt(std::max(var_all, 0.0));
+  // Student's t with the intervals' degrees of freedom (every parameter,
+  // free and held, counted already) and the candidate's readings.
+  const double t = t_quantile(0.975, interval_dof(u) + out.data);
+  const double half = t * out.sd;
+  // The held parameters' expected reach: to each side, the lesser of their
+  // reach now (the profiles' and the rays', from the centre) and what the
+  // information after the test leaves them, t √(wᵀ S⁻¹ w), in quadrature
+  // with the reach now of each held one left without information. It falls
+  // continuously from the reach now as the candidate's information grows.
+  const double linear = t * std::sqrt(std::max(var_all - var_free, 0.0));
+  double rest_down = 0, rest_up = 0;
+  const bool by_held = s.down_by_held.size() == nh && s.up_by_held.size() == nh;
+  for (std::size_t j = 0; j < nh; ++j)
+    if (!in[np + j]) {
+      if (!by_held) rest_down = s.down, rest_up = s.up;
+      else rest_down = -std::hypot(rest_down, s.down_by_held[j]), rest_up = std::hypot(rest_up, s.up_by_held[j]);
+    }
+  out.reach_down = std::min(-s.down, std::hypot(linear, rest_down));
+  out.reach_up = std::min(s.up, std::hypot(linear, rest_up));
+  // Centred where the interval now is: the linear expectation does not
+  // move the estimate.
+  const double y0 = s.center;
+  const double below = std::hypot(half, out.reach_down), above = std::hypot(half, out.reach_up);
   out.expected.lo = s.log ? std::exp(y0 - below) : y0 - below;
   out.expected.hi = s.log ? std::exp(y0 + above) : y0 + above;
-  if (s.down == -std::numeric_limits<double>::infinity() && down == s.down) out.expected.lo = -HUGE_VAL;
-  if (s.up == std::numeric_limits<double>::infinity() && up == s.up) out.expected.hi = HUGE_VAL;
+  if (!std::isfinite(below)) out.expected.lo = -HUGE_VAL;
+  if (!std::isfinite(above)) out.expected.hi = HUGE_VAL;
   out.width = out.expected.hi - out.expected.lo;
   return out;
 }

@@ -3,10 +3,9 @@
 // on the usual sieves), the 95 % interval a product of the fitted ore is
 // expected to have once that test is fitted with the others. Linear: the
 // current fit's information on its variables (free and held) plus the
-// candidate's Fisher information JᵀJ / s² at the fitted ore, inverted; a
-// held parameter the sum would fix (its expected standard error within the
-// fit's own limit for identifying it) joins the free ones, the others keep
-// their reach.
+// candidate's Fisher information JᵀJ / s² at the fitted ore, inverted; the
+// held parameters' reach falls from what it is now to what the sum's
+// information leaves them (the lesser of the two, continuously).
 #pragma once
 
 #include <string>
@@ -26,9 +25,14 @@ BatchTest candidate_test(const Ore& ore, const std::vector<double>& times_min);
 struct NextTestWidth {
   Interval expected;               // the product's expected 95 % interval after the test
   double width = std::numeric_limits<double>::quiet_NaN();  // expected.hi - expected.lo
-  std::vector<std::string> fixes;  // held parameters the test would fix
+  std::vector<std::string> fixes;  // held parameters the test would fix (expected standard error within the fit's limit)
   int data = 0;                    // the candidate's readings that carry information
-  double sd = std::numeric_limits<double>::quiet_NaN();  // √(gᵀ Σ_after g): the free part's standard deviation
+  // √(gᵀ L_ff⁻¹ g): the free part's standard deviation after the test (the
+  // held ones given); √(cᵀ Σ c): over the free and every held one the
+  // information after reaches.
+  double sd = std::numeric_limits<double>::quiet_NaN(), sd_all = std::numeric_limits<double>::quiet_NaN();
+  // The held parameters' expected reach below and above the centre (≥ 0).
+  double reach_down = std::numeric_limits<double>::quiet_NaN(), reach_up = std::numeric_limits<double>::quiet_NaN();
   std::vector<std::vector<double>> added;  // the candidate's information J_cᵀ J_c / s² (every variable)
 };
 
@@ -36,11 +40,14 @@ struct NextTestWidth {
 // sensitivity at the fitted ore is `s` (sensitivities(..., true): with its
 // gradient in the held parameters too). The current information is the
 // tests' JᵀJ / s² on the free and the held variables that the fit kept
-// (FitCovariance::information); the candidate adds J_cᵀ J_c / s², J_c the
-// derivatives of its readings (pp) at the fitted ore, its readings taken
-// to scatter as the first test's. The held parameters the sum fixes join
-// the free ones; the rest keep their reach. An ore without the
-// information matrix gets no interval (expected.valid() false).
+// (FitCovariance::information), at s² = interval_variance; the candidate
+// adds J_cᵀ J_c / s², J_c the derivatives of its readings (pp) at the
+// fitted ore, its readings taken to scatter as the first test's. The free
+// part: t √(gᵀ L_ff⁻¹ g). The held parameters' reach, each side: the lesser
+// of their reach now and t √(cᵀ Σ c − gᵀ L_ff⁻¹ g), the linear reach the
+// information after leaves them (in quadrature with the reach now of a
+// held one that has none). Centred where the interval now is. An ore
+// without the information matrix gets no interval (expected.valid() false).
 NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensitivity& s,
                              const TestInMill& candidate);
 

@@ -51,6 +51,9 @@ struct HeldParameter {
 struct HeldEdge {
   std::vector<double> held;  // each held parameter's value (file units), in the order of `held`
   std::vector<double> free;  // the free variables refitted there
+  // The held parameter whose profile ends here (the others refitted with
+  // the free ones); -1: a point where several were moved together.
+  int of = -1;
 };
 struct FitCovariance {
   bool given = false;                       // the ore file has one (an ore fitted before has not)

@@ -165,7 +165,13 @@ void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u
   // Two arrays of numbers, one a held parameter and one a free variable:
   // [fitted.best] and each [[fitted.edge]].
   auto point = [&](const toml::table& t, const std::string& where, grind::HeldEdge& c) {
-    r.knows(t, where + ".", {"held", "free"});
+    r.knows(t, where + ".", {"held", "free", "profile_of"});
+    if (const toml::node* on = t.get("profile_of")) {
+      const std::optional<std::string> name = on->value<std::string>();
+      for (std::size_t k = 0; name && k < u.held.size(); ++k)
+        if (u.held[k].name == *name) c.of = static_cast<int>(k);
+      if (c.of < 0) r.fail(where + ".profile_of", on, "must name a held parameter ([[fitted.held]] name)");
+    }
     for (auto [key, dst, want] : {std::tuple{"held", &c.held, u.held.size()}, std::tuple{"free", &c.free, np}}) {
       const toml::node* fn = t.get(key);
       if (!fn) r.fail(where + "." + key, nullptr, "missing");
@@ -561,8 +567,11 @@ std::string covariance_toml(const FitCovariance& u) {
   if (!u.best.held.empty())
     s += "\n[fitted.best]           # where the held parameters fit the data best, the free ones refitted there\n"
          "held = " + list(u.best.held) + "\nfree = " + list(u.best.free) + "\n";
-  for (const grind::HeldEdge& c : u.edges)
+  for (const grind::HeldEdge& c : u.edges) {
     s += "\n[[fitted.edge]]\nheld = " + list(c.held) + "\nfree = " + list(c.free) + "\n";
+    if (c.of >= 0 && static_cast<std::size_t>(c.of) < u.held.size())
+      s += "profile_of = \"" + u.held[static_cast<std::size_t>(c.of)].name + "\"   # an end of its profile\n";
+  }
   return s;
 }
 
