@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -126,6 +127,19 @@ TEST_CASE("a mesh liner wears by what its triangles booked, stage by stage", "[l
       CHECK(removed == Approx(num(meshes[i], "removed_cm3")).epsilon(1e-3));
     }
   }
+  // life-compare reads the bars of a mesh study from life_meshes.csv, the
+  // rest from life.csv.
+  const std::string cmp = std::string(MC_BINARY) + " life-compare '" + a.string() + "' --at 2000,3000 --quiet --out '" +
+                          (a / "cmp").string() + "' >/dev/null 2>&1";
+  REQUIRE(std::system(cmp.c_str()) == 0);
+  const auto compared = read_csv(a / "cmp" / "compare.csv");
+  REQUIRE(compared.size() == 2);
+  CHECK(num(compared[0], "leading_angle_deg") == Approx(num(meshes[1], "mid_leading_angle_deg")).margin(1e-3));
+  CHECK(num(compared[0], "leading_angle_deg_se") == Approx(num(meshes[1], "mid_leading_angle_deg_se")).margin(1e-3));
+  CHECK(num(compared[0], "height_mm") == Approx(num(meshes[1], "mid_height_mm")).margin(1e-3));
+  CHECK(num(compared[0], "shell_wear_mm") == Approx(num(rows[1], "shell_wear_mm")).margin(1e-3));
+  CHECK(num(compared[1], "trailing_angle_deg") ==
+        Approx(0.5 * (num(meshes[1], "mid_trailing_angle_deg") + num(meshes[2], "mid_trailing_angle_deg"))).margin(1e-3));
   fs::remove_all(a);
 }
 

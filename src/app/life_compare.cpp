@@ -41,6 +41,50 @@ double optional_number(const io::CsvTable& t, std::size_t r, int c) {
   return t.number(r, c);
 }
 
+// A mesh study's path: the stage figures of life.csv, the bars' from
+// life_meshes.csv (the K-th worn mesh's rows).
+StudyPath read_mesh_study_path(const fs::path& folder, const io::CsvTable& t, StudyPath s, int mesh) {
+  const fs::path file = folder / "life_meshes.csv";
+  const io::CsvTable m = io::read_csv_strict(file, " (a life study of a mesh liner holds life_meshes.csv)");
+  const char* bars[] = {"mid_leading_angle_deg", "mid_height_mm", "mid_trailing_angle_deg"};  // figures 0 to 2
+  const int c_stage = m.column("stage"), c_mesh = m.column("mesh"), c_hours = t.column("hours");
+  std::vector<int> meshes;  // the worn meshes' [[walls.mesh]] indices, in order
+  for (std::size_t r = 0; r < m.rows.size(); ++r) {
+    const int k = static_cast<int>(m.number(r, c_mesh));
+    if (std::find(meshes.begin(), meshes.end(), k) == meshes.end()) meshes.push_back(k);
+  }
+  if (mesh < 0 || mesh >= static_cast<int>(meshes.size()))
+    throw std::invalid_argument(fmt::format("{}: --profile {}: the study wears {} mesh{} (0 to {})", file.string(), mesh,
+                                            meshes.size(), meshes.size() == 1 ? "" : "es",
+                                            static_cast<int>(meshes.size()) - 1));
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    const double h = t.number(r, c_hours);
+    if (!s.hours.empty() && h < s.hours.back())
+      throw std::invalid_argument(fmt::format("{}: hours: {:g} after {:g}: a study's hours do not go back", t.where(r), h,
+                                              s.hours.back()));
+    s.hours.push_back(h);
+    if (s.basis.empty() && t.has("wear_basis")) s.basis = t.rows[r][t.column("wear_basis")];
+    // The stage's row of the mesh in life_meshes.csv.
+    long row = -1;
+    for (std::size_t q = 0; q < m.rows.size() && row < 0; ++q)
+      if (m.number(q, c_stage) == t.number(r, t.column("stage")) && m.number(q, c_mesh) == meshes[mesh])
+        row = static_cast<long>(q);
+    if (row < 0)
+      throw std::invalid_argument(fmt::format("{}: no row of stage {} and mesh {}", file.string(),
+                                              t.rows[r][t.column("stage")], meshes[mesh]));
+    for (int f = 0; f < kComparedCount; ++f) {
+      if (f < 3) {
+        s.value[f].push_back(optional_number(m, row, m.column(bars[f])));
+        s.se[f].push_back(optional_number(m, row, m.column(std::string(bars[f]) + "_se")));
+      } else {
+        s.value[f].push_back(optional_number(t, r, t.has(kCompared[f]) ? t.column(kCompared[f]) : -1));
+        s.se[f].push_back(NAN);
+      }
+    }
+  }
+  return s;
+}
+
 }  // namespace
 
 double StudyPath::at(int figure, double h, bool want_se) const {
@@ -76,13 +120,13 @@ StudyPath read_study_path(const fs::path& folder, const std::string& label, int 
     const std::string se = std::string(kCompared[f]) + "_se";
     c_se[f] = t.has(se) ? t.column(se) : -1;
   }
+  // A study whose bars are a mesh: its stage rows have no profile, and
+  // life_meshes.csv measures the bars (the mean of their sections at
+  // mid-length, its standard error from their spread); --profile K picks
+  // its K-th worn mesh.
+  if (!t.rows.empty() && t.rows[0][c_profile].empty()) return read_mesh_study_path(folder, t, std::move(s), profile);
   int profiles = 0;
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
-    if (t.rows[r][c_profile].empty())
-      throw std::invalid_argument(fmt::format(
-          "{}: the study's bars are a mesh (its life_meshes.csv follows them); life-compare sets studies of "
-          "[lifters] bars side by side",
-          file.string()));
     const double p = t.number(r, c_profile);
     profiles = std::max(profiles, static_cast<int>(p) + 1);
     if (static_cast<int>(p) != profile) continue;
