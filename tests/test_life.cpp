@@ -253,6 +253,8 @@ TEST_CASE("bad life study requests are refused by name, status 2 and nothing wri
       {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --axial-segments 7",
        "--axial-segments 7: segments of 0.02143 m, shorter than the largest ball (0.0254 m); give at most 5"},
       {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --axial-segments 0", "--axial-segments"},
+      {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --set mill.ends=periodic",
+       "mill.ends = \"periodic\": walls.mesh[0] would wear unevenly along the slice"},
       // A scanned liner that lies outside the shell or beyond the end plates.
       {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --set walls.mesh.0.offset=[0.01,0,0]",
        "walls.mesh[0]: ../meshes/lab_lifters.stl: triangle 1 lies outside the mill: a vertex at 0.46 m from the axis"},

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "core/lifters.h"
@@ -120,13 +121,10 @@ TEST_CASE("the booked wear spread over a mesh keeps its volume and its creases",
   REQUIRE(parts.size() == 4);
   // Bar 0's top (normal pointing in, towards the axis, at angle 0: -x).
   auto on_top = [&](int i) { return unit_normal(t[i]).x < -0.99; };
-  std::vector<double> even(t.size(), 0.0), spike(t.size(), 0.0);
+  std::vector<double> spike(t.size(), 0.0);
   int top_count = 0, spiked = -1;
-  double top_area = 0;
   for (int i : parts[0])
     if (on_top(i)) {
-      even[i] = tri_area(t[i]) * 1e-3;  // 1 mm deep
-      top_area += tri_area(t[i]);
       ++top_count;
       const Vec3 c = (t[i].v[0] + t[i].v[1] + t[i].v[2]) * (1.0 / 3);
       if (spiked < 0 && std::fabs(c.z - 0.075) < 0.003 && std::fabs(c.y) < 0.003) spiked = i;
@@ -139,17 +137,48 @@ TEST_CASE("the booked wear spread over a mesh keeps its volume and its creases",
     for (double x : v) s += x;
     return s;
   };
-  // An even depth over a face stays even on it and nothing leaks over its
-  // creases (the faces at 70° to it) or to the other bars.
-  const std::vector<double> e = life::smooth_wear(t, even, 0.005, 0.02);
-  CHECK(sum(e) == Approx(sum(even)).epsilon(1e-12));
-  for (std::size_t i = 0; i < t.size(); ++i) {
-    if (even[i] > 0) CHECK(e[i] / tri_area(t[i]) == Approx(1e-3).epsilon(1e-9));
-    else CHECK(e[i] == 0);
+  // Uneven wear on two bars: each bar's and each face's volume kept, none
+  // carried over a crease (the faces at 70° to the top) or to another bar.
+  {
+    std::vector<double> uneven(t.size(), 0.0);
+    std::uint32_t x = 12345;
+    auto face_of = [&](int i) {  // 0 top, 1 and 2 the sides, 3 the base, 4 the ends
+      const Vec3 n = unit_normal(t[i]);
+      if (std::fabs(n.z) > 0.5) return 4;
+      const Vec3 c = (t[i].v[0] + t[i].v[1] + t[i].v[2]) * (1.0 / 3);
+      const double r = std::hypot(c.x, c.y), nr = (n.x * c.x + n.y * c.y) / r;
+      return nr < -0.99 ? 0 : nr > 0.99 ? 3 : (n.y * c.x - n.x * c.y) / r > 0 ? 1 : 2;
+    };
+    for (int bar : {0, 2})
+      for (int i : parts[bar]) {
+        x = x * 1664525u + 1013904223u;  // a fixed pseudo-random depth, 0 to 2 mm
+        uneven[i] = face_of(i) < 3 ? tri_area(t[i]) * 2e-3 * (x >> 8) / double(1u << 24) : 0.0;
+      }
+    const std::vector<double> e = life::smooth_wear(t, uneven, 0.005, 0.02);
+    REQUIRE(e.size() == t.size());
+    for (std::size_t bar = 0; bar < parts.size(); ++bar)
+      for (int face = 0; face < 5; ++face) {
+        double before = 0, after = 0;
+        for (int i : parts[bar])
+          if (face_of(i) == face) before += uneven[i], after += e[i];
+        INFO("bar " << bar << ", face " << face);
+        CHECK(after == Approx(before).epsilon(1e-12).margin(1e-18));
+      }
+    // And it is smoother: the spread of the depths on bar 0's top falls.
+    double m0 = 0, m1 = 0, s0 = 0, s1 = 0;
+    int n = 0;
+    for (int i : parts[0])
+      if (face_of(i) == 0) m0 += uneven[i] / tri_area(t[i]), m1 += e[i] / tri_area(t[i]), ++n;
+    m0 /= n, m1 /= n;
+    for (int i : parts[0])
+      if (face_of(i) == 0)
+        s0 += std::pow(uneven[i] / tri_area(t[i]) - m0, 2), s1 += std::pow(e[i] / tri_area(t[i]) - m1, 2);
+    CHECK(std::sqrt(s1) < 0.3 * std::sqrt(s0));
   }
   // One triangle's wear spread as a Gaussian: 5 mm across, 20 mm along.
   const std::vector<double> s = life::smooth_wear(t, spike, 0.005, 0.02);
   CHECK(sum(s) == Approx(1e-6).epsilon(1e-12));
+  CHECK(s[spiked] < 0.5e-6);  // spread: the triangle keeps a part of it
   const Vec3 c0 = (t[spiked].v[0] + t[spiked].v[1] + t[spiked].v[2]) * (1.0 / 3);
   double far_along = 0, far_across = 0, near = 0;
   for (std::size_t i = 0; i < t.size(); ++i) {

@@ -187,11 +187,12 @@ fs::path stage_dir(const fs::path& out, int i) { return out / fmt::format("stage
 // The stage's case: the study's case with the stage's liner. A worn mill
 // turns at the new one's rpm (a fixed-speed drive) and holds the same charge
 // (the filling of its larger free volume).
-MillCase stage_case(const Prepared& base, const Stage& s, const fs::path& out) {
+MillCase stage_case(const Prepared& base, const Stage& s, const fs::path& out,
+                    const std::vector<std::vector<Triangle>>* worn = nullptr) {
   MillCase c = base.c;
   if (s.index == 0) return c;
   c.diameter = s.diameter;
-  life::put_stage_meshes(c, out, s);
+  life::put_stage_meshes(c, out, s, worn);
   for (std::size_t k = 0; k < s.outlines.size(); ++k) {
     LifterProfile p;
     p.points = s.outlines[k];
@@ -322,6 +323,12 @@ int cmd_life(const LifeOptions& o) {
                                 ": lifters.rows = 0: the lifters' height is followed on the bars of [lifters], and "
                                 "this mill's bars are a mesh; give --hours, and calibrate by --calibrate-consumption "
                                 "or --calibrate-rate");
+  if (!worn.empty() && c.periodic)
+    throw std::invalid_argument(fmt::format(
+        "mill.ends = \"periodic\": walls.mesh[{}] would wear unevenly along the slice, and a worn triangle that "
+        "leans along the axis breaks the slice's repeat (its seams); wear the mesh in a whole mill (mill.ends = "
+        "\"plates\"), or give the bars as [lifters] in the slice",
+        worn.front()));
   if (o.axial_segments > 0 && profiles > 0)
     throw std::invalid_argument(fmt::format(
         "--axial-segments {}: the bars of [lifters] wear alike along the mill (their stations are a row's mean); "
@@ -335,6 +342,7 @@ int cmd_life(const LifeOptions& o) {
                                             o.axial_segments, c.length / o.axial_segments,
                                             base.d.largest_ball_diameter,
                                             static_cast<int>(std::floor(c.length / base.d.largest_ball_diameter))));
+  life::check_worn_meshes(c, worn, o.axial_segments);
   if (!worn.empty() && o.shell_wear_ratio != 1)
     throw std::invalid_argument(fmt::format("--shell-wear-ratio {:g}: walls.mesh[{}] is worn as a liner of its own; "
                                             "the ratio sets the shell plates' wear against the bars' of [lifters] only",
@@ -561,27 +569,34 @@ int cmd_life(const LifeOptions& o) {
         s.se_height_mm.clear(), s.se_leading_deg.clear(), s.se_trailing_deg.clear();
     next.diameter = s.diameter + 2 * s.shell_depth_m;
     next.shell_wear_m = s.shell_wear_m + s.shell_depth_m;
-    // The mesh liners by their triangles' wear, written for the next stage.
-    try {
-      life::wear_meshes(out, c, s, next, st.mix, span, 0.5 * next.diameter, smoothing);
-    } catch (const std::invalid_argument& e) {
-      const std::string why = fmt::format("{}; the study stops at stage {} (life.csv holds stages 0 to {}); ask for "
-                                          "shorter stages (more --stages) or a wider --mesh-smoothing",
-                                          e.what(), i, i);
+    // The mesh liners by their triangles' wear; then the same charge in
+    // the larger free volume. Nothing of the next stage is written until
+    // its case is known to be valid; a step that cannot be taken stops the
+    // study by name, the stages run kept.
+    std::vector<std::vector<Triangle>> worn_now;
+    auto stop = [&](const std::string& why) {
       s.span_case_hours = 0;
       save(out, request, st, why);
       throw std::invalid_argument(why);
+    };
+    try {
+      worn_now = life::wear_meshes(out, c, s, next, st.mix, span, 0.5 * next.diameter, smoothing);
+    } catch (const std::invalid_argument& e) {
+      stop(fmt::format("{}; the study stops at stage {} (life.csv holds stages 0 to {}); ask for shorter stages (more "
+                       "--stages) or a wider --mesh-smoothing",
+                       e.what(), i, i));
     }
-    // The same charge in the larger free volume.
     Stage probe = next;
     probe.filling = c.filling;
-    MillCase nc = stage_case(base, probe, out);
     try {
-      const MillDerived nd = derive(nc);
+      const MillDerived nd = derive(stage_case(base, probe, out, &worn_now));
       next.filling = c.filling * V0 / nd.mill_volume;
     } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(fmt::format("stage {}: the worn liner is not a valid case: {}", i + 1, e.what()));
+      stop(fmt::format("stage {}: the worn liner is not a valid case: {}; the study stops at stage {} (life.csv holds "
+                       "stages 0 to {})",
+                       i + 1, e.what(), i, i));
     }
+    life::write_stage_meshes(out, next, worn_now);
     for (std::size_t k = 0; k < s.outlines.size(); ++k)
       std::printf("life            stage %d -> %d: profile %zu worn %.4g mm2 (booked %.4g mm2, depth scale %.3f, "
                   "smoothed %dx), shell %.3f mm\n",

@@ -55,8 +55,38 @@ std::vector<Triangle> stage_mesh_triangles(const fs::path& out, const MillCase& 
   return io::read_stl(out / m.file).triangles;
 }
 
-void put_stage_meshes(MillCase& c, const fs::path& out, const Stage& s) {
-  for (const StageMesh& m : s.meshes) {
+void check_worn_meshes(const MillCase& c, const std::vector<int>& worn, int axial_segments) {
+  for (int k : worn) {
+    const std::vector<Triangle> t = placed_mesh_triangles(c.meshes.at(k));
+    std::size_t alone = 0;
+    for (const std::vector<int>& part : mc::life::connected_parts(t)) alone += part.size() == 1 ? 1 : 0;
+    if (t.size() >= 4 && 2 * alone > t.size())
+      throw std::invalid_argument(fmt::format(
+          "walls.mesh[{}]: {} of its {} triangles share no corner with another: the STL's corners are not welded "
+          "(each triangle has its own copies), and a worn mesh would come apart; weld its vertices first (in "
+          "MeshLab: Merge Close Vertices)",
+          k, alone, t.size()));
+    if (axial_segments > 0) {
+      const double span = c.length / axial_segments;
+      for (std::size_t i = 0; i < t.size(); ++i) {
+        if (std::fabs(triangle_unit_normal(t[i]).z) > 0.5) continue;  // an end cap
+        const double z0 = std::min({t[i].v[0].z, t[i].v[1].z, t[i].v[2].z});
+        const double z1 = std::max({t[i].v[0].z, t[i].v[1].z, t[i].v[2].z});
+        if (z1 - z0 > span * (1 + 1e-9))
+          throw std::invalid_argument(fmt::format(
+              "--axial-segments {}: walls.mesh[{}]: triangle {} runs {:.4g} m along the mill, longer than a segment "
+              "({:.4g} m), so its wear cannot be told to one; give a finer mesh (check --write-lifters FILE "
+              "--lifter-mesh MM makes one of bars) or fewer segments",
+              axial_segments, k, i + 1, z1 - z0, span));
+      }
+    }
+  }
+}
+
+void put_stage_meshes(MillCase& c, const fs::path& out, const Stage& s,
+                      const std::vector<std::vector<Triangle>>* worn) {
+  for (std::size_t j = 0; j < s.meshes.size(); ++j) {
+    const StageMesh& m = s.meshes[j];
     if (m.file.empty()) continue;
     MeshSpec& spec = c.meshes.at(m.walls_mesh);
     const fs::path p = fs::absolute(out / m.file).lexically_normal();
@@ -65,13 +95,15 @@ void put_stage_meshes(MillCase& c, const fs::path& out, const Stage& s) {
     spec.offset = Vec3{};
     spec.angle_deg = 0;
     spec.flip = false;
-    spec.triangles = io::read_stl(p).triangles;
+    spec.triangles = worn ? worn->at(j) : io::read_stl(p).triangles;
   }
 }
 
-void wear_meshes(const fs::path& out, const MillCase& c, Stage& s, Stage& next, const WearMix& mix,
-                 double span_case_hours, double next_R, const MeshSmoothing& smoothing) {
+std::vector<std::vector<Triangle>> wear_meshes(const fs::path& out, const MillCase& c, Stage& s, Stage& next,
+                                               const WearMix& mix, double span_case_hours, double next_R,
+                                               const MeshSmoothing& smoothing) {
   next.meshes.clear();
+  std::vector<std::vector<Triangle>> worn;
   const fs::path run = out / fmt::format("stage-{:02d}", s.index);
   for (StageMesh& m : s.meshes) {
     const std::vector<Triangle> placed = stage_mesh_triangles(out, c, m);
@@ -96,13 +128,21 @@ void wear_meshes(const fs::path& out, const MillCase& c, Stage& s, Stage& next, 
     StageMesh n;
     n.walls_mesh = m.walls_mesh;
     n.file = fmt::format("stage-{:02d}/{}", next.index, mesh_file_name(c, m.walls_mesh));
+    next.meshes.push_back(n);
+    worn.push_back(w.triangles);
+  }
+  return worn;
+}
+
+void write_stage_meshes(const fs::path& out, const Stage& next, const std::vector<std::vector<Triangle>>& worn) {
+  for (std::size_t j = 0; j < next.meshes.size(); ++j) {
+    const StageMesh& n = next.meshes[j];
     std::error_code ec;
     fs::create_directories((out / n.file).parent_path(), ec);
     if (ec) throw std::runtime_error("cannot create " + (out / n.file).parent_path().string() + ": " + ec.message());
-    io::write_file_atomic(out / n.file, io::stl_binary(w.triangles, fmt::format("millcharge life: walls.mesh[{}] "
-                                                                                "worn to stage {}, m",
-                                                                                m.walls_mesh, next.index)));
-    next.meshes.push_back(n);
+    io::write_file_atomic(out / n.file, io::stl_binary(worn.at(j), fmt::format("millcharge life: walls.mesh[{}] worn "
+                                                                               "to stage {}, m",
+                                                                               n.walls_mesh, next.index)));
   }
 }
 
@@ -140,12 +180,17 @@ std::vector<std::vector<double>> bar_angles(const fs::path& out, const MillCase&
 
 std::vector<Stage> stages_drawn(const fs::path& out, const MillCase& c, const std::vector<Stage>& stages) {
   std::vector<Stage> shown = stages;
-  if (stages.empty() || stages.front().meshes.empty()) return shown;
-  const std::vector<double> angles = bar_angles(out, c, stages).front();
+  if (stages.empty()) return shown;
+  // The first worn mesh of part "lifters".
+  std::size_t j = 0;
+  while (j < stages.front().meshes.size() && c.meshes.at(stages.front().meshes[j].walls_mesh).part != MeshPart::lifters)
+    ++j;
+  if (j == stages.front().meshes.size()) return shown;
+  const std::vector<double> angles = bar_angles(out, c, stages).at(j);
   for (Stage& s : shown) {
     s.se_height_mm.clear(), s.se_leading_deg.clear(), s.se_trailing_deg.clear();
     if (!s.ran) continue;
-    const std::vector<Triangle> tris = stage_mesh_triangles(out, c, s.meshes.front());
+    const std::vector<Triangle> tris = stage_mesh_triangles(out, c, s.meshes.at(j));
     const std::vector<Vec2> mean =
         mc::life::mean_outline(mc::life::bar_sections(tris, angles, 0.5 * c.length, 0.5 * s.diameter));
     if (!mean.empty()) s.outlines = {mean};
@@ -171,9 +216,13 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
       const std::vector<Triangle> tris = stage_mesh_triangles(out, c, m);
       const std::size_t parts = mc::life::connected_parts(tris).size();
       // The bars cut across at mid-length and a tenth of the length from each end.
-      const mc::life::BarMeasures mid = mc::life::measure_bars(tris, angles.at(j), 0.5 * c.length, R);
-      mc::life::BarMeasures ends = mc::life::measure_bars(tris, angles.at(j), 0.1 * c.length, R);
-      const mc::life::BarMeasures far = mc::life::measure_bars(tris, angles.at(j), 0.9 * c.length, R);
+      // Bars are measured on a mesh of part "lifters" only.
+      const bool bars = c.meshes.at(m.walls_mesh).part == MeshPart::lifters;
+      const std::vector<double> none;
+      const std::vector<double>& a = bars ? angles.at(j) : none;
+      const mc::life::BarMeasures mid = mc::life::measure_bars(tris, a, 0.5 * c.length, R);
+      mc::life::BarMeasures ends = mc::life::measure_bars(tris, a, 0.1 * c.length, R);
+      const mc::life::BarMeasures far = mc::life::measure_bars(tris, a, 0.9 * c.length, R);
       ends.height.insert(ends.height.end(), far.height.begin(), far.height.end());
       ends.leading_deg.insert(ends.leading_deg.end(), far.leading_deg.begin(), far.leading_deg.end());
       ends.trailing_deg.insert(ends.trailing_deg.end(), far.trailing_deg.begin(), far.trailing_deg.end());
@@ -253,7 +302,9 @@ void write_segment_table(const fs::path& out, const MillCase& c, const std::vect
         }
       }
       for (int g = 0; g < segments; ++g) {
-        const mc::life::BarMeasures bars = mc::life::measure_bars(tris, angles.at(j), (g + 0.5) * span, R);
+        const bool lifters = c.meshes.at(m.walls_mesh).part == MeshPart::lifters;
+        const mc::life::BarMeasures bars =
+            mc::life::measure_bars(tris, lifters ? angles.at(j) : std::vector<double>{}, (g + 0.5) * span, R);
         const auto h = mean_se(bars.height), l = mean_se(bars.leading_deg), tr = mean_se(bars.trailing_deg);
         t += fmt::format("{},{:.6g},{:.6g},{},{},{:.6g},{:.6g},{},{},{},{},{},{},{},{},{},{},{},{}\n", s.index,
                          s.case_hours / b.factor, s.case_hours, m.walls_mesh, g, g * span, (g + 1) * span,

@@ -27,22 +27,34 @@ std::vector<int> worn_meshes(const MillCase& c);
 // wrote (relative to `out`).
 std::vector<Triangle> stage_mesh_triangles(const std::filesystem::path& out, const MillCase& c, const StageMesh& m);
 
+// Refused by name before a study starts: a worn mesh whose STL corners are
+// not welded (more than half its triangles alone), and with
+// `axial_segments` a triangle (not an end cap) longer along the mill than
+// a segment.
+void check_worn_meshes(const MillCase& c, const std::vector<int>& worn, int axial_segments);
+
 // The case's [[walls.mesh]] entries for stage s: each worn mesh from the
-// STL the study wrote for it (placed already: offset 0, angle 0, no flip).
-void put_stage_meshes(MillCase& c, const std::filesystem::path& out, const Stage& s);
+// STL the study wrote for it (placed already: offset 0, angle 0, no flip),
+// or from `worn` (in s.meshes' order) where given.
+void put_stage_meshes(MillCase& c, const std::filesystem::path& out, const Stage& s,
+                      const std::vector<std::vector<Triangle>>* worn = nullptr);
 
 // The wear of stage s's `span_case_hours` (at the case's wear coefficient;
-// volumes at `mix`) on its meshes, written as next's STLs (in its stage
-// folder), next.meshes set and s.meshes' step figures; the booked wear
-// spread by `smoothing` first. `next_R`: the worn
+// volumes at `mix`) on its meshes: the worn meshes (in s.meshes' order),
+// next.meshes named and s.meshes' step figures set; the booked wear spread
+// by `smoothing` first. Writes nothing: write_stage_meshes does, once the
+// next stage's case is known to be valid. `next_R`: the worn
 // shell's radius, which no vertex may pass. std::invalid_argument from
 // the mesh move (life/mesh_wear.h) naming walls.mesh[K] and the stage.
 // How far the booked wear is spread before the mesh moves (m; life/mesh_wear.h smooth_wear).
 struct MeshSmoothing {
   double across_m = 0, along_m = 0;
 };
-void wear_meshes(const std::filesystem::path& out, const MillCase& c, Stage& s, Stage& next, const WearMix& mix,
-                 double span_case_hours, double next_R, const MeshSmoothing& smoothing);
+std::vector<std::vector<Triangle>> wear_meshes(const std::filesystem::path& out, const MillCase& c, Stage& s,
+                                               Stage& next, const WearMix& mix, double span_case_hours, double next_R,
+                                               const MeshSmoothing& smoothing);
+void write_stage_meshes(const std::filesystem::path& out, const Stage& next,
+                        const std::vector<std::vector<Triangle>>& worn);
 
 // life_meshes.csv: per stage and worn mesh, its triangles, its parts (bars)
 // measured across at mid-length and a tenth of the length from each end

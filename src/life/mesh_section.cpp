@@ -133,7 +133,13 @@ std::vector<std::vector<Vec2>> bar_sections(const std::vector<Triangle>& triangl
   const std::vector<std::vector<int>> parts = connected_parts(triangles);
   for (std::size_t k = 0; k < parts.size() && k < angles.size(); ++k) {
     std::vector<Vec2> o = bar_section(triangles, parts[k], z, angles[k], R);
-    if (o.size() >= 3) out.push_back(std::move(o));
+    if (o.size() < 3) continue;
+    // A cut wider or higher than half the shell's radius is not a bar (a
+    // liner welded into one surface, a shell plate): left out.
+    double x0 = o[0].x, x1 = o[0].x, y1 = o[0].y;
+    for (const Vec2& p : o) x0 = std::min(x0, p.x), x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+    if (x1 - x0 > 0.5 * R || y1 > 0.5 * R) continue;
+    out.push_back(std::move(o));
   }
   return out;
 }

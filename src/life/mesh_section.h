@@ -32,7 +32,8 @@ std::vector<Vec2> bar_section(const std::vector<Triangle>& triangles, const std:
 std::vector<Vec2> mean_outline(const std::vector<std::vector<Vec2>>& outlines, int samples = 64);
 
 // Each bar of a mesh cut across at z, in the frames of `angles` (the
-// parts' order; those the plane misses left out).
+// parts' order; those the plane misses left out, and those whose cut is
+// wider or higher than half the shell's radius: not a bar).
 std::vector<std::vector<Vec2>> bar_sections(const std::vector<Triangle>& triangles, const std::vector<double>& angles,
                                             double z, double R);
 

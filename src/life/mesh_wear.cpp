@@ -137,12 +137,12 @@ std::vector<double> smooth_wear(const std::vector<Triangle>& triangles, const st
   std::map<Cell, std::vector<int>> cells;
   for (std::size_t t = 0; t < nt; ++t) cells[cell_of(centre[t])].push_back(static_cast<int>(t));
   const double cos_limit = std::cos(30.0 * 3.14159265358979323846 / 180);
-  std::vector<double> depth(nt, 0.0);
-  double total = 0, smoothed = 0;
-  for (std::size_t t = 0; t < nt; ++t) {
-    total += volume_m3[t];
+  // Each triangle's volume shared out over the triangles around it (those
+  // of its part within 30° of its normal), in proportion to their areas
+  // times the Gaussian of the distance: every triangle's volume is kept,
+  // and so every part's and every face's.
+  auto each_neighbour = [&](std::size_t t, auto&& f) {
     const auto [ix, iy, iz] = cell_of(centre[t]);
-    double v = 0, a = 0;
     for (long dx = -1; dx <= 1; ++dx)
       for (long dy = -1; dy <= 1; ++dy)
         for (long dz = -1; dz <= 1; ++dz) {
@@ -151,16 +151,21 @@ std::vector<double> smooth_wear(const std::vector<Triangle>& triangles, const st
           for (int u : it->second) {
             if (part[u] != part[t] || unit[u].dot(unit[t]) < cos_limit) continue;
             const Vec3 d = centre[u] - centre[t];
-            const double w = std::exp(-0.5 * ((d.x * d.x + d.y * d.y) / (across * across) + d.z * d.z / (along * along)));
-            v += w * volume_m3[u], a += w * area[u];
+            f(u, area[u] * std::exp(-0.5 * ((d.x * d.x + d.y * d.y) / (across * across) + d.z * d.z / (along * along))));
           }
         }
-    depth[t] = a > 0 ? v / a : 0.0;
-    smoothed += depth[t] * area[t];
+  };
+  std::vector<double> out(nt, 0.0);
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (!(volume_m3[t] > 0)) continue;
+    double weight = 0;
+    each_neighbour(t, [&](int, double w) { weight += w; });
+    if (!(weight > 0)) {  // a triangle of no area keeps its own
+      out[t] += volume_m3[t];
+      continue;
+    }
+    each_neighbour(t, [&](int u, double w) { out[u] += volume_m3[t] * w / weight; });
   }
-  std::vector<double> out(nt);
-  const double keep = smoothed > 0 ? total / smoothed : 0.0;  // the volumes' sum kept
-  for (std::size_t t = 0; t < nt; ++t) out[t] = depth[t] * area[t] * keep;
   return out;
 }
 
@@ -258,6 +263,12 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
         b[i] = b[i] + n * (area[t] * depth[t]);
       }
     for (std::size_t i = 0; i < nv; ++i) move[i] = crease_solve(m[i], b[i]) * -1.0;
+    // A vertex on an end plane stays on it: its move along the axis (a
+    // rounding of the least squares where the faces around it lean a
+    // little after earlier wear) is dropped.
+    if (bounds.z1 > bounds.z0)
+      for (std::size_t i = 0; i < nv; ++i)
+        if (std::abs(w.points[i].z - bounds.z0) <= 2e-6 || std::abs(w.points[i].z - bounds.z1) <= 2e-6) move[i].z = 0;
   }
   auto moved = [&](double scale) {
     std::vector<Triangle> m(triangles.size());

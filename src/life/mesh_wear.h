@@ -22,7 +22,8 @@ namespace mc::life {
 
 // Where a worn mesh must stay: inside the shell (radius at most
 // shell_radius + 1 µm; 0: not checked) and between z0 and z1 (not
-// checked where z1 <= z0).
+// checked where z1 <= z0; a vertex within 2 µm of either end stays at its
+// z: a bar that stands on an end plate stays on it).
 struct MeshBounds {
   double shell_radius = 0;
   double z0 = 0, z1 = 0;
@@ -59,16 +60,16 @@ std::vector<double> swept_volumes(const std::vector<Triangle>& before, const std
 // triangle. A mesh of lifter bars has a part per bar.
 std::vector<std::vector<int>> connected_parts(const std::vector<Triangle>& triangles);
 
-// The booked volumes averaged over the surface around each triangle, as a
-// depth: each triangle's depth becomes the sum of the volumes over the sum
-// of the areas of the triangles of its own part whose normals lie within
-// 30° of its own, weighed by a Gaussian of the distance between their
-// centroids, `across` (m, its standard deviation across the mill's axis)
-// and `along` (m, along it). A short run books its wear on a few of a fine
-// mesh's triangles; this spreads it over the surface that wears alike
-// (wear varies slowly along a mill, fast round a bar's edge), keeping
-// creases sharp. The volumes returned sum to those given. across <= 0:
-// the volumes unchanged.
+// The booked volumes spread over the surface around each triangle: each
+// triangle's volume shared out over the triangles of its own part whose
+// normals lie within 30° of its own, in proportion to their areas times a
+// Gaussian of the distance between their centroids, `across` (m, its
+// standard deviation across the mill's axis) and `along` (m, along it). A
+// short run books its wear on a few of a fine mesh's triangles; this
+// spreads it over the surface that wears alike (wear varies slowly along a
+// mill, fast round a bar's edge), keeping creases sharp. Each triangle's
+// volume is kept, so each part's and each face's sum is the one booked.
+// across <= 0: the volumes unchanged.
 std::vector<double> smooth_wear(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,
                                 double across, double along);
 
