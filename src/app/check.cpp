@@ -125,6 +125,9 @@ int cmd_check(const CaseOptions& o) {
       throw std::invalid_argument("--write-lifters: the case has no lifter bars (lifters.rows = 0)");
     const auto tris =
         lifter_triangles(bars_on_shell(w.walls.lifters, w.walls.shell_radius), c.length, o.lifter_mesh_mm * 1e-3);
+    std::error_code ec;
+    const std::filesystem::path parent = std::filesystem::path(o.write_lifters).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
     io::write_file_atomic(o.write_lifters, io::stl_binary(tris, c.name + " lifters, m"));
     std::printf("lifters         %d bars as %s triangles (binary STL, metres, mill frame at t = 0): %s\n",
                 c.lifter_rows, thousands(static_cast<long>(tris.size())).c_str(), o.write_lifters.c_str());
