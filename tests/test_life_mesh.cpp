@@ -199,3 +199,66 @@ TEST_CASE("a mesh whose corners are not welded is refused before a study starts"
   CHECK_FALSE(fs::exists(a));
   fs::remove(loose);
 }
+
+TEST_CASE("two worn meshes, one in millimetres and turned, are carried through a stage placed", "[life][cli][mesh_wear]") {
+  // The lab bars split in two STL files: bars 0-5 in metres as they are,
+  // bars 6-11 in millimetres and turned back by 180° (the case turns them
+  // forward again with angle = 180).
+  const std::vector<mc::Triangle> all =
+      mc::io::read_stl(fs::path(MC_ASSET_DIR) / "meshes" / "lab_lifters.stl").triangles;
+  REQUIRE(all.size() == 144);
+  std::vector<mc::Triangle> first(all.begin(), all.begin() + 72), second;
+  for (auto it = all.begin() + 72; it != all.end(); ++it) {
+    mc::Triangle t = *it;
+    for (mc::Vec3& v : t.v) v = {-v.x * 1000, -v.y * 1000, v.z * 1000};
+    second.push_back(t);
+  }
+  const fs::path dir = scratch("two-meshes"), a = scratch("two-meshes-study");
+  fs::create_directories(dir);
+  std::ofstream(dir / "a.stl", std::ios::binary) << mc::io::stl_binary(first);
+  std::ofstream(dir / "b.stl", std::ios::binary) << mc::io::stl_binary(second);
+  // lab_stl.toml with its one mesh replaced by the two.
+  std::string text = read_text(fs::path(MC_ASSET_DIR) / "cases" / "lab_stl.toml");
+  const std::size_t at = text.find("\n[[walls.mesh]]") + 1, end = text.find("\n[charge]") + 1;
+  REQUIRE(at > 0);
+  REQUIRE(end > at);
+  text = text.substr(0, at) +
+         "[[walls.mesh]]\nfile = \"a.stl\"\npart = \"lifters\"\n\n"
+         "[[walls.mesh]]\nfile = \"b.stl\"\nunits = \"mm\"\nangle = 180.0\npart = \"lifters\"\n\n" +
+         text.substr(end);
+  std::ofstream(dir / "two.toml") << text;
+  std::string err;
+  const int rc = life("'" + (dir / "two.toml").string() + "' --stages 1 --hours 2000" + kShort + " --out '" +
+                      a.string() + "'",
+                      &err);
+  INFO(err);
+  REQUIRE(rc == 0);
+  const auto rows = read_csv(a / "life_meshes.csv");
+  REQUIRE(rows.size() == 4);  // two stages, two meshes
+  for (const auto& r : rows) CHECK(num(r, "parts") == 6);
+  CHECK(rows[2].at("file") == "stage-01/liner-0.stl");
+  CHECK(rows[3].at("file") == "stage-01/liner-1.stl");
+  // The next case names both, in metres, placed.
+  const mc::MillCase next = mc::io::read_case(a / "cases" / "stage-01.toml");
+  REQUIRE(next.meshes.size() == 2);
+  CHECK(fs::equivalent(next.meshes[1].path, a / "stage-01" / "liner-1.stl"));
+  CHECK(next.meshes[1].units == "m");
+  CHECK(next.meshes[1].angle_deg == 0);
+  // The second mesh's worn triangles where the original bars 6-11 were:
+  // an end cap (no wear) is where it was to float precision, every vertex
+  // within a wear's depth of the original.
+  const std::vector<mc::Triangle> worn = mc::io::read_stl(a / "stage-01" / "liner-1.stl").triangles;
+  REQUIRE(worn.size() == 72);
+  double farthest = 0;
+  for (std::size_t i = 0; i < 72; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const mc::Vec3 d = worn[i].v[k] - all[72 + i].v[k];
+      farthest = std::max(farthest, d.norm());
+    }
+  CHECK(farthest > 1e-5);   // worn
+  CHECK(farthest < 0.015);  // and where the bars are, not turned or scaled away
+  const double booked = num(rows[1], "booked_cm3") * 1e-6;
+  CHECK(mc::closed_mesh_volume(second) * 1e-9 - mc::closed_mesh_volume(worn) == Approx(booked).epsilon(0.01));
+  fs::remove_all(dir);
+  fs::remove_all(a);
+}
