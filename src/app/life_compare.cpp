@@ -41,6 +41,17 @@ double optional_number(const io::CsvTable& t, std::size_t r, int c) {
   return t.number(r, c);
 }
 
+// A stage's hours (after the last's) and the study's wear basis from
+// life.csv's row r.
+void add_stage_hours(const io::CsvTable& t, std::size_t r, int c_hours, StudyPath& s) {
+  const double h = t.number(r, c_hours);
+  if (!s.hours.empty() && h < s.hours.back())
+    throw std::invalid_argument(fmt::format("{}: hours: {:g} after {:g}: a study's hours do not go back", t.where(r), h,
+                                            s.hours.back()));
+  s.hours.push_back(h);
+  if (s.basis.empty() && t.has("wear_basis")) s.basis = t.rows[r][t.column("wear_basis")];
+}
+
 // A mesh study's path: the stage figures of life.csv, the bars' from
 // life_meshes.csv (the K-th worn mesh's rows).
 StudyPath read_mesh_study_path(const fs::path& folder, const io::CsvTable& t, StudyPath s, int mesh) {
@@ -58,12 +69,7 @@ StudyPath read_mesh_study_path(const fs::path& folder, const io::CsvTable& t, St
                                             meshes.size(), meshes.size() == 1 ? "" : "es",
                                             static_cast<int>(meshes.size()) - 1));
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
-    const double h = t.number(r, c_hours);
-    if (!s.hours.empty() && h < s.hours.back())
-      throw std::invalid_argument(fmt::format("{}: hours: {:g} after {:g}: a study's hours do not go back", t.where(r), h,
-                                              s.hours.back()));
-    s.hours.push_back(h);
-    if (s.basis.empty() && t.has("wear_basis")) s.basis = t.rows[r][t.column("wear_basis")];
+    add_stage_hours(t, r, c_hours, s);
     // The stage's row of the mesh in life_meshes.csv.
     long row = -1;
     for (std::size_t q = 0; q < m.rows.size() && row < 0; ++q)
@@ -130,12 +136,7 @@ StudyPath read_study_path(const fs::path& folder, const std::string& label, int 
     const double p = t.number(r, c_profile);
     profiles = std::max(profiles, static_cast<int>(p) + 1);
     if (static_cast<int>(p) != profile) continue;
-    const double h = t.number(r, c_hours);
-    if (!s.hours.empty() && h < s.hours.back())
-      throw std::invalid_argument(fmt::format("{}: hours: {:g} after {:g}: a study's hours do not go back", t.where(r), h,
-                                              s.hours.back()));
-    s.hours.push_back(h);
-    if (s.basis.empty() && t.has("wear_basis")) s.basis = t.rows[r][t.column("wear_basis")];
+    add_stage_hours(t, r, c_hours, s);
     for (int f = 0; f < kComparedCount; ++f) {
       s.value[f].push_back(optional_number(t, r, c_value[f]));
       s.se[f].push_back(optional_number(t, r, c_se[f]));
