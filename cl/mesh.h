@@ -17,7 +17,8 @@
  * contact is dropped when a face contact's triangle or a kept edge has that
  * vertex, or another triangle already gave it. So a ball on the shared edge
  * or vertex of coplanar triangles feels one contact, and a ball in a
- * concave corner feels each face. Triangles sharing an edge at less than
+ * concave corner feels each face; contacts of one smooth patch whose normals
+ * lie within 20° are one contact, the nearest. Triangles sharing an edge at less than
  * kSmoothDegrees (src/core/wall_mesh.h) belong to one smooth patch; a
  * contact that moves from one feature to another of its patch keeps its
  * record (its tangential spring and its losses so far). */
@@ -38,6 +39,9 @@ typedef struct {
  * (MC_MESH_EDGE0 + 0 ab, 1 bc, 2 ca) or a vertex (MC_MESH_VERTEX0 + 0 a,
  * 1 b, 2 c); region − 1 indexes MeshTriangle.feat. */
 #define MC_MESH_FACE 0
+/* cos 20°: src/core/wall_mesh.h kSmoothDegrees, the angle below which two
+ * triangles' normals make one smooth surface. */
+#define MC_MESH_SMOOTH_COS R(0.93969262078590838)
 #define MC_MESH_EDGE0 1
 #define MC_MESH_VERTEX0 4
 
@@ -156,6 +160,24 @@ MC_FN void mesh_keep(const Meshes* m, const MeshHit* hits, int nh, int* keep) {
       if (j < h && keep[j] && hits[j].feature == v) k = 0;
     }
     keep[h] = k;
+  }
+  /* One contact per smooth surface where it curves gently: of the contacts
+   * of one smooth patch whose normals lie within MC_MESH_SMOOTH_COS of each
+   * other (a ball over a shallow dish of a worn or scanned surface sees a
+   * face of each triangle round a vertex), the nearest is the contact.
+   * Contacts of one patch at a larger angle (a ball in a fillet that
+   * curves round it) stay apart, as concave corners between patches do. */
+  for (int h = 0; h < nh; ++h) {
+    if (!keep[h]) continue;
+    const int p = m->feature[hits[h].feature].x;
+    for (int j = 0; j < nh; ++j) {
+      if (j == h || !keep[j] || m->feature[hits[j].feature].x != p) continue;
+      if (dot(hits[j].normal, hits[h].normal) < MC_MESH_SMOOTH_COS) continue;
+      if (hits[j].dist < hits[h].dist || (hits[j].dist == hits[h].dist && j < h)) {
+        keep[h] = 0;
+        break;
+      }
+    }
   }
 }
 

@@ -281,6 +281,44 @@ TEST_CASE("a ball on a shared edge or vertex feels one contact with the plate's 
   }
 }
 
+TEST_CASE("a ball over a shallow dish where six triangles meet feels one contact, the nearest", "[mesh][physics]") {
+  // Six triangles round the origin, each rising outward at 3° (a worn or
+  // scanned surface, one smooth patch): a ball above the vertex is as near
+  // to each face, a face contact of each (Hu's rule keeps every face).
+  std::vector<Triangle> dish;
+  const double tilt = 3 * kPi / 180, R0 = 0.5;
+  for (int k = 0; k < 6; ++k) {
+    const double a0 = k * kPi / 3, a1 = (k + 1) * kPi / 3;
+    dish.push_back({{Vec3{0, 0, 0}, Vec3{R0 * std::cos(a0), R0 * std::sin(a0), R0 * std::tan(tilt)},
+                     Vec3{R0 * std::cos(a1), R0 * std::sin(a1), R0 * std::tan(tilt)}}});
+  }
+  const double r = 0.02, h = r - 2e-4;
+  Scene s = plate_scene(ContactLaw::linear, &dish);
+  s.numerics.gravity = {0, 0, 0};
+  s.balls[0].position = {0, 0, h};
+  s.balls[0].velocity = {};
+  s.balls[0].omega = {};
+  // Each face's plane is h cos(tilt') from the centre, tilt' the face's
+  // steepest slope (its normal's angle from the axis): one contact, the
+  // nearest face's, with that overlap.
+  double nearest = 1;
+  for (const Triangle& t : dish) nearest = std::min(nearest, h * triangle_unit_normal(t).z);
+  const Vec3 f = force_on(s);
+  CHECK(wall_contacts(s) == 1.0);
+  CHECK(f.norm() == Approx(1e5 * (r - nearest)).epsilon(1e-9));
+  // A steeper fold than a smooth surface's (two patches) keeps both faces.
+  std::vector<Triangle> fold = {{{Vec3{0, -1, 0}, Vec3{1, -1, std::tan(0.4)}, Vec3{1, 1, std::tan(0.4)}}},
+                                {{Vec3{0, -1, 0}, Vec3{1, 1, std::tan(0.4)}, Vec3{0, 1, 0}}},
+                                {{Vec3{0, -1, 0}, Vec3{0, 1, 0}, Vec3{-1, 1, std::tan(0.4)}}},
+                                {{Vec3{0, -1, 0}, Vec3{-1, 1, std::tan(0.4)}, Vec3{-1, -1, std::tan(0.4)}}}};
+  Scene v = plate_scene(ContactLaw::linear, &fold);
+  v.numerics.gravity = {0, 0, 0};
+  v.balls[0].position = {0, 0.1, h};
+  v.balls[0].velocity = {};
+  v.balls[0].omega = {};
+  CHECK(wall_contacts(v) == 2.0);
+}
+
 TEST_CASE("the contact profile counts balls on mesh lifters and shell, not on mesh ends", "[mesh]") {
   // A ball pressed onto a plate mesh, as a lifter, as the shell and as part of
   // the ends: the toe and shoulder come from the belly's contacts alone.
