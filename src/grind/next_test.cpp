@@ -99,18 +99,20 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
   const std::size_t np = u.names.size(), nh = u.held.size(), nv = np + nh;
   if (!s.ok || s.g.size() != np || s.g_held.size() != nh) return out;
   // The candidate's readings as the fitted ore makes them, at the sieves
-  // that carry information.
+  // that carry information: at the best point (where the information kept
+  // and the product's gradients are taken; the ore itself without held ones).
+  const Ore at = best_point(ore, u);
   TestInMill c = candidate;
-  c.test.passing = batch_test_products(ore, c.spectrum, c.power_W, c.holdup_kg, c.test);
+  c.test.passing = batch_test_products(at, c.spectrum, c.power_W, c.holdup_kg, c.test);
   const std::vector<std::size_t> sieves = informative_sieves(c.test);
-  const std::vector<double> r0 = readings(ore, c, sieves);
+  const std::vector<double> r0 = readings(at, c, sieves);
   out.data = static_cast<int>(r0.size());
   std::vector<const OreParameter*> ps;
   for (const std::string& n : u.names) ps.push_back(find_ore_parameter(n));
   for (const HeldParameter& h : u.held) ps.push_back(find_ore_parameter(h.name));
   Matrix Jc(r0.size(), std::vector<double>(nv));
   for (std::size_t v = 0; v < nv; ++v) {
-    const std::vector<double> col = column(*ps[v], ore, c, sieves, r0);
+    const std::vector<double> col = column(*ps[v], at, c, sieves, r0);
     for (std::size_t i = 0; i < r0.size(); ++i) Jc[i][v] = col[i];
   }
   // The current information: the tests' JᵀJ / s² on every variable, kept

@@ -3,7 +3,7 @@
 // on the usual sieves), the 95 % interval a product of the fitted ore is
 // expected to have once that test is fitted with the others. Linear: the
 // current fit's information on its variables (free and held) plus the
-// candidate's Fisher information JᵀJ / s² at the fitted ore, inverted; the
+// candidate's Fisher information JᵀJ / s² at the fitted ore (its best point, best_point), inverted; the
 // held parameters' reach falls from what it is now to what the sum's
 // information leaves them (the lesser of the two, continuously).
 #pragma once
@@ -42,7 +42,7 @@ struct NextTestWidth {
 // tests' JᵀJ / s² on the free and the held variables that the fit kept
 // (FitCovariance::information), at s² = interval_variance; the candidate
 // adds J_cᵀ J_c / s², J_c the derivatives of its readings (pp) at the
-// fitted ore, its readings taken to scatter as the first test's. The free
+// fitted ore's best point (best_point), its readings taken to scatter as the first test's. The free
 // part: t √(gᵀ L_ff⁻¹ g). The held parameters' reach, each side: the lesser
 // of their reach now and t √(cᵀ Σ c − gᵀ L_ff⁻¹ g), the linear reach the
 // information after leaves them (in quadrature with the reach now of a

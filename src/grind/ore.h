@@ -59,7 +59,9 @@ struct FitCovariance {
   bool given = false;                       // the ore file has one (an ore fitted before has not)
   std::vector<std::string> names;           // the free parameters, ore file keys
   std::vector<double> values;               // their fitted variables at the fit
-  std::vector<std::vector<double>> matrix;  // covariance of the fitted variables
+  // Covariance of the fitted variables (s² the fit's), taken at `best`
+  // where there are held parameters (an ore fitted before: at the fit).
+  std::vector<std::vector<double>> matrix;
   double residual_variance_pp2 = 0;         // s² of the fit
   int dof = 0;                              // data − free parameters
   std::vector<HeldParameter> held;          // unidentified, held at their start, or on their bound
@@ -71,7 +73,7 @@ struct FitCovariance {
   // range's ends, and two to four together toward each corner of their
   // ranges, as far as the data allow.
   std::vector<HeldEdge> edges;
-  // The tests' information on every fitted variable at the fit, the free
+  // The tests' information on every fitted variable at `best` (else at the fit), the free
   // ones' then the held ones': JᵀJ / s² of the weighted residuals (what a
   // next test adds to: next_test.h). Empty: not kept.
   std::vector<std::vector<double>> information;
