@@ -198,7 +198,7 @@ double quad(const std::vector<double>& g, const std::vector<std::vector<double>>
 // held reach each side the lesser of the reach now and
 // t √(cᵀ L⁻¹ c − gᵀ L_ff⁻¹ g); around the centre now.
 struct ByHand {
-  double lo = 0, hi = 0, linear = 0;
+  double lo = 0, hi = 0, linear = 0, linear_now = 0, ratio = 0;
   int data = 0;
 };
 ByHand expected_by_hand(const Ore& ore, const FitCovariance& u, const Sensitivity& s, TestInMill c) {
@@ -245,8 +245,17 @@ ByHand expected_by_hand(const Ore& ore, const FitCovariance& u, const Sensitivit
   const double var_all = quad(all, inverse(L)), var_free = quad(s.g, inverse(Lff));
   const double t = t_quantile(0.975, nu + out.data);
   out.linear = t * std::sqrt(var_all - var_free);
-  const double below = std::hypot(t * std::sqrt(var_free), std::min(-s.down, out.linear));
-  const double above = std::hypot(t * std::sqrt(var_free), std::min(s.up, out.linear));
+  // The same from the tests' information alone (t at their ν): the held
+  // reach now scaled by the linear reach's fall, never grown.
+  std::vector<std::vector<double>> L0(nv, std::vector<double>(nv)), L0ff(np, std::vector<double>(np));
+  for (std::size_t a = 0; a < nv; ++a)
+    for (std::size_t b = 0; b < nv; ++b) L0[a][b] = u.information[a][b] * u.residual_variance_pp2 / s2;
+  for (std::size_t a = 0; a < np; ++a)
+    for (std::size_t b = 0; b < np; ++b) L0ff[a][b] = L0[a][b];
+  out.linear_now = t_quantile(0.975, nu) * std::sqrt(quad(all, inverse(L0)) - quad(s.g, inverse(L0ff)));
+  out.ratio = std::min(1.0, out.linear / out.linear_now);
+  const double below = std::hypot(t * std::sqrt(var_free), -s.down * out.ratio);
+  const double above = std::hypot(t * std::sqrt(var_free), s.up * out.ratio);
   out.lo = std::exp(s.center - below);
   out.hi = std::exp(s.center + above);
   return out;
@@ -311,13 +320,28 @@ TEST_CASE("grind next test: a held parameter the candidate informs, its reach ag
     CHECK(width_now - w.width == Approx(width_now - (h.hi - h.lo)).epsilon(1e-3));
     ws.push_back(w);
   }
-  // The harder mill's long test: to each side the linear reach the
-  // information after leaves E∞ and d₀, less than now.
-  const double linear = expected_by_hand(best_point(f.ore, u), u, s, cases[0].c).linear;
-  CHECK(ws[0].reach_down == Approx(linear).epsilon(1e-4));
-  CHECK(ws[0].reach_down < -s.down);
-  CHECK(ws[0].reach_up == Approx(linear).epsilon(1e-4));
-  CHECK(ws[0].reach_up < s.up);
+  // The harder mill's long test informs E∞ and d₀: their reach now falls,
+  // each side, by the linear reach's ratio (after over now), computed by hand.
+  const ByHand hard = expected_by_hand(best_point(f.ore, u), u, s, cases[0].c);
+  std::printf("  harder mill's linear reach %.5f after, %.5f now: ratio %.4f\n", hard.linear, hard.linear_now, hard.ratio);
+  CHECK(hard.ratio < 0.5);
+  CHECK(ws[0].reach_down == Approx(-s.down * hard.ratio).epsilon(1e-4));
+  CHECK(ws[0].reach_up == Approx(s.up * hard.ratio).epsilon(1e-4));
+  // A candidate that adds nothing (ground for 10⁻⁷ min): the reach stays
+  // as now, and the whole interval with it, but for t (the candidate's
+  // readings add to ν): each side's half-width in logarithms scaled by
+  // t after over t now.
+  const TestInMill useless{candidate_test(f.ore, {1e-7}), synthetic_spectrum(), kPower_W, kHoldup_kg};
+  const NextTestWidth z = expected_after(f.ore, u, s, useless);
+  REQUIRE(z.expected.valid());
+  const double t_now = t_quantile(0.975, interval_dof(u)), t_after = t_quantile(0.975, interval_dof(u) + z.data);
+  std::printf("  a candidate without information: expected [%.3f, %.3f] against now [%.3f, %.3f]; reach %.4f / %.4f "
+              "(now %.4f / %.4f); t %.5f now, %.5f after\n",
+              z.expected.lo, z.expected.hi, now.lo, now.hi, z.reach_down, z.reach_up, -s.down, s.up, t_now, t_after);
+  CHECK(z.reach_down == Approx(-s.down * t_after / t_now).epsilon(1e-3));
+  CHECK(z.reach_up == Approx(s.up * t_after / t_now).epsilon(1e-3));
+  CHECK(std::log(z.expected.hi) - s.center == Approx((std::log(now.hi) - s.center) * t_after / t_now).epsilon(1e-3));
+  CHECK(s.center - std::log(z.expected.lo) == Approx((s.center - std::log(now.lo)) * t_after / t_now).epsilon(1e-3));
   for (const NextTestWidth& w : ws) CHECK(w.width < width_now);
 }
 
