@@ -187,7 +187,7 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
   if (f.ssr > limit) CHECK(outside.find("e_inf_J_kg") != std::string::npos);
   // Each end of a profile the data set (not the file's range): the other
   // held one and the free ones refitted there, S within the limit; a
-  // tenth of its reach further out, everything else refitted from there,
+  // fortieth of its reach further out (ends found to 2 %), everything else refitted from there,
   // past it. The profile is a true one: at one end at least the other held
   // parameter has moved from its best value, and S with it kept at its
   // best (the conditional profile) lies above S at the end.
@@ -204,7 +204,7 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
     for (std::size_t m = 0; m < 2; ++m) find_ore_parameter(u.held[m].name)->set(o, e.held[m]);
     const double s_end = weighted_ssr(o, tests);
     const double step = std::log(end / u.best.held[k]);
-    p.set(o, end * std::exp(0.11 * step));
+    p.set(o, end * std::exp(0.025 * step));
     std::vector<std::string> all = free;
     all.push_back(u.held[other].name);
     const double s_past = refit_ssr(o, tests, all);
@@ -214,7 +214,7 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
     const bool moved = std::fabs(e.held[other] / u.best.held[other] - 1) > 1e-3;
     others_moved += moved && s_conditional > s_end * (1 + 1e-6);
     INFO(h.name << " end " << end << " (" << u.held[other].name << " " << e.held[other] << "): S " << s_end
-                << ", a tenth further " << s_past << ", the other at its best " << s_conditional << ", limit " << limit);
+                << ", 2.5 % further " << s_past << ", the other at its best " << s_conditional << ", limit " << limit);
     CHECK(s_end <= limit * (1 + 1e-6));
     CHECK(s_past > limit * (1 - 1e-6));
   }
@@ -819,11 +819,15 @@ TEST_CASE("grind intervals: the held parameters' reach against a brute-force gri
     }
     std::printf("  product %zu: search %.4f / %.4f, grid %.4f / %.4f, profiles' ends alone %.4f / %.4f\n", m,
                 ss[m].down, ss[m].up, grid_down[m], grid_up[m], ends_down, ends_up);
-    // Within 15 % of the grid's reach (and 0.001, a tenth of a per cent
-    // of the product, for a reach near 0); measured: 3 to 13 % short,
-    // 6 % past (the grid's columns are 0.04 apart in log η, which moves
-    // E∞ / η² by 0.08: the grid misses some of the extreme too).
-    auto close = [](double reach, double grid) { return std::fabs(reach - grid) <= 0.15 * std::fabs(grid) + 1e-3; };
+    // Within 12 % of the grid's reach (and 0.001, a tenth of a per cent
+    // of the product, for a reach near 0). Measured with the profiles'
+    // ends to 2 % (2026-12-07): short by 0.8 to 12.7 % of the grid's
+    // reach, none past; beyond the 0.001 the most any side needs is 9.2 %
+    // (the P80 after 20 min, below), so 12 % leaves
+    // about 3 points. What remains is the rays' directions (a linear
+    // number's extreme to cos 22.5°) and the grid's own spacing (its
+    // columns 0.04 apart in log η, which moves E∞ / η² by 0.08).
+    auto close = [](double reach, double grid) { return std::fabs(reach - grid) <= 0.12 * std::fabs(grid) + 1e-3; };
     INFO("product " << m);
     CHECK(close(ss[m].down, grid_down[m]));
     CHECK(close(ss[m].up, grid_up[m]));

@@ -187,8 +187,9 @@ std::size_t refine(std::vector<LinePoint>& pts, const FitCovariance& u, std::siz
 }
 
 // The stretch of a line within `limit` around its point `k`: each end
-// between the last point within and the first past, by halvings to a
-// tenth of its distance from point k (at most twenty). The two ends.
+// between the last point within and the first past, by halvings to 2 %
+// of its distance from point k (at most twenty), as the rays' ends. The
+// two ends.
 std::pair<LinePoint, LinePoint> stretch(const std::vector<LinePoint>& pts, std::size_t k, const FitCovariance& u,
                                         std::size_t j, const std::vector<TestInMill>& tests, double limit) {
   const OreParameter& p = *find_ore_parameter(u.held[j].name);
@@ -201,7 +202,7 @@ std::pair<LinePoint, LinePoint> stretch(const std::vector<LinePoint>& pts, std::
     LinePoint in = pts[i];
     if (dir < 0 ? i > 0 : i + 1 < pts.size()) {
       double x_out = pts[dir < 0 ? i - 1 : i + 1].x;
-      for (int b = 0; b < 20 && std::fabs(x_out - in.x) > 0.1 * std::fabs(in.x - pts[k].x); ++b) {
+      for (int b = 0; b < 20 && std::fabs(x_out - in.x) > 0.02 * std::fabs(in.x - pts[k].x); ++b) {
         const double x = 0.5 * (in.x + x_out);
         LinePoint q{x, profile_point(u, j, from_var(p, x), in.p.at.ore, tests, limit)};
         if (within(q)) in = q;
@@ -302,9 +303,10 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
   // linear in its parameters), so each refit predicts where S meets the
   // limit, s √((limit − S_b) / (S − S_b)), and the next is taken there
   // (2 % short of it where the last was past), kept inside the bracket of
-  // the last point within and the first past: from x0 + d (or where the
-  // ray leaves the file's range, or s_cap), until a point within lies
-  // within 2 % of the prediction, at most six refits; then, where none is
+  // the last point within and the first past (halved instead where the
+  // last prediction did not halve it: S flat, then a wall): from x0 + d
+  // (or where the ray leaves the file's range, or s_cap), until a point
+  // within lies within 2 % of the prediction, at most eight refits; then, where none is
   // within, four halvings toward the best point. The last point within is
   // an edge point.
   auto ray = [&](const std::vector<double>& d, double s_cap) {
@@ -325,7 +327,8 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
     const double s_b = best.at.ssr;
     double s_in = 0, s_out = kInf, s = std::min(1.0, s_max);
     HeldPoint in = best;
-    for (int k = 0; k < 6; ++k) {
+    double bracket = kInf;  // s_out − s_in before the last refit
+    for (int k = 0; k < 8; ++k) {
       const HeldPoint q = at(s, s_in > 0 ? in.at.ore : best.at.ore);
       const bool within = q.at.ok && q.at.ssr <= limit;
       if (within) s_in = s, in = q;
@@ -335,7 +338,13 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
       if (!within) next *= 0.98;
       if (within && std::fabs(next - s) <= 0.02 * s) break;
       next = std::min(next, s_max);
-      if (!(next > s_in && next < s_out)) next = s_out < kInf ? 0.5 * (s_in + s_out) : std::min(2 * s_in, s_max);
+      // A prediction outside the bracket, or one that did not halve it
+      // last time (S far from quadratic along the ray: flat, then a wall):
+      // halve it instead.
+      const bool slow = s_out < kInf && s_out - s_in > 0.5 * bracket;
+      if (s_out < kInf) bracket = s_out - s_in;
+      if (!(next > s_in && next < s_out) || slow)
+        next = s_out < kInf ? 0.5 * (s_in + s_out) : std::min(2 * s_in, s_max);
       s = next;
     }
     for (int b = 0; b < 4 && s_in == 0 && s_out < kInf; ++b) {

@@ -43,7 +43,7 @@ std::string ore_file_key(const std::string& parameter);
 //     least S refined by golden sections (to a thousandth of a step, or a
 //     flat profile; at most 16 refits).
 //  2. Through that point, each one's stretch within the limit: its ends by
-//     halvings to a tenth of their distance from it (at most twenty), the
+//     halvings to 2 % of their distance from it (at most twenty), the
 //     range widened to hold where the parameter is held.
 //  3. Two to four held together, from the best point toward each corner of
 //     their ranges, as far as the limit allows (the corner, or six
