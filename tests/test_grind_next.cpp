@@ -22,6 +22,7 @@
 
 #include "app/commands.h"
 #include "app/grind.h"
+#include "app/grind_next.h"
 #include "bond_run.h"
 #include "grind/bond.h"
 #include "grind/circuit.h"
@@ -262,6 +263,46 @@ ByHand expected_by_hand(const Ore& ore, const FitCovariance& u, const Sensitivit
 }
 
 }  // namespace
+
+TEST_CASE("grind --next-test: an ore edited after its fit is refused, in a fitted key or any other",
+          "[grind][next][failures]") {
+  // The same staleness check as the intervals': a fitted value moved, or
+  // another key of the ore's tables (breakage.beta) edited, which the
+  // tables' hash kept by --fit catches.
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.sigma = 1.0;
+  const std::vector<TestInMill> tests = {{synthetic_test(truth, 1.0, 5), synthetic_spectrum(), kPower_W, kHoldup_kg}};
+  const BatchFit f = fit_batch_tests(start, tests, {"efficiency", "sigma"});
+  Ore fitted = f.ore;
+  fitted.fitted_under.covariance = fit_covariance(f, tests);
+  fitted.fitted_under.covariance.tables_hash = mc::io::ore_tables_hash(fitted);
+  REQUIRE(fitted.fitted_under.covariance.information.size() == 2);
+  mc::app::GrindOptions o;
+  o.ore = "fitted.toml";
+  o.next_tests = {"no-such-run"};
+  auto refused = [&](const Ore& ore) {
+    try {
+      (void)mc::app::plan_next(o, ore);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  // As fitted: past the staleness check, to the candidate (not a run folder).
+  CHECK(refused(fitted).find("not a run folder") != std::string::npos);
+  Ore moved = fitted;
+  moved.efficiency *= 1.1;
+  CHECK(refused(moved).find("rates.efficiency") != std::string::npos);
+  Ore beta = fitted;
+  beta.breakage.beta += 0.3;
+  const std::string said = refused(beta);
+  INFO(said);
+  CHECK(said.find("[breakage] differ from the tables the ore was fitted with ([fitted] tables_fnv1a)") !=
+        std::string::npos);
+  CHECK(said.find("the ore was changed after its fit") != std::string::npos);
+}
 
 TEST_CASE("grind next test: a held parameter the candidate informs, its reach against the definitions",
           "[grind][next]") {
