@@ -672,6 +672,10 @@ int cmd_grind(const GrindOptions& o) {
                  o.ore.c_str());
   const GrindIntervals ci = grind_intervals(ore, numbers(o, made),
                                             [&](const Ore& moved) { return numbers(o, make(o, moved, run, lab, times, true)); });
+  // The fit's residuals correlated along the sieves: the intervals shown are likely too narrow; said once.
+  if (ci.given && !o.quiet && !correlated_residuals_note(ore.fitted_under.residual_lag1).empty())
+    std::fprintf(stderr, "millcharge: %s: %s\n", o.ore.c_str(),
+                 correlated_residuals_note(ore.fitted_under.residual_lag1).c_str());
   if (!ci.stale.empty() && !o.quiet)
     std::fprintf(stderr,
                  "millcharge: note: %s: %s ([fitted] %s): the ore was changed after its fit, and "

@@ -4,6 +4,7 @@
 // parameters of one of the three rate models.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -104,6 +105,9 @@ struct ContactRecord {
   // What else the ore file's [fitted] table says (not compared).
   std::string test, run, parameters;
   double rms_residual_pp = 0;
+  // The fit's residuals' lag-1 autocorrelation along the sieves
+  // (residual_lag1; fit.h): NaN where not kept.
+  double residual_lag1 = std::numeric_limits<double>::quiet_NaN();
   FitCovariance covariance;  // a batch test's fit only
 };
 
