@@ -475,11 +475,13 @@ void print(const GrindOptions& o, const Ore& ore, const io::Run& run, const Circ
   }
   for (std::size_t k = 0; k < products.size(); ++k) {
     const Product& p = products[k];
-    // An interval where the number depends on the ore (a batch's kWh/t does not).
+    // An interval where the number depends on the ore (a batch's kWh/t does
+    // not; a P80 held at the target moves by the solver's tolerance only,
+    // about 1e-7 of it: below 1e-6, none).
     auto iv = [&](Interval ProductInterval::*m, double scale, const char* f) {
       if (!ci.given) return std::string();
       const Interval& i = ci.products[k].*m;
-      return i.valid() && i.hi - i.lo > 1e-9 * std::fabs(i.hi) ? bracket(i, scale, f) : std::string();
+      return i.valid() && i.hi - i.lo > 1e-6 * std::fabs(i.hi) ? bracket(i, scale, f) : std::string();
     };
     std::printf("  %-28s %s %8.3g kWh/t%s  P80 %s um%s%s\n", p.label.c_str(),
                 p.feed_t_h > 0 ? fmt::format("{:9.4g} t/h{}", p.feed_t_h, iv(&ProductInterval::feed_t_h, 1, "{:.4g}"))
