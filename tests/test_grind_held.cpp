@@ -187,7 +187,7 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
   if (f.ssr > limit) CHECK(outside.find("e_inf_J_kg") != std::string::npos);
   // Each end of a profile the data set (not the file's range): the other
   // held one and the free ones refitted there, S within the limit; a
-  // tenth of its reach further out, everything else refitted from there,
+  // fortieth of its reach further out (ends found to 2 %), everything else refitted from there,
   // past it. The profile is a true one: at one end at least the other held
   // parameter has moved from its best value, and S with it kept at its
   // best (the conditional profile) lies above S at the end.
@@ -204,7 +204,7 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
     for (std::size_t m = 0; m < 2; ++m) find_ore_parameter(u.held[m].name)->set(o, e.held[m]);
     const double s_end = weighted_ssr(o, tests);
     const double step = std::log(end / u.best.held[k]);
-    p.set(o, end * std::exp(0.11 * step));
+    p.set(o, end * std::exp(0.025 * step));
     std::vector<std::string> all = free;
     all.push_back(u.held[other].name);
     const double s_past = refit_ssr(o, tests, all);
@@ -214,7 +214,7 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
     const bool moved = std::fabs(e.held[other] / u.best.held[other] - 1) > 1e-3;
     others_moved += moved && s_conditional > s_end * (1 + 1e-6);
     INFO(h.name << " end " << end << " (" << u.held[other].name << " " << e.held[other] << "): S " << s_end
-                << ", a tenth further " << s_past << ", the other at its best " << s_conditional << ", limit " << limit);
+                << ", 2.5 % further " << s_past << ", the other at its best " << s_conditional << ", limit " << limit);
     CHECK(s_end <= limit * (1 + 1e-6));
     CHECK(s_past > limit * (1 - 1e-6));
   }
@@ -252,6 +252,72 @@ TEST_CASE("grind intervals: held parameters' ranges are limited from their least
   CHECK(corners >= 1);
 }
 
+TEST_CASE("grind intervals: the free part taken where the held parameters fit best, not where they are held",
+          "[grind][interval][held]") {
+  // E∞ and d₀ held wrong, η and σ fitted (seed 41): the interval is centred
+  // where the held ones fit best, and its free half-width must be taken
+  // there too. Independently: the free ones refitted at the best held
+  // values (fit_batch_tests from there), that fit's covariance at the
+  // intervals' s² (S_min / ν), and log P80's gradient by central
+  // differences of the model at the refitted ore.
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.sigma = 1.0;
+  start.fracture.e_inf_J_kg = 40;
+  start.fracture.d0_m = 2.8e-3;
+  const std::vector<TestInMill> tests = {{synthetic_test(truth, 1.0, 41), synthetic_spectrum(), kPower_W, kHoldup_kg}};
+  const std::vector<std::string> free = {"efficiency", "sigma"};
+  BatchFit f = fit_batch_tests(start, tests, free);
+  for (const char* name : {"e_inf_J_kg", "d0_mm"}) {
+    FittedParameter h;
+    h.name = name;
+    h.start = h.value = find_ore_parameter(name)->get(start);
+    h.identified = false;
+    h.why = "held for the test";
+    f.parameters.push_back(h);
+  }
+  const FitCovariance u = fit_covariance(f, tests);
+  REQUIRE(u.best.held.size() == 2);
+  Ore from_best = start;
+  for (std::size_t k = 0; k < 2; ++k) find_ore_parameter(u.held[k].name)->set(from_best, u.best.held[k]);
+  const BatchFit g = fit_batch_tests(from_best, tests, free);
+  REQUIRE(g.covariance.size() == 2);
+  const double scale = u.ssr_best / interval_dof(u) / g.s2;
+  std::vector<double> grad(2);
+  for (std::size_t j = 0; j < 2; ++j) {
+    const OreParameter& p = *find_ore_parameter(free[j]);
+    const double h = 1e-3;
+    Ore a = g.ore, b = g.ore;
+    p.set(a, p.get(g.ore) * std::exp(h));
+    p.set(b, p.get(g.ore) * std::exp(-h));
+    grad[j] = (std::log(p80_third_mill(a)[0]) - std::log(p80_third_mill(b)[0])) / (2 * h);
+  }
+  double var = 0;
+  for (std::size_t a = 0; a < 2; ++a)
+    for (std::size_t b = 0; b < 2; ++b) var += grad[a] * g.covariance[a][b] * scale * grad[b];
+  const double sd = std::sqrt(var);
+  const Sensitivity s = sensitivities(f.ore, u, p80_third_mill).front();
+  REQUIRE(s.log);
+  const auto C = interval_covariance(u);
+  double var_s = 0;
+  for (std::size_t a = 0; a < 2; ++a)
+    for (std::size_t b = 0; b < 2; ++b) var_s += s.g[a] * C[a][b] * s.g[b];
+  const double q = t_quantile(0.975, interval_dof(u));
+  const Interval i = propagate(f.ore, u, p80_third_mill)[0];
+  const double p80 = p80_third_mill(truth)[0];
+  std::printf("free part at the best point: sd of log P80 %.5f (by hand %.5f); interval [%.1f, %.1f] um, truth %.1f; "
+              "by hand [%.1f, %.1f]\n",
+              std::sqrt(var_s), sd, i.lo, i.hi, p80, std::exp(s.center - std::hypot(q * sd, s.down)),
+              std::exp(s.center + std::hypot(q * sd, s.up)));
+  CHECK(std::exp(s.center) == Approx(p80_third_mill(g.ore)[0]).epsilon(1e-3));
+  CHECK(std::sqrt(var_s) == Approx(sd).epsilon(0.03));
+  CHECK(i.lo == Approx(std::exp(s.center - std::hypot(q * sd, s.down))).epsilon(0.005));
+  CHECK(i.hi == Approx(std::exp(s.center + std::hypot(q * sd, s.up))).epsilon(0.005));
+  CHECK(i.lo < p80);
+  CHECK(i.hi > p80);
+}
+
 TEST_CASE("grind intervals: with a held parameter, the interval still holds the truth in about 95 % of tests",
           "[grind][interval][held]") {
   // E∞ held at two thirds of its true value, η and σ fitted: the interval
@@ -279,10 +345,14 @@ TEST_CASE("grind intervals: with a held parameter, the interval still holds the 
     const FitCovariance u = fit_covariance(f, tests);
     const Sensitivity s = sensitivities(f.ore, u, p80_third_mill).front();
     const Interval i = interval_of(s, interval_covariance(u), t_quantile(0.975, interval_dof(u)), 1);
-    Sensitivity alone = s;  // E∞ taken as known: no reach, around the value, the fit's own s² and ν
-    alone.down = alone.up = 0;
-    alone.center = std::log(alone.value);
-    const Interval d = interval_of(alone, u.matrix, t_quantile(0.975, u.dof), 1);
+    // E∞ taken as known: no held one, at the fit (the fit's own covariance,
+    // gradients where E∞ is held), its own s² and ν.
+    FitCovariance known = u;
+    known.held.clear();
+    known.best = {};
+    known.edges.clear();
+    known.matrix = f.covariance;
+    const Interval d = propagate(f.ore, known, p80_third_mill)[0];
     REQUIRE(i.valid());
     held_in += i.lo <= true_p80 && true_p80 <= i.hi;
     delta_in += d.lo <= true_p80 && true_p80 <= d.hi;
@@ -749,11 +819,15 @@ TEST_CASE("grind intervals: the held parameters' reach against a brute-force gri
     }
     std::printf("  product %zu: search %.4f / %.4f, grid %.4f / %.4f, profiles' ends alone %.4f / %.4f\n", m,
                 ss[m].down, ss[m].up, grid_down[m], grid_up[m], ends_down, ends_up);
-    // Within 15 % of the grid's reach (and 0.001, a tenth of a per cent
-    // of the product, for a reach near 0); measured: 3 to 13 % short,
-    // 6 % past (the grid's columns are 0.04 apart in log η, which moves
-    // E∞ / η² by 0.08: the grid misses some of the extreme too).
-    auto close = [](double reach, double grid) { return std::fabs(reach - grid) <= 0.15 * std::fabs(grid) + 1e-3; };
+    // Within 12 % of the grid's reach (and 0.001, a tenth of a per cent
+    // of the product, for a reach near 0). Measured with the profiles'
+    // ends to 2 % (2026-12-07): short by 0.8 to 12.7 % of the grid's
+    // reach, none past; beyond the 0.001 the most any side needs is 9.2 %
+    // (the P80 after 20 min, below), so 12 % leaves
+    // about 3 points. What remains is the rays' directions (a linear
+    // number's extreme to cos 22.5°) and the grid's own spacing (its
+    // columns 0.04 apart in log η, which moves E∞ / η² by 0.08).
+    auto close = [](double reach, double grid) { return std::fabs(reach - grid) <= 0.12 * std::fabs(grid) + 1e-3; };
     INFO("product " << m);
     CHECK(close(ss[m].down, grid_down[m]));
     CHECK(close(ss[m].up, grid_up[m]));

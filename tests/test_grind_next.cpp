@@ -22,6 +22,7 @@
 
 #include "app/commands.h"
 #include "app/grind.h"
+#include "app/grind_next.h"
 #include "bond_run.h"
 #include "grind/bond.h"
 #include "grind/circuit.h"
@@ -198,7 +199,7 @@ double quad(const std::vector<double>& g, const std::vector<std::vector<double>>
 // held reach each side the lesser of the reach now and
 // t √(cᵀ L⁻¹ c − gᵀ L_ff⁻¹ g); around the centre now.
 struct ByHand {
-  double lo = 0, hi = 0, linear = 0;
+  double lo = 0, hi = 0, linear = 0, linear_now = 0, ratio = 0;
   int data = 0;
 };
 ByHand expected_by_hand(const Ore& ore, const FitCovariance& u, const Sensitivity& s, TestInMill c) {
@@ -245,14 +246,63 @@ ByHand expected_by_hand(const Ore& ore, const FitCovariance& u, const Sensitivit
   const double var_all = quad(all, inverse(L)), var_free = quad(s.g, inverse(Lff));
   const double t = t_quantile(0.975, nu + out.data);
   out.linear = t * std::sqrt(var_all - var_free);
-  const double below = std::hypot(t * std::sqrt(var_free), std::min(-s.down, out.linear));
-  const double above = std::hypot(t * std::sqrt(var_free), std::min(s.up, out.linear));
+  // The same from the tests' information alone (t at their ν): the held
+  // reach now scaled by the linear reach's fall, never grown.
+  std::vector<std::vector<double>> L0(nv, std::vector<double>(nv)), L0ff(np, std::vector<double>(np));
+  for (std::size_t a = 0; a < nv; ++a)
+    for (std::size_t b = 0; b < nv; ++b) L0[a][b] = u.information[a][b] * u.residual_variance_pp2 / s2;
+  for (std::size_t a = 0; a < np; ++a)
+    for (std::size_t b = 0; b < np; ++b) L0ff[a][b] = L0[a][b];
+  out.linear_now = t_quantile(0.975, nu) * std::sqrt(quad(all, inverse(L0)) - quad(s.g, inverse(L0ff)));
+  out.ratio = std::min(1.0, out.linear / out.linear_now);
+  const double below = std::hypot(t * std::sqrt(var_free), -s.down * out.ratio);
+  const double above = std::hypot(t * std::sqrt(var_free), s.up * out.ratio);
   out.lo = std::exp(s.center - below);
   out.hi = std::exp(s.center + above);
   return out;
 }
 
 }  // namespace
+
+TEST_CASE("grind --next-test: an ore edited after its fit is refused, in a fitted key or any other",
+          "[grind][next][failures]") {
+  // The same staleness check as the intervals': a fitted value moved, or
+  // another key of the ore's tables (breakage.beta) edited, which the
+  // tables' hash kept by --fit catches.
+  const Ore truth = known_ore();
+  Ore start = truth;
+  start.efficiency = 0.6;
+  start.fracture.sigma = 1.0;
+  const std::vector<TestInMill> tests = {{synthetic_test(truth, 1.0, 5), synthetic_spectrum(), kPower_W, kHoldup_kg}};
+  const BatchFit f = fit_batch_tests(start, tests, {"efficiency", "sigma"});
+  Ore fitted = f.ore;
+  fitted.fitted_under.covariance = fit_covariance(f, tests);
+  fitted.fitted_under.covariance.tables_hash = mc::io::ore_tables_hash(fitted);
+  REQUIRE(fitted.fitted_under.covariance.information.size() == 2);
+  mc::app::GrindOptions o;
+  o.ore = "fitted.toml";
+  o.next_tests = {"no-such-run"};
+  auto refused = [&](const Ore& ore) {
+    try {
+      (void)mc::app::plan_next(o, ore);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  // As fitted: past the staleness check, to the candidate (not a run folder).
+  CHECK(refused(fitted).find("not a run folder") != std::string::npos);
+  Ore moved = fitted;
+  moved.efficiency *= 1.1;
+  CHECK(refused(moved).find("rates.efficiency") != std::string::npos);
+  Ore beta = fitted;
+  beta.breakage.beta += 0.3;
+  const std::string said = refused(beta);
+  INFO(said);
+  CHECK(said.find("[breakage] differ from the tables the ore was fitted with ([fitted] tables_fnv1a)") !=
+        std::string::npos);
+  CHECK(said.find("the ore was changed after its fit") != std::string::npos);
+}
 
 TEST_CASE("grind next test: a held parameter the candidate informs, its reach against the definitions",
           "[grind][next]") {
@@ -298,7 +348,7 @@ TEST_CASE("grind next test: a held parameter the candidate informs, its reach ag
   std::vector<NextTestWidth> ws;
   for (const Case& k : cases) {
     const NextTestWidth w = expected_after(f.ore, u, s, k.c);
-    const ByHand h = expected_by_hand(f.ore, u, s, k.c);
+    const ByHand h = expected_by_hand(best_point(f.ore, u), u, s, k.c);
     REQUIRE(w.expected.valid());
     std::printf("  %s: expected [%.3f, %.3f] width %.3f (by hand [%.3f, %.3f]); held reach %.4f / %.4f, linear "
                 "%.4f; fixes %zu\n",
@@ -311,13 +361,28 @@ TEST_CASE("grind next test: a held parameter the candidate informs, its reach ag
     CHECK(width_now - w.width == Approx(width_now - (h.hi - h.lo)).epsilon(1e-3));
     ws.push_back(w);
   }
-  // The harder mill's long test: below, the linear reach the information
-  // after leaves E∞ and d₀ (less than now); above, the reach now (less
-  // than the linear): the lesser, side by side.
-  CHECK(ws[0].reach_down == Approx(expected_by_hand(f.ore, u, s, cases[0].c).linear).epsilon(1e-4));
-  CHECK(ws[0].reach_down < -s.down);
-  CHECK(ws[0].reach_up == Approx(s.up).epsilon(1e-12));
-  CHECK(expected_by_hand(f.ore, u, s, cases[0].c).linear > s.up);
+  // The harder mill's long test informs E∞ and d₀: their reach now falls,
+  // each side, by the linear reach's ratio (after over now), computed by hand.
+  const ByHand hard = expected_by_hand(best_point(f.ore, u), u, s, cases[0].c);
+  std::printf("  harder mill's linear reach %.5f after, %.5f now: ratio %.4f\n", hard.linear, hard.linear_now, hard.ratio);
+  CHECK(hard.ratio < 0.5);
+  CHECK(ws[0].reach_down == Approx(-s.down * hard.ratio).epsilon(1e-4));
+  CHECK(ws[0].reach_up == Approx(s.up * hard.ratio).epsilon(1e-4));
+  // A candidate that adds nothing (ground for 10⁻⁷ min): the reach stays
+  // as now, and the whole interval with it, but for t (the candidate's
+  // readings add to ν): each side's half-width in logarithms scaled by
+  // t after over t now.
+  const TestInMill useless{candidate_test(f.ore, {1e-7}), synthetic_spectrum(), kPower_W, kHoldup_kg};
+  const NextTestWidth z = expected_after(f.ore, u, s, useless);
+  REQUIRE(z.expected.valid());
+  const double t_now = t_quantile(0.975, interval_dof(u)), t_after = t_quantile(0.975, interval_dof(u) + z.data);
+  std::printf("  a candidate without information: expected [%.3f, %.3f] against now [%.3f, %.3f]; reach %.4f / %.4f "
+              "(now %.4f / %.4f); t %.5f now, %.5f after\n",
+              z.expected.lo, z.expected.hi, now.lo, now.hi, z.reach_down, z.reach_up, -s.down, s.up, t_now, t_after);
+  CHECK(z.reach_down == Approx(-s.down * t_after / t_now).epsilon(1e-3));
+  CHECK(z.reach_up == Approx(s.up * t_after / t_now).epsilon(1e-3));
+  CHECK(std::log(z.expected.hi) - s.center == Approx((std::log(now.hi) - s.center) * t_after / t_now).epsilon(1e-3));
+  CHECK(s.center - std::log(z.expected.lo) == Approx((s.center - std::log(now.lo)) * t_after / t_now).epsilon(1e-3));
   for (const NextTestWidth& w : ws) CHECK(w.width < width_now);
 }
 
@@ -388,7 +453,7 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
     const mc::io::Run r = mc::io::read_run(run, true, fo.energy_basis);
     const TestInMill cand{candidate_test(fo, c["times_min"].get<std::vector<double>>()), r.spectrum, r.power_W,
                           mill_holdup_kg(fo, r.porosity, r.filling, r.mill_volume)};
-    const ByHand h = expected_by_hand(fo, fu, fs_wi, cand);
+    const ByHand h = expected_by_hand(best_point(fo, fu), fu, fs_wi, cand);
     INFO(run << " " << c["times_min"].dump());
     CHECK(c["expected_width"].get<double>() == Approx(h.hi - h.lo).epsilon(1e-3));
     by_hand.push_back(h.hi - h.lo);

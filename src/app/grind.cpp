@@ -475,11 +475,13 @@ void print(const GrindOptions& o, const Ore& ore, const io::Run& run, const Circ
   }
   for (std::size_t k = 0; k < products.size(); ++k) {
     const Product& p = products[k];
-    // An interval where the number depends on the ore (a batch's kWh/t does not).
+    // An interval where the number depends on the ore (a batch's kWh/t does
+    // not; a P80 held at the target moves by the solver's tolerance only,
+    // about 1e-7 of it: below 1e-6, none).
     auto iv = [&](Interval ProductInterval::*m, double scale, const char* f) {
       if (!ci.given) return std::string();
       const Interval& i = ci.products[k].*m;
-      return i.valid() && i.hi - i.lo > 1e-9 * std::fabs(i.hi) ? bracket(i, scale, f) : std::string();
+      return i.valid() && i.hi - i.lo > 1e-6 * std::fabs(i.hi) ? bracket(i, scale, f) : std::string();
     };
     std::printf("  %-28s %s %8.3g kWh/t%s  P80 %s um%s%s\n", p.label.c_str(),
                 p.feed_t_h > 0 ? fmt::format("{:9.4g} t/h{}", p.feed_t_h, iv(&ProductInterval::feed_t_h, 1, "{:.4g}"))
@@ -672,6 +674,10 @@ int cmd_grind(const GrindOptions& o) {
                  o.ore.c_str());
   const GrindIntervals ci = grind_intervals(ore, numbers(o, made),
                                             [&](const Ore& moved) { return numbers(o, make(o, moved, run, lab, times, true)); });
+  // The fit's residuals correlated along the sieves: the intervals shown are likely too narrow; said once.
+  if (ci.given && !o.quiet && !correlated_residuals_note(ore.fitted_under.residual_lag1).empty())
+    std::fprintf(stderr, "millcharge: %s: %s\n", o.ore.c_str(),
+                 correlated_residuals_note(ore.fitted_under.residual_lag1).c_str());
   if (!ci.stale.empty() && !o.quiet)
     std::fprintf(stderr,
                  "millcharge: note: %s: %s ([fitted] %s): the ore was changed after its fit, and "

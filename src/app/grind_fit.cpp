@@ -328,6 +328,7 @@ int fit_batch(const GrindOptions& o) {
   }
   const io::Run& run = tests.front().run;
   fit.ore.fitted_under = record(run, test_names, run_names, names, fit.rms_pp);
+  fit.ore.fitted_under.residual_lag1 = fit.residual_r1;
   // What the fit leaves open, kept with the ore for the intervals of its products.
   const auto t_cov = std::chrono::steady_clock::now();
   fit.ore.fitted_under.covariance = fit_covariance(fit, in_mills);
@@ -378,6 +379,10 @@ int fit_batch(const GrindOptions& o) {
   for (const FittedParameter& p : fit.parameters) j["parameters"].push_back(parameter_json(p, cov));
   j["free_parameters"] = fit.free;
   j["rms_residual_pp"] = fit.rms_pp;
+  // Sieve errors correlated along the sieves leave the intervals too narrow
+  // (docs/grinding-intervals.md, "Are the intervals right?").
+  j["residual_lag1"] = std::isfinite(fit.residual_r1) ? nlohmann::json(fit.residual_r1) : nlohmann::json();
+  j["residuals_correlated"] = fit.residual_r1 > kCorrelatedResiduals;
   double noise_pp = 0;
   for (const TestRun& t : tests) noise_pp = std::max(noise_pp, t.file.test.noise_pp);
   // With nothing free the residual says how far the ore as it stands is
@@ -442,6 +447,10 @@ int fit_batch(const GrindOptions& o) {
     std::printf("  rms residual %.4g pp; %d iterations, %d evaluations, %.2f s (%.2f s of it what the fit leaves "
                 "open: covariance, profiles)\n",
                 fit.rms_pp, fit.iterations, fit.evaluations, seconds, cov_seconds);
+    if (std::isfinite(fit.residual_r1))
+      std::printf("  residuals' lag-1 autocorrelation along the sieves r1 = %.3f\n", fit.residual_r1);
+    if (fit.free > 0 && !correlated_residuals_note(fit.residual_r1).empty())
+      std::printf("  %s\n", correlated_residuals_note(fit.residual_r1).c_str());
     if (fit.rms_pp > 2 * noise_pp && fit.free > 0)
       std::printf("  note: the rms residual is above twice the test's noise_pp (%g pp): the model cannot reproduce "
                   "the test with these parameters free%s\n",

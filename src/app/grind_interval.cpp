@@ -35,19 +35,26 @@ std::vector<double> flatten(const GrindNumbers& g) {
   return v;
 }
 
+Staleness covariance_staleness(const Ore& ore) {
+  const FitCovariance& u = ore.fitted_under.covariance;
+  Staleness st{stale_covariance(ore, u), "covariance_values"};
+  if (st.what.empty()) {
+    // Any other key of the ore's tables edited (breakage.beta, sizes, the basis).
+    const std::string t = io::changed_tables(ore, u.tables_hash);
+    if (!t.empty()) st.what = t + " differ from the tables the ore was fitted with";
+    st.key = "tables_fnv1a";
+  }
+  return st;
+}
+
 GrindIntervals grind_intervals(const Ore& ore, const GrindNumbers& made,
                                const std::function<GrindNumbers(const Ore&)>& make) {
   GrindIntervals out;
   const FitCovariance& u = ore.fitted_under.covariance;
   if (!u.given) return out;
-  out.stale = stale_covariance(ore, u);
-  out.stale_key = "covariance_values";
-  if (out.stale.empty()) {
-    // Any other key of the ore's tables edited (breakage.beta, sizes, the basis).
-    const std::string t = io::changed_tables(ore, u.tables_hash);
-    if (!t.empty()) out.stale = t + " differ from the tables the ore was fitted with";
-    out.stale_key = "tables_fnv1a";
-  }
+  const Staleness st = covariance_staleness(ore);
+  out.stale = st.what;
+  out.stale_key = st.key;
   if (!out.stale.empty()) return out;
   out.correlated = correlated_pairs(u);
   out.outside = outside_region(u);

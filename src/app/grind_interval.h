@@ -47,6 +47,15 @@ struct GrindIntervals {
   grind::Interval work_index_kWh_t, bond_p80_um, gbp_g_rev, throughput_t_h;
 };
 
+// Why the ore's covariance no longer describes it: a fitted or held
+// parameter moved (grind::stale_covariance; key covariance_values), or
+// another key of its tables edited (io::changed_tables; key
+// tables_fnv1a). Empty `what`: it does. For intervals and --next-test alike.
+struct Staleness {
+  std::string what, key;
+};
+Staleness covariance_staleness(const grind::Ore& ore);
+
 // The intervals of what `make` gives for the ore; none (given false) for an
 // ore whose [fitted] table has no covariance, or whose fitted values were
 // changed since (`stale` says which).

@@ -58,10 +58,11 @@ NextPlan plan_next(const GrindOptions& o, const Ore& ore) {
     throw std::invalid_argument("--next-test: " + o.ore +
                                 " keeps no information matrix ([fitted] information: fitted by an older millcharge): "
                                 "fit it again with --fit");
-  const std::string stale = stale_covariance(ore, u);
-  if (!stale.empty())
-    throw std::invalid_argument("--next-test: " + o.ore + ": " + stale +
-                                ": the ore was changed after its fit; its covariance describes the fitted ore only");
+  // The same check as the intervals': a fitted or held value, or any other key of its tables.
+  const Staleness stale = covariance_staleness(ore);
+  if (!stale.what.empty())
+    throw std::invalid_argument("--next-test: " + o.ore + ": " + stale.what + " ([fitted] " + stale.key +
+                                "): the ore was changed after its fit; its covariance describes the fitted ore only");
   for (const std::string& dir : o.next_tests) {
     if (std::find(p.runs.begin(), p.runs.end(), dir) != p.runs.end())
       throw std::invalid_argument("--next-test " + dir + ": given twice");

@@ -1,5 +1,7 @@
 // An ore fitted to a batch test, least squares, identification (fit.h).
 #include "grind/fit.h"
+
+#include <fmt/format.h>
 #include "core/edit_distance.h"
 
 #include <algorithm>
@@ -465,6 +467,34 @@ std::vector<double> test_weights(const std::vector<TestInMill>& tests) {
   return w;
 }
 
+double residual_lag1(const std::vector<double>& r, const std::vector<std::size_t>& row_lengths) {
+  std::size_t total = 0;
+  for (std::size_t len : row_lengths) total += len;
+  if (total == 0 || total > r.size()) return kNaN;
+  double mean = 0;
+  for (std::size_t i = 0; i < total; ++i) mean += r[i] / static_cast<double>(total);
+  double num = 0, den = 0;
+  std::size_t i = 0, pairs = 0;
+  for (std::size_t len : row_lengths) {
+    for (std::size_t k = 0; k < len; ++k) {
+      const double d = r[i + k] - mean;
+      den += d * d;
+      if (k + 1 < len) num += d * (r[i + k + 1] - mean), ++pairs;
+    }
+    i += len;
+  }
+  return pairs > 0 && den > 0 ? num / den : kNaN;
+}
+
+std::string correlated_residuals_note(double r1) {
+  if (!(r1 > kCorrelatedResiduals)) return "";
+  return fmt::format(
+      "note: the fit's residuals are correlated along the sieves (lag-1 autocorrelation r1 = {:.2f}, above {:.1f}): "
+      "the sieve errors are likely not independent, and the 95 % intervals are then likely too narrow (about 70 % "
+      "coverage for such errors: docs/grinding-intervals.md#are-the-intervals-right)",
+      r1, kCorrelatedResiduals);
+}
+
 std::vector<double> weighted_residuals(const Ore& ore, const std::vector<TestInMill>& tests) {
   const std::vector<double> w = test_weights(tests);
   std::vector<double> r;
@@ -635,6 +665,10 @@ BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests,
       fit.rms_by_test.push_back(nm ? std::sqrt(ssr_m / static_cast<double>(nm)) : 0.0);
     }
     fit.rms_pp = std::sqrt(ssr_pp / static_cast<double>(n));
+    std::vector<std::size_t> rows;
+    for (std::size_t m = 0; m < tests.size(); ++m)
+      rows.insert(rows.end(), tests[m].test.times_min.size(), used[m].size());
+    fit.residual_r1 = residual_lag1(r, rows);
     // The covariance of those off their bounds, with the bound ones fixed.
     if (!inner.empty()) {
       Matrix Jin(lm.J.size(), std::vector<double>(inner.size()));

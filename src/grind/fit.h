@@ -9,6 +9,7 @@
 
 #include <functional>
 #include <optional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -133,7 +134,21 @@ struct BatchFit {
   std::vector<std::vector<double>> covariance;
   double s2 = 0;                                // ssr / (data − free), pp² of the first test
   int dof = 0;
+  // The residuals' lag-1 autocorrelation along the sieves (residual_lag1):
+  // near 0 for independent sieve errors; well above for errors that move
+  // neighbouring sieves together, where the intervals come out too narrow.
+  double residual_r1 = std::numeric_limits<double>::quiet_NaN();
 };
+// The lag-1 autocorrelation of residuals along the sieves, pooled: rows
+// of `row_lengths` consecutive residuals (a test time's, its sieves coarse
+// to fine), r1 = Σ d_k d_{k+1} / Σ d_k² over every row's neighbours, d the
+// residual less the mean of all. NaN with no neighbours or no scatter.
+double residual_lag1(const std::vector<double>& residuals, const std::vector<std::size_t>& row_lengths);
+// Above this, the fit's residuals say the sieve errors are correlated and
+// the 95 % intervals likely too narrow (docs/grinding-intervals.md).
+constexpr double kCorrelatedResiduals = 0.3;
+// "" unless r1 > kCorrelatedResiduals: then the note to print, once.
+std::string correlated_residuals_note(double r1);
 // Fits the named parameters of `start` to the test through the mill's
 // spectrum and power, with the hold-up `holdup_kg`. An unidentified
 // parameter is held at its start and the rest fitted again, one at a time.

@@ -187,8 +187,9 @@ std::size_t refine(std::vector<LinePoint>& pts, const FitCovariance& u, std::siz
 }
 
 // The stretch of a line within `limit` around its point `k`: each end
-// between the last point within and the first past, by halvings to a
-// tenth of its distance from point k (at most twenty). The two ends.
+// between the last point within and the first past, by halvings to 2 %
+// of its distance from point k (at most twenty), as the rays' ends. The
+// two ends.
 std::pair<LinePoint, LinePoint> stretch(const std::vector<LinePoint>& pts, std::size_t k, const FitCovariance& u,
                                         std::size_t j, const std::vector<TestInMill>& tests, double limit) {
   const OreParameter& p = *find_ore_parameter(u.held[j].name);
@@ -201,7 +202,7 @@ std::pair<LinePoint, LinePoint> stretch(const std::vector<LinePoint>& pts, std::
     LinePoint in = pts[i];
     if (dir < 0 ? i > 0 : i + 1 < pts.size()) {
       double x_out = pts[dir < 0 ? i - 1 : i + 1].x;
-      for (int b = 0; b < 20 && std::fabs(x_out - in.x) > 0.1 * std::fabs(in.x - pts[k].x); ++b) {
+      for (int b = 0; b < 20 && std::fabs(x_out - in.x) > 0.02 * std::fabs(in.x - pts[k].x); ++b) {
         const double x = 0.5 * (in.x + x_out);
         LinePoint q{x, profile_point(u, j, from_var(p, x), in.p.at.ore, tests, limit)};
         if (within(q)) in = q;
@@ -302,9 +303,10 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
   // linear in its parameters), so each refit predicts where S meets the
   // limit, s √((limit − S_b) / (S − S_b)), and the next is taken there
   // (2 % short of it where the last was past), kept inside the bracket of
-  // the last point within and the first past: from x0 + d (or where the
-  // ray leaves the file's range, or s_cap), until a point within lies
-  // within 2 % of the prediction, at most six refits; then, where none is
+  // the last point within and the first past (halved instead where the
+  // last prediction did not halve it: S flat, then a wall): from x0 + d
+  // (or where the ray leaves the file's range, or s_cap), until a point
+  // within lies within 2 % of the prediction, at most eight refits; then, where none is
   // within, four halvings toward the best point. The last point within is
   // an edge point.
   auto ray = [&](const std::vector<double>& d, double s_cap) {
@@ -325,7 +327,8 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
     const double s_b = best.at.ssr;
     double s_in = 0, s_out = kInf, s = std::min(1.0, s_max);
     HeldPoint in = best;
-    for (int k = 0; k < 6; ++k) {
+    double bracket = kInf;  // s_out − s_in before the last refit
+    for (int k = 0; k < 8; ++k) {
       const HeldPoint q = at(s, s_in > 0 ? in.at.ore : best.at.ore);
       const bool within = q.at.ok && q.at.ssr <= limit;
       if (within) s_in = s, in = q;
@@ -335,7 +338,13 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
       if (!within) next *= 0.98;
       if (within && std::fabs(next - s) <= 0.02 * s) break;
       next = std::min(next, s_max);
-      if (!(next > s_in && next < s_out)) next = s_out < kInf ? 0.5 * (s_in + s_out) : std::min(2 * s_in, s_max);
+      // A prediction outside the bracket, or one that did not halve it
+      // last time (S far from quadratic along the ray: flat, then a wall):
+      // halve it instead.
+      const bool slow = s_out < kInf && s_out - s_in > 0.5 * bracket;
+      if (s_out < kInf) bracket = s_out - s_in;
+      if (!(next > s_in && next < s_out) || slow)
+        next = s_out < kInf ? 0.5 * (s_in + s_out) : std::min(2 * s_in, s_max);
       s = next;
     }
     for (int b = 0; b < 4 && s_in == 0 && s_out < kInf; ++b) {
@@ -408,26 +417,24 @@ void held_ranges(FitCovariance& u, const BatchFit& fit, const std::vector<TestIn
   }
 }
 
-// The tests' information on the free variables and then the held ones at
-// the fit, JᵀJ / s²: the Jacobian of the weighted residuals by differences
-// inside the ore file's ranges (central, or one-sided of second order at a
-// bound), steps of 10⁻⁴ of the variable (at least 10⁻⁴).
-std::vector<std::vector<double>> information(const FitCovariance& u, const BatchFit& fit,
-                                             const std::vector<TestInMill>& tests) {
-  if (!(u.residual_variance_pp2 > 0)) return {};
+// The Jacobian of the weighted residuals at `ore` in the free variables and
+// then the held ones (one row a variable): by differences inside the ore
+// file's ranges (central, or one-sided of second order at a bound), steps
+// of 10⁻⁴ of the variable (at least 10⁻⁴).
+std::vector<std::vector<double>> jacobian(const FitCovariance& u, const Ore& ore, const std::vector<TestInMill>& tests) {
   std::vector<const OreParameter*> ps;
   for (const std::string& n : u.names) ps.push_back(find_ore_parameter(n));
   for (const HeldParameter& h : u.held) ps.push_back(find_ore_parameter(h.name));
-  const std::vector<double> r0 = weighted_residuals(fit.ore, tests);
+  const std::vector<double> r0 = weighted_residuals(ore, tests);
   std::vector<std::vector<double>> J(ps.size());
   for (std::size_t v = 0; v < ps.size(); ++v) {
     const OreParameter& p = *ps[v];
-    const double x = to_var(p, p.get(fit.ore)), lo = var_lo(p), hi = var_hi(p);
+    const double x = to_var(p, p.get(ore)), lo = var_lo(p), hi = var_hi(p);
     double h = 1e-4 * std::max(1.0, std::fabs(x));
     if (x - h < lo && x + h > hi) h = std::max(hi - x, x - lo) / 2;
     const int sign = x + h <= hi && x - h >= lo ? 0 : x + 2 * h <= hi ? +1 : -1;
     auto at = [&](double xv) {
-      Ore o = fit.ore;
+      Ore o = ore;
       p.set(o, from_var(p, xv));
       return weighted_residuals(o, tests);
     };
@@ -435,10 +442,16 @@ std::vector<std::vector<double>> information(const FitCovariance& u, const Batch
     for (std::size_t i = 0; i < r0.size(); ++i)
       J[v].push_back(sign == 0 ? (a[i] - b[i]) / (2 * h) : sign * (-3 * r0[i] + 4 * a[i] - b[i]) / (2 * h));
   }
-  std::vector<std::vector<double>> L(ps.size(), std::vector<double>(ps.size(), 0.0));
-  for (std::size_t a = 0; a < ps.size(); ++a)
-    for (std::size_t b = 0; b < ps.size(); ++b) {
-      for (std::size_t i = 0; i < r0.size(); ++i) L[a][b] += J[a][i] * J[b][i];
+  return J;
+}
+
+// The tests' information on every variable, JᵀJ / s² (s² the fit's).
+std::vector<std::vector<double>> information(const FitCovariance& u, const std::vector<std::vector<double>>& J) {
+  if (!(u.residual_variance_pp2 > 0)) return {};
+  std::vector<std::vector<double>> L(J.size(), std::vector<double>(J.size(), 0.0));
+  for (std::size_t a = 0; a < J.size(); ++a)
+    for (std::size_t b = 0; b < J.size(); ++b) {
+      for (std::size_t i = 0; i < J[a].size(); ++i) L[a][b] += J[a][i] * J[b][i];
       L[a][b] /= u.residual_variance_pp2;
     }
   return L;
@@ -538,7 +551,22 @@ FitCovariance fit_covariance(const BatchFit& fit, const std::vector<TestInMill>&
     u.held.push_back(h);
   }
   if (!u.held.empty() && interval_dof(u) > 0) held_ranges(u, fit, tests);
-  u.information = information(u, fit, tests);
+  // The free parameters' covariance and the information where the
+  // interval is centred: where the held ones fit best, the free ones
+  // refitted there (the fit's own point without held ones). Taken where
+  // they are held, a curvature far from the data's best can make the free
+  // part many times too wide (or too narrow).
+  const Ore at = best_point(fit.ore, u);
+  const std::vector<std::vector<double>> J = jacobian(u, at, tests);
+  u.information = information(u, J);
+  if (!u.held.empty() && u.best.held.size() == u.held.size() && !u.names.empty() && !J.empty()) {
+    std::vector<std::vector<double>> Jf(J[0].size(), std::vector<double>(u.names.size()));
+    for (std::size_t a = 0; a < u.names.size(); ++a)
+      for (std::size_t i = 0; i < J[a].size(); ++i) Jf[i][a] = J[a][i];
+    // s² the fit's (S at the held point over its dof), as the fit's own
+    // covariance: interval_covariance rescales it to S_min / ν.
+    u.matrix = covariance_matrix(Jf, fit.ssr);
+  }
   return u;
 }
 
@@ -566,11 +594,21 @@ Ore with_variables(const Ore& ore, const FitCovariance& u, const std::vector<dou
   return o;
 }
 
+Ore best_point(const Ore& ore, const FitCovariance& u) {
+  if (u.held.empty() || u.best.held.size() != u.held.size() || u.best.free.size() != u.names.size()) return ore;
+  Ore o = with_variables(ore, u, u.best.free);
+  for (std::size_t k = 0; k < u.held.size(); ++k) find_ore_parameter(u.held[k].name)->set(o, u.best.held[k]);
+  return o;
+}
+
 std::vector<Sensitivity> sensitivities(const Ore& ore, const FitCovariance& u,
                                        const std::function<std::vector<double>(const Ore&)>& f, bool held_gradient) {
   const std::vector<double> v0 = f(ore);
   const std::size_t n = v0.size(), np = u.names.size(), nh = u.held.size();
-  const std::vector<double> x0 = variables_of(ore, u.names);
+  // The gradients are taken where the interval is centred: the best point
+  // of the held parameters, the free ones refitted there.
+  const Ore at = best_point(ore, u);
+  const std::vector<double> x0 = variables_of(at, u.names);
   // Two points a free variable: x ± h, or x + h and x + 2h (x − h and
   // x − 2h) where a step would leave the ore file's range.
   struct Diff {
@@ -595,14 +633,14 @@ std::vector<Sensitivity> sensitivities(const Ore& ore, const FitCovariance& u,
     diffs.push_back(differences(p, x0[j], h, [&](double x) {
       std::vector<double> xs = x0;
       xs[j] = x;
-      return with_variables(ore, u, xs);
+      return with_variables(at, u, xs);
     }));
   }
   if (held_gradient)
     for (const HeldParameter& hp : u.held) {
       const OreParameter& p = *find_ore_parameter(hp.name);
-      held_diffs.push_back(differences(p, to_var(p, p.get(ore)), 1e-3, [&](double x) {
-        Ore o = ore;
+      held_diffs.push_back(differences(p, to_var(p, p.get(at)), 1e-3, [&](double x) {
+        Ore o = at;
         p.set(o, from_var(p, x));
         return o;
       }));
@@ -673,7 +711,7 @@ std::vector<Sensitivity> sensitivities(const Ore& ore, const FitCovariance& u,
     s.center = g_of(at_best[i]);
     auto slope = [&](const Diff& d) {
       if (d.sign == 0) return (g_of(d.a[i]) - g_of(d.b[i])) / (2 * d.h);
-      return d.sign * (-3 * y0 + 4 * g_of(d.a[i]) - g_of(d.b[i])) / (2 * d.h);
+      return d.sign * (-3 * s.center + 4 * g_of(d.a[i]) - g_of(d.b[i])) / (2 * d.h);
     };
     for (const Diff& d : diffs) s.g.push_back(slope(d));
     for (const Diff& d : held_diffs) s.g_held.push_back(slope(d));

@@ -43,12 +43,15 @@ std::string ore_file_key(const std::string& parameter);
 //     least S refined by golden sections (to a thousandth of a step, or a
 //     flat profile; at most 16 refits).
 //  2. Through that point, each one's stretch within the limit: its ends by
-//     halvings to a tenth of their distance from it (at most twenty), the
+//     halvings to 2 % of their distance from it (at most twenty), the
 //     range widened to hold where the parameter is held.
 //  3. Two to four held together, from the best point toward each corner of
 //     their ranges, as far as the limit allows (the corner, or six
 //     halvings short of it; four past it); five or more: their ranges alone.
 // The best point and the edge points (2, 3) are kept with the covariance.
+// The free parameters' covariance and the information (JᵀJ / s², every
+// variable) are taken at the best point (best_point), where the intervals
+// are centred; without held ones, at the fit.
 FitCovariance fit_covariance(const BatchFit& fit, const std::vector<SpectrumBin>& spectrum, double power_W,
                              double holdup_kg, const BatchTest& test);
 // The same for tests fitted together (fit_batch_tests).
@@ -104,7 +107,8 @@ struct Sensitivity {
 };
 
 // The numbers f makes from the ore, and their sensitivities: the gradient
-// by differences in the fitted variables (steps of a tenth of each one's
+// at best_point (where the interval is centred; the free ones' covariance
+// is taken there too) by differences in the fitted variables (steps of a tenth of each one's
 // standard error: central, or one-sided of second order where a step
 // would cross the ore file's range); the held parameters at their best
 // point and their edge points, the free ones as refitted there (an ore
@@ -130,6 +134,10 @@ std::vector<Interval> propagate(const Ore& ore, const FitCovariance& u,
 
 // The ore with the fitted variables x of u's free parameters.
 Ore with_variables(const Ore& ore, const FitCovariance& u, const std::vector<double>& x);
+// The point the intervals are centred at and their free part taken: the
+// held parameters where they fit best, the free ones refitted there
+// (FitCovariance::best); `ore` itself without held ones or a best point.
+Ore best_point(const Ore& ore, const FitCovariance& u);
 
 // "" when the ore's free and held parameters have the values the
 // covariance was computed at (to 1e-7); else the first that differs, by its

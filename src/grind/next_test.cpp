@@ -99,18 +99,20 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
   const std::size_t np = u.names.size(), nh = u.held.size(), nv = np + nh;
   if (!s.ok || s.g.size() != np || s.g_held.size() != nh) return out;
   // The candidate's readings as the fitted ore makes them, at the sieves
-  // that carry information.
+  // that carry information: at the best point (where the information kept
+  // and the product's gradients are taken; the ore itself without held ones).
+  const Ore at = best_point(ore, u);
   TestInMill c = candidate;
-  c.test.passing = batch_test_products(ore, c.spectrum, c.power_W, c.holdup_kg, c.test);
+  c.test.passing = batch_test_products(at, c.spectrum, c.power_W, c.holdup_kg, c.test);
   const std::vector<std::size_t> sieves = informative_sieves(c.test);
-  const std::vector<double> r0 = readings(ore, c, sieves);
+  const std::vector<double> r0 = readings(at, c, sieves);
   out.data = static_cast<int>(r0.size());
   std::vector<const OreParameter*> ps;
   for (const std::string& n : u.names) ps.push_back(find_ore_parameter(n));
   for (const HeldParameter& h : u.held) ps.push_back(find_ore_parameter(h.name));
   Matrix Jc(r0.size(), std::vector<double>(nv));
   for (std::size_t v = 0; v < nv; ++v) {
-    const std::vector<double> col = column(*ps[v], ore, c, sieves, r0);
+    const std::vector<double> col = column(*ps[v], at, c, sieves, r0);
     for (std::size_t i = 0; i < r0.size(); ++i) Jc[i][v] = col[i];
   }
   // The current information: the tests' JᵀJ / s² on every variable, kept
@@ -122,6 +124,7 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
   Matrix L = u.information;
   for (auto& row : L)
     for (double& v : row) v *= u.residual_variance_pp2 / s2;
+  const Matrix Lnow = L;
   // The candidate's information: its readings scatter as the first test's (s²).
   out.added.assign(nv, std::vector<double>(nv));
   for (std::size_t a = 0; a < nv; ++a)
@@ -131,54 +134,69 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
       out.added[a][b] = v / s2;
       L[a][b] += v / s2;
     }
-  // The variables estimated after the test: the free ones and every held
-  // one the sum's information reaches (positive definite); a held one
-  // without information, even with the candidate's, is dropped, one at a
-  // time, the least informed for its limit first. No inverse of the free
-  // ones alone: no interval.
-  std::vector<bool> in(nv, true);
-  Matrix Sigma;
-  std::vector<std::size_t> idx;
-  for (;;) {
-    idx.clear();
-    for (std::size_t v = 0; v < nv; ++v)
-      if (in[v]) idx.push_back(v);
-    Matrix sub(idx.size(), std::vector<double>(idx.size()));
-    for (std::size_t a = 0; a < idx.size(); ++a)
-      for (std::size_t b = 0; b < idx.size(); ++b) sub[a][b] = L[idx[a]][idx[b]];
-    if (idx.empty() || invert_spd(sub, Sigma)) break;
-    std::size_t drop = nv;
-    double least = HUGE_VAL;
-    for (std::size_t v : idx) {
-      if (v < np) continue;
-      const OreParameter& p = *ps[v];
-      const double limit = p.log ? 1.0 : (p.hi - p.lo) / 4;
-      const double info = std::max(L[v][v], 0.0) * limit * limit;
-      if (info <= least) least = info, drop = v;
-    }
-    if (drop == nv) return out;  // the free ones alone cannot be inverted
-    in[drop] = false;
-  }
-  // The product's variance over all of them (cᵀ Σ c) and over the free
-  // ones given the held (gᵀ L_ff⁻¹ g): for a model linear in its
+  // The variables estimated from an information matrix: the free ones and
+  // every held one it reaches (positive definite); a held one without
+  // information is dropped, one at a time, the least informed for its
+  // limit first. The product's variance over all of them (cᵀ Σ c) and over
+  // the free ones given the held (gᵀ L_ff⁻¹ g): for a model linear in its
   // parameters the first is the second plus the held parameters' part,
   // wᵀ S⁻¹ w (w the product's slope in them with the free ones refitted,
   // S their information with the free ones refitted: a Schur complement).
-  std::vector<double> grad(idx.size());
-  for (std::size_t a = 0; a < idx.size(); ++a) grad[a] = idx[a] < np ? s.g[idx[a]] : s.g_held[idx[a] - np];
-  double var_all = 0;
-  for (std::size_t a = 0; a < idx.size(); ++a)
-    for (std::size_t b = 0; b < idx.size(); ++b) var_all += grad[a] * Sigma[a][b] * grad[b];
-  double var_free = var_all;
-  if (idx.size() > np) {
-    Matrix Lff(np, std::vector<double>(np)), Cff;
-    for (std::size_t a = 0; a < np; ++a)
-      for (std::size_t b = 0; b < np; ++b) Lff[a][b] = L[a][b];
-    if (!invert_spd(Lff, Cff)) return out;
-    var_free = 0;
-    for (std::size_t a = 0; a < np; ++a)
-      for (std::size_t b = 0; b < np; ++b) var_free += s.g[a] * Cff[a][b] * s.g[b];
-  }
+  // ok false where the free ones alone cannot be inverted.
+  struct Solved {
+    bool ok = false;
+    std::vector<bool> in;
+    std::vector<std::size_t> idx;
+    Matrix Sigma;
+    double var_all = 0, var_free = 0;
+  };
+  auto solve = [&](const Matrix& L) {
+    Solved r;
+    r.in.assign(nv, true);
+    for (;;) {
+      r.idx.clear();
+      for (std::size_t v = 0; v < nv; ++v)
+        if (r.in[v]) r.idx.push_back(v);
+      Matrix sub(r.idx.size(), std::vector<double>(r.idx.size()));
+      for (std::size_t a = 0; a < r.idx.size(); ++a)
+        for (std::size_t b = 0; b < r.idx.size(); ++b) sub[a][b] = L[r.idx[a]][r.idx[b]];
+      if (r.idx.empty() || invert_spd(sub, r.Sigma)) break;
+      std::size_t drop = nv;
+      double least = HUGE_VAL;
+      for (std::size_t v : r.idx) {
+        if (v < np) continue;
+        const OreParameter& p = *ps[v];
+        const double limit = p.log ? 1.0 : (p.hi - p.lo) / 4;
+        const double info = std::max(L[v][v], 0.0) * limit * limit;
+        if (info <= least) least = info, drop = v;
+      }
+      if (drop == nv) return r;
+      r.in[drop] = false;
+    }
+    std::vector<double> grad(r.idx.size());
+    for (std::size_t a = 0; a < r.idx.size(); ++a)
+      grad[a] = r.idx[a] < np ? s.g[r.idx[a]] : s.g_held[r.idx[a] - np];
+    for (std::size_t a = 0; a < r.idx.size(); ++a)
+      for (std::size_t b = 0; b < r.idx.size(); ++b) r.var_all += grad[a] * r.Sigma[a][b] * grad[b];
+    r.var_free = r.var_all;
+    if (r.idx.size() > np) {
+      Matrix Lff(np, std::vector<double>(np)), Cff;
+      for (std::size_t a = 0; a < np; ++a)
+        for (std::size_t b = 0; b < np; ++b) Lff[a][b] = L[a][b];
+      if (!invert_spd(Lff, Cff)) return r;
+      r.var_free = 0;
+      for (std::size_t a = 0; a < np; ++a)
+        for (std::size_t b = 0; b < np; ++b) r.var_free += s.g[a] * Cff[a][b] * s.g[b];
+    }
+    r.ok = true;
+    return r;
+  };
+  const Solved after = solve(L);
+  if (!after.ok) return out;
+  const std::vector<bool>& in = after.in;
+  const std::vector<std::size_t>& idx = after.idx;
+  const Matrix& Sigma = after.Sigma;
+  const double var_all = after.var_all, var_free = after.var_free;
   // Which held ones the sum fixes, by the fit's own rule (an expected
   // standard error within a factor of e for a scale, a quarter of its
   // range for a value): said, not used.
@@ -194,12 +212,17 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
   // free and held, counted already) and the candidate's readings.
   const double t = t_quantile(0.975, interval_dof(u) + out.data);
   const double half = t * out.sd;
-  // The held parameters' expected reach: to each side, the lesser of their
-  // reach now (the profiles' and the rays', from the centre) and what the
-  // information after the test leaves them, t √(wᵀ S⁻¹ w), in quadrature
-  // with the reach now of each held one left without information. It falls
-  // continuously from the reach now as the candidate's information grows.
+  // The held parameters' expected reach: their reach now (the profiles'
+  // and the rays', from the centre) scaled by how much the linear reach
+  // falls, t √(wᵀ S⁻¹ w) after the test against the same now (from the
+  // tests' information alone, t at their ν), never above 1: a candidate
+  // that adds no information leaves it as it is (but for t). The reach now
+  // of each held one left without information even after the test stays
+  // (in quadrature where several): the result is at least that.
   const double linear = t * std::sqrt(std::max(var_all - var_free, 0.0));
+  const Solved now = solve(Lnow);
+  const double linear_now =
+      now.ok ? t_quantile(0.975, interval_dof(u)) * std::sqrt(std::max(now.var_all - now.var_free, 0.0)) : 0.0;
   double rest_down = 0, rest_up = 0;
   const bool by_held = s.down_by_held.size() == nh && s.up_by_held.size() == nh;
   for (std::size_t j = 0; j < nh; ++j)
@@ -207,8 +230,14 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
       if (!by_held) rest_down = s.down, rest_up = s.up;
       else rest_down = -std::hypot(rest_down, s.down_by_held[j]), rest_up = std::hypot(rest_up, s.up_by_held[j]);
     }
-  out.reach_down = std::min(-s.down, std::hypot(linear, rest_down));
-  out.reach_up = std::min(s.up, std::hypot(linear, rest_up));
+  if (linear_now > 0 && std::isfinite(linear_now)) {
+    const double ratio = std::min(1.0, linear / linear_now);
+    out.reach_down = std::max(-s.down * ratio, -rest_down);
+    out.reach_up = std::max(s.up * ratio, rest_up);
+  } else {  // no held one informed now: the linear reach after, if less
+    out.reach_down = std::min(-s.down, std::hypot(linear, rest_down));
+    out.reach_up = std::min(s.up, std::hypot(linear, rest_up));
+  }
   // Centred where the interval now is: the linear expectation does not
   // move the estimate.
   const double y0 = s.center;

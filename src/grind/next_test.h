@@ -3,9 +3,9 @@
 // on the usual sieves), the 95 % interval a product of the fitted ore is
 // expected to have once that test is fitted with the others. Linear: the
 // current fit's information on its variables (free and held) plus the
-// candidate's Fisher information JᵀJ / s² at the fitted ore, inverted; the
-// held parameters' reach falls from what it is now to what the sum's
-// information leaves them (the lesser of the two, continuously).
+// candidate's Fisher information JᵀJ / s² at the fitted ore (its best point, best_point), inverted; the
+// held parameters' reach now scaled by how much their linear reach falls
+// (never grown; unchanged, but for t, by a candidate without information).
 #pragma once
 
 #include <string>
@@ -42,11 +42,14 @@ struct NextTestWidth {
 // tests' JᵀJ / s² on the free and the held variables that the fit kept
 // (FitCovariance::information), at s² = interval_variance; the candidate
 // adds J_cᵀ J_c / s², J_c the derivatives of its readings (pp) at the
-// fitted ore, its readings taken to scatter as the first test's. The free
-// part: t √(gᵀ L_ff⁻¹ g). The held parameters' reach, each side: the lesser
-// of their reach now and t √(cᵀ Σ c − gᵀ L_ff⁻¹ g), the linear reach the
-// information after leaves them (in quadrature with the reach now of a
-// held one that has none). Centred where the interval now is. An ore
+// fitted ore's best point (best_point), its readings taken to scatter as the first test's. The free
+// part: t √(gᵀ L_ff⁻¹ g). The held parameters' reach, each side: their
+// reach now times min(1, linear after / linear now), the linear reach
+// t √(cᵀ Σ c − gᵀ L_ff⁻¹ g) of the information after the test against the
+// same of the tests' information alone (t at its ν); at least the reach
+// now of the held ones without information even after (in quadrature);
+// where none is informed now, the lesser of the reach now and the linear
+// after. Centred where the interval now is. An ore
 // without the information matrix gets no interval (expected.valid() false).
 NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensitivity& s,
                              const TestInMill& candidate);

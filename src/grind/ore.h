@@ -4,6 +4,7 @@
 // parameters of one of the three rate models.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -59,7 +60,9 @@ struct FitCovariance {
   bool given = false;                       // the ore file has one (an ore fitted before has not)
   std::vector<std::string> names;           // the free parameters, ore file keys
   std::vector<double> values;               // their fitted variables at the fit
-  std::vector<std::vector<double>> matrix;  // covariance of the fitted variables
+  // Covariance of the fitted variables (s² the fit's), taken at `best`
+  // where there are held parameters (an ore fitted before: at the fit).
+  std::vector<std::vector<double>> matrix;
   double residual_variance_pp2 = 0;         // s² of the fit
   int dof = 0;                              // data − free parameters
   std::vector<HeldParameter> held;          // unidentified, held at their start, or on their bound
@@ -71,7 +74,7 @@ struct FitCovariance {
   // range's ends, and two to four together toward each corner of their
   // ranges, as far as the data allow.
   std::vector<HeldEdge> edges;
-  // The tests' information on every fitted variable at the fit, the free
+  // The tests' information on every fitted variable at `best` (else at the fit), the free
   // ones' then the held ones': JᵀJ / s² of the weighted residuals (what a
   // next test adds to: next_test.h). Empty: not kept.
   std::vector<std::vector<double>> information;
@@ -102,6 +105,9 @@ struct ContactRecord {
   // What else the ore file's [fitted] table says (not compared).
   std::string test, run, parameters;
   double rms_residual_pp = 0;
+  // The fit's residuals' lag-1 autocorrelation along the sieves
+  // (residual_lag1; fit.h): NaN where not kept.
+  double residual_lag1 = std::numeric_limits<double>::quiet_NaN();
   FitCovariance covariance;  // a batch test's fit only
 };
 

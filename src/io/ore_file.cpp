@@ -209,7 +209,7 @@ void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u
 // [fitted]: the contact the ore was fitted under (grind::ContactRecord).
 void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   r.knows(ft, "fitted.", {"contact_law", "restitution", "friction", "rolling_friction", "stiffness_N_m",
-                          "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp",
+                          "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp", "residual_lag1",
                           "energy_basis", "covariance_variables", "covariance_values", "covariance",
                           "residual_variance_pp2", "degrees_of_freedom", "held", "edge", "best", "information",
                           "ssr_held", "ssr_best", "ssr_limit", "tables_fnv1a"});
@@ -236,6 +236,7 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   c.run = text("run");
   c.parameters = text("parameters");
   c.rms_residual_pp = r.number(ft, "fitted.", "rms_residual_pp", 0, kInf, ">= 0", 0.0);
+  if (ft.get("residual_lag1")) c.residual_lag1 = r.number(ft, "fitted.", "residual_lag1", -1, 1, "within -1 .. 1");
   read_covariance(r, ft, c.covariance);
 }
 
@@ -604,6 +605,7 @@ std::string ore_toml(const grind::Ore& o, const std::string& header) {
     if (!f.run.empty()) s += "run = " + quoted(f.run) + "\n";
     if (!f.parameters.empty()) s += "parameters = " + quoted(f.parameters) + "\n";
     s += "rms_residual_pp = " + g(f.rms_residual_pp) + "\n";
+    if (std::isfinite(f.residual_lag1)) s += "residual_lag1 = " + g(f.residual_lag1) + "\n";
     s += covariance_toml(f.covariance);
   }
   return s;
