@@ -91,10 +91,21 @@ TEST_CASE("a mesh liner wears by what its triangles booked, stage by stage", "[l
       }
     // The shell and lifters' wear: the run's shell part and the mesh's triangles.
     const nlohmann::json summary = nlohmann::json::parse(read_text(run / "summary.json"));
-    double shell = 0;
+    double shell = 0, shell_mm = 0;
     for (const auto& part : summary.at("liner").at("parts"))
-      if (part.at("part") == "shell") shell = part.at("wear_kg_per_h").get<double>();
+      if (part.at("part") == "shell")
+        shell = part.at("wear_kg_per_h").get<double>(), shell_mm = part.at("mean_wear_mm_per_1000h").get<double>();
     CHECK(num(rows[i], "shell_lifters_wear_kg_per_h") == Approx(shell + mesh_kg_h).epsilon(1e-4));
+    // The shell falls by its wear over the area the bars leave bare: the
+    // run books it over the whole cylinder. The lab bar's feet meet the
+    // shell where its 20° faces, 15 mm off the centre at the top, cross the
+    // circle: 12 arcs of that width over the circumference.
+    double x = 0.03;
+    for (int it = 0; it < 50; ++it) x = 0.015 + (0.025 - (R[0] - std::sqrt(R[0] * R[0] - x * x))) * std::tan(20 * M_PI / 180);
+    const double covered = 12 * 2 * R[0] * std::asin(x / R[0]) / (2 * M_PI * R[0]);
+    CHECK(covered == Approx(0.2).margin(0.01));
+    CHECK(num(rows[i + 1], "shell_wear_mm") - num(rows[i], "shell_wear_mm") ==
+          Approx(shell_mm * hours / 1000 / (1 - covered)).epsilon(0.01));
     // The next stage's case names the worn mesh, and its run read it.
     for (const fs::path& c : {a / "cases" / ("stage-0" + std::to_string(i + 1) + ".toml"),
                               a / ("stage-0" + std::to_string(i + 1)) / "case.toml"}) {

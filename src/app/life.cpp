@@ -378,6 +378,7 @@ int cmd_life(const LifeOptions& o) {
                                             o.calibrate_loss_mm, h_new * 1000));
 
   const fs::path out = o.out.empty() ? fs::path("runs") / (c.name + "-life") : fs::path(o.out);
+  const double shell_covered = life::shell_share_covered(c, worn);
   // How far a mesh liner's booked wear is spread (life/mesh_wear.h smooth_wear).
   life::MeshSmoothing smoothing;
   smoothing.across_m = o.mesh_smoothing_mm > 0 ? o.mesh_smoothing_mm * 1e-3 : 0.5 * base.d.largest_ball_diameter;
@@ -458,6 +459,8 @@ int cmd_life(const LifeOptions& o) {
         if (const int rc = cmd_run(ro); rc != 0) return rc;
       }
       s.r = life::read_stage_result(dir, static_cast<int>(profiles), worn, st.density);
+      // The shell's depth over the area the mesh bars leave bare.
+      if (shell_covered > 0) life::scale_shell_rates(s.r, 1 / (1 - shell_covered));
       s.ran = true;
     }
     mix_stages(st, o);

@@ -83,6 +83,34 @@ void check_worn_meshes(const MillCase& c, const std::vector<int>& worn, int axia
   }
 }
 
+double shell_share_covered(const MillCase& c, const std::vector<int>& worn) {
+  if (c.lifter_rows > 0) return 0;  // the shell's elements leave out [lifters] bars' feet already
+  const double R = 0.5 * c.diameter;
+  double covered = 0;
+  for (int k : worn) {
+    if (c.meshes.at(k).part != MeshPart::lifters) continue;
+    const std::vector<Triangle> t = placed_mesh_triangles(c.meshes.at(k));
+    for (const std::vector<int>& part : mc::life::connected_parts(t)) {
+      const double centre = mc::life::part_angle(t, part);
+      double a0 = 1e9, a1 = -1e9, z0 = 1e9, z1 = -1e9;
+      for (int i : part)
+        for (const Vec3& v : t[i].v) {
+          if (std::hypot(v.x, v.y) < R - 1e-3) continue;
+          const double a = std::remainder(std::atan2(v.y, v.x) - centre, 2 * M_PI);
+          a0 = std::min(a0, a), a1 = std::max(a1, a), z0 = std::min(z0, v.z), z1 = std::max(z1, v.z);
+        }
+      if (a1 > a0 && z1 > z0) covered += R * (a1 - a0) * (z1 - z0);
+    }
+  }
+  return std::clamp(covered / (2 * M_PI * R * c.length), 0.0, 0.9);
+}
+
+void scale_shell_rates(StageResult& r, double f) {
+  r.shell_mm_per_1000h *= f;
+  for (WearParts* p : {&r.parts}) p->shell_sliding_mm_per_1000h *= f, p->shell_strike_W_m2 *= f;
+  for (WearParts& p : r.halves) p.shell_sliding_mm_per_1000h *= f, p.shell_strike_W_m2 *= f;
+}
+
 void put_stage_meshes(MillCase& c, const fs::path& out, const Stage& s,
                       const std::vector<std::vector<Triangle>>* worn) {
   for (std::size_t j = 0; j < s.meshes.size(); ++j) {

@@ -33,6 +33,18 @@ std::vector<Triangle> stage_mesh_triangles(const std::filesystem::path& out, con
 // a segment.
 void check_worn_meshes(const MillCase& c, const std::vector<int>& worn, int axial_segments);
 
+// The share of the shell's area that the worn meshes of part "lifters"
+// stand on, where the case has no [lifters] bars: each bar's (connected
+// part's) vertices within a millimetre of the shell span an arc and a
+// length, the bar's footprint. The run books the shell's wear over the
+// whole cylinder (it does not know the mesh covers it); the shell's mean
+// depth rate is its wear over the rest, the rate over the whole divided by
+// (1 - this share).
+double shell_share_covered(const MillCase& c, const std::vector<int>& worn);
+
+// A stage's shell depth rates (and their parts, and the halves') times f.
+void scale_shell_rates(StageResult& r, double f);
+
 // The case's [[walls.mesh]] entries for stage s: each worn mesh from the
 // STL the study wrote for it (placed already: offset 0, angle 0, no flip),
 // or from `worn` (in s.meshes' order) where given.
