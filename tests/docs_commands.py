@@ -51,6 +51,7 @@ EXPECTED_SKIPS = [
     ('docs/liner-life.md', 'runs/lab-life/stage-08'), # an eight-stage study, shortened to one stage here
     ('docs/liner-life-mesh.md', 'runs/lab-mesh-life'),  # a mesh worn by a 0.2 s run's start-up turns over
                                                          # (tests/test_life_mesh.cpp runs a coarser one)
+    ('docs/liner-life-mesh.md', 'runs/lab-mesh-compare'),  # compares that study
     ('docs/reliability.md', '--resume runs/lab1'),    # after Ctrl-C
     ('docs/commands.md', '--resume runs/b'),          # after Ctrl-C, a crash or a time limit
 ]
@@ -222,6 +223,11 @@ class Runner:
             # (--at, --measured) may lie beyond them.
             drop(rest, '--at')
             drop(rest, '--measured')
+            valued = {'--label', '--out', '--profile', '--at', '--measured'}
+            studies = [a for k, a in enumerate(rest) if not a.startswith('--') and (k == 0 or rest[k - 1] not in valued)]
+            missing = [a for a in studies if not os.path.isdir(os.path.join(cwd, a))]
+            if missing:
+                return None, f'{missing[0]} is a study this page does not make here'
             return [self.binary, 'life-compare'] + rest + ['--quiet'], None
         if sub == 'bench':
             drop(rest, '--steps')

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "app/commands.h"
+#include "app/life_picture.h"
 #include "io/atomic_file.h"
 #include "io/csv_read.h"
 #include "io/png_plot.h"
@@ -248,7 +249,11 @@ int cmd_life_compare(const LifeCompareOptions& o) {
   for (int f = 0; f < kDrawnCount; ++f) {
     io::LinePlot p;
     p.title = std::string(titles[f]) + " (bands: \u00b1 2 standard errors where the study has them)";
-    p.x_label = "operating hours";
+    // Relative hours (the default wear coefficient, not calibrated) said so
+    // where every study stands on them.
+    const bool relative =
+        std::all_of(paths.begin(), paths.end(), [](const StudyPath& s) { return s.basis == "relative"; });
+    p.x_label = hours_label(relative);
     p.y_label = units[f];
     for (std::size_t i = 0; i < paths.size(); ++i) {
       const StudyPath& s = paths[i];
