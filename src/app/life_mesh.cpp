@@ -127,6 +127,27 @@ void put_stage_meshes(MillCase& c, const fs::path& out, const Stage& s,
   }
 }
 
+namespace {
+
+// What each of a stage's mesh triangles (placed, every one) booked over
+// the stage's hours at the mix, m³, from the run's wear.csv (which leaves
+// a periodic slice's seam caps out: they book nothing).
+std::vector<double> booked_volumes(const fs::path& run, const MillCase& c, int walls_mesh,
+                                   const std::vector<Triangle>& placed, const WearMix& mix, double span_case_hours) {
+  std::size_t kept = 0;
+  for (const Triangle& t : placed) kept += on_periodic_seam(t, c) ? 0 : 1;
+  const TriangleWear tw = read_triangle_wear(run / "wear.csv", walls_mesh, kept);
+  std::vector<double> volume(placed.size(), 0.0);
+  for (std::size_t t = 0, i = 0; t < placed.size(); ++t)
+    if (!on_periodic_seam(placed[t], c)) {
+      volume[t] = (mix.sliding * tw.sliding_m3_s[i] + mix.impact * tw.strike_W[i]) * span_case_hours * 3600.0;
+      ++i;
+    }
+  return volume;
+}
+
+}  // namespace
+
 std::vector<std::vector<Triangle>> wear_meshes(const fs::path& out, const MillCase& c, Stage& s, Stage& next,
                                                const WearMix& mix, double span_case_hours, double next_R,
                                                const MeshSmoothing& smoothing) {
@@ -135,15 +156,7 @@ std::vector<std::vector<Triangle>> wear_meshes(const fs::path& out, const MillCa
   const fs::path run = out / fmt::format("stage-{:02d}", s.index);
   for (StageMesh& m : s.meshes) {
     const std::vector<Triangle> placed = stage_mesh_triangles(out, c, m);
-    std::size_t kept = 0;
-    for (const Triangle& t : placed) kept += on_periodic_seam(t, c) ? 0 : 1;
-    const TriangleWear tw = read_triangle_wear(run / "wear.csv", m.walls_mesh, kept);
-    std::vector<double> volume(placed.size(), 0.0);
-    for (std::size_t t = 0, i = 0; t < placed.size(); ++t)
-      if (!on_periodic_seam(placed[t], c)) {
-        volume[t] = (mix.sliding * tw.sliding_m3_s[i] + mix.impact * tw.strike_W[i]) * span_case_hours * 3600.0;
-        ++i;
-      }
+    std::vector<double> volume = booked_volumes(run, c, m.walls_mesh, placed, mix, span_case_hours);
     const double z_tol = 1e-6 * std::max(1.0, c.length);
     const mc::life::MeshBounds bounds{next_R, -z_tol, c.length + z_tol};
     volume = mc::life::smooth_wear(placed, volume, smoothing.across_m, smoothing.along_m);
@@ -313,16 +326,9 @@ void write_segment_table(const fs::path& out, const MillCase& c, const std::vect
       std::vector<double> booked(segments, 0.0), smoothed(segments, 0.0), removed(segments, 0.0);
       const bool carried = s.span_case_hours > 0 && i + 1 < stages.size() && j < stages[i + 1].meshes.size();
       if (carried) {
-        std::size_t kept = 0;
-        for (const Triangle& tr : tris) kept += on_periodic_seam(tr, c) ? 0 : 1;
-        const TriangleWear tw = read_triangle_wear(run / "wear.csv", m.walls_mesh, kept);
         const std::vector<Triangle> next = stage_mesh_triangles(out, c, stages[i + 1].meshes[j]);
         const std::vector<double> swept = mc::life::swept_volumes(tris, next);
-        std::vector<double> volume(tris.size(), 0.0);
-        for (std::size_t q = 0, n = 0; q < tris.size(); ++q)
-          if (!on_periodic_seam(tris[q], c))
-            volume[q] = (b.mix.sliding * tw.sliding_m3_s[n] + b.mix.impact * tw.strike_W[n]) * s.span_case_hours * 3600.0,
-            ++n;
+        const std::vector<double> volume = booked_volumes(run, c, m.walls_mesh, tris, b.mix, s.span_case_hours);
         const std::vector<double> spread = mc::life::smooth_wear(tris, volume, b.smoothing.across_m, b.smoothing.along_m);
         for (std::size_t q = 0; q < tris.size(); ++q) {
           const int g = segment_of((tris[q].v[0].z + tris[q].v[1].z + tris[q].v[2].z) / 3);
