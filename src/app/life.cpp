@@ -19,6 +19,7 @@
 
 #include "app/commands.h"
 #include "app/life_mesh.h"
+#include "app/life_options.h"
 #include "app/life_picture.h"
 #include "app/life_state.h"
 #include "app/prepare.h"
@@ -308,9 +309,8 @@ void check_options(const LifeOptions& o) {
 
 }  // namespace
 
-int cmd_life(const LifeOptions& o) {
+void check_life(const LifeOptions& o, const Prepared& base) {
   check_options(o);
-  const Prepared base = prepare(o.c);
   const MillCase& c = base.c;
   const std::vector<int> worn = life::worn_meshes(c);
   // The bars of [lifters] (none where rows = 0: a mesh liner's bars are its own).
@@ -376,16 +376,50 @@ int cmd_life(const LifeOptions& o) {
   if (o.calibrate_loss_mm > 0 && !(o.calibrate_loss_mm < h_new * 1000))
     throw std::invalid_argument(fmt::format("--calibrate-loss {:g}: more than the new lifters' height, {:.4g} mm",
                                             o.calibrate_loss_mm, h_new * 1000));
+}
 
-  const fs::path out = o.out.empty() ? fs::path("runs") / (c.name + "-life") : fs::path(o.out);
-  const double shell_covered = life::shell_share_covered(c, worn);
-  // How far a mesh liner's booked wear is spread (life/mesh_wear.h smooth_wear).
+namespace {
+
+// An empty folder, or a sweep's case folder before its study began: only
+// the log and exit status that sweep.sh writes (app/slurm.cpp).
+bool holds_nothing_but_a_sweep_log(const fs::path& out) {
+  std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(out, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name != "run.log" && name != "exit_status" && name != "exit_status.tmp") return false;
+  }
+  return !ec;
+}
+
+// The mesh smoothing as resolved for the case (life/mesh_wear.h smooth_wear).
+life::MeshSmoothing smoothing_of(const LifeOptions& o, const Prepared& base) {
   life::MeshSmoothing smoothing;
   smoothing.across_m = o.mesh_smoothing_mm > 0 ? o.mesh_smoothing_mm * 1e-3 : 0.5 * base.d.largest_ball_diameter;
   smoothing.along_m = o.mesh_smoothing_along_mm > 0 ? o.mesh_smoothing_along_mm * 1e-3 : 4 * smoothing.across_m;
+  return smoothing;
+}
+
+}  // namespace
+
+json life_request(const LifeOptions& o, const Prepared& base) {
   json request = request_with_consumption(o, base);
-  if (!worn.empty())  // as resolved: a study resumes with the smoothing it began with
+  const life::MeshSmoothing smoothing = smoothing_of(o, base);
+  if (!life::worn_meshes(base.c).empty())  // as resolved: a study resumes with the smoothing it began with
     request["mesh_smoothing_mm"] = smoothing.across_m * 1e3, request["mesh_smoothing_along_mm"] = smoothing.along_m * 1e3;
+  return request;
+}
+
+int cmd_life(const LifeOptions& o) {
+  const Prepared base = prepare(o.c);
+  check_life(o, base);
+  const MillCase& c = base.c;
+  const std::vector<int> worn = life::worn_meshes(c);
+  const std::size_t profiles = c.lifter_rows > 0 ? c.lifter_pattern.size() : 0;
+  const fs::path out = o.out.empty() ? fs::path("runs") / (c.name + "-life") : fs::path(o.out);
+  const double shell_covered = life::shell_share_covered(c, worn);
+  // How far a mesh liner's booked wear is spread (life/mesh_wear.h smooth_wear).
+  const life::MeshSmoothing smoothing = smoothing_of(o, base);
+  const json request = life_request(o, base);
   Study st;
   st.wear_coefficient = base.scene.wall_material.wear_coefficient;
   st.impact_coefficient = base.scene.wall_material.impact_wear_coefficient;
@@ -411,7 +445,7 @@ int cmd_life(const LifeOptions& o) {
     st.stages = std::move(state.stages);
     std::printf("life            resuming %s at stage %d\n", out.string().c_str(), st.stages.back().index);
   } else {
-    if (fs::exists(out, ec) && !fs::is_empty(out, ec) && !fs::exists(out / "life.json", ec))
+    if (fs::exists(out, ec) && !holds_nothing_but_a_sweep_log(out))
       throw std::invalid_argument("--out " + out.string() + ": exists and holds no life study; choose another folder");
     if (o.force) {
       for (int i = 0; fs::exists(stage_dir(out, i), ec); ++i) fs::remove_all(stage_dir(out, i), ec);

@@ -31,6 +31,7 @@
 #include "app/cli_checks.h"
 #include "app/commands.h"
 #include "app/grind.h"
+#include "app/life_options.h"
 #include "app/sweep.h"
 #include "compute/context.h"
 
@@ -130,56 +131,7 @@ int main(int argc, char** argv) {
   mc::app::LifeOptions lo;
   auto* life = app.add_subcommand("life", "the liner over its life: run, wear the lifters and shell, run again");
   add_case_options(life, lo.c, true);
-  life->add_option("--out", lo.out, "study folder (default runs/CASE-life); a study there resumes");
-  life->add_option("--stages", lo.stages, "worn stages after the new liner")
-      ->check(mc::app::cli::count(1, 100))
-      ->required();
-  life->add_option("--hours", lo.hours, "operating hours the study covers, in equal stages")
-      ->check(mc::app::cli::positive("h"));
-  life->add_option("--until-height", lo.until_height_mm, "or: until the tallest lifters are this high")
-      ->check(mc::app::cli::positive("mm"))
-      ->type_name("MM");
-  life->add_option("--calibrate-loss", lo.calibrate_loss_mm,
-                   "measured: the lifters lost MM of height in --calibrate-hours H (sets the hours)")
-      ->check(mc::app::cli::positive("mm"))
-      ->type_name("MM");
-  life->add_option("--calibrate-hours", lo.calibrate_hours, "the hours of --calibrate-loss")
-      ->check(mc::app::cli::positive("h"))
-      ->type_name("H");
-  life->add_option("--calibrate-rate", lo.calibrate_rate_kg_h,
-                   "measured: the new shell liner (shell and lifters) wears KG/H (sets the hours)")
-      ->check(mc::app::cli::positive("kg/h"))
-      ->type_name("KG/H");
-  life->add_option("--calibrate-consumption", lo.calibrate_consumption_g_kWh,
-                   "measured: the new shell and lifters wear G_PER_KWH grams of steel per kWh the mill draws (sets "
-                   "the hours; end plates not counted)")
-      ->check(mc::app::cli::positive("g/kWh"))
-      ->type_name("G_PER_KWH");
-  life->add_option("--impact-share", lo.impact_share,
-                   "the share S (0 to 1) of the new shell and lifters' wear that impact wear does, the rest sliding "
-                   "(sets both wear coefficients; the hours stay those of the case's, or a calibration's)")
-      ->check(mc::app::cli::between(0, 1))
-      ->type_name("S");
-  life->add_option("--shell-wear-ratio", lo.shell_wear_ratio,
-                   "the shell plates' wear coefficients over the lifter bars' (default 1: one liner steel): the "
-                   "shell wears R times what the bars' coefficients give it")
-      ->check(mc::app::cli::between(0.01, 100))
-      ->type_name("R");
-  life->add_option("--mesh-smoothing", lo.mesh_smoothing_mm,
-                   "a mesh liner's booked wear averaged over the surface around each triangle, a Gaussian of MM "
-                   "standard deviation across the mill's axis (default: the largest ball's radius)")
-      ->check(mc::app::cli::between(0.1, 1000))
-      ->type_name("MM");
-  life->add_option("--axial-segments", lo.axial_segments,
-                   "a mesh liner's bars and the shell measured in N equal spans along the mill: life_segments.csv")
-      ->check(mc::app::cli::count(1, 32))
-      ->type_name("N");
-  life->add_option("--mesh-smoothing-along", lo.mesh_smoothing_along_mm,
-                   "and of MM along the axis (default: four times --mesh-smoothing)")
-      ->check(mc::app::cli::between(0.1, 10000))
-      ->type_name("MM");
-  life->add_flag("--force", lo.force, "start the study again in an --out that holds one");
-  life->add_flag("--quiet", lo.quiet, "no progress lines from the stages' runs");
+  mc::app::add_life_options(life, lo);
 
   mc::app::LifeCompareOptions lco;
   auto* life_compare = app.add_subcommand(

@@ -67,6 +67,7 @@ JobScript job_script_for(const io::Sweep& s, const std::vector<io::SweepCase>& c
   j.base_case = s.base_case;
   j.device = s.device;
   j.common = s.set;
+  j.command = s.command;
   j.slurm = s.slurm;
   for (const io::SweepCase& c : cases) {
     JobScript::Case jc;
@@ -74,6 +75,7 @@ JobScript job_script_for(const io::Sweep& s, const std::vector<io::SweepCase>& c
     jc.dir = c.dir;
     jc.label = io::case_label(s, c);
     jc.axes.assign(c.overrides.begin() + static_cast<long>(s.set.size()), c.overrides.end());
+    jc.life = c.life_args;
     j.cases.push_back(std::move(jc));
   }
   return j;
@@ -83,11 +85,16 @@ std::string job_script_text(const JobScript& j) {
   std::ostringstream o;
   o << "#!/bin/bash\n"
     << "# millcharge sweep '" << j.name << "': " << j.cases.size() << " cases of " << j.base_case.string() << ".\n"
-    << "# Written by `millcharge sweep run`. Array task N runs case N (SLURM_ARRAY_TASK_ID):\n"
-    << "# a normal `millcharge run` into cases/NAME/, or `millcharge run --resume` when\n"
-    << "# that folder holds a checkpoint. SIGTERM (scancel, the time limit) stops the\n"
-    << "# run with a checkpoint; submitting the case again resumes it. Without Slurm,\n"
-    << "# `bash sweep.sh N` runs case N here. Output: cases/NAME/run.log, exit_status.\n";
+    << "# Written by `millcharge sweep run`. Array task N runs case N (SLURM_ARRAY_TASK_ID):\n";
+  if (j.command == "life")
+    o << "# a life study, `millcharge life` into cases/NAME/, which resumes the study there\n"
+      << "# from its life.json. SIGTERM (scancel, the time limit) stops the stage's run\n"
+      << "# with a checkpoint; submitting the case again resumes it. Without Slurm,\n";
+  else
+    o << "# a normal `millcharge run` into cases/NAME/, or `millcharge run --resume` when\n"
+      << "# that folder holds a checkpoint. SIGTERM (scancel, the time limit) stops the\n"
+      << "# run with a checkpoint; submitting the case again resumes it. Without Slurm,\n";
+  o << "# `bash sweep.sh N` runs case N here. Output: cases/NAME/run.log, exit_status.\n";
   o << "#SBATCH --job-name=" << j.name << "\n";
   if (!j.array.empty()) o << "#SBATCH --array=" << array_spec(j.array, j.slurm.max_running) << "\n";
   o << "#SBATCH --output=" << (j.sweep_dir / "slurm" / "%A_%a.out").string() << "\n";
@@ -113,28 +120,49 @@ std::string job_script_text(const JobScript& j) {
       << "    name=" << shell_quote(c.dir) << "\n"
       << "    axes=(";
     for (std::size_t i = 0; i < c.axes.size(); ++i) o << (i ? " " : "") << "--set " << shell_quote(c.axes[i]);
-    o << ") ;;\n";
+    o << ")";
+    if (j.command == "life") {
+      o << "\n    life=(";
+      for (std::size_t i = 0; i < c.life.size(); ++i) o << (i ? " " : "") << shell_quote(c.life[i]);
+      o << ")";
+    }
+    o << " ;;\n";
   }
   o << "  *) echo \"sweep.sh: no case '$task' (the cases are 0 to " << (j.cases.empty() ? 0 : j.cases.back().index)
     << "); run it as a Slurm array task or as: bash sweep.sh N\" >&2\n"
     << "     exit 2 ;;\n"
     << "esac\n\n";
-  o << R"(dir=$sweep/cases/$name
+  if (j.command == "life")
+    o << R"(dir=$sweep/cases/$name
+# A study that ended says where in its life.json ("stopped").
+if [ -f "$dir/life.json" ] && grep -q '"stopped"' "$dir/life.json"; then
+  echo "case $task ($name) has finished: $dir/life.json"
+  exit 0
+fi)";
+  else
+    o << R"(dir=$sweep/cases/$name
 if [ -f "$dir/summary.json" ]; then
   echo "case $task ($name) has finished: $dir/summary.json"
   exit 0
-fi
+fi)";
+  o << R"(
 mkdir -p "$dir" || exit 1
 exec >>"$dir/run.log" 2>&1
 rm -f "$dir/exit_status"
 echo "== case $task ($name) on $(hostname) at $(date -u +%Y-%m-%dT%H:%M:%SZ)${SLURM_JOB_ID:+, Slurm job ${SLURM_ARRAY_JOB_ID:-$SLURM_JOB_ID}_$task}"
 device_opt=()
 if [ -n "$device" ]; then device_opt=(--device "$device"); fi
-if [ -f "$dir/checkpoint.bin" ]; then
+)";
+  if (j.command == "life")
+    o << R"(# The study resumes from its life.json (and a stage's run from its checkpoint).
+run=("$millcharge" life "$base" --out "$dir" "${common[@]}" "${axes[@]}" "${life[@]}" "${device_opt[@]}"))";
+  else
+    o << R"(if [ -f "$dir/checkpoint.bin" ]; then
   run=("$millcharge" run --resume "$dir" "${device_opt[@]}")
 else
   run=("$millcharge" run "$base" --out "$dir" --force "${common[@]}" "${axes[@]}" "${device_opt[@]}")
-fi
+fi)";
+  o << R"(
 echo "== ${run[*]}"
 # The run gets the signal, writes its checkpoint and exits 128 + the signal.
 pid=

@@ -1,7 +1,8 @@
 // The Slurm backend of `millcharge sweep run`: a job-array script whose
 // task SLURM_ARRAY_TASK_ID runs case number SLURM_ARRAY_TASK_ID (a normal
 // `millcharge run`, or `millcharge run --resume` when the case's folder
-// holds a checkpoint), sbatch to submit it, squeue to see what is queued.
+// holds a checkpoint; in a sweep of life studies `millcharge life`, which
+// resumes a study by itself), sbatch to submit it, squeue to see what is queued.
 // No scheduler of our own: Slurm queues, places and signals the runs.
 #pragma once
 
@@ -22,11 +23,13 @@ struct JobScript {
   std::filesystem::path base_case;    // absolute
   std::string device;                 // --device for every run; empty: millcharge's default
   std::vector<std::string> common;    // the sweep's [set] as KEY=VALUE
+  std::string command = "run";        // "run", or "life": each case a life study
   struct Case {
     int index = 0;
     std::string dir;                  // folder name under cases/
     std::string label;                // "key=value, ..." for the script's comments
     std::vector<std::string> axes;    // the axes' KEY=VALUE
+    std::vector<std::string> life;    // a life study's options, --KEY=VALUE
   };
   std::vector<Case> cases;            // every case of the sweep
   std::vector<int> array;             // the tasks to submit (#SBATCH --array)

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -22,6 +23,10 @@
 #include <stdexcept>
 
 #include "app/cli_checks.h"
+#include "app/life_options.h"
+#include "app/life_state.h"
+#include "app/prepare.h"
+#include "app/sweep_life.h"
 #include "app/slurm.h"
 #include "app/sweep_runs.h"
 #include "app/sweep_table.h"
@@ -44,13 +49,7 @@ namespace {
 // measurement (`millcharge bench` measures a device).
 constexpr double kDefaultThroughput = 1e7;
 
-std::string thousands(long v) {
-  std::string s = std::to_string(v);
-  for (int i = static_cast<int>(s.size()) - 3; i > (v < 0 ? 1 : 0); i -= 3) s.insert(i, ",");
-  return s;
-}
-
-std::string duration_text(double s) {
+std::string estimate_text(double s) {
   char buf[32];
   if (!(s >= 0) || s > 1e9) return "?";
   if (s < 60) std::snprintf(buf, sizeof buf, "%.0fs", s);
@@ -95,6 +94,8 @@ struct CaseCheck {
   double steps = 0;          // settling (at its limit when "auto") and turning
   bool settle_auto = false;
   std::string resolved;      // case_to_toml, to compare with a run folder's
+  int runs = 1;              // a life study: its new liner and each worn stage asked (stages + 1)
+  nlohmann::json request;    // a life study's, to compare with a case folder's life.json
 };
 
 CaseCheck check_case(const io::Sweep& s, const io::SweepCase& sc) {
@@ -113,6 +114,16 @@ CaseCheck check_case(const io::Sweep& s, const io::SweepCase& sc) {
     r.steps = std::round((settle + d.turn_limit_s) / d.dt);  // an auto run at its cap
     r.settle_auto = c.settle < 0;
     r.resolved = io::case_to_toml(c);
+    if (s.is_life()) {
+      // The study's options read and checked as `millcharge life` does.
+      LifeOptions lo = life_options_from(sc.life_args);
+      lo.c.case_path = s.base_case.string();
+      lo.c.overrides = sc.overrides;
+      const Prepared p{s.base_case, c, d, build_scene(c, d)};
+      check_life(lo, p);
+      r.runs = lo.stages + 1;
+      r.request = life_request(lo, p);
+    }
   } catch (const std::invalid_argument& e) {
     r.error = e.what();
   }
@@ -127,6 +138,23 @@ struct Checked {
 };
 
 Checked check_all(io::Sweep s) {
+  // A [life] key or life.* axis that is no life option is one mistake of
+  // the file, said once with its line, not once per case.
+  if (s.is_life()) {
+    const std::vector<std::string> names = sweep_life_option_names();
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    auto known = [&](const std::string& key, const std::string& where) {
+      if (std::find(names.begin(), names.end(), key) == names.end())
+        throw io::SweepError(where + ": not an option of millcharge life that a sweep can give (those: " + list +
+                             "; the sweep sets --out, --force and --quiet itself)");
+    };
+    for (const io::SweepLifeOption& o : s.life)
+      known(o.key, s.file.string() + ":" + std::to_string(o.line) + ": life." + o.key);
+    for (const io::SweepAxis& a : s.axes)
+      if (a.key.rfind(io::kLifeAxisPrefix, 0) == 0)
+        known(a.key.substr(std::string(io::kLifeAxisPrefix).size()), s.file.string() + ": axes." + a.key);
+  }
   Checked k;
   k.cases = io::expand(s);
   for (const io::SweepCase& c : k.cases) {
@@ -287,6 +315,9 @@ int cmd_sweep_check(const SweepCheckOptions& o) {
   const char* work_name = clumps ? "sphere-steps" : "ball-steps";
   table[0].push_back(clumps ? "particles" : "balls");
   if (clumps) table[0].push_back("spheres");
+  // A life study runs its new liner and each worn stage: its steps are
+  // the runs' steps together.
+  if (s.is_life()) table[0].push_back("runs");
   for (const char* h : {"steps", work_name, "wall"}) table[0].push_back(h);
   double total_balls = 0, total_spheres = 0, total_steps = 0, total_work = 0;
   for (std::size_t i = 0; i < k.cases.size(); ++i) {
@@ -296,12 +327,14 @@ int cmd_sweep_check(const SweepCheckOptions& o) {
     if (!c.error.empty()) {
       row.push_back("NOT VALID (below)");
     } else {
-      const double work = static_cast<double>(c.spheres) * c.steps;
-      total_balls += c.balls, total_spheres += c.spheres, total_steps += c.steps, total_work += work;
+      const double steps = c.steps * c.runs;
+      const double work = static_cast<double>(c.spheres) * steps;
+      total_balls += c.balls, total_spheres += c.spheres, total_steps += steps, total_work += work;
       row.push_back(thousands(c.balls));
       if (clumps) row.push_back(thousands(c.spheres));
-      row.insert(row.end(), {thousands(static_cast<long>(c.steps)), number_text(work, "%.3g"),
-                             duration_text(work / throughput)});
+      if (s.is_life()) row.push_back(std::to_string(c.runs));
+      row.insert(row.end(), {thousands(static_cast<long>(steps)), number_text(work, "%.3g"),
+                             estimate_text(work / throughput)});
     }
     table.push_back(row);
   }
@@ -318,13 +351,16 @@ int cmd_sweep_check(const SweepCheckOptions& o) {
   bool any_auto = false;
   for (const CaseCheck& c : k.checks) any_auto = any_auto || c.settle_auto;
   std::printf("estimated %s of device time at %.3g %s/s (%s; `millcharge bench` measures a device%s)%s\n",
-              duration_text(total_work / throughput).c_str(), throughput,
+              estimate_text(total_work / throughput).c_str(), throughput,
               clumps ? "sphere-updates" : "particle-updates",
               o.throughput > 0   ? "--throughput"
               : s.throughput > 0 ? "the file's throughput"
                                  : "a stated round figure, not a measurement",
               clumps ? "; for clumps, bench a case of the same shapes" : "",
               any_auto ? ";\nsettling counted at its limit, 2 s + 4 sqrt(D/g), where run.settle is \"auto\"" : "");
+  if (s.is_life())
+    std::printf("each life study counted as its new liner's run and one run per stage asked (stages + 1); a study "
+                "that goes on until it covers its hours or height may run up to 3 x stages + 1\n");
   return 0;
 }
 
@@ -373,7 +409,15 @@ int cmd_sweep_run(const SweepRunOptions& o) {
   int mismatched = 0;
   for (std::size_t i = 0; i < k.cases.size(); ++i) {
     const fs::path dir = case_path(sweep_dir, k.cases[i].dir);
-    states.push_back(case_state(dir));
+    states.push_back(case_state(dir, s.is_life()));
+    if (s.is_life()) {
+      const std::string differs = life_study_difference(dir, k.checks[i].request);
+      if (differs.empty()) continue;
+      ++mismatched;
+      std::cerr << "millcharge: " << dir.string() << ": holds a life study of another case or options than the "
+                << "sweep's case " << i << " (" << io::case_label(s, k.cases[i]) << "): " << differs << '\n';
+      continue;
+    }
     std::ifstream in(dir / "case.toml");
     if (!in) continue;
     std::ostringstream text;
@@ -394,9 +438,10 @@ int cmd_sweep_run(const SweepRunOptions& o) {
               << io::case_label(s, k.cases[i]) << "): " << what << '\n';
   }
   if (mismatched > 0) {
-    std::cerr << "millcharge: " << s.file.string() << ": " << mismatched
-              << " case folders hold other cases (the sweep file or its base case changed); remove them to run "
-                 "them afresh, or give another --out\n";
+    std::cerr << "millcharge: " << s.file.string() << ": " << mismatched << " case folders hold other "
+              << (s.is_life() ? "studies" : "cases")
+              << " (the sweep file or its base case changed); remove them to run them afresh, or give another "
+                 "--out\n";
     return 2;
   }
 
@@ -416,9 +461,9 @@ int cmd_sweep_run(const SweepRunOptions& o) {
     }
   }
   print_sweep_head(s, k.cases.size());
-  std::printf("%d finished, %d queued or running, %d failed%s; %zu to run (%d resume from a checkpoint)\n", n_done,
+  std::printf("%d finished, %d queued or running, %d failed%s; %zu to run (%d resume from %s)\n", n_done,
               n_queued, n_failed, n_failed > 0 && !o.retry_failed ? " (not run again: --retry-failed)" : "",
-              to_run.size(), n_resume);
+              to_run.size(), n_resume, s.is_life() ? "their life.json" : "a checkpoint");
   for (std::size_t i = 0; i < k.cases.size(); ++i)
     if (states[i].status == CaseStatus::failed && !o.retry_failed && !queued.count(k.cases[i].dir))
       std::printf("  case %zu (%s) failed (exit status %d): %s\n", i, io::case_label(s, k.cases[i]).c_str(),
@@ -472,6 +517,19 @@ int cmd_sweep_run(const SweepRunOptions& o) {
 
 int cmd_sweep_collect(const SweepCollectOptions& o) {
   const fs::path dir = fs::absolute(o.dir).lexically_normal();
+  // A sweep of life studies tables each study's life (app/sweep_life.h).
+  if (fs::exists(dir / "cases.json")) {
+    const nlohmann::json cases = io::read_json_file(dir / "cases.json");
+    if (cases.is_object() && cases.value("command", "run") == "life") {
+      if (!cases.contains("axes") || !cases["axes"].is_array() || !cases.contains("cases") || !cases["cases"].is_array())
+        throw std::invalid_argument((dir / "cases.json").string() + ": no axes and cases; not a sweep's cases.json");
+      return collect_life_sweep(dir, cases, o.relining_height_mm);
+    }
+  }
+  if (o.relining_height_mm > 0)
+    throw std::invalid_argument("--relining-height: " + dir.string() +
+                                " is a sweep of runs; the relining height is for a sweep of life studies (command = "
+                                "\"life\")");
   const SweepTable t = collect_table(dir);
   io::write_file_atomic(dir / "sweep.csv", table_csv(t));
   io::write_file_atomic(dir / "sweep.json", table_json(t).dump(2) + "\n");
@@ -550,6 +608,11 @@ void add_sweep_commands(CLI::App& app, SweepCli& cli) {
 
   cli.collect = cli.sweep->add_subcommand("collect", "join the sweep's runs into sweep.csv, sweep.json and plots");
   cli.collect->add_option("dir", cli.collect_options.dir, "the sweep folder (runs/NAME)")->required();
+  cli.collect->add_option("--relining-height", cli.collect_options.relining_height_mm,
+                          "a sweep of life studies: the hours each takes to wear its lifters down to MM (default: "
+                          "[life] until-height)")
+      ->check(cli::positive("mm"))
+      ->type_name("MM");
 }
 
 bool run_sweep(SweepCli& cli, int& status) {

@@ -34,6 +34,7 @@ struct SweepRunOptions {
 
 struct SweepCollectOptions {
   std::string dir;
+  double relining_height_mm = 0;  // --relining-height MM: a life sweep's hours to it (0: [life] until-height)
 };
 
 // `millcharge sweep` and its three subcommands on the CLI11 app; after

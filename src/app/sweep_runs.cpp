@@ -8,7 +8,10 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <map>
+
+#include "io/json_read.h"
 
 namespace mc::app {
 
@@ -38,22 +41,37 @@ std::string last_log_line(const fs::path& log) {
   return last;
 }
 
-CaseState case_state(const fs::path& dir) {
+namespace {
+
+// Whether a life study's life.json says where it stopped (the study ended).
+bool life_study_ended(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return false;
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  if (!io::json_text_fault(text).empty()) return false;
+  const nlohmann::json j = nlohmann::json::parse(text);
+  return j.is_object() && j.contains("stopped") && j["stopped"].is_string() && !j["stopped"].get<std::string>().empty();
+}
+
+}  // namespace
+
+CaseState case_state(const fs::path& dir, bool life) {
   CaseState st;
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return st;
-  st.checkpoint = fs::exists(dir / "checkpoint.bin", ec);
+  st.checkpoint = fs::exists(dir / (life ? "life.json" : "checkpoint.bin"), ec);
   if (std::ifstream in(dir / "exit_status"); in) {
     int code = -1;
     if (in >> code) st.exit_status = code;
   }
   st.last_line = last_log_line(dir / "run.log");
-  if (fs::exists(dir / "summary.json", ec)) st.status = CaseStatus::done;
+  if (life ? life_study_ended(dir / "life.json") : fs::exists(dir / "summary.json", ec)) st.status = CaseStatus::done;
   else if (st.exit_status >= 128) st.status = CaseStatus::stopped;
   else if (st.exit_status >= 0) st.status = CaseStatus::failed;
   else st.status = CaseStatus::incomplete;
   if (st.status == CaseStatus::failed && st.exit_status == 0)
-    st.last_line = "exit status 0 but no summary.json; " + st.last_line;
+    st.last_line = std::string("exit status 0 but no ") + (life ? "ended study in life.json" : "summary.json") + "; " +
+                   st.last_line;
   return st;
 }
 
@@ -67,6 +85,12 @@ nlohmann::ordered_json cases_json(const io::Sweep& s, const std::vector<io::Swee
   j["case"] = s.base_case.string();
   j["set"] = s.set;
   j["combine"] = s.zipped ? "zip" : "cross";
+  j["command"] = s.command;
+  if (s.is_life()) {
+    nlohmann::ordered_json life;
+    for (const io::SweepLifeOption& o : s.life) life[o.key] = value(o.value);
+    j["life"] = life;
+  }
   const std::vector<std::string> names = io::short_axis_names(s);
   j["axes"] = nlohmann::json::array();
   for (std::size_t i = 0; i < s.axes.size(); ++i) {
@@ -87,6 +111,7 @@ nlohmann::ordered_json cases_json(const io::Sweep& s, const std::vector<io::Swee
     for (std::size_t i = 0; i < s.axes.size(); ++i) values[s.axes[i].key] = value(s.axes[i].values[c.value_index[i]]);
     e["values"] = values;
     e["overrides"] = c.overrides;
+    if (s.is_life()) e["life_args"] = c.life_args;
     j["cases"].push_back(e);
   }
   return j;
@@ -164,14 +189,15 @@ int run_local(const fs::path& script, const fs::path& sweep_dir, const std::vect
     const int index = it->second.index;
     const double wall = std::chrono::duration<double>(clock::now() - it->second.start).count();
     running.erase(it);
-    const CaseState cs = case_state(case_path(sweep_dir, cases[index].dir));
+    const CaseState cs = case_state(case_path(sweep_dir, cases[index].dir), s.is_life());
     const std::string label = io::case_label(s, cases[index]);
     if (cs.status == CaseStatus::done) {
       ++n_done;
       std::printf("case %d (%s): done in %s\n", index, label.c_str(), wall_text(wall).c_str());
     } else if (cs.status == CaseStatus::stopped) {
       ++n_stopped;
-      std::printf("case %d (%s): stopped (exit status %d), checkpoint kept\n", index, label.c_str(), cs.exit_status);
+      std::printf("case %d (%s): stopped (exit status %d), %s kept\n", index, label.c_str(), cs.exit_status,
+                  s.is_life() ? "the study (life.json) and its stage's checkpoint" : "checkpoint");
     } else {
       ++n_failed;
       const int code = cs.exit_status >= 0 ? cs.exit_status : WIFEXITED(st) ? WEXITSTATUS(st) : -1;

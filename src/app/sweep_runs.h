@@ -34,7 +34,9 @@ struct CaseState {
   std::string last_line;     // the last line of run.log the run wrote (its error, for a failed case)
 };
 
-CaseState case_state(const std::filesystem::path& case_dir);
+// A life study's case (a sweep of command = "life") is done when its
+// life.json says where the study stopped, and resumes from its life.json.
+CaseState case_state(const std::filesystem::path& case_dir, bool life = false);
 
 // The last line of a run log that the run wrote (not sweep.sh's "== " lines).
 std::string last_log_line(const std::filesystem::path& log);

@@ -220,12 +220,12 @@ Sweep parse_sweep(const std::string& text, const fs::path& file) {
   Sweep s;
   s.file = file;
   static const std::set<std::string> known = {"name", "case", "combine", "zip", "device", "throughput",
-                                              "set", "axes", "slurm"};
+                                              "set", "axes", "slurm", "command", "life"};
   for (auto&& [k, v] : root)
     if (!known.count(std::string(k.str())))
       r.fail(std::string(k.str()), &v,
-             "unknown key (a sweep file has name, case, combine, zip, device, throughput, [set], [axes] and "
-             "[slurm]; case keys go in [set] or [axes])");
+             "unknown key (a sweep file has name, case, command, combine, zip, device, throughput, [set], [axes], "
+             "[life] and [slurm]; case keys go in [set] or [axes])");
 
   auto string_key = [&](const char* k, const std::string& fallback) {
     const toml::node* n = root.get(k);
@@ -253,6 +253,33 @@ Sweep parse_sweep(const std::string& text, const fs::path& file) {
   s.base_case = fs::absolute(base).lexically_normal();
 
   s.device = string_key("device", "");
+  s.command = string_key("command", "run");
+  if (s.command != "run" && s.command != "life")
+    r.fail("command", root.get("command"),
+           "\"" + s.command + "\" is not one of \"run\" (each case a run) and \"life\" (each case a life study)");
+  // [life]: the life options every study gets. Their names and values are
+  // checked by the life command's own parser, case by case (app/sweep.cpp).
+  if (const toml::node* n = root.get("life")) {
+    if (!s.is_life())
+      r.fail("life", n, "[life] holds a life study's options: give command = \"life\" too");
+    if (!n->is_table()) r.fail("life", n, "expected a table [life] of life options, got " + type_name(*n));
+    std::vector<std::pair<std::string, const toml::node*>> keys;
+    leaves(*n->as_table(), "", [](const toml::node&) { return false; }, keys);
+    sort_by_source(keys);
+    for (auto& [key, node] : keys) {
+      auto v = scalar_value(*node);
+      if (!v) r.fail("life." + key, node, "expected a value, got " + type_name(*node));
+      SweepLifeOption o;
+      o.key = key;
+      std::replace(o.key.begin(), o.key.end(), '_', '-');
+      o.value = *v;
+      o.line = static_cast<int>(node->source().begin.line);
+      s.life.push_back(o);
+    }
+  }
+  if (s.is_life() && s.life.empty())
+    r.fail("life", nullptr, "command = \"life\" needs a table [life] with the studies' options, e.g. stages = 8 "
+                            "and hours = 16000");
   if (const toml::node* n = root.get("throughput")) {
     s.throughput = number_of(r, "throughput", n);
     if (!(s.throughput > 0)) r.fail("throughput", n, "must be > 0 particle-updates per second");
@@ -285,6 +312,15 @@ Sweep parse_sweep(const std::string& text, const fs::path& file) {
       a.key = key;
       a.values = axis_values(r, key, *node);
       a.group = static_cast<int>(s.axes.size());
+      if (key.rfind(kLifeAxisPrefix, 0) == 0) {
+        if (!s.is_life())
+          r.fail("axes." + key, node, "a life option varies in a sweep of life studies only: give command = \"life\"");
+        std::string option = key.substr(std::string(kLifeAxisPrefix).size());
+        std::replace(option.begin(), option.end(), '_', '-');
+        a.key = kLifeAxisPrefix + option;
+        for (const SweepLifeOption& o : s.life)
+          if (o.key == option) r.fail("axes." + key, node, "is also in [life]; give it in one place");
+      }
       for (const std::string& fixed : s.set)
         if (fixed.substr(0, fixed.find('=')) == key)
           r.fail("axes." + key, node, "is also in [set]; give it in one place");
@@ -464,11 +500,15 @@ std::vector<SweepCase> expand(const Sweep& s) {
     SweepCase c;
     c.index = static_cast<int>(k);
     c.overrides = s.set;
+    for (const SweepLifeOption& o : s.life) c.life_args.push_back("--" + o.key + "=" + o.value.text);
     std::vector<std::string> texts;
     for (const SweepAxis& a : s.axes) {
       const std::size_t g = std::find(groups.begin(), groups.end(), a.group) - groups.begin();
       c.value_index.push_back(static_cast<int>(at[g]));
-      c.overrides.push_back(a.key + "=" + a.values[at[g]].toml);
+      if (a.key.rfind(kLifeAxisPrefix, 0) == 0)
+        c.life_args.push_back("--" + a.key.substr(std::string(kLifeAxisPrefix).size()) + "=" + a.values[at[g]].text);
+      else
+        c.overrides.push_back(a.key + "=" + a.values[at[g]].toml);
       texts.push_back(a.values[at[g]].text);
     }
     c.dir = dir_name(names, texts);

@@ -51,6 +51,17 @@ struct SlurmSettings {
   std::vector<std::string> sbatch_args;  // more sbatch options, e.g. "--qos=long"
 };
 
+// A life option of `[life]` (command = "life"): as `millcharge life` takes
+// it, `--KEY=VALUE`. The key as written, underscores made dashes.
+struct SweepLifeOption {
+  std::string key;   // e.g. calibrate-consumption
+  SweepValue value;
+  int line = 0;      // in the sweep file
+};
+
+// Axes whose key starts with this vary a life option, not a case key.
+inline constexpr const char* kLifeAxisPrefix = "life.";
+
 struct Sweep {
   std::filesystem::path file;   // the sweep file
   std::string name;             // `name`, default the file's stem
@@ -61,13 +72,21 @@ struct Sweep {
   std::string device;               // `device`, empty: millcharge's default
   double throughput = 0;            // particle-updates/s for estimates; 0: not given
   SlurmSettings slurm;
+  // `command`: "run" (default), each case a `millcharge run`; or "life",
+  // each case a life study (`millcharge life`) with `[life]`'s options.
+  std::string command = "run";
+  std::vector<SweepLifeOption> life;
+  bool is_life() const { return command == "life"; }
 };
 
 struct SweepCase {
   int index = 0;                     // 0-based, the array task id
   std::vector<int> value_index;      // per axis, the index into its values
   std::string dir;                   // folder name under cases/, from the values
-  std::vector<std::string> overrides;  // the sweep's `set`, then the axes' "key=value"
+  std::vector<std::string> overrides;  // the sweep's `set`, then the axes' "key=value" (not life.* axes)
+  // A life sweep's options for `millcharge life`: `[life]`'s, then the
+  // life.* axes', each "--key=value".
+  std::vector<std::string> life_args;
 };
 
 // Reads and checks a sweep file (not yet its cases: expand and read_case do).
