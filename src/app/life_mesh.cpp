@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <numeric>
 #include <stdexcept>
 
@@ -12,6 +13,7 @@
 #include "io/csv_read.h"
 #include "io/stl.h"
 #include "life/mesh_section.h"
+#include "life/mesh_collapse.h"
 #include "life/mesh_wear.h"
 
 namespace mc::app::life {
@@ -148,6 +150,22 @@ std::vector<double> booked_volumes(const fs::path& run, const MillCase& c, int w
 
 }  // namespace
 
+namespace {
+
+// The stage's mesh with its short edges collapsed, and its booked volumes
+// carried (life/mesh_collapse.h): what the wear moves.
+mc::life::Collapsed collapsed_mesh(const MillCase& c, const std::vector<Triangle>& tris, const std::vector<double>& volume,
+                                   double share) {
+  return mc::life::collapse_short_edges(tris, volume, 0.0, c.length, share);
+}
+
+// The shares of the median edge below which edges are collapsed, tried in
+// turn until the move keeps the mesh one (a quarter first: most stages
+// need no more).
+constexpr double kCollapseShares[] = {0.25, 0.4, 0.55};
+
+}  // namespace
+
 std::vector<std::vector<Triangle>> wear_meshes(const fs::path& out, const MillCase& c, Stage& s, Stage& next,
                                                const WearMix& mix, double span_case_hours, double next_R,
                                                const MeshSmoothing& smoothing) {
@@ -156,16 +174,31 @@ std::vector<std::vector<Triangle>> wear_meshes(const fs::path& out, const MillCa
   const fs::path run = out / fmt::format("stage-{:02d}", s.index);
   for (StageMesh& m : s.meshes) {
     const std::vector<Triangle> placed = stage_mesh_triangles(out, c, m);
-    std::vector<double> volume = booked_volumes(run, c, m.walls_mesh, placed, mix, span_case_hours);
+    const std::vector<double> booked = booked_volumes(run, c, m.walls_mesh, placed, mix, span_case_hours);
     const double z_tol = 1e-6 * std::max(1.0, c.length);
     const mc::life::MeshBounds bounds{next_R, -z_tol, c.length + z_tol};
-    volume = mc::life::smooth_wear(placed, volume, smoothing.across_m, smoothing.along_m);
-    const mc::life::MeshWear w = mc::life::wear_mesh(
-        placed, volume, bounds, 0, fmt::format("walls.mesh[{}] worn from stage {} to {}", m.walls_mesh, s.index, next.index));
+    const std::string name = fmt::format("walls.mesh[{}] worn from stage {} to {}", m.walls_mesh, s.index, next.index);
+    // Short edges collapsed first; where the move still spoils a triangle
+    // (a worn corner's strip), longer ones, up to the last share.
+    mc::life::MeshWear w;
+    for (const double share : kCollapseShares) {
+      const mc::life::Collapsed k = collapsed_mesh(c, placed, booked, share);
+      const std::vector<double> volume =
+          mc::life::smooth_wear(k.triangles, k.volume_m3, smoothing.across_m, smoothing.along_m);
+      try {
+        w = mc::life::wear_mesh(k.triangles, volume, bounds, 0, name);
+      } catch (const std::invalid_argument&) {
+        if (share == kCollapseShares[std::size(kCollapseShares) - 1]) throw;
+        continue;
+      }
+      m.collapsed = k.edges, m.collapse_share = share;
+      break;
+    }
     m.booked_m3 = w.booked_m3;
     m.removed_m3 = w.removed_m3;
     m.scale = w.scale;
     m.deepest_m = w.deepest_m;
+    m.relaxed = w.relaxed;
     StageMesh n;
     n.walls_mesh = m.walls_mesh;
     n.file = fmt::format("stage-{:02d}/{}", next.index, mesh_file_name(c, m.walls_mesh));
@@ -246,7 +279,7 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
       "mid_height_mm,mid_height_mm_se,mid_leading_angle_deg,mid_leading_angle_deg_se,mid_trailing_angle_deg,"
       "mid_trailing_angle_deg_se,ends_height_mm,ends_leading_angle_deg,ends_leading_angle_deg_se,"
       "ends_trailing_angle_deg,wear_kg_per_h,impact_wear_share,booked_cm3,removed_cm3,depth_scale,deepest_mm,"
-      "smoothing_across_mm,smoothing_along_mm,wear_basis\n";
+      "collapsed_edges,relaxed_vertices,smoothing_across_mm,smoothing_along_mm,wear_basis\n";
   if (stages.empty()) return;
   const std::vector<std::vector<double>> angles = bar_angles(out, c, stages);
   for (const Stage& s : stages) {
@@ -271,7 +304,7 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
       const auto eh = mean_se(ends.height), el = mean_se(ends.leading_deg), et = mean_se(ends.trailing_deg);
       const double sliding = b.mix.sliding * s.r.mesh_sliding_m3_s.at(j), impact = b.mix.impact * s.r.mesh_strike_W.at(j);
       const bool carried = s.span_case_hours > 0;
-      t += fmt::format("{},{:.6g},{:.6g},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{},{},{},{},{:.4g},{:.4g},{}\n",
+      t += fmt::format("{},{:.6g},{:.6g},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{},{},{},{},{},{},{:.4g},{:.4g},{}\n",
                        s.index, s.case_hours / b.factor, s.case_hours, m.walls_mesh,
                        m.file.empty() ? c.meshes.at(m.walls_mesh).file : m.file, tris.size(), parts, opt(mh.first * 1000, 4),
                        opt(mh.second * 1000, 4), opt(ml.first, 3), opt(ml.second, 3), opt(mt.first, 3), opt(mt.second, 3),
@@ -281,7 +314,9 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
                        carried ? fmt::format("{:.6g}", m.booked_m3 * 1e6) : "",
                        carried ? fmt::format("{:.6g}", m.removed_m3 * 1e6) : "",
                        carried ? fmt::format("{:.6g}", m.scale) : "",
-                       carried ? fmt::format("{:.4f}", m.deepest_m * 1000) : "", b.smoothing.across_m * 1000,
+                       carried ? fmt::format("{:.4f}", m.deepest_m * 1000) : "",
+                       carried ? fmt::format("{}", m.collapsed) : "", carried ? fmt::format("{}", m.relaxed) : "",
+                       b.smoothing.across_m * 1000,
                        b.smoothing.along_m * 1000, b.basis);
     }
   }
@@ -327,12 +362,25 @@ void write_segment_table(const fs::path& out, const MillCase& c, const std::vect
       const bool carried = s.span_case_hours > 0 && i + 1 < stages.size() && j < stages[i + 1].meshes.size();
       if (carried) {
         const std::vector<Triangle> next = stage_mesh_triangles(out, c, stages[i + 1].meshes[j]);
-        const std::vector<double> swept = mc::life::swept_volumes(tris, next);
         const std::vector<double> volume = booked_volumes(run, c, m.walls_mesh, tris, b.mix, s.span_case_hours);
-        const std::vector<double> spread = mc::life::smooth_wear(tris, volume, b.smoothing.across_m, b.smoothing.along_m);
-        for (std::size_t q = 0; q < tris.size(); ++q) {
-          const int g = segment_of((tris[q].v[0].z + tris[q].v[1].z + tris[q].v[2].z) / 3);
-          booked[g] += volume[q], smoothed[g] += spread[q], removed[g] += swept[q];
+        for (std::size_t q = 0; q < tris.size(); ++q)
+          booked[segment_of((tris[q].v[0].z + tris[q].v[1].z + tris[q].v[2].z) / 3)] += volume[q];
+        // The move was of the mesh with its short edges collapsed (where
+        // the study collapsed any), corner for corner.
+        const mc::life::Collapsed k = m.collapse_share > 0 ? collapsed_mesh(c, tris, volume, m.collapse_share)
+                                                            : mc::life::Collapsed{tris, volume, 0};
+        if (k.triangles.size() != next.size())
+          throw std::invalid_argument(fmt::format("{}: {} triangles, where stage {}'s {} collapse to {}: not the mesh "
+                                                  "this study wore",
+                                                  (out / stages[i + 1].meshes[j].file).string(), next.size(), s.index,
+                                                  tris.size(), k.triangles.size()));
+        const std::vector<double> swept = mc::life::swept_volumes(k.triangles, next);
+        const std::vector<double> spread =
+            mc::life::smooth_wear(k.triangles, k.volume_m3, b.smoothing.across_m, b.smoothing.along_m);
+        for (std::size_t q = 0; q < k.triangles.size(); ++q) {
+          const auto& v = k.triangles[q].v;
+          const int g = segment_of((v[0].z + v[1].z + v[2].z) / 3);
+          smoothed[g] += spread[q], removed[g] += swept[q];
         }
       }
       for (int g = 0; g < segments; ++g) {

@@ -66,7 +66,7 @@ json stage_json(const Stage& s) {
       json x = {{"walls_mesh", m.walls_mesh}, {"file", m.file}};
       if (s.span_case_hours > 0)
         x["wear"] = {{"booked_m3", m.booked_m3}, {"removed_m3", m.removed_m3}, {"scale", m.scale},
-                     {"deepest_m", m.deepest_m}};
+                     {"deepest_m", m.deepest_m}, {"relaxed_vertices", m.relaxed}, {"collapsed_edges", m.collapsed}, {"collapse_share", m.collapse_share}};
       j["meshes"].push_back(x);
     }
   }
@@ -228,6 +228,10 @@ Stage stage_of(const JsonAt& j, int i, const StateShape& shape, const Stage* bef
         x.removed_m3 = w["removed_m3"].number_at_least(0);
         x.scale = w["scale"].number_at_least(0);
         x.deepest_m = w["deepest_m"].number_at_least(0);
+        // Not in a study's state written before meshes were relaxed.
+        if (w.has("relaxed_vertices")) x.relaxed = static_cast<int>(w["relaxed_vertices"].number_at_least(0));
+        if (w.has("collapsed_edges")) x.collapsed = static_cast<int>(w["collapsed_edges"].number_at_least(0));
+        if (w.has("collapse_share")) x.collapse_share = w["collapse_share"].number_at_least(0);
       }
       s.meshes.push_back(x);
     }

@@ -69,6 +69,85 @@ Vec3 crease_solve(std::array<double, 9> a, const Vec3& b) {
   return {x[0], x[1], x[2]};
 }
 
+
+// Vertices free to slide when the mesh is relaxed: no two normals of the
+// triangles round them differ by more than this (a face of a bar, the
+// shell, a corner the wear has rounded); the others (a bar's sharp edges
+// and corners) stay put.
+constexpr double kRelaxSmoothDegrees = 50.0;
+constexpr int kRelaxPasses = 40;
+
+// Tangential relaxation: each vertex of a smooth patch slides toward the
+// centroid of its neighbours (those it shares an edge with), within the
+// plane normal to it on the unworn mesh, half the way per pass, the
+// patches' edge and corner vertices held; a vertex on an end plane slides
+// within it. Returns each vertex's slide from `at` (the worn positions).
+std::vector<Vec3> relax_slides(const WeldedMesh& w, const std::vector<Vec3>& at, const MeshBounds& bounds,
+                               int& moved) {
+  const std::size_t nv = w.points.size();
+  std::vector<Vec3> normal(nv);
+  std::vector<std::vector<Vec3>> around(nv);
+  std::vector<std::vector<int>> next(nv);
+  for (const auto& c : w.corners) {
+    const Vec3 av = area_vector(w.points[c[0]], w.points[c[1]], w.points[c[2]]);
+    const double a = av.norm();
+    for (int k = 0; k < 3; ++k) {
+      normal[c[k]] = normal[c[k]] + av;
+      if (a > 0) around[c[k]].push_back(av * (1 / a));
+      for (int j = 1; j < 3; ++j) {
+        const int o = c[(k + j) % 3];
+        if (std::find(next[c[k]].begin(), next[c[k]].end(), o) == next[c[k]].end()) next[c[k]].push_back(o);
+      }
+    }
+  }
+  const double cos_smooth = std::cos(kRelaxSmoothDegrees * 3.14159265358979323846 / 180);
+  std::vector<char> free(nv, 0);
+  for (std::size_t i = 0; i < nv; ++i) {
+    const double len = normal[i].norm();
+    if (!(len > 0) || next[i].empty()) continue;
+    normal[i] = normal[i] * (1 / len);
+    bool smooth = true;
+    for (std::size_t a = 0; a < around[i].size() && smooth; ++a)
+      for (std::size_t b = a + 1; b < around[i].size() && smooth; ++b) smooth = around[i][a].dot(around[i][b]) >= cos_smooth;
+    free[i] = smooth;
+  }
+  std::vector<Vec3> q = at;
+  for (int pass = 0; pass < kRelaxPasses; ++pass) {
+    std::vector<Vec3> step(nv);
+    for (std::size_t i = 0; i < nv; ++i) {
+      if (!free[i]) continue;
+      Vec3 c{};
+      for (int o : next[i]) c = c + q[o];
+      Vec3 d = c * (1.0 / static_cast<double>(next[i].size())) - q[i];
+      d = d - normal[i] * normal[i].dot(d);
+      if (bounds.z1 > bounds.z0 &&
+          (std::abs(w.points[i].z - bounds.z0) <= 2e-6 || std::abs(w.points[i].z - bounds.z1) <= 2e-6))
+        d.z = 0;
+      step[i] = d * 0.5;
+    }
+    for (std::size_t i = 0; i < nv; ++i) q[i] = q[i] + step[i];
+  }
+  std::vector<Vec3> slide(nv);
+  moved = 0;
+  for (std::size_t i = 0; i < nv; ++i) {
+    slide[i] = q[i] - at[i];
+    moved += slide[i].norm() > 1e-6;
+  }
+  return slide;
+}
+
+// Triangles the worn mesh turns over or crushes below `share` of their area.
+int spoiled(const std::vector<Triangle>& before, const std::vector<Triangle>& after, double share) {
+  int n = 0;
+  for (std::size_t t = 0; t < before.size(); ++t) {
+    const auto& a = before[t].v;
+    const auto& b = after[t].v;
+    const Vec3 na = area_vector(a[0], a[1], a[2]), nb = area_vector(b[0], b[1], b[2]);
+    n += nb.dot(na) <= 0 || nb.norm() < share * na.norm();
+  }
+  return n;
+}
+
 }  // namespace
 
 WeldedMesh weld(const std::vector<Triangle>& triangles) {
@@ -203,7 +282,7 @@ std::vector<double> swept_volumes(const std::vector<Triangle>& before, const std
 }
 
 MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,
-                   const MeshBounds& bounds, int smoothing, const std::string& name) {
+                   const MeshBounds& bounds, int smoothing, const std::string& name, bool relax) {
   if (volume_m3.size() != triangles.size())
     throw std::invalid_argument(fmt::format("{}: {} wear volumes for {} triangles", name, volume_m3.size(),
                                             triangles.size()));
@@ -270,12 +349,15 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
       for (std::size_t i = 0; i < nv; ++i)
         if (std::abs(w.points[i].z - bounds.z0) <= 2e-6 || std::abs(w.points[i].z - bounds.z1) <= 2e-6) move[i].z = 0;
   }
+  // Each vertex's slide along the surface (tangential relaxation, below):
+  // none unless the move spoils a triangle.
+  std::vector<Vec3> slide(nv);
   auto moved = [&](double scale) {
     std::vector<Triangle> m(triangles.size());
     for (std::size_t t = 0; t < triangles.size(); ++t)
       for (int k = 0; k < 3; ++k) {
         const int i = w.corners[t][k];
-        m[t].v[k] = w.points[i] + move[i] * scale;
+        m[t].v[k] = w.points[i] + move[i] * scale + slide[i];
       }
     return m;
   };
@@ -283,9 +365,12 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
   // grows with the scale (a surface moved further into the liner), to
   // first order in proportion.
   double scale = 1;
-  std::vector<Triangle> worn = moved(scale);
-  if (out.booked_m3 > 0) {
-    double s0 = 0, v0 = 0, s1 = 1, v1 = swept_volume(triangles, worn);
+  std::vector<Triangle> worn;
+  auto fit_scale = [&] {
+    scale = 1;
+    worn = moved(scale);
+    if (!(out.booked_m3 > 0)) return;
+    double s0 = 0, v0 = swept_volume(triangles, moved(0)), s1 = 1, v1 = swept_volume(triangles, worn);
     for (int it = 0; it < 40 && std::abs(v1 - out.booked_m3) > 1e-12 * out.booked_m3; ++it) {
       if (!(v1 > v0)) break;
       const double s2 = s1 + (out.booked_m3 - v1) * (s1 - s0) / (v1 - v0);
@@ -301,6 +386,20 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
           "{}: no move of the mesh removes the {:.6g} m3 booked (the nearest removes {:.6g} m3); the wear is too "
           "deep for the mesh: more smoothing or shorter stages",
           name, out.booked_m3, v1));
+  };
+  fit_scale();
+  // Keep the mesh one: where the move turns a triangle over or crushes it
+  // to under a tenth of its area (a worn corner has gone past the first
+  // row of vertices on the face below it), the vertices of the smooth
+  // patches slide along the surface to their neighbours' centroid, so
+  // that they space out again between the edges that hold them, and the
+  // depth scale is found again with the slides (a slide along a flat face
+  // removes nothing; on a curved one, what it does is in the scale).
+  if (relax && spoiled(triangles, worn, 0.1) > 0) {
+    std::vector<Vec3> at(nv);
+    for (std::size_t i = 0; i < nv; ++i) at[i] = w.points[i] + move[i] * scale;
+    slide = relax_slides(w, at, bounds, out.relaxed);
+    fit_scale();
   }
   out.scale = scale;
   for (std::size_t i = 0; i < nv; ++i) out.deepest_m = std::max(out.deepest_m, scale * move[i].norm());
@@ -311,9 +410,9 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     const Vec3 na = area_vector(a[0], a[1], a[2]), nb = area_vector(b[0], b[1], b[2]);
     if (nb.dot(na) <= 0)
       throw std::invalid_argument(fmt::format(
-          "{}: triangle {}: the wear turns it over (its vertices move past each other, {:.3g} mm deep at most); the "
-          "wear is too deep for the mesh: more smoothing or shorter stages",
-          name, t + 1, out.deepest_m * 1000));
+          "{}: triangle {}: the wear turns it over (its vertices move past each other, {:.3g} mm deep at most{}); "
+          "the wear is too deep for the mesh: more smoothing or shorter stages",
+          name, t + 1, out.deepest_m * 1000, out.relaxed > 0 ? ", with the mesh relaxed" : ""));
     if (nb.norm() < 1e-3 * na.norm())
       throw std::invalid_argument(fmt::format(
           "{}: triangle {}: the wear shrinks it to under a thousandth of its area; more smoothing or shorter "

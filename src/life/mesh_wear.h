@@ -8,7 +8,11 @@
 // a depth scale then makes the swept volume equal the booked one exactly
 // (as core/liner_wear.h does for a bar's outline). Where the booked depths
 // are noisy, passes of smoothing average each triangle's depth with its
-// neighbours' first (the booked volume kept by the scale). The worn mesh
+// neighbours' first (the booked volume kept by the scale). Where the move
+// would turn a triangle over or crush it (a worn corner past the first row
+// of vertices below it), the vertices of smooth patches slide along the
+// surface toward their neighbours' centroid (tangential relaxation; edges
+// and corners held) and the scale is found again. The worn mesh
 // is checked: no triangle turned over or shrunk to nothing, no vertex
 // beyond the shell or the mill's ends. No OpenCL: the unit tests reach it.
 #pragma once
@@ -36,6 +40,7 @@ struct MeshWear {
   double scale = 1;                 // the depth scale that makes them equal
   int smoothing = 0;                // passes of depth smoothing done
   double deepest_m = 0;             // the largest vertex move
+  int relaxed = 0;                  // vertices slid along the surface to keep the mesh valid (0: none needed)
 };
 
 // The welded vertices of a mesh: each triangle's corners as indices into
@@ -80,7 +85,8 @@ std::vector<double> smooth_wear(const std::vector<Triangle>& triangles, const st
 // vertex beyond `bounds` (the shell within a micrometre), and naming `name`
 // where no move removes the volume booked; std::invalid_argument for a negative or
 // non-finite volume, or a count that is not the triangles'.
+// `relax` false: no tangential relaxation (the unit tests' comparison).
 MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,
-                   const MeshBounds& bounds, int smoothing = 0, const std::string& name = "mesh");
+                   const MeshBounds& bounds, int smoothing = 0, const std::string& name = "mesh", bool relax = true);
 
 }  // namespace mc::life

@@ -1,0 +1,145 @@
+// A worn mesh kept fit to wear again (life/mesh_collapse.h, the
+// relaxation in life/mesh_wear.h): short edges collapsed with their wear
+// kept, a plane's area kept, an end plane's vertices kept on it; and a bar
+// whose worn corner has drawn a strip a millimetre wide, which the next
+// move turns over as it stands and wears once its strip is collapsed.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <numeric>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+#include "life/mesh_collapse.h"
+#include "life/mesh_wear.h"
+
+using namespace mc;
+
+namespace {
+
+Vec3 cross3(const Vec3& a, const Vec3& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+Vec3 area2(const Triangle& t) { return cross3(t.v[1] - t.v[0], t.v[2] - t.v[0]); }
+double area(const Triangle& t) { return 0.5 * area2(t).norm(); }
+
+// Rows of points (each row a line across, the rows along `v`), two
+// triangles per quad, facing (row direction) x v.
+std::vector<Triangle> sheet(const std::vector<Vec3>& across, const Vec3& v, int n) {
+  std::vector<Triangle> t;
+  for (std::size_t i = 0; i + 1 < across.size(); ++i)
+    for (int j = 0; j < n; ++j) {
+      const Vec3 a = across[i] + v * j, b = across[i + 1] + v * j, c = across[i + 1] + v * (j + 1),
+                 d = across[i] + v * (j + 1);
+      t.push_back({{a, b, c}});
+      t.push_back({{a, c, d}});
+    }
+  return t;
+}
+
+// A lifter bar 25 mm high on the shell plane y = 0, extruded along z from
+// 0 to 60 mm in 10 mm rows: its leading face x = 0 in three rows, a strip
+// of `strip` mm at 45° where the top meets it (what the wear of earlier
+// stages draws), the top at y = 25 mm and the trailing face at x = 30 mm.
+// Its surface faces out of the bar, towards the charge.
+std::vector<Triangle> worn_bar(double strip) {
+  const double s = strip / std::sqrt(2.0);
+  const std::vector<Vec3> profile = {{30e-3, 0, 0},      {30e-3, 12.5e-3, 0}, {30e-3, 25e-3, 0},
+                                     {20e-3, 25e-3, 0},  {10e-3, 25e-3, 0},   {s * 1e-3, 25e-3, 0},
+                                     {0, (25 - s) * 1e-3, 0}, {0, 16e-3, 0},   {0, 8e-3, 0},
+                                     {0, 0, 0}};
+  return sheet(profile, {0, 0, 10e-3}, 6);
+}
+
+}  // namespace
+
+TEST_CASE("short edges collapse with their wear kept, a plane's area kept and nothing folded",
+          "[life][mesh_wear][collapse]") {
+  // A plane of 8 x 8 mm cells facing +z, its fifth row of vertices drawn
+  // to within 0.4 mm of the fourth.
+  std::vector<Vec3> across;
+  for (int i = 0; i <= 8; ++i) across.push_back({i * 8e-3, 0, 0});
+  across[5].x = across[4].x + 0.4e-3;
+  const std::vector<Triangle> plane = sheet(across, {0, 8e-3, 0}, 8);
+  REQUIRE(area2(plane[0]).z > 0);
+  std::vector<double> volume;
+  for (std::size_t t = 0; t < plane.size(); ++t) volume.push_back(1e-9 * (1 + t % 7));
+  const double booked = std::accumulate(volume.begin(), volume.end(), 0.0);
+  const double total_area = 64e-3 * 64e-3;
+
+  const life::Collapsed c = life::collapse_short_edges(plane, volume, 0, 0);
+  // The strip's cross edges inside the plane (7 of its 9; the two on its
+  // border have one triangle each) collapse, two triangles each.
+  CHECK(c.edges == 7);
+  CHECK(c.triangles.size() == plane.size() - 14);
+  CHECK(std::accumulate(c.volume_m3.begin(), c.volume_m3.end(), 0.0) == Approx(booked).epsilon(1e-12));
+  double a = 0;
+  for (const Triangle& t : c.triangles) {
+    CHECK(area2(t).z > 0);  // none folded
+    a += area(t);
+  }
+  CHECK(a == Approx(total_area).epsilon(1e-12));
+  // Nothing short: nothing changes.
+  std::vector<Vec3> even;
+  for (int i = 0; i <= 8; ++i) even.push_back({i * 8e-3, 0, 0});
+  const std::vector<Triangle> flat = sheet(even, {0, 8e-3, 0}, 8);
+  const life::Collapsed none = life::collapse_short_edges(flat, std::vector<double>(flat.size(), 1e-9), 0, 0);
+  CHECK(none.edges == 0);
+  CHECK(none.triangles.size() == flat.size());
+
+  // A plane across the axis's end: a vertex on the end plane z = 0 keeps
+  // its place, its short edge's other end comes to it.
+  std::vector<Vec3> rows;  // along z from the end plane: 0, 0.3, 8, 16 ... mm
+  const std::vector<double> zs = {0, 0.3e-3, 8e-3, 16e-3, 24e-3};
+  std::vector<Triangle> end_sheet;
+  for (std::size_t i = 0; i + 1 < zs.size(); ++i)
+    for (int j = 0; j < 4; ++j) {
+      const Vec3 p{j * 8e-3, 0.4, zs[i]}, q{(j + 1) * 8e-3, 0.4, zs[i]}, r{(j + 1) * 8e-3, 0.4, zs[i + 1]},
+          u{j * 8e-3, 0.4, zs[i + 1]};
+      end_sheet.push_back({{p, r, q}});
+      end_sheet.push_back({{p, u, r}});
+    }
+  const life::Collapsed e = life::collapse_short_edges(end_sheet, std::vector<double>(end_sheet.size(), 1e-9), 0, 1);
+  CHECK(e.edges == 3);  // the three inner ones of the 0.3 mm row (its two on the border have one triangle)
+  std::set<double> left;  // x of the points still 0.3 mm from the plane
+  for (const Triangle& t : e.triangles)
+    for (const Vec3& p : t.v) {
+      CHECK((p.z == 0 || p.z == 0.3e-3 || p.z >= 8e-3 - 1e-12));  // to the plane, not halfway
+      if (p.z == 0.3e-3) left.insert(p.x);
+    }
+  CHECK(left == std::set<double>{0.0, 32e-3});
+}
+
+TEST_CASE("a bar whose worn corner drew a thin strip: turned over as it stands, kept by relaxation or by "
+          "collapsing the strip", "[life][mesh_wear][collapse]") {
+  const std::vector<Triangle> bar = worn_bar(0.8);
+  // The corner's wear: the strip, and the top's and the face's rows next
+  // to it, 2 mm deep; the rest of the top 0.5 mm.
+  std::vector<double> volume;
+  for (std::size_t t = 0; t < bar.size(); ++t) {
+    const std::size_t segment = t / 12;  // of the profile: 6 quads along z, 2 triangles each
+    const double depth = segment >= 4 && segment <= 6 ? 2e-3 : segment == 2 || segment == 3 ? 0.5e-3 : 0.0;
+    volume.push_back(area(bar[t]) * depth);
+  }
+  const double booked = std::accumulate(volume.begin(), volume.end(), 0.0);
+  const life::MeshBounds bounds{0, -1e-6, 60e-3 + 1e-6};
+  // Moved as it stands: the strip's two rows move along their own faces'
+  // normals and past each other.
+  CHECK_THROWS_WITH(life::wear_mesh(bar, volume, bounds, 0, "bar", false), Catch::Contains("bar: triangle") &&
+                                                                             Catch::Contains("turns it over"));
+  // Relaxed: the strip's vertices (their faces within 50° of one
+  // another) slide apart along the surface; the booked volume removed.
+  const life::MeshWear r = life::wear_mesh(bar, volume, bounds, 0, "bar");
+  CHECK(r.relaxed > 0);
+  CHECK(r.removed_m3 == Approx(booked).epsilon(1e-6));
+  for (std::size_t t = 0; t < bar.size(); ++t) CHECK(area2(r.triangles[t]).dot(area2(bar[t])) > 0);
+  // Collapsed first, as a study does: the strip's five inner cross edges
+  // go (its two at the mesh's open ends have one triangle each, and stay),
+  // its wear kept; the worn mesh is one, with the booked volume removed.
+  const life::Collapsed c = life::collapse_short_edges(bar, volume, 0, 60e-3);
+  CHECK(c.edges == 5);
+  CHECK(c.triangles.size() == bar.size() - 10);
+  CHECK(std::accumulate(c.volume_m3.begin(), c.volume_m3.end(), 0.0) == Approx(booked).epsilon(1e-12));
+  const life::MeshWear w = life::wear_mesh(c.triangles, c.volume_m3, bounds, 0, "bar");
+  CHECK(w.removed_m3 == Approx(booked).epsilon(1e-6));
+  for (std::size_t t = 0; t < w.triangles.size(); ++t) CHECK(area2(w.triangles[t]).dot(area2(c.triangles[t])) > 0);
+}
