@@ -3,6 +3,7 @@
 // --slurm` submits a 2 x 2 sweep of small lab mills as a job array, one
 // task is cancelled mid-run with scancel, the rerun submits only that case
 // and it resumes from its checkpoint; `sweep collect` then has a full table.
+// Then a sweep of two life studies, one cancelled mid-stage and resumed.
 // Without root or the packages the cluster does not start and the test
 // fails, saying why; it never passes without Slurm.
 #include <catch2/catch.hpp>
@@ -115,7 +116,7 @@ std::vector<double> column_of(const fs::path& csv, std::size_t col) {
 
 }  // namespace
 
-TEST_CASE("sweep on Slurm: a 2x2 job array, a task cancelled mid-run resumes from its checkpoint", "[slurm]") {
+TEST_CASE("sweep on Slurm: a 2x2 job array and two life studies, a task cancelled mid-run resumes", "[slurm]") {
   const Scratch scratch("slurm");
   const fs::path& work = scratch.dir;
   Cluster cluster(work / "cluster", work);  // stopped before the scratch folder goes
@@ -244,4 +245,76 @@ lifters.profile.0.face_angle = [10, 30]
   CHECK_THAT(third.out, Catch::Contains("nothing to run"));
   CHECK(job_of(third.out).empty());
   CHECK(nlohmann::json::parse(read_text(out / "jobs.json")).size() == 2);
+
+  // A sweep of life studies on the same cluster: two studies of one worn
+  // stage; study 0, cancelled while its new liner's run turns, goes on
+  // from its life.json (and that run from its checkpoint) when the sweep
+  // is run again.
+  const fs::path life_file = work / "life2.toml";
+  std::ofstream(life_file) << R"(
+name = "life2"
+case = "lab.toml"
+command = "life"
+[set]
+mill.length = 0.05
+run.duration = 0.5
+run.settle = 0.05
+run.warmup = 0.1
+run.snapshot_interval = 0
+run.checkpoint_interval = 0.05
+[life]
+stages = 1
+hours = 4000
+[axes]
+lifters.profile.0.face_angle = [10, 30]
+)";
+  const fs::path life_out = work / "life-sweep";
+  const std::string life_run = std::string(MC_BINARY) + " sweep run '" + life_file.string() + "' --slurm --out '" +
+                               life_out.string() + "' --time 15 --signal-grace 30";
+  const fs::path study0 = life_out / "cases" / "face_angle=10";
+  const Outcome l1 = shell(life_run, work);
+  INFO(l1.out);
+  REQUIRE(l1.status == 0);
+  CHECK_THAT(l1.out, Catch::Contains("0 finished, 0 queued or running, 0 failed; 2 to run (0 resume from their life.json)"));
+  const std::string ljob1 = job_of(l1.out);
+  REQUIRE(!ljob1.empty());
+  const bool stage_turning = wait_until(240, [&] {
+    try {
+      const io::Checkpoint c = io::read_checkpoint(study0 / "stage-00" / io::kCheckpointFile);
+      return c.run.phase == 2 && c.run.turn_step > 0;
+    } catch (const std::exception&) {
+      return false;
+    }
+  });
+  REQUIRE(stage_turning);
+  REQUIRE(shell("scancel " + ljob1 + "_0", work).status == 0);
+  REQUIRE(wait_until(300, [&] { return job_gone(ljob1, work); }));
+  CHECK(read_text(study0 / "exit_status") == "143\n");
+  CHECK_THAT(read_text(study0 / "life.json"), !Catch::Contains("\"stopped\""));
+  const Outcome lmid = shell(std::string(MC_BINARY) + " sweep collect '" + life_out.string() + "'", work);
+  REQUIRE(lmid.status == 0);
+  CHECK_THAT(lmid.out, Catch::Contains("1 of 2 studies ended"));
+
+  const Outcome l2 = shell(life_run, work);
+  INFO(l2.out);
+  REQUIRE(l2.status == 0);
+  CHECK_THAT(l2.out, Catch::Contains("1 finished, 0 queued or running, 0 failed; 1 to run (1 resume from their life.json)"));
+  const std::string ljob2 = job_of(l2.out);
+  REQUIRE(!ljob2.empty());
+  REQUIRE(wait_until(300, [&] { return job_gone(ljob2, work); }));
+  const std::string study_log = read_text(study0 / "run.log");
+  CHECK_THAT(study_log, Catch::Contains("life            resuming"));
+  CHECK_THAT(study_log, Catch::Contains("millcharge: resuming at t = "));
+  CHECK(read_text(study0 / "exit_status") == "0\n");
+  const Outcome lend = shell(std::string(MC_BINARY) + " sweep collect '" + life_out.string() + "'", work);
+  REQUIRE(lend.status == 0);
+  CHECK_THAT(lend.out, Catch::Contains("2 of 2 studies ended"));
+  const nlohmann::json lt = nlohmann::json::parse(read_text(life_out / "sweep.json"));
+  REQUIRE(lt["cases"].size() == 2);
+  for (const auto& row : lt["cases"]) {
+    INFO(row.dump());
+    CHECK(row["status"] == "done");
+    CHECK(row["hours.end"].get<double>() == Approx(4000));
+    CHECK(row["stages"].get<double>() == 1);
+  }
 }
