@@ -143,3 +143,38 @@ TEST_CASE("a bar whose worn corner drew a thin strip: turned over as it stands, 
   CHECK(w.removed_m3 == Approx(booked).epsilon(1e-6));
   for (std::size_t t = 0; t < w.triangles.size(); ++t) CHECK(area2(w.triangles[t]).dot(area2(c.triangles[t])) > 0);
 }
+
+TEST_CASE("a stage's mesh kept fit: the first share that keeps it one, a spoiled move named, other refusals at once",
+          "[life][mesh_wear][collapse]") {
+  const std::vector<Triangle> bar = worn_bar(0.8);
+  std::vector<double> volume;
+  auto corner_wear = [&](double depth) {
+    volume.clear();
+    for (std::size_t t = 0; t < bar.size(); ++t) {
+      const std::size_t segment = t / 12;
+      volume.push_back(area(bar[t]) * (segment >= 4 && segment <= 6 ? depth : 0.0));
+    }
+  };
+  corner_wear(2e-3);
+  const life::MeshBounds bounds{0, -1e-6, 60e-3 + 1e-6};
+  const life::FitWear f = life::wear_kept_fit(bar, volume, bounds, 0, 0, "bar");
+  CHECK(f.share == 0.25);
+  CHECK(f.collapsed.edges == 5);
+  CHECK(f.wear.triangles.size() == f.collapsed.triangles.size());
+  CHECK(f.wear.removed_m3 == Approx(std::accumulate(volume.begin(), volume.end(), 0.0)).epsilon(1e-6));
+  // 30 mm off a 25 mm bar's corner: no share keeps it; the last share's
+  // refusal, a spoiled mesh, named.
+  corner_wear(30e-3);
+  CHECK_THROWS_AS(life::wear_kept_fit(bar, volume, bounds, 0, 0, "bar"), life::MeshSpoiled);
+  // A bar past the mill's end: refused as it is, not as a spoiled mesh.
+  corner_wear(2e-3);
+  const life::MeshBounds short_mill{0, -1e-6, 50e-3};
+  try {
+    life::wear_kept_fit(bar, volume, short_mill, 0, 0, "bar");
+    FAIL("no refusal");
+  } catch (const life::MeshSpoiled& e) {
+    FAIL(std::string("refused as spoiled: ") + e.what());
+  } catch (const std::invalid_argument& e) {
+    CHECK_THAT(e.what(), Catch::Contains("beyond the mill's ends"));
+  }
+}

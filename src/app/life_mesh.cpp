@@ -148,21 +148,22 @@ std::vector<double> booked_volumes(const fs::path& run, const MillCase& c, int w
   return volume;
 }
 
-}  // namespace
 
-namespace {
-
-// The stage's mesh with its short edges collapsed, and its booked volumes
-// carried (life/mesh_collapse.h): what the wear moves.
-mc::life::Collapsed collapsed_mesh(const MillCase& c, const std::vector<Triangle>& tris, const std::vector<double>& volume,
-                                   double share) {
-  return mc::life::collapse_short_edges(tris, volume, 0.0, c.length, share);
+// Where a worn mesh must stay: inside the shell of radius R and between
+// the end planes (within a micrometre per metre of them).
+mc::life::MeshBounds mesh_bounds(const MillCase& c, double R) {
+  const double z_tol = 1e-6 * std::max(1.0, c.length);
+  return {R, -z_tol, c.length + z_tol};
 }
 
-// The shares of the median edge below which edges are collapsed, tried in
-// turn until the move keeps the mesh one (a quarter first: most stages
-// need no more).
-constexpr double kCollapseShares[] = {0.25, 0.4, 0.55};
+// The stage's mesh with its short edges collapsed at `share`, and its
+// booked volumes carried (life/mesh_collapse.h): what the wear moved, as
+// wear_kept_fit collapsed it.
+mc::life::Collapsed collapsed_mesh(const MillCase& c, const std::vector<Triangle>& tris, const std::vector<double>& volume,
+                                   double share) {
+  const mc::life::MeshBounds b = mesh_bounds(c, 0);
+  return mc::life::collapse_short_edges(tris, volume, b.z0, b.z1, share);
+}
 
 }  // namespace
 
@@ -175,25 +176,13 @@ std::vector<std::vector<Triangle>> wear_meshes(const fs::path& out, const MillCa
   for (StageMesh& m : s.meshes) {
     const std::vector<Triangle> placed = stage_mesh_triangles(out, c, m);
     const std::vector<double> booked = booked_volumes(run, c, m.walls_mesh, placed, mix, span_case_hours);
-    const double z_tol = 1e-6 * std::max(1.0, c.length);
-    const mc::life::MeshBounds bounds{next_R, -z_tol, c.length + z_tol};
+    const mc::life::MeshBounds bounds = mesh_bounds(c, next_R);
     const std::string name = fmt::format("walls.mesh[{}] worn from stage {} to {}", m.walls_mesh, s.index, next.index);
     // Short edges collapsed first; where the move still spoils a triangle
     // (a worn corner's strip), longer ones, up to the last share.
-    mc::life::MeshWear w;
-    for (const double share : kCollapseShares) {
-      const mc::life::Collapsed k = collapsed_mesh(c, placed, booked, share);
-      const std::vector<double> volume =
-          mc::life::smooth_wear(k.triangles, k.volume_m3, smoothing.across_m, smoothing.along_m);
-      try {
-        w = mc::life::wear_mesh(k.triangles, volume, bounds, 0, name);
-      } catch (const std::invalid_argument&) {
-        if (share == kCollapseShares[std::size(kCollapseShares) - 1]) throw;
-        continue;
-      }
-      m.collapsed = k.edges, m.collapse_share = share;
-      break;
-    }
+    const mc::life::FitWear f = mc::life::wear_kept_fit(placed, booked, bounds, smoothing.across_m, smoothing.along_m, name);
+    const mc::life::MeshWear& w = f.wear;
+    m.collapsed = f.collapsed.edges, m.collapse_share = f.share;
     m.booked_m3 = w.booked_m3;
     m.removed_m3 = w.removed_m3;
     m.scale = w.scale;

@@ -2,6 +2,7 @@
 #include "life/mesh_collapse.h"
 
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 #include <set>
 #include <stdexcept>
@@ -131,6 +132,24 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
     out.volume_m3.push_back(volume[t]);
   }
   return out;
+}
+
+FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<double>& booked_m3,
+                      const MeshBounds& bounds, double across, double along, const std::string& name) {
+  for (const double share : kCollapseShares) {
+    FitWear f;
+    f.collapsed = collapse_short_edges(triangles, booked_m3, bounds.z0, bounds.z1, share);
+    const std::vector<double> spread = smooth_wear(f.collapsed.triangles, f.collapsed.volume_m3, across, along);
+    try {
+      f.wear = wear_mesh(f.collapsed.triangles, spread, bounds, 0, name);
+    } catch (const MeshSpoiled&) {
+      if (share == kCollapseShares[std::size(kCollapseShares) - 1]) throw;
+      continue;
+    }
+    f.share = share;
+    return f;
+  }
+  throw std::logic_error("wear_kept_fit: no share");
 }
 
 }  // namespace mc::life

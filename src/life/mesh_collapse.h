@@ -12,9 +12,11 @@
 // link condition). No OpenCL: the unit tests reach it.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "core/vec.h"
+#include "life/mesh_wear.h"
 
 namespace mc::life {
 
@@ -29,5 +31,25 @@ struct Collapsed {
 // of the median edge length is collapsed.
 Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,
                                double z0, double z1, double share = 0.25);
+
+// The shares of the median edge below which edges are collapsed, tried in
+// turn until the move keeps the mesh one (a quarter first: most stages
+// need no more). Past 0.55 the collapse coarsens a worn corner until the
+// bars' measures jump (docs/liner-life-mesh.md), so the study stops there.
+inline constexpr double kCollapseShares[] = {0.25, 0.4, 0.55};
+
+// A stage's mesh worn by its booked volumes and kept fit to wear again:
+// collapsed at each share in turn, its volumes spread (smooth_wear, across
+// and along, m) and moved (wear_mesh, relaxed where needed), the first
+// share whose move does not spoil the mesh kept. The last share's
+// MeshSpoiled where none does; any other refusal (a vertex beyond the
+// shell or the ends) at once.
+struct FitWear {
+  Collapsed collapsed;  // the mesh that was moved, and its booked volumes
+  MeshWear wear;        // the move
+  double share = 0;     // the share it was collapsed at
+};
+FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<double>& booked_m3,
+                      const MeshBounds& bounds, double across, double along, const std::string& name);
 
 }  // namespace mc::life

@@ -382,7 +382,7 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     scale = s1;
     out.removed_m3 = v1;
     if (!(std::abs(v1 - out.booked_m3) <= 1e-6 * out.booked_m3))
-      throw std::invalid_argument(fmt::format(
+      throw MeshSpoiled(fmt::format(
           "{}: no move of the mesh removes the {:.6g} m3 booked (the nearest removes {:.6g} m3); the wear is too "
           "deep for the mesh: more smoothing or shorter stages",
           name, out.booked_m3, v1));
@@ -409,12 +409,12 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     const auto& b = worn[t].v;
     const Vec3 na = area_vector(a[0], a[1], a[2]), nb = area_vector(b[0], b[1], b[2]);
     if (nb.dot(na) <= 0)
-      throw std::invalid_argument(fmt::format(
+      throw MeshSpoiled(fmt::format(
           "{}: triangle {}: the wear turns it over (its vertices move past each other, {:.3g} mm deep at most{}); "
           "the wear is too deep for the mesh: more smoothing or shorter stages",
           name, t + 1, out.deepest_m * 1000, out.relaxed > 0 ? ", with the mesh relaxed" : ""));
     if (nb.norm() < 1e-3 * na.norm())
-      throw std::invalid_argument(fmt::format(
+      throw MeshSpoiled(fmt::format(
           "{}: triangle {}: the wear shrinks it to under a thousandth of its area; more smoothing or shorter "
           "stages",
           name, t + 1));

@@ -17,6 +17,7 @@
 // beyond the shell or the mill's ends. No OpenCL: the unit tests reach it.
 #pragma once
 
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,14 @@ namespace mc::life {
 struct MeshBounds {
   double shell_radius = 0;
   double z0 = 0, z1 = 0;
+};
+
+// The refusal of a move that would spoil the mesh (turn a triangle over,
+// crush one, or find no move that removes the volume booked), which a
+// coarser mesh may pass (mesh_collapse.h); a vertex beyond the shell or the
+// ends is a plain std::invalid_argument.
+struct MeshSpoiled : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
 };
 
 struct MeshWear {
