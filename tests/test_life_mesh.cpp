@@ -150,6 +150,28 @@ TEST_CASE("a mesh liner wears by what its triangles booked, stage by stage", "[l
       CHECK(removed == Approx(num(meshes[i], "removed_cm3")).epsilon(1e-3));
     }
   }
+  // Three spans of 50 mm over the shell's two 75 mm elements along the
+  // axis: each element's rate goes to the spans it covers by the length
+  // in each, so the middle span (half of each) has their mean; the outer
+  // ones their own, the area-weighted mean of the stage's shell rows.
+  REQUIRE(life(study + " --axial-segments 3", &err) == 0);
+  {
+    const auto thirds = read_csv(a / "life_segments.csv");
+    REQUIRE(thirds.size() == 9);
+    const auto shell_rows = read_csv(a / "stage-00" / "wear.csv");
+    double rate[2] = {0, 0}, area[2] = {0, 0};
+    for (const auto& w : shell_rows) {
+      if (w.at("part") != "shell") continue;
+      const int bin = num(w, "z_to_m") <= 0.075 + 1e-9 ? 0 : 1;
+      rate[bin] += num(w, "wear_mm_per_1000h") * num(w, "area_m2"), area[bin] += num(w, "area_m2");
+    }
+    REQUIRE(area[0] > 0);
+    REQUIRE(area[1] == Approx(area[0]));
+    CHECK(num(thirds[0], "shell_wear_mm_per_1000h") == Approx(rate[0] / area[0]).epsilon(1e-4));
+    CHECK(num(thirds[2], "shell_wear_mm_per_1000h") == Approx(rate[1] / area[1]).epsilon(1e-4));
+    CHECK(num(thirds[1], "shell_wear_mm_per_1000h") ==
+          Approx(0.5 * (rate[0] / area[0] + rate[1] / area[1])).epsilon(1e-4));
+  }
   // life-compare reads the bars of a mesh study from life_meshes.csv, the
   // rest from life.csv.
   const std::string cmp = std::string(MC_BINARY) + " life-compare '" + a.string() + "' --at 2000,3000 --quiet --out '" +

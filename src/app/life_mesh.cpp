@@ -338,9 +338,16 @@ void write_segment_table(const fs::path& out, const MillCase& c, const std::vect
         if (w.rows[k][c_part] != "shell") continue;
         const double area = w.number(k, c_area);
         if (!(area > 0)) continue;
-        const int g = segment_of(0.5 * (w.number(k, c_z0) + w.number(k, c_z1)));
         const double mm = b.mix.sliding * w.number(k, c_sl) + b.mix.impact * w.number(k, c_st) / area * 3.6e9;
-        shell_rate[g] += mm * area, shell_area[g] += area;
+        // An element longer than a segment shares its area among the
+        // segments it spans, by the length in each.
+        const double z0 = w.number(k, c_z0), z1 = w.number(k, c_z1);
+        for (int g = 0; g < segments; ++g) {
+          const double overlap = std::min(z1, (g + 1) * span) - std::max(z0, g * span);
+          if (!(overlap > 0) || !(z1 > z0)) continue;
+          const double a = area * overlap / (z1 - z0);
+          shell_rate[g] += mm * a, shell_area[g] += a;
+        }
       }
     }
     for (std::size_t j = 0; j < s.meshes.size(); ++j) {
