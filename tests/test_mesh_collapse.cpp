@@ -50,6 +50,34 @@ std::vector<Triangle> worn_bar(double strip) {
   return sheet(profile, {0, 0, 10e-3}, 6);
 }
 
+// The same bar closed: its base on the shell plane (facing -y) and its
+// two ends (facing -z at z = 0 and +z at z = 60 mm), each end a fan from
+// the profile's centroid; the solid's volume is then the enclosed one.
+std::vector<Triangle> closed_bar(double strip) {
+  std::vector<Triangle> t = worn_bar(strip);
+  const double s = strip / std::sqrt(2.0);
+  const std::vector<Vec3> profile = {{30e-3, 0, 0},      {30e-3, 12.5e-3, 0}, {30e-3, 25e-3, 0},
+                                     {20e-3, 25e-3, 0},  {10e-3, 25e-3, 0},   {s * 1e-3, 25e-3, 0},
+                                     {0, (25 - s) * 1e-3, 0}, {0, 16e-3, 0},   {0, 8e-3, 0},
+                                     {0, 0, 0}};
+  const Vec3 dz{0, 0, 10e-3};
+  for (int j = 0; j < 6; ++j) {  // the base, from (0,0) to (30,0)
+    const Vec3 a = profile.back() + dz * j, b = profile.front() + dz * j, c = profile.front() + dz * (j + 1),
+               d = profile.back() + dz * (j + 1);
+    t.push_back({{a, b, c}});
+    t.push_back({{a, c, d}});
+  }
+  Vec3 centre{};
+  for (const Vec3& p : profile) centre = centre + p * (1.0 / profile.size());
+  for (std::size_t i = 0; i < profile.size(); ++i) {
+    const Vec3& a = profile[i];
+    const Vec3& b = profile[(i + 1) % profile.size()];
+    t.push_back({{centre, b, a}});                             // z = 0 (the profile runs anticlockwise)
+    t.push_back({{centre + dz * 6, a + dz * 6, b + dz * 6}});  // z = 60 mm
+  }
+  return t;
+}
+
 }  // namespace
 
 TEST_CASE("short edges collapse with their wear kept, a plane's area kept and nothing folded",
@@ -131,7 +159,20 @@ TEST_CASE("a bar whose worn corner drew a thin strip: turned over as it stands, 
   const life::MeshWear r = life::wear_mesh(bar, volume, bounds, 0, "bar");
   CHECK(r.relaxed > 0);
   CHECK(r.removed_m3 == Approx(booked).epsilon(1e-6));
-  for (std::size_t t = 0; t < bar.size(); ++t) CHECK(area2(r.triangles[t]).dot(area2(bar[t])) > 0);
+  for (std::size_t t = 0; t < bar.size(); ++t) {
+    CHECK(area2(r.triangles[t]).dot(area2(bar[t])) > 0);
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& was = bar[t].v[k];
+      const Vec3& now = r.triangles[t].v[k];
+      // The feet (an open edge on the shell) and the unworn trailing face
+      // (three or more rings from the spoiled strip) stay where they were.
+      if (was.y == 0 || (was.x == 30e-3 && was.y < 25e-3)) {
+        CHECK(now.x == was.x);
+        CHECK(now.y == was.y);
+        CHECK(now.z == was.z);
+      }
+    }
+  }
   // Collapsed first, as a study does: the strip's five inner cross edges
   // go (its two at the mesh's open ends have one triangle each, and stay),
   // its wear kept; the worn mesh is one, with the booked volume removed.
@@ -144,30 +185,57 @@ TEST_CASE("a bar whose worn corner drew a thin strip: turned over as it stands, 
   for (std::size_t t = 0; t < w.triangles.size(); ++t) CHECK(area2(w.triangles[t]).dot(area2(c.triangles[t])) > 0);
 }
 
-TEST_CASE("a stage's mesh kept fit: the first share that keeps it one, a spoiled move named, other refusals at once",
+// Six times the signed volume a surface encloses with the origin: for two
+// surfaces with the same rim, their difference is the volume between them.
+double volume6(const std::vector<Triangle>& m) {
+  double v = 0;
+  for (const Triangle& t : m) v += t.v[0].dot(cross3(t.v[1], t.v[2]));
+  return v;
+}
+
+TEST_CASE("a stage's mesh kept fit: no collapse where none is needed, the first share that keeps it one, the "
+          "collapse's own volume counted, a spoiled move named, other refusals at once",
           "[life][mesh_wear][collapse]") {
-  const std::vector<Triangle> bar = worn_bar(0.8);
-  std::vector<double> volume;
-  auto corner_wear = [&](double depth) {
-    volume.clear();
-    for (std::size_t t = 0; t < bar.size(); ++t) {
-      const std::size_t segment = t / 12;
-      volume.push_back(area(bar[t]) * (segment >= 4 && segment <= 6 ? depth : 0.0));
-    }
-  };
-  corner_wear(2e-3);
   const life::MeshBounds bounds{0, -1e-6, 60e-3 + 1e-6};
+  // The closed bar with a 2.5 mm strip; wear on its corner (the strip and
+  // the rows of the top and the face next to it), none on its base and ends.
+  const std::vector<Triangle> bar = closed_bar(2.5);
+  REQUIRE(volume6(bar) / 6 == Approx((30e-3 * 25e-3 - 0.5 * std::pow(2.5e-3 / std::sqrt(2.0), 2)) * 60e-3));
+  auto corner_wear = [&](double depth) {
+    std::vector<double> volume;
+    for (std::size_t t = 0; t < bar.size(); ++t) {
+      const std::size_t segment = t / 12;  // the profile's sheet first: 9 segments of 12 triangles
+      volume.push_back(area(bar[t]) * (t < 108 && segment >= 4 && segment <= 6 ? depth : 0.0));
+    }
+    return volume;
+  };
+  // 2 mm: the plain move keeps the mesh one; nothing collapsed.
+  std::vector<double> volume = corner_wear(2e-3);
+  const life::FitWear plain = life::wear_kept_fit(bar, volume, bounds, 0, 0, "bar");
+  CHECK(plain.share == 0);
+  CHECK(plain.collapsed.edges == 0);
+  CHECK(plain.collapsed.triangles.size() == bar.size());
+  CHECK((volume6(bar) - volume6(plain.wear.triangles)) / 6 ==
+        Approx(std::accumulate(volume.begin(), volume.end(), 0.0)).epsilon(1e-6));
+  // 6 mm: the plain move spoils it; collapsed at a quarter of the median
+  // edge (the strip's seven cross edges) it wears. The collapse took metal
+  // of its own (the closed meshes' enclosed volumes, before and after);
+  // the move removes the rest, so the solid loses the volume booked.
+  volume = corner_wear(6e-3);
+  const double booked = std::accumulate(volume.begin(), volume.end(), 0.0);
   const life::FitWear f = life::wear_kept_fit(bar, volume, bounds, 0, 0, "bar");
   CHECK(f.share == 0.25);
-  CHECK(f.collapsed.edges == 5);
-  CHECK(f.wear.triangles.size() == f.collapsed.triangles.size());
-  CHECK(f.wear.removed_m3 == Approx(std::accumulate(volume.begin(), volume.end(), 0.0)).epsilon(1e-6));
+  CHECK(f.collapsed.edges == 7);
+  const double taken = (volume6(bar) - volume6(f.collapsed.triangles)) / 6;
+  CHECK(taken > 0.01 * booked);  // a chamfer's worth: not nothing
+  CHECK(f.collapsed.removed_m3 == Approx(taken).epsilon(1e-9));
+  CHECK((volume6(bar) - volume6(f.wear.triangles)) / 6 == Approx(booked).epsilon(1e-6));
   // 30 mm off a 25 mm bar's corner: no share keeps it; the last share's
   // refusal, a spoiled mesh, named.
-  corner_wear(30e-3);
+  volume = corner_wear(30e-3);
   CHECK_THROWS_AS(life::wear_kept_fit(bar, volume, bounds, 0, 0, "bar"), life::MeshSpoiled);
   // A bar past the mill's end: refused as it is, not as a spoiled mesh.
-  corner_wear(2e-3);
+  volume = corner_wear(2e-3);
   const life::MeshBounds short_mill{0, -1e-6, 50e-3};
   try {
     life::wear_kept_fit(bar, volume, short_mill, 0, 0, "bar");

@@ -94,7 +94,8 @@ struct StageMesh {
   // the surface to keep the mesh valid (life/mesh_wear.h).
   double booked_m3 = 0, removed_m3 = 0, scale = 1, deepest_m = 0;
   int relaxed = 0, collapsed = 0;  // and the short edges collapsed first (life/mesh_collapse.h),
-  double collapse_share = 0;       // those shorter than this share of the median edge (0: none tried)
+  double collapse_share = 0;       // those shorter than this share of the median edge (0: none)
+  double collapse_m3 = 0;          // the volume the collapse took (the move removed booked less this)
 };
 
 struct Stage {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <iterator>
 #include <cmath>
+#include <map>
 #include <set>
 #include <stdexcept>
 #include <utility>
@@ -16,9 +17,20 @@ namespace {
 
 Vec3 cross3(const Vec3& a, const Vec3& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 
-// A collapse may turn a neighbour's normal by at most this.
+// A collapse may turn a neighbour's normal by at most this from the mesh
+// as given; a vertex whose triangles' normals differ by more than
+// kCreaseDegrees is on an edge of the shape, which a collapse keeps.
 constexpr double kFoldDegrees = 60.0;
+constexpr double kCreaseDegrees = 30.0;
 constexpr int kPasses = 8;
+
+// Six times the signed volume the surface encloses with the origin.
+double volume6(const std::vector<Vec3>& p, const std::vector<std::array<int, 3>>& tri, const std::vector<char>& alive) {
+  double v = 0;
+  for (std::size_t t = 0; t < tri.size(); ++t)
+    if (alive[t]) v += p[tri[t][0]].dot(cross3(p[tri[t][1]], p[tri[t][2]]));
+  return v;
+}
 
 }  // namespace
 
@@ -36,6 +48,34 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
     return z1 > z0 && (std::abs(p[v].z - z0) <= 2e-6 || std::abs(p[v].z - z1) <= 2e-6);
   };
   auto area_vec = [&](const std::array<int, 3>& c) { return cross3(p[c[1]] - p[c[0]], p[c[2]] - p[c[0]]); };
+  // The mesh as given: each triangle's normal, the vertices on an open
+  // edge (held: a scan's rim stays where it is) and on a crease.
+  std::vector<Vec3> given(nt);
+  std::vector<std::vector<Vec3>> normals_at(p.size());
+  std::map<std::pair<int, int>, int> uses;
+  for (std::size_t t = 0; t < nt; ++t) {
+    given[t] = area_vec(tri[t]);
+    const double a = given[t].norm();
+    for (int k = 0; k < 3; ++k) {
+      if (a > 0) normals_at[tri[t][k]].push_back(given[t] * (1 / a));
+      const int u = tri[t][k], v = tri[t][(k + 1) % 3];
+      ++uses[{std::min(u, v), std::max(u, v)}];
+    }
+  }
+  // Open: on an open edge that does not lie in an end plane.
+  auto plane_of = [&](int v) {
+    if (!(z1 > z0)) return 0;
+    return std::abs(p[v].z - z0) <= 2e-6 ? 1 : std::abs(p[v].z - z1) <= 2e-6 ? 2 : 0;
+  };
+  std::vector<char> open(p.size(), 0), crease(p.size(), 0);
+  for (const auto& [e, n] : uses)
+    if (n < 2 && !(plane_of(e.first) > 0 && plane_of(e.first) == plane_of(e.second))) open[e.first] = open[e.second] = 1;
+  const double cos_crease = std::cos(kCreaseDegrees * 3.14159265358979323846 / 180);
+  for (std::size_t v = 0; v < p.size(); ++v)
+    for (std::size_t a = 0; a < normals_at[v].size() && !crease[v]; ++a)
+      for (std::size_t b = a + 1; b < normals_at[v].size() && !crease[v]; ++b)
+        crease[v] = normals_at[v][a].dot(normals_at[v][b]) < cos_crease;
+  const double volume_given = volume6(p, tri, alive);
 
   // The median edge length of the mesh as given.
   std::vector<double> lengths;
@@ -73,7 +113,15 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
     for (const auto& [len, e] : edges) {
       int a = e.first, b = e.second;
       if (locked[a] || locked[b]) continue;
-      if (on_end(b) && !on_end(a)) std::swap(a, b);  // a stays; the point keeps an end vertex's place
+      // Where the point goes: an end plane's vertex, a vertex on an open
+      // edge, a crease's vertex keeps its place (a stays); two of a kind
+      // that cannot both keep theirs: not collapsed, but for two on one
+      // end plane or two on a crease, which meet half-way.
+      auto rank = [&](int v) { return on_end(v) ? 3 : open[v] ? 2 : crease[v] ? 1 : 0; };
+      if (rank(b) > rank(a)) std::swap(a, b);
+      if (rank(a) == 2 && rank(b) == 2) continue;
+      if (rank(a) == 3 && rank(b) == 3 && std::abs(p[a].z - p[b].z) > 4e-6) continue;
+      if (rank(a) == 3 && rank(b) == 2) continue;  // an end vertex and a rim's: both must stay
       // The triangles on the edge: two, for a closed surface.
       std::vector<int> on_edge;
       for (int t : star[a])
@@ -89,14 +137,13 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
       for (int v : na)
         if (v != a && v != b && nb.count(v)) ++common;
       if (common != 2) continue;
-      Vec3 at = on_end(a) ? p[a] : (p[a] + p[b]) * 0.5;
-      if (on_end(a) && on_end(b) && std::abs(p[a].z - p[b].z) <= 4e-6) at = (p[a] + p[b]) * 0.5;
+      const Vec3 at = rank(a) > rank(b) ? p[a] : (p[a] + p[b]) * 0.5;
       // No neighbour folds or shrinks to nothing.
       bool fine = true;
       for (int v : {a, b})
         for (int t : star[v]) {
           if (t == on_edge[0] || t == on_edge[1]) continue;
-          const Vec3 before = area_vec(tri[t]);
+          const Vec3& before = given[t];
           std::array<Vec3, 3> q{p[tri[t][0]], p[tri[t][1]], p[tri[t][2]]};
           for (int k = 0; k < 3; ++k)
             if (tri[t][k] == a || tri[t][k] == b) q[k] = at;
@@ -104,7 +151,12 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
           if (!(after.dot(before) > cos_fold * after.norm() * before.norm()) || after.norm() < 1e-3 * before.norm())
             fine = false;
         }
-      if (!fine) continue;
+      // The triangles round the point after: none, and the wear of the
+      // edge's two would have nowhere to go.
+      bool others = false;
+      for (int v : {a, b})
+        for (int t : star[v]) others = others || (t != on_edge[0] && t != on_edge[1]);
+      if (!fine || !others) continue;
       // Collapse: b becomes a at the point; the edge's triangles go, their
       // wear shared by area over the triangles round the point.
       p[a] = at;
@@ -126,6 +178,7 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
     }
     if (done == 0) break;
   }
+  out.removed_m3 = (volume_given - volume6(p, tri, alive)) / 6;
   for (std::size_t t = 0; t < nt; ++t) {
     if (!alive[t]) continue;
     out.triangles.push_back({{p[tri[t][0]], p[tri[t][1]], p[tri[t][2]]}});
@@ -136,14 +189,29 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
 
 FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<double>& booked_m3,
                       const MeshBounds& bounds, double across, double along, const std::string& name) {
+  double booked = 0;
+  for (double v : booked_m3) booked += v;
   for (const double share : kCollapseShares) {
     FitWear f;
-    f.collapsed = collapse_short_edges(triangles, booked_m3, bounds.z0, bounds.z1, share);
-    const std::vector<double> spread = smooth_wear(f.collapsed.triangles, f.collapsed.volume_m3, across, along);
+    if (share > 0) f.collapsed = collapse_short_edges(triangles, booked_m3, bounds.z0, bounds.z1, share);
+    else f.collapsed = {triangles, booked_m3, 0, 0.0};
+    // What the collapse took (or gave back) counts against the stage's
+    // wear: the move removes the rest, so that the two remove the booked.
+    std::vector<double> volume = smooth_wear(f.collapsed.triangles, f.collapsed.volume_m3, across, along);
+    const double left = booked - f.collapsed.removed_m3;
+    const bool last = share == kCollapseShares[std::size(kCollapseShares) - 1];
+    if (booked > 0 && !(left > 0)) {
+      if (last)
+        throw MeshSpoiled(name + ": collapsing its short edges takes more than the stage's wear; more smoothing or "
+                                 "shorter stages");
+      continue;
+    }
+    if (booked > 0)
+      for (double& v : volume) v *= left / booked;
     try {
-      f.wear = wear_mesh(f.collapsed.triangles, spread, bounds, 0, name);
+      f.wear = wear_mesh(f.collapsed.triangles, volume, bounds, 0, name);
     } catch (const MeshSpoiled&) {
-      if (share == kCollapseShares[std::size(kCollapseShares) - 1]) throw;
+      if (last) throw;
       continue;
     }
     f.share = share;

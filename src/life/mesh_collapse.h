@@ -3,13 +3,17 @@
 // face below it together, until a strip of triangles a millimetre wide
 // runs along the corner, which the next move turns over (its two rows
 // move along different normals). Before a stage's wear moves the mesh,
-// each edge much shorter than the mesh's own (a quarter of its median
-// edge) is collapsed to a point: the two triangles on it go, their booked
-// wear goes to the triangles round the point (by area), and the point
-// stays on an end plane where one of the two vertices was on it. An edge
-// is left where collapsing it would fold a neighbour (turn its normal by
-// more than 60°) or join two parts of the surface that only touch (the
-// link condition). No OpenCL: the unit tests reach it.
+// each edge much shorter than the mesh's own (a share of its median edge)
+// is collapsed to a point: the two triangles on it go, their booked wear
+// goes to the triangles round the point (by area). The point is where an
+// end of the edge lies on an end plane, on an open edge of the mesh (a
+// scan's rim) or on a crease (a bar's edge), else half-way. An edge is
+// left where collapsing it would turn a neighbour's normal by more than
+// 60° from the mesh as given, join two sheets of the surface that only
+// touch (the link condition), leave no triangle round the point, or move
+// a rim's or an end plane's vertex. The volume the collapse takes from
+// the solid is measured (the mesh's own enclosed volume, before and
+// after). No OpenCL: the unit tests reach it.
 #pragma once
 
 #include <string>
@@ -24,6 +28,7 @@ struct Collapsed {
   std::vector<Triangle> triangles;  // the mesh without the collapsed edges' triangles, in their order
   std::vector<double> volume_m3;    // the booked volumes carried with them (the same sum)
   int edges = 0;                    // edges collapsed
+  double removed_m3 = 0;            // the volume the collapse took from the solid the mesh bounds (< 0: gave)
 };
 
 // `z0`, `z1`: the mill's end planes (a vertex within 2 µm of one stays on
@@ -33,15 +38,16 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
                                double z0, double z1, double share = 0.25);
 
 // The shares of the median edge below which edges are collapsed, tried in
-// turn until the move keeps the mesh one (a quarter first: most stages
-// need no more). Past 0.55 the collapse coarsens a worn corner until the
+// turn until the move keeps the mesh one: none first (most stages need no
+// collapse), then a quarter. Past 0.55 the collapse coarsens a worn corner until the
 // bars' measures jump (docs/liner-life-mesh.md), so the study stops there.
-inline constexpr double kCollapseShares[] = {0.25, 0.4, 0.55};
+inline constexpr double kCollapseShares[] = {0, 0.25, 0.4, 0.55};
 
 // A stage's mesh worn by its booked volumes and kept fit to wear again:
 // collapsed at each share in turn, its volumes spread (smooth_wear, across
-// and along, m) and moved (wear_mesh, relaxed where needed), the first
-// share whose move does not spoil the mesh kept. The last share's
+// and along, m), less what the collapse itself took, and moved (wear_mesh,
+// relaxed where needed), the first share whose move does not spoil the
+// mesh kept: the collapse and the move together remove the volume booked. The last share's
 // MeshSpoiled where none does; any other refusal (a vertex beyond the
 // shell or the ends) at once.
 struct FitWear {

@@ -73,44 +73,74 @@ Vec3 crease_solve(std::array<double, 9> a, const Vec3& b) {
 // Vertices free to slide when the mesh is relaxed: no two normals of the
 // triangles round them differ by more than this (a face of a bar, the
 // shell, a corner the wear has rounded); the others (a bar's sharp edges
-// and corners) stay put.
+// and corners) stay put, as do vertices on an open edge of the mesh (a
+// scan's rim, where it meets the shell) and those more than a few edges
+// from a spoiled triangle.
 constexpr double kRelaxSmoothDegrees = 50.0;
 constexpr int kRelaxPasses = 40;
+constexpr int kRelaxRings = 3;
 
-// Tangential relaxation: each vertex of a smooth patch slides toward the
-// centroid of its neighbours (those it shares an edge with), within the
-// plane normal to it on the unworn mesh, half the way per pass, the
-// patches' edge and corner vertices held; a vertex on an end plane slides
-// within it. Returns each vertex's slide from `at` (the worn positions).
-std::vector<Vec3> relax_slides(const WeldedMesh& w, const std::vector<Vec3>& at, const MeshBounds& bounds,
-                               int& moved) {
+// Tangential relaxation round the spoiled triangles: each free vertex
+// slides toward the centroid of its neighbours (those it shares an edge
+// with), within the plane normal to the unworn surface there, half the way
+// per pass; a vertex on an end plane slides within it. `at`: the worn
+// positions. Returns each vertex's slide from them.
+std::vector<Vec3> relax_slides(const WeldedMesh& w, const std::vector<Vec3>& at, const std::vector<char>& bad_triangle,
+                               const MeshBounds& bounds, int& moved) {
   const std::size_t nv = w.points.size();
   std::vector<Vec3> normal(nv);
   std::vector<std::vector<Vec3>> around(nv);
   std::vector<std::vector<int>> next(nv);
+  std::map<std::pair<int, int>, int> edge_uses;
   for (const auto& c : w.corners) {
     const Vec3 av = area_vector(w.points[c[0]], w.points[c[1]], w.points[c[2]]);
     const double a = av.norm();
     for (int k = 0; k < 3; ++k) {
       normal[c[k]] = normal[c[k]] + av;
       if (a > 0) around[c[k]].push_back(av * (1 / a));
+      const int o = c[(k + 1) % 3];
+      ++edge_uses[{std::min(c[k], o), std::max(c[k], o)}];
       for (int j = 1; j < 3; ++j) {
-        const int o = c[(k + j) % 3];
-        if (std::find(next[c[k]].begin(), next[c[k]].end(), o) == next[c[k]].end()) next[c[k]].push_back(o);
+        const int u = c[(k + j) % 3];
+        if (std::find(next[c[k]].begin(), next[c[k]].end(), u) == next[c[k]].end()) next[c[k]].push_back(u);
       }
     }
   }
   const double cos_smooth = std::cos(kRelaxSmoothDegrees * 3.14159265358979323846 / 180);
+  // Near a spoiled triangle: its corners and the vertices a few edges on.
+  std::vector<char> near(nv, 0);
+  for (std::size_t t = 0; t < w.corners.size(); ++t)
+    if (bad_triangle[t])
+      for (int v : w.corners[t]) near[v] = 1;
+  for (int ring = 0; ring < kRelaxRings; ++ring) {
+    std::vector<char> grown = near;
+    for (std::size_t i = 0; i < nv; ++i)
+      if (near[i])
+        for (int o : next[i]) grown[o] = 1;
+    near.swap(grown);
+  }
   std::vector<char> free(nv, 0);
   for (std::size_t i = 0; i < nv; ++i) {
     const double len = normal[i].norm();
-    if (!(len > 0) || next[i].empty()) continue;
+    if (!near[i] || !(len > 0) || next[i].empty()) continue;
+    // The plane it slides in: the unworn surface's there (a face worn
+    // back parallel to itself has the same; the slides are measured from
+    // the unworn mesh, and what they sweep counts in the scale).
     normal[i] = normal[i] * (1 / len);
     bool smooth = true;
     for (std::size_t a = 0; a < around[i].size() && smooth; ++a)
       for (std::size_t b = a + 1; b < around[i].size() && smooth; ++b) smooth = around[i][a].dot(around[i][b]) >= cos_smooth;
     free[i] = smooth;
   }
+  // An open edge holds its ends (a scan's rim on the shell stays there),
+  // but for one that lies in an end plane: its ends slide within it.
+  auto end_plane = [&](int v) {
+    if (!(bounds.z1 > bounds.z0)) return 0;
+    return std::abs(w.points[v].z - bounds.z0) <= 2e-6 ? 1 : std::abs(w.points[v].z - bounds.z1) <= 2e-6 ? 2 : 0;
+  };
+  for (const auto& [e, uses] : edge_uses)
+    if (uses < 2 && !(end_plane(e.first) > 0 && end_plane(e.first) == end_plane(e.second)))
+      free[e.first] = free[e.second] = 0;
   std::vector<Vec3> q = at;
   for (int pass = 0; pass < kRelaxPasses; ++pass) {
     std::vector<Vec3> step(nv);
@@ -370,12 +400,29 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     scale = 1;
     worn = moved(scale);
     if (!(out.booked_m3 > 0)) return;
+    // At scale 0 the slides alone (none unless relaxed): what they sweep
+    // counts with the move's. The scale is bracketed (doubled until the
+    // move removes the booked volume) and found by regula falsi (Illinois).
     double s0 = 0, v0 = swept_volume(triangles, moved(0)), s1 = 1, v1 = swept_volume(triangles, worn);
-    for (int it = 0; it < 40 && std::abs(v1 - out.booked_m3) > 1e-12 * out.booked_m3; ++it) {
-      if (!(v1 > v0)) break;
-      const double s2 = s1 + (out.booked_m3 - v1) * (s1 - s0) / (v1 - v0);
-      s0 = s1, v0 = v1;
-      s1 = std::clamp(s2, 0.25 * s1, 4.0 * s1);
+    for (int it = 0; it < 16 && v1 < out.booked_m3; ++it) s0 = s1, v0 = v1, s1 *= 2, v1 = swept_volume(triangles, moved(s1));
+    const double tol = 1e-12 * out.booked_m3;
+    if (v0 <= out.booked_m3 && v1 >= out.booked_m3) {
+      double f0 = v0 - out.booked_m3, f1 = v1 - out.booked_m3;
+      int side = 0;
+      for (int it = 0; it < 100 && std::abs(f1) > tol && std::abs(f0) > tol; ++it) {
+        const double sm = f1 != f0 ? s1 - f1 * (s1 - s0) / (f1 - f0) : 0.5 * (s0 + s1);
+        const double fm = swept_volume(triangles, moved(sm)) - out.booked_m3;
+        if ((fm < 0) == (f0 < 0)) {
+          s0 = sm, f0 = fm;
+          if (side == -1) f1 *= 0.5;
+          side = -1;
+        } else {
+          s1 = sm, f1 = fm;
+          if (side == 1) f0 *= 0.5;
+          side = 1;
+        }
+      }
+      if (std::abs(f0) < std::abs(f1)) s1 = s0;
       worn = moved(s1);
       v1 = swept_volume(triangles, worn);
     }
@@ -398,7 +445,14 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
   if (relax && spoiled(triangles, worn, 0.1) > 0) {
     std::vector<Vec3> at(nv);
     for (std::size_t i = 0; i < nv; ++i) at[i] = w.points[i] + move[i] * scale;
-    slide = relax_slides(w, at, bounds, out.relaxed);
+    std::vector<char> bad(nt, 0);
+    for (std::size_t t = 0; t < nt; ++t) {
+      const auto& a = triangles[t].v;
+      const auto& b = worn[t].v;
+      const Vec3 na = area_vector(a[0], a[1], a[2]), nb = area_vector(b[0], b[1], b[2]);
+      bad[t] = nb.dot(na) <= 0 || nb.norm() < 0.1 * na.norm();
+    }
+    slide = relax_slides(w, at, bad, bounds, out.relaxed);
     fit_scale();
   }
   out.scale = scale;
@@ -410,9 +464,10 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     const Vec3 na = area_vector(a[0], a[1], a[2]), nb = area_vector(b[0], b[1], b[2]);
     if (nb.dot(na) <= 0)
       throw MeshSpoiled(fmt::format(
-          "{}: triangle {}: the wear turns it over (its vertices move past each other, {:.3g} mm deep at most{}); "
-          "the wear is too deep for the mesh: more smoothing or shorter stages",
-          name, t + 1, out.deepest_m * 1000, out.relaxed > 0 ? ", with the mesh relaxed" : ""));
+          "{}: triangle {} (at x {:.4f}, y {:.4f}, z {:.4f} m): the wear turns it over (its vertices move past each "
+          "other, {:.3g} mm deep at most{}); the wear is too deep for the mesh: more smoothing or shorter stages",
+          name, t + 1, (a[0].x + a[1].x + a[2].x) / 3, (a[0].y + a[1].y + a[2].y) / 3, (a[0].z + a[1].z + a[2].z) / 3,
+          out.deepest_m * 1000, out.relaxed > 0 ? ", with the mesh relaxed" : ""));
     if (nb.norm() < 1e-3 * na.norm())
       throw MeshSpoiled(fmt::format(
           "{}: triangle {}: the wear shrinks it to under a thousandth of its area; more smoothing or shorter "
