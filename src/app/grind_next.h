@@ -1,6 +1,7 @@
 // `grind RUN --ore FITTED --next-test RUN2 ...`: which batch test to run
-// next (src/grind/next_test.h; docs/grinding-intervals.md, "Which test to
-// run next"). The candidates are checked before anything is computed; the
+// next (src/grind/next_test.h, the linear width; src/grind/next_refit.h,
+// the refits that size it; docs/grinding-intervals.md, "Which test to run
+// next"). The candidates are checked before anything is computed; the
 // ranking is computed before anything is written.
 #pragma once
 
@@ -31,7 +32,7 @@ struct NextPlan {
   // parameters), for the refits; `refit_note` says why there are none.
   grind::RealTests real;
   std::string refit_note;
-  int draws = 8, refit = -1;
+  int draws = 8, refit = 3;
   std::uint64_t seed = 1;
 };
 // Throws std::invalid_argument, naming the option and the run, for a

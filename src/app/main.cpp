@@ -315,7 +315,7 @@ int main(int argc, char** argv) {
       ->type_name("N");
   grind->add_option("--next-seed", next_seed, "with --next-test: the seed of those draws (default 1)")->type_name("S");
   grind->add_option("--next-refit", next_refit,
-                    "with --next-test: refit only the first K candidates of the linear ranking (default: all; 0: "
+                    "with --next-test: refit only the first K candidates of the linear ranking (default 3; 0: "
                     "the linear ranking alone)")
       ->type_name("K");
   grind->add_option("--out", go.out, "folder for the results (default RUN/grind, RUN/fit for a fit)");

@@ -2,9 +2,11 @@
 #include "grind/next_refit.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace mc::grind {
@@ -145,7 +147,13 @@ RefitWidth refitted_width(const Ore& ore, const RealTests& real, const std::vect
                           double scatter_pp, std::uint64_t seed) {
   RefitWidth out;
   out.draws = static_cast<int>(truths.size());
-  for (std::size_t k = 0; k < truths.size(); ++k) {
+  // Each draw on its own seed, its result in its own place: the same widths
+  // in the same order whatever the threads (the draws are independent; a
+  // draw that keeps held parameters costs a profile search, so they are
+  // shared out one at a time).
+  std::vector<double> width(truths.size(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<std::string> why(truths.size());
+  auto draw = [&](std::size_t k) {
     SeededNormal noise(mix(seed, k));
     std::vector<TestInMill> tests = real.tests;
     TestInMill c = candidate;
@@ -157,15 +165,27 @@ RefitWidth refitted_width(const Ore& ore, const RealTests& real, const std::vect
       const FitCovariance u = fit_covariance(f, tests);
       f.ore.fitted_under.covariance = u;
       const Interval i = propagate(f.ore, u, [&](const Ore& o) { return std::vector<double>{number(o)}; })[0];
-      if (!i.valid() || !std::isfinite(i.lo) || !std::isfinite(i.hi)) {
-        out.failures.push_back("draw " + std::to_string(k + 1) + ": the fit has no closed interval of the product");
-        continue;
-      }
-      out.widths.push_back(i.hi - i.lo);
+      if (!i.valid() || !std::isfinite(i.lo) || !std::isfinite(i.hi))
+        why[k] = "the fit has no closed interval of the product";
+      else
+        width[k] = i.hi - i.lo;
     } catch (const std::exception& e) {
-      out.failures.push_back("draw " + std::to_string(k + 1) + ": " + e.what());
+      why[k] = e.what();
     }
-  }
+  };
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t k; (k = next++) < truths.size();) draw(k);
+  };
+  const std::size_t n_threads =
+      std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<std::size_t>(truths.size(), 1));
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < n_threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+  for (std::size_t k = 0; k < truths.size(); ++k)
+    if (std::isfinite(width[k])) out.widths.push_back(width[k]);
+    else out.failures.push_back("draw " + std::to_string(k + 1) + ": " + why[k]);
   out.converged = static_cast<int>(out.widths.size());
   if (out.converged > 0) {
     double sum = 0;
