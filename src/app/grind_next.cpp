@@ -211,7 +211,7 @@ NextRanking rank_next(const NextPlan& plan, const Ore& ore, const NextTarget& ta
   });
   r.draws = plan.draws;
   r.seed = plan.seed;
-  r.refit_note = plan.refit_note;
+  r.refit_note = plan.refit != 0 ? plan.refit_note : "";  // --next-refit 0: none asked for
   const auto t1 = std::chrono::steady_clock::now();
   if (plan.refit_note.empty() && plan.refit != 0) {
     // The same truths for every candidate, and the same scatter draws: the
