@@ -169,6 +169,14 @@ TEST_CASE("grind next test by refits: the same seed, the same widths", "[grind][
   REQUIRE(a.size() == 4);
   CHECK(a == b);  // bit for bit
   CHECK(a != c);
+  // Refitted beside another candidate (their draws shared out over the
+  // threads together), the same widths: each draw has its own seed.
+  const TestInMill other{candidate_test(fitted, {2, 4, 8, 16, 32}), harder_spectrum(), kPower_W, kHoldup_kg};
+  const std::vector<RefitWidth> both =
+      refitted_widths(fitted, real, plausible_truths(fitted, real, 4, 5), {other, candidate}, number, scatter, 5);
+  REQUIRE(both.size() == 2);
+  CHECK(both[1].widths == a);
+  CHECK(both[0].widths != a);
   // The normal deviates: mean 0, variance 1 (20000 draws: 4 standard errors).
   SeededNormal g(9);
   double s1 = 0, s2 = 0;

@@ -218,10 +218,14 @@ NextRanking rank_next(const NextPlan& plan, const Ore& ore, const NextTarget& ta
     // candidates differ by the test, not by the luck of the draw.
     const std::vector<PlausibleTruth> truths = plausible_truths(ore, plan.real, plan.draws, plan.seed);
     const double scatter_pp = std::sqrt(interval_variance(u));
-    for (std::size_t k = 0; k < order.size(); ++k) {
-      if (plan.refit >= 0 && static_cast<int>(k) >= plan.refit) break;
+    std::vector<TestInMill> chosen;
+    for (std::size_t k = 0; k < order.size() && (plan.refit < 0 || static_cast<int>(k) < plan.refit); ++k)
+      chosen.push_back(candidates[order[k]]);
+    const std::vector<RefitWidth> widths =
+        refitted_widths(ore, plan.real, truths, chosen, number, scatter_pp, plan.seed);
+    for (std::size_t k = 0; k < widths.size(); ++k) {
       NextRow& row = r.rows[order[k]];
-      row.refit = refitted_width(ore, plan.real, truths, candidates[order[k]], number, scatter_pp, plan.seed);
+      row.refit = widths[k];
       row.refitted = true;
       ++r.refitted;
     }

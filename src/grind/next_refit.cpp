@@ -142,21 +142,24 @@ BatchTest simulated_test(const Ore& truth, const TestInMill& candidate, double s
   return t;
 }
 
-RefitWidth refitted_width(const Ore& ore, const RealTests& real, const std::vector<PlausibleTruth>& truths,
-                          const TestInMill& candidate, const std::function<double(const Ore&)>& number,
-                          double scatter_pp, std::uint64_t seed) {
-  RefitWidth out;
-  out.draws = static_cast<int>(truths.size());
-  // Each draw on its own seed, its result in its own place: the same widths
-  // in the same order whatever the threads (the draws are independent; a
-  // draw that keeps held parameters costs a profile search, so they are
-  // shared out one at a time).
-  std::vector<double> width(truths.size(), std::numeric_limits<double>::quiet_NaN());
-  std::vector<std::string> why(truths.size());
-  auto draw = [&](std::size_t k) {
+std::vector<RefitWidth> refitted_widths(const Ore& ore, const RealTests& real,
+                                        const std::vector<PlausibleTruth>& truths,
+                                        const std::vector<TestInMill>& candidates,
+                                        const std::function<double(const Ore&)>& number, double scatter_pp,
+                                        std::uint64_t seed) {
+  // Each draw on its own seed (the draw's, not the candidate's: every
+  // candidate sees the same scatter), its result in its own place: the same
+  // widths whatever the threads. A draw that keeps held parameters costs a
+  // profile search, so the draws of every candidate are shared out one at a
+  // time from one list.
+  const std::size_t nd = truths.size(), nc = candidates.size();
+  std::vector<double> width(nc * nd, std::numeric_limits<double>::quiet_NaN());
+  std::vector<std::string> why(nc * nd);
+  auto draw = [&](std::size_t at) {
+    const std::size_t m = at / nd, k = at % nd;
     SeededNormal noise(mix(seed, k));
     std::vector<TestInMill> tests = real.tests;
-    TestInMill c = candidate;
+    TestInMill c = candidates[m];
     c.test.noise_pp = real.tests.empty() ? 1.0 : real.tests.front().test.noise_pp;
     c.test = simulated_test(truths[k].ore, c, scatter_pp, noise);
     tests.push_back(c);
@@ -166,35 +169,46 @@ RefitWidth refitted_width(const Ore& ore, const RealTests& real, const std::vect
       f.ore.fitted_under.covariance = u;
       const Interval i = propagate(f.ore, u, [&](const Ore& o) { return std::vector<double>{number(o)}; })[0];
       if (!i.valid() || !std::isfinite(i.lo) || !std::isfinite(i.hi))
-        why[k] = "the fit has no closed interval of the product";
+        why[at] = "the fit has no closed interval of the product";
       else
-        width[k] = i.hi - i.lo;
+        width[at] = i.hi - i.lo;
     } catch (const std::exception& e) {
-      why[k] = e.what();
+      why[at] = e.what();
     }
   };
   std::atomic<std::size_t> next{0};
   auto worker = [&] {
-    for (std::size_t k; (k = next++) < truths.size();) draw(k);
+    for (std::size_t at; (at = next++) < nc * nd;) draw(at);
   };
   const std::size_t n_threads =
-      std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<std::size_t>(truths.size(), 1));
+      std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<std::size_t>(nc * nd, 1));
   std::vector<std::thread> pool;
   for (std::size_t t = 1; t < n_threads; ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& t : pool) t.join();
-  for (std::size_t k = 0; k < truths.size(); ++k)
-    if (std::isfinite(width[k])) out.widths.push_back(width[k]);
-    else out.failures.push_back("draw " + std::to_string(k + 1) + ": " + why[k]);
-  out.converged = static_cast<int>(out.widths.size());
-  if (out.converged > 0) {
-    double sum = 0;
-    for (double w : out.widths) sum += w;
-    out.mean = sum / out.converged;
-    out.p10 = quantile(out.widths, 0.1);
-    out.p90 = quantile(out.widths, 0.9);
+  std::vector<RefitWidth> out(nc);
+  for (std::size_t m = 0; m < nc; ++m) {
+    RefitWidth& r = out[m];
+    r.draws = static_cast<int>(nd);
+    for (std::size_t k = 0; k < nd; ++k)
+      if (std::isfinite(width[m * nd + k])) r.widths.push_back(width[m * nd + k]);
+      else r.failures.push_back("draw " + std::to_string(k + 1) + ": " + why[m * nd + k]);
+    r.converged = static_cast<int>(r.widths.size());
+    if (r.converged > 0) {
+      double sum = 0;
+      for (double w : r.widths) sum += w;
+      r.mean = sum / r.converged;
+      r.p10 = quantile(r.widths, 0.1);
+      r.p90 = quantile(r.widths, 0.9);
+    }
   }
   return out;
+}
+
+RefitWidth refitted_width(const Ore& ore, const RealTests& real, const std::vector<PlausibleTruth>& truths,
+                          const TestInMill& candidate, const std::function<double(const Ore&)>& number,
+                          double scatter_pp, std::uint64_t seed) {
+  return refitted_widths(ore, real, truths, {candidate}, number, scatter_pp, seed).front();
 }
 
 double quantile(std::vector<double> v, double q) {
