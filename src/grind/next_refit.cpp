@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -174,6 +175,8 @@ std::vector<RefitWidth> refitted_widths(const Ore& ore, const RealTests& real,
         width[at] = i.hi - i.lo;
     } catch (const std::exception& e) {
       why[at] = e.what();
+    } catch (...) {  // nothing may leave a thread
+      why[at] = "the fit failed";
     }
   };
   std::atomic<std::size_t> next{0};
@@ -183,7 +186,12 @@ std::vector<RefitWidth> refitted_widths(const Ore& ore, const RealTests& real,
   const std::size_t n_threads =
       std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<std::size_t>(nc * nd, 1));
   std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < n_threads; ++t) pool.emplace_back(worker);
+  try {
+    for (std::size_t t = 1; t < n_threads; ++t) pool.emplace_back(worker);
+  } catch (const std::system_error&) {
+    // No more threads to be had: those made, and this one, share the draws
+    // (a throw past the joinable ones would end the program).
+  }
   worker();
   for (std::thread& t : pool) t.join();
   std::vector<RefitWidth> out(nc);
