@@ -274,7 +274,8 @@ TEST_CASE("grind --next-draws, --next-seed, --next-refit: bad values refused, th
     return out;
   };
   for (const char* bad : {"--next-draws 0", "--next-draws -3", "--next-draws 2.5", "--next-draws many",
-                          "--next-seed -1", "--next-refit x"}) {
+                          "--next-seed -1", "--next-refit x", "--next-seed 99999999999",
+                          "--next-draws 99999999999999999999"}) {
     int status = 0;
     const std::string said = run(bad, status);
     INFO(bad << ": " << said);
@@ -282,6 +283,7 @@ TEST_CASE("grind --next-draws, --next-seed, --next-refit: bad values refused, th
     const std::string option = std::string(bad).substr(0, std::string(bad).find(' '));
     CHECK(said.find(option + " ") != std::string::npos);
     CHECK(said.find("expected a whole number") != std::string::npos);
+    CHECK((said.find("at most 1000000000") != std::string::npos) == (std::string(bad).size() > 20));
   }
   int status = 0;
   FILE* p = popen((std::string(MC_BINARY) + " grind no-run --ore no-ore.toml --next-draws 4 2>&1").c_str(), "r");

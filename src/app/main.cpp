@@ -375,8 +375,10 @@ int main(int argc, char** argv) {
         char* stop = nullptr;
         errno = 0;
         const long long v = std::strtoll(text.c_str(), &stop, 10);
-        if (text.empty() || *stop != '\0' || errno == ERANGE || v < least || v > 1000000000LL)
+        if (text.empty() || *stop != '\0' || v < least)
           throw std::invalid_argument(std::string(option) + " " + text + ": expected " + what);
+        if (errno == ERANGE || v > 1000000000LL)
+          throw std::invalid_argument(std::string(option) + " " + text + ": expected " + what + ", at most 1000000000");
         return v;
       };
       for (const auto& [option, text] : {std::pair<const char*, const std::string*>{"--next-draws", &next_draws},
