@@ -517,4 +517,22 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
   refused("grind " + run_dir.string() + " --ore " + (fs::path(MC_ASSET_DIR) / "ores" / "example_spectrum.toml").string() + " --bond 106 --next-test " + run_dir.string(),
           "keeps no covariance");
   refused(grind + "--next-test " + run_dir.string() + " --next-for throughput", "--next-for throughput: ");
+  // The test the ore was fitted to changed since its fit: no refits, and
+  // the console and grind.json say why; the linear ranking still made.
+  {
+    mc::io::BatchTestFile tf;
+    tf.title = "synthetic, changed";
+    tf.test = synthetic_test(truth, 1.0, 99, mc::io::read_run(run_dir, true).spectrum, {1, 2, 4, 8, 16}, true);
+    std::ofstream(dir.path / "test.toml") << mc::io::batch_test_toml(tf);
+    const std::string said = run_binary(grind + "--next-test " + run_dir.string() + " --next-refit 1 --next-draws 2 " +
+                                            "--out " + (dir.path / "changed").string(),
+                                        status);
+    INFO(said);
+    REQUIRE(status == 0);
+    CHECK(said.find("note: no refits: the tests the ore was fitted to") != std::string::npos);
+    const nlohmann::json jc = nlohmann::json::parse(std::ifstream(dir.path / "changed" / "grind.json"));
+    CHECK(jc["next_test"]["refitted"].get<int>() == 0);
+    CHECK(jc["next_test"]["no_refits"].get<std::string>().find("a test or a run changed since") != std::string::npos);
+    CHECK(jc["next_test"]["candidates"].size() == 3);
+  }
 }

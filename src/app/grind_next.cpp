@@ -72,6 +72,24 @@ RealTests real_tests(const Ore& ore, std::string& why) {
                                                   : mill_holdup_kg(ore, run.porosity, run.filling, run.mill_volume);
       r.tests.push_back({t.test, run.spectrum, run.power_W, holdup});
     }
+    // The same tests as fitted, and in the same runs: the fitted ore's sum
+    // of squares on them is the one its fit kept (ssr_held, with held
+    // parameters), its rms residual the one kept (rms_residual_pp), each to
+    // its 10 digits. A test file edited or a run made again since would
+    // give the refits other data than the ore's covariance describes.
+    double ss_pp = 0, n = 0;  // each test alone: its residuals in pp as measured
+    for (const TestInMill& t : r.tests)
+      for (double x : weighted_residuals(ore, {t})) ss_pp += x * x, ++n;
+    const double ssr_kept = ore.fitted_under.covariance.ssr_fit, ssr_now = weighted_ssr(ore, r.tests);
+    const double rms_kept = f.rms_residual_pp, rms_now = n > 0 ? std::sqrt(ss_pp / n) : 0;
+    auto differs = [](double now, double kept) { return kept > 0 && !(std::fabs(now - kept) <= 1e-6 * kept + 1e-9); };
+    if (differs(ssr_now, ssr_kept) || differs(rms_now, rms_kept)) {
+      why = fmt::format("the tests the ore was fitted to ([fitted] test = \"{}\", run = \"{}\") are not as they "
+                        "were: the fitted ore's rms residual on them is {:.6g} pp here, {:.6g} at its fit "
+                        "(rms_residual_pp); a test or a run changed since: fit the ore again",
+                        f.test, f.run, rms_now, rms_kept);
+      return {};
+    }
   } catch (const std::exception& e) {
     why = "the tests the ore was fitted to cannot be read here ([fitted] test = \"" + f.test + "\": " + e.what() +
           "; run grind where --fit ran)";
