@@ -249,6 +249,13 @@ TEST_CASE("grind next test by refits: the same seed, the same widths", "[grind][
   REQUIRE(both.size() == 2);
   CHECK(both[1].widths == a);
   CHECK(both[0].widths != a);
+  // On one thread and on five (more than the draws' half), the same widths.
+  for (unsigned threads : {1u, 5u}) {
+    const std::vector<RefitWidth> on = refitted_widths(fitted, real, plausible_truths(fitted, real, 4, 5),
+                                                       {other, candidate}, number, scatter, 5, threads);
+    CHECK(on[0].widths == both[0].widths);
+    CHECK(on[1].widths == both[1].widths);
+  }
   // The normal deviates: mean 0, variance 1 (20000 draws: 4 standard errors).
   SeededNormal g(9);
   double s1 = 0, s2 = 0;

@@ -147,7 +147,7 @@ std::vector<RefitWidth> refitted_widths(const Ore& ore, const RealTests& real,
                                         const std::vector<PlausibleTruth>& truths,
                                         const std::vector<TestInMill>& candidates,
                                         const std::function<double(const Ore&)>& number, double scatter_pp,
-                                        std::uint64_t seed) {
+                                        std::uint64_t seed, unsigned threads) {
   // Each draw on its own seed (the draw's, not the candidate's: every
   // candidate sees the same scatter), its result in its own place: the same
   // widths whatever the threads. A draw that keeps held parameters costs a
@@ -184,7 +184,8 @@ std::vector<RefitWidth> refitted_widths(const Ore& ore, const RealTests& real,
     for (std::size_t at; (at = next++) < nc * nd;) draw(at);
   };
   const std::size_t n_threads =
-      std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<std::size_t>(nc * nd, 1));
+      std::min<std::size_t>(threads > 0 ? threads : std::max(1u, std::thread::hardware_concurrency()),
+                            std::max<std::size_t>(nc * nd, 1));
   std::vector<std::thread> pool;
   try {
     for (std::size_t t = 1; t < n_threads; ++t) pool.emplace_back(worker);

@@ -89,12 +89,13 @@ RefitWidth refitted_width(const Ore& ore, const RealTests& real, const std::vect
                           double scatter_pp, std::uint64_t seed);
 
 // The same for several candidates at once, their draws shared out over
-// the machine's cores together (the result does not depend on how many).
+// `threads` threads together (0: the machine's cores; the result does not
+// depend on how many).
 std::vector<RefitWidth> refitted_widths(const Ore& ore, const RealTests& real,
                                         const std::vector<PlausibleTruth>& truths,
                                         const std::vector<TestInMill>& candidates,
                                         const std::function<double(const Ore&)>& number, double scatter_pp,
-                                        std::uint64_t seed);
+                                        std::uint64_t seed, unsigned threads = 0);
 
 // The q-quantile of values (0 ≤ q ≤ 1), linear between order statistics.
 double quantile(std::vector<double> values, double q);
