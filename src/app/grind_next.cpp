@@ -325,9 +325,10 @@ nlohmann::ordered_json next_json(const NextRanking& r) {
   j["value"] = r.value;
   j["interval_now"] = {end(r.now.lo), end(r.now.hi)};
   j["width_now"] = end(r.width_now);
-  j["method"] = "expected_width: the mean width over draws of a simulated candidate test (plausible truths of the "
-                "current 95 % region, Gaussian scatter as the fit's), each fitted with the real tests and its "
-                "interval taken as grind takes it; linear_width: the fit's information plus the candidate's "
+  j["method"] = "expected_width: the mean width over the converged draws of a simulated candidate test (plausible "
+                "truths along the profiles' and rays' directions, within each held parameter's own 95 % limit; "
+                "Gaussian scatter as the fit's), each fitted with the real tests and its interval taken as grind "
+                "takes it; linear_width: the fit's information plus the candidate's "
                 "J^T J / s^2 at the fitted ore's best point (docs/grinding-intervals.md)";
   j["draws"] = r.draws;
   j["seed"] = r.seed;
