@@ -41,7 +41,7 @@ struct GrindOptions {
   // (the linear ranking's first) are refitted.
   int next_draws = 8;                            // --next-draws N
   std::uint64_t next_seed = 1;                   // --next-seed S
-  int next_refit = 3;                            // --next-refit K (-1: every candidate)
+  int next_refit = 3;                            // --next-refit K (0 or more; -1, not from the command line: every candidate)
 };
 
 int cmd_grind(const GrindOptions& o);
