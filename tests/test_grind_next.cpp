@@ -410,7 +410,8 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
   const std::string grind = "grind " + run_dir.string() + " --ore " + fitted + " --bond 106 ";
   int status = 0;
   const std::string shown = run_binary(grind + "--next-test " + run_dir.string() + " --next-test " +
-                                           (dir.path / "mill2").string() + " --out " + (dir.path / "next").string(),
+                                           (dir.path / "mill2").string() + " --next-refit 2 --next-draws 3 --out " +
+                                           (dir.path / "next").string(),
                                        status);
   INFO(shown);
   REQUIRE(status == 0);
@@ -420,12 +421,33 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
   REQUIRE(nt["candidates"].size() == 6);  // two mills x the three default sets of times
   const auto wi_95 = j["bond"]["work_index_kWh_t_95"].get<std::vector<double>>();
   CHECK(nt["width_now"].get<double>() == Approx(wi_95[1] - wi_95[0]).epsilon(1e-9));
-  double last = 0;
-  for (const auto& c : nt["candidates"]) {
-    const double w = c["expected_width"].get<double>();
-    CHECK(w >= last);  // narrowest first
-    CHECK(w < nt["width_now"].get<double>());
-    last = w;
+  // The first two of the linear order refitted (3 draws each) and ranked
+  // first, narrowest refitted width first; the other four after them, by
+  // their linear width.
+  CHECK(nt["refitted"].get<int>() == 2);
+  CHECK(nt["draws"].get<int>() == 3);
+  double last = 0, last_linear = 0, worst_refitted_linear = 0;
+  for (std::size_t k = 0; k < nt["candidates"].size(); ++k) {
+    const auto& c = nt["candidates"][k];
+    const double linear = c["linear_width"].get<double>();
+    CHECK(linear < nt["width_now"].get<double>());
+    if (k < 2) {
+      REQUIRE(c["draws"].get<int>() == 3);
+      REQUIRE(c["draws_converged"].get<int>() == 3);
+      const double w = c["expected_width"].get<double>();
+      const auto range = c["expected_width_10_90"].get<std::vector<double>>();
+      CHECK(w >= last);  // narrowest first
+      CHECK(range[0] <= w);
+      CHECK(w <= range[1]);
+      last = w;
+      worst_refitted_linear = std::max(worst_refitted_linear, linear);
+    } else {
+      CHECK(c["expected_width"].is_null());
+      CHECK(c["draws"].is_null());
+      CHECK(linear >= last_linear);
+      CHECK(linear >= worst_refitted_linear);  // the linear ranking chose the two refitted
+      last_linear = linear;
+    }
   }
   // Each row's expected width against the one computed here from the
   // definitions (expected_by_hand), the product Bond's Wi in the first
@@ -455,13 +477,13 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
                           mill_holdup_kg(fo, r.porosity, r.filling, r.mill_volume)};
     const ByHand h = expected_by_hand(best_point(fo, fu), fu, fs_wi, cand);
     INFO(run << " " << c["times_min"].dump());
-    CHECK(c["expected_width"].get<double>() == Approx(h.hi - h.lo).epsilon(1e-3));
+    CHECK(c["linear_width"].get<double>() == Approx(h.hi - h.lo).epsilon(1e-3));
     by_hand.push_back(h.hi - h.lo);
     double& b = best_of[run == run_dir.string() ? 0 : 1];
     b = std::min(b, h.hi - h.lo);
   }
   REQUIRE(by_hand.size() == 6);
-  CHECK(std::is_sorted(by_hand.begin(), by_hand.end()));
+  CHECK(std::is_sorted(by_hand.begin() + 2, by_hand.end()));
   std::printf("next test through the command: Bond Wi width now %.4g; the narrowest expected %.4g in the 70 rpm mill, "
               "%.4g at 55 rpm\n",
               nt["width_now"].get<double>(), best_of[0], best_of[1]);
@@ -470,7 +492,9 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
   std::ifstream csv(dir.path / "next" / "next_test.csv");
   std::string line;
   std::getline(csv, line);
-  CHECK(line == "rank,run,times_min,expected_lo,expected_hi,expected_width,width_now,fixes_held");
+  CHECK(line ==
+        "rank,run,times_min,expected_width,width_p10,width_p90,draws_converged,draws,linear_lo,linear_hi,linear_width,"
+        "width_now,fixes_held");
   int rows = 0;
   while (std::getline(csv, line)) ++rows;
   CHECK(rows == 6);
@@ -493,4 +517,22 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
   refused("grind " + run_dir.string() + " --ore " + (fs::path(MC_ASSET_DIR) / "ores" / "example_spectrum.toml").string() + " --bond 106 --next-test " + run_dir.string(),
           "keeps no covariance");
   refused(grind + "--next-test " + run_dir.string() + " --next-for throughput", "--next-for throughput: ");
+  // The test the ore was fitted to changed since its fit: no refits, and
+  // the console and grind.json say why; the linear ranking still made.
+  {
+    mc::io::BatchTestFile tf;
+    tf.title = "synthetic, changed";
+    tf.test = synthetic_test(truth, 1.0, 99, mc::io::read_run(run_dir, true).spectrum, {1, 2, 4, 8, 16}, true);
+    std::ofstream(dir.path / "test.toml") << mc::io::batch_test_toml(tf);
+    const std::string said = run_binary(grind + "--next-test " + run_dir.string() + " --next-refit 1 --next-draws 2 " +
+                                            "--out " + (dir.path / "changed").string(),
+                                        status);
+    INFO(said);
+    REQUIRE(status == 0);
+    CHECK(said.find("note: no refits: the tests the ore was fitted to") != std::string::npos);
+    const nlohmann::json jc = nlohmann::json::parse(std::ifstream(dir.path / "changed" / "grind.json"));
+    CHECK(jc["next_test"]["refitted"].get<int>() == 0);
+    CHECK(jc["next_test"]["no_refits"].get<std::string>().find("a test or a run changed since") != std::string::npos);
+    CHECK(jc["next_test"]["candidates"].size() == 3);
+  }
 }

@@ -3,6 +3,7 @@
 // breakage parameters (docs/grinding.md).
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,12 @@ struct GrindOptions {
   std::vector<std::string> next_tests;           // --next-test RUN, once or more
   std::vector<std::vector<double>> next_times;   // --next-times MIN,..., once or more
   std::string next_for;                          // --next-for wi|throughput|p80:K
+  // The refits that size each candidate's expected width (next_refit.h):
+  // simulated tests per candidate, their seed, and how many candidates
+  // (the linear ranking's first) are refitted.
+  int next_draws = 8;                            // --next-draws N
+  std::uint64_t next_seed = 1;                   // --next-seed S
+  int next_refit = 3;                            // --next-refit K (0 or more; -1, not from the command line: every candidate)
 };
 
 int cmd_grind(const GrindOptions& o);

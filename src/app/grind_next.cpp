@@ -16,6 +16,7 @@
 #include "grind/next_test.h"
 #include "grind/pbm.h"
 #include "io/atomic_file.h"
+#include "io/batch_test_file.h"
 
 namespace mc::app {
 
@@ -34,6 +35,67 @@ std::string fixes_text(const std::vector<std::string>& f) {
   std::string s;
   for (const std::string& x : f) s += (s.empty() ? "" : " ") + x;
   return s;
+}
+
+// Split "a, b" (the [fitted] table's lists) at `sep`, each piece trimmed.
+std::vector<std::string> split(const std::string& text, char sep) {
+  std::vector<std::string> out;
+  for (std::size_t start = 0; start <= text.size();) {
+    std::size_t end = text.find(sep, start);
+    if (end == std::string::npos) end = text.size();
+    std::string item = text.substr(start, end - start);
+    item.erase(0, item.find_first_not_of(' '));
+    item.erase(item.find_last_not_of(' ') + 1);
+    if (!item.empty()) out.push_back(item);
+    start = end + 1;
+  }
+  return out;
+}
+
+// The user's tests, as the ore's [fitted] table names them (each test's
+// file and its run, relative to where --fit ran), read as --fit read them;
+// the parameters it fitted. Empty, with `why`, where they cannot be had.
+RealTests real_tests(const Ore& ore, std::string& why) {
+  RealTests r;
+  const ContactRecord& f = ore.fitted_under;
+  const std::vector<std::string> files = split(f.test, ','), runs = split(f.run, ',');
+  r.names = split(f.parameters, ',');
+  if (files.empty() || files.size() != runs.size() || r.names.empty()) {
+    why = "the ore's [fitted] table does not name its tests, their runs and parameters (test, run, parameters)";
+    return {};
+  }
+  try {
+    for (std::size_t k = 0; k < files.size(); ++k) {
+      const io::BatchTestFile t = io::read_batch_test(files[k]);
+      const io::Run run = io::read_run(runs[k], ore.model == RateModel::spectrum, ore.energy_basis);
+      const double holdup = t.test.holdup_kg > 0 ? t.test.holdup_kg
+                                                  : mill_holdup_kg(ore, run.porosity, run.filling, run.mill_volume);
+      r.tests.push_back({t.test, run.spectrum, run.power_W, holdup});
+    }
+    // The same tests as fitted, and in the same runs: the fitted ore's sum
+    // of squares on them is the one its fit kept (ssr_held, with held
+    // parameters), its rms residual the one kept (rms_residual_pp), each to
+    // its 10 digits. A test file edited or a run made again since would
+    // give the refits other data than the ore's covariance describes.
+    double ss_pp = 0, n = 0;  // each test alone: its residuals in pp as measured
+    for (const TestInMill& t : r.tests)
+      for (double x : weighted_residuals(ore, {t})) ss_pp += x * x, ++n;
+    const double ssr_kept = ore.fitted_under.covariance.ssr_fit, ssr_now = weighted_ssr(ore, r.tests);
+    const double rms_kept = f.rms_residual_pp, rms_now = n > 0 ? std::sqrt(ss_pp / n) : 0;
+    auto differs = [](double now, double kept) { return kept > 0 && !(std::fabs(now - kept) <= 1e-6 * kept + 1e-9); };
+    if (differs(ssr_now, ssr_kept) || differs(rms_now, rms_kept)) {
+      why = fmt::format("the tests the ore was fitted to ([fitted] test = \"{}\", run = \"{}\") are not as they "
+                        "were: the fitted ore's rms residual on them is {:.6g} pp here, {:.6g} at its fit "
+                        "(rms_residual_pp); a test or a run changed since: fit the ore again",
+                        f.test, f.run, rms_now, rms_kept);
+      return {};
+    }
+  } catch (const std::exception& e) {
+    why = "the tests the ore was fitted to cannot be read here ([fitted] test = \"" + f.test + "\": " + e.what() +
+          "; run grind where --fit ran)";
+    return {};
+  }
+  return r;
 }
 
 // An interval's end for a table: "" where it is open.
@@ -83,6 +145,10 @@ NextPlan plan_next(const GrindOptions& o, const Ore& ore) {
     p.holdup_kg.push_back(mill_holdup_kg(ore, r.porosity, r.filling, r.mill_volume));
     p.read.push_back(r);
   }
+  p.draws = o.next_draws;
+  p.refit = o.next_refit;
+  p.seed = o.next_seed;
+  p.real = real_tests(ore, p.refit_note);
   p.times = o.next_times.empty() ? std::vector<std::vector<double>>{{0.5, 1, 2, 4, 8}, {1, 2, 4, 8, 16}, {2, 4, 8, 16, 32}}
                                  : o.next_times;
   return p;
@@ -141,40 +207,112 @@ NextRanking rank_next(const NextPlan& plan, const Ore& ore, const NextTarget& ta
     throw std::invalid_argument("--next-test: the " + target.name +
                                 " has no interval at this ore (a held parameter's range reaches where the ore cannot "
                                 "make it): nothing to rank by");
+  std::vector<TestInMill> candidates;
   for (std::size_t m = 0; m < plan.runs.size(); ++m)
     for (const std::vector<double>& times : plan.times) {
       const TestInMill c{candidate_test(ore, times), plan.read[m].spectrum, plan.read[m].power_W, plan.holdup_kg[m]};
       const NextTestWidth w = expected_after(ore, u, s, c);
-      r.rows.push_back({plan.runs[m], times, w.expected, w.width, w.fixes});
+      NextRow row;
+      row.run = plan.runs[m];
+      row.times = times;
+      row.expected = w.expected;
+      row.width = w.width;
+      row.fixes = w.fixes;
+      r.rows.push_back(row);
+      candidates.push_back(c);
     }
-  std::stable_sort(r.rows.begin(), r.rows.end(), [](const NextRow& a, const NextRow& b) {
-    return std::isnan(b.width) ? !std::isnan(a.width) : a.width < b.width;
+  // The linear order picks which candidates are refitted.
+  std::vector<std::size_t> order(r.rows.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return std::isnan(r.rows[b].width) ? !std::isnan(r.rows[a].width) : r.rows[a].width < r.rows[b].width;
   });
+  r.draws = plan.draws;
+  r.seed = plan.seed;
+  r.refit_note = plan.refit != 0 ? plan.refit_note : "";  // --next-refit 0: none asked for
+  const auto t1 = std::chrono::steady_clock::now();
+  if (plan.refit_note.empty() && plan.refit != 0) {
+    // The same truths for every candidate, and the same scatter draws: the
+    // candidates differ by the test, not by the luck of the draw.
+    const std::vector<PlausibleTruth> truths = plausible_truths(ore, plan.real, plan.draws, plan.seed);
+    const double scatter_pp = std::sqrt(interval_variance(u));
+    std::vector<TestInMill> chosen;
+    for (std::size_t k = 0; k < order.size() && (plan.refit < 0 || static_cast<int>(k) < plan.refit); ++k)
+      chosen.push_back(candidates[order[k]]);
+    const std::vector<RefitWidth> widths =
+        refitted_widths(ore, plan.real, truths, chosen, number, scatter_pp, plan.seed);
+    for (std::size_t k = 0; k < widths.size(); ++k) {
+      NextRow& row = r.rows[order[k]];
+      row.refit = widths[k];
+      row.refitted = true;
+      ++r.refitted;
+    }
+  }
+  r.refit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+  auto key = [](const NextRow& a) {
+    return a.refitted && a.refit.converged > 0 ? std::make_pair(0, a.refit.mean)
+                                               : std::make_pair(std::isnan(a.width) ? 2 : 1, a.width);
+  };
+  std::vector<NextRow> ranked;
+  for (std::size_t k : order) ranked.push_back(r.rows[k]);
+  std::stable_sort(ranked.begin(), ranked.end(), [&](const NextRow& a, const NextRow& b) { return key(a) < key(b); });
+  r.rows = ranked;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }
 
+// The refitted width's cells: mean, "[p10, p90]", "converged/draws"; "-" where not refitted.
+struct RefitCells {
+  std::string mean, range, fits;
+};
+RefitCells refit_cells(const NextRow& w) {
+  if (!w.refitted) return {"-", "-", "-"};
+  const std::string fits = fmt::format("{}/{}", w.refit.converged, w.refit.draws);
+  if (w.refit.converged == 0) return {"none", "-", fits};
+  return {fmt::format("{:.3g}", w.refit.mean), fmt::format("[{:.3g}, {:.3g}]", w.refit.p10, w.refit.p90), fits};
+}
+
 void print_next(const NextRanking& r) {
-  std::printf("which test next, for the %s (%s): now %.4g%s, width %.3g; expected after one more test (the usual "
-              "13 sieves, scatter as the fit's):\n",
+  std::printf("which test next, for the %s (%s): now %.4g%s, width %.3g; expected width after one more test (the "
+              "usual 13 sieves, scatter as the fit's):\n",
               r.target.name.c_str(), r.target.unit.c_str(), r.value, bracket(r.now, 1, "{:.4g}").c_str(), r.width_now);
-  std::printf("  %4s  %-28s %-18s %14s  %-24s %s\n", "rank", "mill (run)", "times (min)", "expected width",
-              "expected interval", "fixes held");
+  std::printf("  %4s  %-28s %-18s %14s  %-20s %5s  %12s  %s\n", "rank", "mill (run)", "times (min)", "expected width",
+              "10-90 % of draws", "fits", "linear width", "fixes held");
   for (std::size_t k = 0; k < r.rows.size(); ++k) {
     const NextRow& w = r.rows[k];
-    std::printf("  %4zu  %-28s %-18s %14.3g  %-24s %s\n", k + 1, w.run.c_str(), times_text(w.times).c_str(), w.width,
-                bracket(w.expected, 1, "{:.4g}").c_str(), w.fixes.empty() ? "-" : fixes_text(w.fixes).c_str());
+    const RefitCells c = refit_cells(w);
+    std::printf("  %4zu  %-28s %-18s %14s  %-20s %5s  %12.3g  %s\n", k + 1, w.run.c_str(), times_text(w.times).c_str(),
+                c.mean.c_str(), c.range.c_str(), c.fits.c_str(), w.width,
+                w.fixes.empty() ? "-" : fixes_text(w.fixes).c_str());
   }
-  std::printf("  (linear, at the fitted ore: docs/grinding-intervals.md; %.2f s)\n", r.seconds);
+  if (r.refitted > 0)
+    std::printf("  (expected width: the mean over %d simulated tests per candidate, each fitted with yours, seed %llu; "
+                "linear width: at the fitted ore's best point; docs/grinding-intervals.md; %.2f s, %.2f s of it "
+                "refits)\n",
+                r.draws, static_cast<unsigned long long>(r.seed), r.seconds, r.refit_seconds);
+  else
+    std::printf("  (linear, at the fitted ore's best point: docs/grinding-intervals.md; %.2f s)\n", r.seconds);
+  for (const NextRow& w : r.rows)
+    if (w.refitted && w.refit.converged < w.refit.draws)
+      std::printf("  note: %s %s: %d of %d draws gave no width (%s%s)\n", w.run.c_str(), times_text(w.times).c_str(),
+                  w.refit.draws - w.refit.converged, w.refit.draws, w.refit.failures.front().c_str(),
+                  w.refit.failures.size() > 1 ? "; the rest in grind.json" : "");
+  if (!r.refit_note.empty())
+    std::printf("  note: no refits: %s; the ranking is the linear one\n", r.refit_note.c_str());
 }
 
 void write_next_csv(const fs::path& out, const NextRanking& r) {
-  std::string csv = "rank,run,times_min,expected_lo,expected_hi,expected_width,width_now,fixes_held\n";
+  std::string csv =
+      "rank,run,times_min,expected_width,width_p10,width_p90,draws_converged,draws,linear_lo,linear_hi,linear_width,"
+      "width_now,fixes_held\n";
   for (std::size_t k = 0; k < r.rows.size(); ++k) {
     const NextRow& w = r.rows[k];
-    csv += fmt::format("{},\"{}\",\"{}\",{},{},{},{:.6g},\"{}\"\n", k + 1, w.run, times_text(w.times),
-                       end_text(w.expected.lo), end_text(w.expected.hi), end_text(w.width), r.width_now,
-                       fixes_text(w.fixes));
+    const bool any = w.refitted && w.refit.converged > 0;
+    csv += fmt::format("{},\"{}\",\"{}\",{},{},{},{},{},{},{},{},{:.6g},\"{}\"\n", k + 1, w.run, times_text(w.times),
+                       any ? end_text(w.refit.mean) : "", any ? end_text(w.refit.p10) : "",
+                       any ? end_text(w.refit.p90) : "", w.refitted ? std::to_string(w.refit.converged) : "",
+                       w.refitted ? std::to_string(w.refit.draws) : "", end_text(w.expected.lo),
+                       end_text(w.expected.hi), end_text(w.width), r.width_now, fixes_text(w.fixes));
   }
   io::write_file_atomic(out / "next_test.csv", csv);
 }
@@ -187,15 +325,32 @@ nlohmann::ordered_json next_json(const NextRanking& r) {
   j["value"] = r.value;
   j["interval_now"] = {end(r.now.lo), end(r.now.hi)};
   j["width_now"] = end(r.width_now);
-  j["method"] = "linear: the fit's information plus the candidate's J^T J / s^2 at the fitted ore "
-                "(docs/grinding-intervals.md)";
+  j["method"] = "expected_width: the mean width over the converged draws of a simulated candidate test (plausible "
+                "truths along the profiles' and rays' directions, within each held parameter's own 95 % limit; "
+                "Gaussian scatter as the fit's), each fitted with the real tests and its interval taken as grind "
+                "takes it; linear_width: the fit's information plus the candidate's "
+                "J^T J / s^2 at the fitted ore's best point (docs/grinding-intervals.md)";
+  j["draws"] = r.draws;
+  j["seed"] = r.seed;
+  j["refitted"] = r.refitted;
+  if (!r.refit_note.empty()) j["no_refits"] = r.refit_note;
+  j["seconds"] = r.seconds;
+  j["refit_seconds"] = r.refit_seconds;
   j["candidates"] = nlohmann::json::array();
-  for (const NextRow& w : r.rows)
-    j["candidates"].push_back({{"run", w.run},
-                               {"times_min", w.times},
-                               {"expected_interval", {end(w.expected.lo), end(w.expected.hi)}},
-                               {"expected_width", end(w.width)},
-                               {"fixes_held", w.fixes}});
+  for (const NextRow& w : r.rows) {
+    const bool any = w.refitted && w.refit.converged > 0;
+    nlohmann::ordered_json c = {{"run", w.run}, {"times_min", w.times}};
+    c["expected_width"] = any ? end(w.refit.mean) : nlohmann::json();
+    c["expected_width_10_90"] = any ? nlohmann::json{end(w.refit.p10), end(w.refit.p90)} : nlohmann::json();
+    c["draws_converged"] = w.refitted ? nlohmann::json(w.refit.converged) : nlohmann::json();
+    c["draws"] = w.refitted ? nlohmann::json(w.refit.draws) : nlohmann::json();
+    c["draw_widths"] = w.refit.widths;
+    c["draw_failures"] = w.refit.failures;
+    c["linear_width"] = end(w.width);
+    c["linear_interval"] = {end(w.expected.lo), end(w.expected.hi)};
+    c["fixes_held"] = w.fixes;
+    j["candidates"].push_back(c);
+  }
   return j;
 }
 

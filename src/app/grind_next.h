@@ -1,6 +1,7 @@
 // `grind RUN --ore FITTED --next-test RUN2 ...`: which batch test to run
-// next (src/grind/next_test.h; docs/grinding-intervals.md, "Which test to
-// run next"). The candidates are checked before anything is computed; the
+// next (src/grind/next_test.h, the linear width; src/grind/next_refit.h,
+// the refits that size it; docs/grinding-intervals.md, "Which test to run
+// next"). The candidates are checked before anything is computed; the
 // ranking is computed before anything is written.
 #pragma once
 
@@ -13,6 +14,7 @@
 #include "app/grind.h"
 #include "app/grind_interval.h"
 #include "grind/interval.h"
+#include "grind/next_refit.h"
 #include "grind/ore.h"
 #include "io/run_folder.h"
 
@@ -26,6 +28,12 @@ struct NextPlan {
   std::vector<io::Run> read;
   std::vector<double> holdup_kg;
   std::vector<std::vector<double>> times;
+  // The user's tests as the ore's [fitted] table names them (test, run,
+  // parameters), for the refits; `refit_note` says why there are none.
+  grind::RealTests real;
+  std::string refit_note;
+  int draws = 8, refit = 3;
+  std::uint64_t seed = 1;
 };
 // Throws std::invalid_argument, naming the option and the run, for a
 // candidate that is not a run folder, lacks the normal energy spectrum or
@@ -45,20 +53,29 @@ NextTarget next_target(const GrindOptions& o, const GrindNumbers& made);
 struct NextRow {
   std::string run;
   std::vector<double> times;
-  grind::Interval expected;
-  double width = 0;
+  grind::Interval expected;  // the linear expectation (next_test.h), centred where the interval now is
+  double width = 0;          // its width: the linear width
   std::vector<std::string> fixes;
+  bool refitted = false;     // the refits' expected width (below) was computed
+  grind::RefitWidth refit;
 };
 struct NextRanking {
   NextTarget target;
   double value = 0;
   grind::Interval now;
   double width_now = 0;
-  std::vector<NextRow> rows;  // narrowest expected first
-  double seconds = 0;
+  // The refitted candidates first, narrowest mean refitted width first;
+  // then the rest by their linear width.
+  std::vector<NextRow> rows;
+  int draws = 0, refitted = 0;  // draws per refitted candidate; candidates refitted
+  std::uint64_t seed = 1;
+  std::string refit_note;       // why no candidate was refitted ("": some were)
+  double seconds = 0, refit_seconds = 0;
 };
-// Every candidate (run x times) ranked by the expected width of the
-// target's interval; `number` makes the target's value for an ore.
+// Every candidate (run x times): the linear expected width of the
+// target's interval, then, for the first plan.refit of that order (all:
+// -1), the refitted one (next_refit.h); ranked by it. `number` makes the
+// target's value for an ore.
 NextRanking rank_next(const NextPlan& plan, const grind::Ore& ore, const NextTarget& target,
                       const GrindIntervals& ci, const GrindNumbers& made,
                       const std::function<double(const grind::Ore&)>& number);

@@ -20,6 +20,7 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -260,6 +261,15 @@ int main(int argc, char** argv) {
                     "with --next-test: the product to narrow: wi (Bond's work index, with --bond), throughput (with "
                     "--target-p80) or p80:K (the K-th product's P80); default wi, else throughput, else p80:1")
       ->type_name("WHAT");
+  std::string next_draws, next_seed, next_refit;
+  grind->add_option("--next-draws", next_draws,
+                    "with --next-test: simulated tests refitted per candidate to size its expected width (default 8)")
+      ->type_name("N");
+  grind->add_option("--next-seed", next_seed, "with --next-test: the seed of those draws (default 1)")->type_name("S");
+  grind->add_option("--next-refit", next_refit,
+                    "with --next-test: refit only the first K candidates of the linear ranking (default 3; 0: "
+                    "the linear ranking alone)")
+      ->type_name("K");
   grind->add_option("--out", go.out, "folder for the results (default RUN/grind, RUN/fit for a fit)");
   grind->add_flag("--quiet", go.quiet, "no summary lines");
 
@@ -312,6 +322,28 @@ int main(int argc, char** argv) {
         }
         go.next_times.push_back(ts);
       }
+      // A whole number >= least, or one message naming the option.
+      auto whole = [](const char* option, const std::string& text, long long least, const char* what) {
+        char* stop = nullptr;
+        errno = 0;
+        const long long v = std::strtoll(text.c_str(), &stop, 10);
+        if (text.empty() || *stop != '\0' || v < least)
+          throw std::invalid_argument(std::string(option) + " " + text + ": expected " + what);
+        if (errno == ERANGE || v > 1000000000LL)
+          throw std::invalid_argument(std::string(option) + " " + text + ": expected " + what + ", at most 1000000000");
+        return v;
+      };
+      for (const auto& [option, text] : {std::pair<const char*, const std::string*>{"--next-draws", &next_draws},
+                                         {"--next-seed", &next_seed},
+                                         {"--next-refit", &next_refit}})
+        if (!text->empty() && go.next_tests.empty())
+          throw std::invalid_argument(std::string(option) + ": the refits of a next test; give --next-test RUN");
+      if (!next_draws.empty())
+        go.next_draws = static_cast<int>(whole("--next-draws", next_draws, 1, "a whole number of draws, 1 or more"));
+      if (!next_seed.empty())
+        go.next_seed = static_cast<std::uint64_t>(whole("--next-seed", next_seed, 0, "a whole number, 0 or more"));
+      if (!next_refit.empty())
+        go.next_refit = static_cast<int>(whole("--next-refit", next_refit, 0, "a whole number of candidates, 0 or more"));
       if (fit_params_opt->count() > 0 && fit_params.empty())
         throw std::invalid_argument("--fit-params \"\": names no parameter; name one or more (e.g. --fit-params "
                                     "efficiency), or leave the option out for the rate model's scale");
