@@ -126,6 +126,16 @@ TEST_CASE("the hours to a relining height: linear between stages, the height's e
   CHECK(x.hours == Approx(2000 + 2000 * 2.0 / 3).epsilon(1e-12));
   CHECK(x.se == Approx(std::sqrt(0.09 + 4.0 / 9 * (0.25 - 0.09)) / (3.0 / 2000)).epsilon(1e-9));
   CHECK(x.se == Approx(267.6).epsilon(1e-3));
+  // On a stage: the crossing's own error over the fall into it, by hand
+  // 0.3 mm over 3 mm per 2000 h.
+  const app::Crossing on = app::hours_to_height(hours, height, se, 22);
+  CHECK(on.hours == Approx(2000).epsilon(1e-12));
+  CHECK(on.se == Approx(200).epsilon(1e-9));
+  // A study stopped by its own --until-height 20 ends within 0.05 mm above
+  // it: there, with the tolerance; not reached without.
+  const std::vector<double> stopped = {25, 22, 20.03};
+  CHECK(app::hours_to_height(hours, stopped, se, 20, 0.05).hours == Approx(4000).epsilon(1e-12));
+  CHECK(std::isnan(app::hours_to_height(hours, stopped, se, 20).hours));
   // Not reached, reached at the start, and a path without errors.
   CHECK(std::isnan(app::hours_to_height(hours, height, se, 18).hours));
   CHECK(app::hours_to_height(hours, height, se, 26).hours == 0);
@@ -224,10 +234,22 @@ stages = 2
   write_text(work / "life.toml", head + "hours = 9000\n" + axes);
   const Outcome changed = run_binary("sweep run '" + (work / "life.toml").string() + "' --local --out '" + dir.string() + "'", work);
   CHECK(changed.status == 2);
-  CHECK_THAT(changed.err, Catch::Contains("face_angle=10: holds a life study of another case or options than the "
-                                          "sweep's case 0 (lifters.profile.0.face_angle=10): hours"));
+  CHECK_THAT(changed.err, Catch::Contains("face_angle=10: not the study of the sweep's case 0 "
+                                          "(lifters.profile.0.face_angle=10): hours"));
   CHECK_THAT(changed.err, Catch::Contains("2 case folders hold other studies"));
   CHECK(read_text(s10 / "life.json") == before);
+
+  // A case folder that holds something else (a run's summary) and no
+  // study: refused before anything runs.
+  write_text(work / "life.toml", head + "hours = 8000\n" + axes);
+  fs::remove_all(s30);
+  fs::create_directories(s30);
+  write_text(s30 / "summary.json", "{}");
+  const Outcome stale = run_binary("sweep run '" + (work / "life.toml").string() + "' --local --out '" + dir.string() + "'", work);
+  CHECK(stale.status == 2);
+  CHECK_THAT(stale.err, Catch::Contains("face_angle=30: not the study of the sweep's case 1 "
+                                        "(lifters.profile.0.face_angle=30): it holds summary.json and no life study"));
+  CHECK(!fs::exists(s30 / "life.json"));
 
   // The relining height is a life sweep's.
   fs::create_directories(work / "runs_sweep");

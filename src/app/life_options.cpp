@@ -90,8 +90,10 @@ LifeOptions life_options_from(const std::vector<std::string>& args) {
   for (const std::string& a : args) {
     const std::string name = a.substr(2, a.find('=') - 2);
     if (kSweepSets.count(name))
-      throw std::invalid_argument("life." + name + ": the sweep sets --" + name +
-                                  " itself (each study's folder is its case's, cases/NAME)");
+      throw std::invalid_argument("life." + name + ": " +
+                                  (name == "out" ? std::string("the sweep gives each study its case's folder, cases/NAME")
+                                                 : "--" + name + " is not for a sweep's studies (a study resumes "
+                                                   "itself; its runs' progress goes to run.log)"));
     if (std::find(names.begin(), names.end(), name) == names.end())
       throw std::invalid_argument("life." + name + ": not an option of millcharge life (its options: " + list + ")");
   }

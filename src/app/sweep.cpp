@@ -147,7 +147,7 @@ Checked check_all(io::Sweep s) {
     auto known = [&](const std::string& key, const std::string& where) {
       if (std::find(names.begin(), names.end(), key) == names.end())
         throw io::SweepError(where + ": not an option of millcharge life that a sweep can give (those: " + list +
-                             "; the sweep sets --out, --force and --quiet itself)");
+                             "; --out is the sweep's, each study's folder its case's; --force and --quiet are not for a sweep's studies)");
     };
     for (const io::SweepLifeOption& o : s.life)
       known(o.key, s.file.string() + ":" + std::to_string(o.line) + ": life." + o.key);
@@ -414,8 +414,8 @@ int cmd_sweep_run(const SweepRunOptions& o) {
       const std::string differs = life_study_difference(dir, k.checks[i].request);
       if (differs.empty()) continue;
       ++mismatched;
-      std::cerr << "millcharge: " << dir.string() << ": holds a life study of another case or options than the "
-                << "sweep's case " << i << " (" << io::case_label(s, k.cases[i]) << "): " << differs << '\n';
+      std::cerr << "millcharge: " << dir.string() << ": not the study of the sweep's case " << i << " ("
+                << io::case_label(s, k.cases[i]) << "): " << differs << '\n';
       continue;
     }
     std::ifstream in(dir / "case.toml");

@@ -25,7 +25,17 @@ using json = nlohmann::ordered_json;
 std::string life_study_difference(const fs::path& case_dir, const nlohmann::json& request) {
   const fs::path file = case_dir / "life.json";
   std::ifstream in(file, std::ios::binary);
-  if (!in) return "";
+  if (!in) {
+    // No study yet: an empty folder, or one a sweep began (its log), and
+    // nothing else.
+    std::error_code ec;
+    for (const fs::directory_entry& e : fs::directory_iterator(case_dir, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name != "run.log" && name != "exit_status" && name != "exit_status.tmp")
+        return "it holds " + name + " and no life study (life.json): a run's folder, or another sweep's";
+    }
+    return "";
+  }
   const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   const std::string fault = io::json_text_fault(text);
   if (!fault.empty()) return "its life.json does not read: " + fault;
@@ -36,18 +46,19 @@ std::string life_study_difference(const fs::path& case_dir, const nlohmann::json
 }
 
 Crossing hours_to_height(const std::vector<double>& hours, const std::vector<double>& height,
-                         const std::vector<double>& se, double relining_mm) {
+                         const std::vector<double>& se, double relining_mm, double tolerance_mm) {
   Crossing c;
   const std::size_t n = std::min(hours.size(), height.size());
   if (n == 0 || !(relining_mm > 0)) return c;
   auto se_at = [&](std::size_t i) { return i < se.size() ? se[i] : NAN; };
-  if (height[0] <= relining_mm) {
+  const double at = relining_mm + tolerance_mm;
+  if (height[0] <= at) {
     c.hours = hours[0];
     return c;
   }
   for (std::size_t i = 1; i < n; ++i) {
-    if (!(height[i] <= relining_mm)) continue;
-    const double t = (height[i - 1] - relining_mm) / (height[i - 1] - height[i]);
+    if (!(height[i] <= at)) continue;
+    const double t = std::min(1.0, (height[i - 1] - relining_mm) / (height[i - 1] - height[i]));
     c.hours = hours[i - 1] + t * (hours[i] - hours[i - 1]);
     // The height's standard error there, as life-compare interpolates it
     // (a stage's error grows over its hours), over the path's fall per hour.
@@ -91,13 +102,33 @@ std::vector<double> power_sem(const fs::path& folder) {
   return out;
 }
 
-std::string stopped_text(const fs::path& folder) {
+// The study's life.json (an empty object where it does not read).
+nlohmann::json life_json(const fs::path& folder) {
   std::ifstream in(folder / "life.json", std::ios::binary);
   const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (!in.eof() && !in) return "";
-  if (!io::json_text_fault(text).empty()) return "";
+  if (!in.eof() && !in) return nlohmann::json::object();
+  if (!io::json_text_fault(text).empty()) return nlohmann::json::object();
   const nlohmann::json j = nlohmann::json::parse(text);
-  return j.is_object() && j.contains("stopped") && j["stopped"].is_string() ? j["stopped"].get<std::string>() : "";
+  return j.is_object() ? j : nlohmann::json::object();
+}
+
+std::string stopped_text(const nlohmann::json& j) {
+  return j.contains("stopped") && j["stopped"].is_string() ? j["stopped"].get<std::string>() : "";
+}
+
+// The lifter profile the study follows, as `millcharge life` does: the
+// tallest of the new liner's (life.csv's stage 0); 0 for a mesh liner's.
+int tallest_profile(const fs::path& folder) {
+  const io::CsvTable t = io::read_csv_strict(folder / "life.csv");
+  const int c_stage = t.column("stage"), c_profile = t.column("profile"), c_height = t.column("height_mm");
+  int best = 0;
+  double top = -1;
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    if (t.rows[r][c_profile].empty() || t.number(r, c_stage) != 0) continue;
+    const double h = t.number(r, c_height);
+    if (h > top) top = h, best = static_cast<int>(t.number(r, c_profile));
+  }
+  return best;
 }
 
 std::string value_text(const json& v, const char* fmt = "%g") {
@@ -158,13 +189,14 @@ LifeSweep collect_life_table(const fs::path& sweep_dir, const nlohmann::json& ca
     std::error_code ec;
     if (fs::exists(folder / "life.csv", ec)) {
       try {
-        const life::StudyPath p = life::read_study_path(folder, path.label, 0);
+        const life::StudyPath p = life::read_study_path(folder, path.label, tallest_profile(folder));
+        const nlohmann::json state = life_json(folder);
         const std::vector<double> sem = power_sem(folder);
         const std::size_t last = p.hours.size() - 1;
         row["stages"] = static_cast<double>(last);
         row["hours.end"] = p.hours[last];
         row["wear_basis"] = p.basis;
-        row["stopped"] = stopped_text(folder);
+        row["stopped"] = stopped_text(state);
         for (const Figure& f : kFigures) {
           row[std::string(f.column) + ".new"] = number(p.value[f.index][0]);
           row[std::string(f.column) + ".end"] = number(p.value[f.index][last]);
@@ -173,7 +205,14 @@ LifeSweep collect_life_table(const fs::path& sweep_dir, const nlohmann::json& ca
           if (f.index == 5) row["power_W.new_se"] = number(sem.empty() ? NAN : sem[0]);
         }
         if (out.relining_mm > 0) {
-          const Crossing x = hours_to_height(p.hours, p.value[1], p.se[1], out.relining_mm);
+          // A study stopped by its own --until-height at this height ends
+          // within 0.05 mm above it (app/life.cpp).
+          double until = 0;
+          if (state.contains("request") && state["request"].is_object() && state["request"].contains("until_height_mm") &&
+              state["request"]["until_height_mm"].is_number())
+            until = state["request"]["until_height_mm"].get<double>();
+          const Crossing x = hours_to_height(p.hours, p.value[1], p.se[1], out.relining_mm,
+                                             until > 0 && std::abs(until - out.relining_mm) < 1e-9 ? 0.05 : 0.0);
           row["hours_to_relining"] = number(x.hours);
           row["hours_to_relining_se"] = number(x.se);
         }
@@ -246,7 +285,10 @@ int collect_life_sweep(const fs::path& dir, const nlohmann::json& cases, double 
   for (const char* h : {"status", "stages", "hours", "height_mm", "leading_deg", "power_W new", "end",
                         "impact_deg new", "end"})
     rows[0].push_back(h);
-  if (s.relining_mm > 0) rows[0].push_back(fmt::format("hours to {:g} mm", s.relining_mm));
+  bool relative = false;
+  for (const json& r : t.rows) relative = relative || (r["wear_basis"].is_string() && r["wear_basis"] == "relative");
+  if (s.relining_mm > 0)
+    rows[0].push_back(fmt::format("{}hours to {:g} mm", relative ? "relative " : "", s.relining_mm));
   rows[0].push_back("error");
   for (const json& r : t.rows) {
     std::vector<std::string> line;

@@ -20,14 +20,16 @@ namespace mc::app {
 // study yet or the same one.
 std::string life_study_difference(const std::filesystem::path& case_dir, const nlohmann::json& request);
 
-// The hours at which a path of heights falls to `height` (linear between
-// stages) and their standard error, the height's error there over the
-// path's slope. NaN where the path stays above it. `se` may be empty.
+// The hours at which a path of heights falls to `relining_mm` (linear
+// between stages; a height within `tolerance_mm` above it counts as
+// there: a study stopped by its own --until-height ends that close) and
+// their standard error, the height's error there over the path's fall
+// per hour. NaN where the path stays above it. `se` may be empty.
 struct Crossing {
   double hours = NAN, se = NAN;
 };
 Crossing hours_to_height(const std::vector<double>& hours, const std::vector<double>& height,
-                         const std::vector<double>& se, double relining_mm);
+                         const std::vector<double>& se, double relining_mm, double tolerance_mm = 0);
 
 // The table of a life sweep: a row per case with its axes, status, and its
 // study's figures at the new liner (`.new`) and at the study's end
