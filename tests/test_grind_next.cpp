@@ -433,16 +433,21 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
     CHECK(linear < nt["width_now"].get<double>());
     if (k < 2) {
       REQUIRE(c["draws"].get<int>() == 3);
-      REQUIRE(c["draws_converged"].get<int>() == 3);
-      const double w = c["expected_width"].get<double>();
-      const auto range = c["expected_width_10_90"].get<std::vector<double>>();
-      CHECK(w >= last);  // narrowest first
-      CHECK(range[0] <= w);
-      CHECK(w <= range[1]);
+      // A draw with no width counts as infinitely wide: "inf" in the JSON.
+      auto width = [](const nlohmann::json& v) { return v.is_string() ? HUGE_VAL : v.get<double>(); };
+      const double w = width(c["median_width"]);
+      const double lo = width(c["width_10_90"][0]), hi = width(c["width_10_90"][1]);
+      CHECK(w >= last);  // narrowest median first
+      CHECK(lo <= w);
+      CHECK(w <= hi);
+      const double wide = c["wide_share"].get<double>();
+      CHECK(wide >= (3 - c["draws_converged"].get<int>()) / 3.0 - 1e-12);  // a draw with no width is wide
+      CHECK(wide <= 1);
       last = w;
       worst_refitted_linear = std::max(worst_refitted_linear, linear);
     } else {
-      CHECK(c["expected_width"].is_null());
+      CHECK(c["median_width"].is_null());
+      CHECK(c["wide_share"].is_null());
       CHECK(c["draws"].is_null());
       CHECK(linear >= last_linear);
       CHECK(linear >= worst_refitted_linear);  // the linear ranking chose the two refitted
@@ -493,8 +498,8 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
   std::string line;
   std::getline(csv, line);
   CHECK(line ==
-        "rank,run,times_min,expected_width,width_p10,width_p90,draws_converged,draws,linear_lo,linear_hi,linear_width,"
-        "width_now,fixes_held");
+        "rank,run,times_min,median_width,width_p10,width_p90,wide_share,mean_width_finite,draws_converged,draws,"
+        "linear_lo,linear_hi,linear_width,width_now,fixes_held");
   int rows = 0;
   while (std::getline(csv, line)) ++rows;
   CHECK(rows == 6);

@@ -241,54 +241,65 @@ NextRanking rank_next(const NextPlan& plan, const Ore& ore, const NextTarget& ta
       chosen.push_back(candidates[order[k]]);
     const std::vector<RefitWidth> widths =
         refitted_widths(ore, plan.real, truths, chosen, number, scatter_pp, plan.seed);
+    r.held_still = held_without_edges(ore);
     for (std::size_t k = 0; k < widths.size(); ++k) {
       NextRow& row = r.rows[order[k]];
-      row.refit = widths[k];
+      // The same figures, the wide share against the interval now.
+      row.refit = summarise_draws(widths[k].per_draw, widths[k].failures, r.width_now);
       row.refitted = true;
       ++r.refitted;
     }
   }
   r.refit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-  auto key = [](const NextRow& a) {
-    return a.refitted && a.refit.converged > 0 ? std::make_pair(0, a.refit.mean)
-                                               : std::make_pair(std::isnan(a.width) ? 2 : 1, a.width);
-  };
+  // The refitted first, by their draws (a candidate whose draws all failed
+  // among them, last: it was refitted and gave nothing); then the linear.
+  auto group = [](const NextRow& a) { return a.refitted ? 0 : std::isnan(a.width) ? 2 : 1; };
   std::vector<NextRow> ranked;
   for (std::size_t k : order) ranked.push_back(r.rows[k]);
-  std::stable_sort(ranked.begin(), ranked.end(), [&](const NextRow& a, const NextRow& b) { return key(a) < key(b); });
+  std::stable_sort(ranked.begin(), ranked.end(), [&](const NextRow& a, const NextRow& b) {
+    if (group(a) != group(b)) return group(a) < group(b);
+    if (group(a) == 0) return ranks_before(a.refit, b.refit);
+    return group(a) == 1 && a.width < b.width;
+  });
   r.rows = ranked;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }
 
-// The refitted width's cells: mean, "[p10, p90]", "converged/draws"; "-" where not refitted.
+// A width for a table: "inf" where a draw gave none.
+std::string width_text(double v) { return std::isinf(v) ? "inf" : fmt::format("{:.3g}", v); }
+
+// The refitted width's cells: median, "[p10, p90]", wide share, mean of
+// the finite, "converged/draws"; "-" where not refitted.
 struct RefitCells {
-  std::string mean, range, fits;
+  std::string median, range, wide, mean, fits;
 };
 RefitCells refit_cells(const NextRow& w) {
-  if (!w.refitted) return {"-", "-", "-"};
-  const std::string fits = fmt::format("{}/{}", w.refit.converged, w.refit.draws);
-  if (w.refit.converged == 0) return {"none", "-", fits};
-  return {fmt::format("{:.3g}", w.refit.mean), fmt::format("[{:.3g}, {:.3g}]", w.refit.p10, w.refit.p90), fits};
+  if (!w.refitted) return {"-", "-", "-", "-", "-"};
+  const RefitWidth& f = w.refit;
+  return {width_text(f.median), fmt::format("[{}, {}]", width_text(f.p10), width_text(f.p90)),
+          fmt::format("{:.0f} %", 100 * f.wide), f.converged > 0 ? width_text(f.mean) : "none",
+          fmt::format("{}/{}", f.converged, f.draws)};
 }
 
 void print_next(const NextRanking& r) {
   std::printf("which test next, for the %s (%s): now %.4g%s, width %.3g; expected width after one more test (the "
               "usual 13 sieves, scatter as the fit's):\n",
               r.target.name.c_str(), r.target.unit.c_str(), r.value, bracket(r.now, 1, "{:.4g}").c_str(), r.width_now);
-  std::printf("  %4s  %-28s %-18s %14s  %-20s %5s  %12s  %s\n", "rank", "mill (run)", "times (min)", "expected width",
-              "10-90 % of draws", "fits", "linear width", "fixes held");
+  std::printf("  %4s  %-28s %-18s %12s  %-20s %5s  %10s %5s  %12s  %s\n", "rank", "mill (run)", "times (min)",
+              "median width", "10-90 % of draws", "wide", "mean (fin)", "fits", "linear width", "fixes held");
   for (std::size_t k = 0; k < r.rows.size(); ++k) {
     const NextRow& w = r.rows[k];
     const RefitCells c = refit_cells(w);
-    std::printf("  %4zu  %-28s %-18s %14s  %-20s %5s  %12.3g  %s\n", k + 1, w.run.c_str(), times_text(w.times).c_str(),
-                c.mean.c_str(), c.range.c_str(), c.fits.c_str(), w.width,
-                w.fixes.empty() ? "-" : fixes_text(w.fixes).c_str());
+    std::printf("  %4zu  %-28s %-18s %12s  %-20s %5s  %10s %5s  %12.3g  %s\n", k + 1, w.run.c_str(),
+                times_text(w.times).c_str(), c.median.c_str(), c.range.c_str(), c.wide.c_str(), c.mean.c_str(),
+                c.fits.c_str(), w.width, w.fixes.empty() ? "-" : fixes_text(w.fixes).c_str());
   }
   if (r.refitted > 0)
-    std::printf("  (expected width: the mean over %d simulated tests per candidate, each fitted with yours, seed %llu; "
-                "linear width: at the fitted ore's best point; docs/grinding-intervals.md; %.2f s, %.2f s of it "
-                "refits)\n",
+    std::printf("  (median width: over %d simulated tests per candidate, each fitted with yours, a draw with no "
+                "width counted as infinitely wide; wide: the share of draws wider than the interval now or with no "
+                "width; mean (fin): over the draws with a width; seed %llu; linear width: at the fitted ore's best "
+                "point; docs/grinding-intervals.md; %.2f s, %.2f s of it refits)\n",
                 r.draws, static_cast<unsigned long long>(r.seed), r.seconds, r.refit_seconds);
   else
     std::printf("  (linear, at the fitted ore's best point: docs/grinding-intervals.md; %.2f s)\n", r.seconds);
@@ -297,20 +308,27 @@ void print_next(const NextRanking& r) {
       std::printf("  note: %s %s: %d of %d draws gave no width (%s%s)\n", w.run.c_str(), times_text(w.times).c_str(),
                   w.refit.draws - w.refit.converged, w.refit.draws, w.refit.failures.front().c_str(),
                   w.refit.failures.size() > 1 ? "; the rest in grind.json" : "");
+  if (!r.held_still.empty())
+    std::printf("  note: the truths keep %s where the fit holds %s: the ore keeps no edge point that moves %s\n",
+                fixes_text(r.held_still).c_str(), r.held_still.size() > 1 ? "them" : "it",
+                r.held_still.size() > 1 ? "them" : "it");
   if (!r.refit_note.empty())
     std::printf("  note: no refits: %s; the ranking is the linear one\n", r.refit_note.c_str());
 }
 
 void write_next_csv(const fs::path& out, const NextRanking& r) {
+  // inf: a median or percentile that a draw with no width reaches.
+  auto cell = [](double v) { return std::isinf(v) ? std::string("inf") : end_text(v); };
   std::string csv =
-      "rank,run,times_min,expected_width,width_p10,width_p90,draws_converged,draws,linear_lo,linear_hi,linear_width,"
-      "width_now,fixes_held\n";
+      "rank,run,times_min,median_width,width_p10,width_p90,wide_share,mean_width_finite,draws_converged,draws,"
+      "linear_lo,linear_hi,linear_width,width_now,fixes_held\n";
   for (std::size_t k = 0; k < r.rows.size(); ++k) {
     const NextRow& w = r.rows[k];
-    const bool any = w.refitted && w.refit.converged > 0;
-    csv += fmt::format("{},\"{}\",\"{}\",{},{},{},{},{},{},{},{},{:.6g},\"{}\"\n", k + 1, w.run, times_text(w.times),
-                       any ? end_text(w.refit.mean) : "", any ? end_text(w.refit.p10) : "",
-                       any ? end_text(w.refit.p90) : "", w.refitted ? std::to_string(w.refit.converged) : "",
+    const bool any = w.refitted && w.refit.draws > 0;
+    csv += fmt::format("{},\"{}\",\"{}\",{},{},{},{},{},{},{},{},{},{},{:.6g},\"{}\"\n", k + 1, w.run,
+                       times_text(w.times), any ? cell(w.refit.median) : "", any ? cell(w.refit.p10) : "",
+                       any ? cell(w.refit.p90) : "", any ? fmt::format("{:.6g}", w.refit.wide) : "",
+                       any ? end_text(w.refit.mean) : "", w.refitted ? std::to_string(w.refit.converged) : "",
                        w.refitted ? std::to_string(w.refit.draws) : "", end_text(w.expected.lo),
                        end_text(w.expected.hi), end_text(w.width), r.width_now, fixes_text(w.fixes));
   }
@@ -325,23 +343,31 @@ nlohmann::ordered_json next_json(const NextRanking& r) {
   j["value"] = r.value;
   j["interval_now"] = {end(r.now.lo), end(r.now.hi)};
   j["width_now"] = end(r.width_now);
-  j["method"] = "expected_width: the mean width over the converged draws of a simulated candidate test (plausible "
-                "truths along the profiles' and rays' directions, within each held parameter's own 95 % limit; "
-                "Gaussian scatter as the fit's), each fitted with the real tests and its interval taken as grind "
-                "takes it; linear_width: the fit's information plus the candidate's "
-                "J^T J / s^2 at the fitted ore's best point (docs/grinding-intervals.md)";
+  j["method"] = "median_width: the median width over every draw of a simulated candidate test, a draw whose fit "
+                "failed or whose interval is open counted as infinitely wide (plausible truths along the profiles' "
+                "and rays' directions, r = |z|/t of the way to the region's edge, z normal, uncut, within the ore "
+                "file's ranges; Gaussian scatter as the fit's), each fitted with the real tests and its interval "
+                "taken as grind takes it; width_10_90 likewise; wide_share: the draws wider than the interval now "
+                "or with no width; mean_width_finite: the mean over the draws with a width; linear_width: the fit's "
+                "information plus the candidate's J^T J / s^2 at the fitted ore's best point "
+                "(docs/grinding-intervals.md)";
   j["draws"] = r.draws;
   j["seed"] = r.seed;
   j["refitted"] = r.refitted;
   if (!r.refit_note.empty()) j["no_refits"] = r.refit_note;
+  if (!r.held_still.empty()) j["held_not_drawn"] = r.held_still;
   j["seconds"] = r.seconds;
   j["refit_seconds"] = r.refit_seconds;
   j["candidates"] = nlohmann::json::array();
   for (const NextRow& w : r.rows) {
-    const bool any = w.refitted && w.refit.converged > 0;
+    const bool any = w.refitted && w.refit.draws > 0;
+    // inf (a draw with no width reached it) as the string "inf": JSON has no infinity.
+    auto wide_end = [&](double v) { return std::isinf(v) ? nlohmann::json("inf") : end(v); };
     nlohmann::ordered_json c = {{"run", w.run}, {"times_min", w.times}};
-    c["expected_width"] = any ? end(w.refit.mean) : nlohmann::json();
-    c["expected_width_10_90"] = any ? nlohmann::json{end(w.refit.p10), end(w.refit.p90)} : nlohmann::json();
+    c["median_width"] = any ? wide_end(w.refit.median) : nlohmann::json();
+    c["width_10_90"] = any ? nlohmann::json{wide_end(w.refit.p10), wide_end(w.refit.p90)} : nlohmann::json();
+    c["wide_share"] = any ? nlohmann::json(w.refit.wide) : nlohmann::json();
+    c["mean_width_finite"] = any ? end(w.refit.mean) : nlohmann::json();
     c["draws_converged"] = w.refitted ? nlohmann::json(w.refit.converged) : nlohmann::json();
     c["draws"] = w.refitted ? nlohmann::json(w.refit.draws) : nlohmann::json();
     c["draw_widths"] = w.refit.widths;

@@ -64,12 +64,14 @@ struct NextRanking {
   double value = 0;
   grind::Interval now;
   double width_now = 0;
-  // The refitted candidates first, narrowest mean refitted width first;
+  // The refitted candidates first, by grind::ranks_before (the smallest
+  // median width over every draw, a draw with no width infinitely wide);
   // then the rest by their linear width.
   std::vector<NextRow> rows;
   int draws = 0, refitted = 0;  // draws per refitted candidate; candidates refitted
   std::uint64_t seed = 1;
   std::string refit_note;       // why no candidate was refitted ("": some were)
+  std::vector<std::string> held_still;  // held parameters the truths cannot move (grind::held_without_edges)
   double seconds = 0, refit_seconds = 0;
 };
 // Every candidate (run x times): the linear expected width of the

@@ -95,20 +95,20 @@ std::vector<PlausibleTruth> plausible_truths(const Ore& ore, const RealTests& re
     if (rays) {
       p.edge = std::min<int>(static_cast<int>(g.uniform() * u.edges.size()), static_cast<int>(u.edges.size()) - 1);
       const HeldEdge& e = u.edges[p.edge];
-      double r = 2;
-      for (int tries = 0; r > 1 && tries < 1000; ++tries) {
-        double z2 = 0;
-        for (std::size_t j = 0; j < nh; ++j) z2 += std::pow(g.next(), 2);
-        r = std::sqrt(z2) / t;
-      }
-      p.fraction = std::min(r, 1.0);
+      // |z| chi-distributed with nh degrees of freedom, the edge at t: the
+      // normal posterior along the ray, not cut at the edge (past it, r > 1,
+      // clamped to the ore file's ranges below).
+      double z2 = 0;
+      for (std::size_t j = 0; j < nh; ++j) z2 += std::pow(g.next(), 2);
+      p.fraction = std::sqrt(z2) / t;
       for (std::size_t j = 0; j < nh && j < e.held.size(); ++j) {
         const OreParameter& q = *find_ore_parameter(u.held[j].name);
         const double a = to_var(q, u.best.held[j]), b = to_var(q, e.held[j]);
         q.set(p.ore, from_var(q, clamp_var(q, a + p.fraction * (b - a))));
       }
       if (e.free.size() == np)
-        for (std::size_t j = 0; j < np; ++j) centre[j] += p.fraction * (e.free[j] - centre[j]);
+        for (std::size_t j = 0; j < np; ++j)
+          centre[j] = clamp_var(*find_ore_parameter(u.names[j]), centre[j] + p.fraction * (e.free[j] - centre[j]));
       p.ore = with_variables(p.ore, u, centre);
       // The free ones refitted there, the held ones where the ray puts them:
       // a truth in the valley the real tests allow, not on a chord across it.
@@ -130,6 +130,19 @@ std::vector<PlausibleTruth> plausible_truths(const Ore& ore, const RealTests& re
     }
     p.ore = with_variables(p.ore, u, x);
     out.push_back(p);
+  }
+  return out;
+}
+
+std::vector<std::string> held_without_edges(const Ore& ore) {
+  const FitCovariance& u = ore.fitted_under.covariance;
+  const std::size_t nh = u.held.size();
+  const bool rays = nh > 0 && !u.edges.empty() && u.best.held.size() == nh && u.best.free.size() == u.names.size();
+  std::vector<std::string> out;
+  for (std::size_t j = 0; j < nh; ++j) {
+    bool moved = false;
+    for (const HeldEdge& e : u.edges) moved = moved || (rays && j < e.held.size() && e.held[j] != u.best.held[j]);
+    if (!moved) out.push_back(u.held[j].name);
   }
   return out;
 }
@@ -162,9 +175,9 @@ std::vector<RefitWidth> refitted_widths(const Ore& ore, const RealTests& real,
     std::vector<TestInMill> tests = real.tests;
     TestInMill c = candidates[m];
     c.test.noise_pp = real.tests.empty() ? 1.0 : real.tests.front().test.noise_pp;
-    c.test = simulated_test(truths[k].ore, c, scatter_pp, noise);
-    tests.push_back(c);
-    try {
+    try {  // the simulated test too: a truth where the candidate cannot be made is a failed draw
+      c.test = simulated_test(truths[k].ore, c, scatter_pp, noise);
+      tests.push_back(c);
       BatchFit f = fit_batch_tests(ore, tests, real.names);
       const FitCovariance u = fit_covariance(f, tests);
       f.ore.fitted_under.covariance = u;
@@ -197,21 +210,50 @@ std::vector<RefitWidth> refitted_widths(const Ore& ore, const RealTests& real,
   for (std::thread& t : pool) t.join();
   std::vector<RefitWidth> out(nc);
   for (std::size_t m = 0; m < nc; ++m) {
-    RefitWidth& r = out[m];
-    r.draws = static_cast<int>(nd);
+    std::vector<double> per_draw(width.begin() + m * nd, width.begin() + (m + 1) * nd);
+    std::vector<std::string> whys;
     for (std::size_t k = 0; k < nd; ++k)
-      if (std::isfinite(width[m * nd + k])) r.widths.push_back(width[m * nd + k]);
-      else r.failures.push_back("draw " + std::to_string(k + 1) + ": " + why[m * nd + k]);
-    r.converged = static_cast<int>(r.widths.size());
-    if (r.converged > 0) {
-      double sum = 0;
-      for (double w : r.widths) sum += w;
-      r.mean = sum / r.converged;
-      r.p10 = quantile(r.widths, 0.1);
-      r.p90 = quantile(r.widths, 0.9);
-    }
+      if (!std::isfinite(per_draw[k])) whys.push_back("draw " + std::to_string(k + 1) + ": " + why[m * nd + k]);
+    out[m] = summarise_draws(per_draw, whys);
   }
   return out;
+}
+
+RefitWidth summarise_draws(const std::vector<double>& per_draw, const std::vector<std::string>& why,
+                           double width_now) {
+  const double inf = std::numeric_limits<double>::infinity();
+  RefitWidth r;
+  r.draws = static_cast<int>(per_draw.size());
+  r.failures = why;
+  int wide = 0;
+  for (double w : per_draw) {
+    const bool ok = std::isfinite(w);
+    r.per_draw.push_back(ok ? w : inf);
+    if (ok) r.widths.push_back(w);
+    wide += !ok || w > width_now;
+  }
+  r.converged = static_cast<int>(r.widths.size());
+  if (r.draws == 0) return r;
+  r.median = quantile(r.per_draw, 0.5);
+  r.p10 = quantile(r.per_draw, 0.1);
+  r.p90 = quantile(r.per_draw, 0.9);
+  r.wide = static_cast<double>(wide) / r.draws;
+  if (r.converged > 0) {
+    double sum = 0;
+    for (double w : r.widths) sum += w;
+    r.mean = sum / r.converged;
+  }
+  return r;
+}
+
+bool ranks_before(const RefitWidth& a, const RefitWidth& b) {
+  // NaN (no draws) after everything; inf equal to inf, then the next figure.
+  auto key = [](double v) { return std::isnan(v) ? std::numeric_limits<double>::infinity() : v; };
+  const double ka[] = {key(a.median), key(a.wide), key(a.p90), key(a.mean)};
+  const double kb[] = {key(b.median), key(b.wide), key(b.p90), key(b.mean)};
+  for (int k = 0; k < 4; ++k)
+    if (ka[k] != kb[k]) return ka[k] < kb[k];
+  return false;
 }
 
 RefitWidth refitted_width(const Ore& ore, const RealTests& real, const std::vector<PlausibleTruth>& truths,
@@ -225,6 +267,8 @@ double quantile(std::vector<double> v, double q) {
   std::sort(v.begin(), v.end());
   const double at = q * (v.size() - 1);
   const std::size_t lo = static_cast<std::size_t>(std::floor(at)), hi = std::min(lo + 1, v.size() - 1);
+  if (at == lo || v[hi] == v[lo]) return v[lo];
+  if (std::isinf(v[hi])) return v[hi];  // a step toward an infinite one
   return v[lo] + (at - lo) * (v[hi] - v[lo]);
 }
 
