@@ -434,7 +434,13 @@ TEST_CASE("grind --next-test: candidates ranked, next_test.csv and grind.json, b
     if (k < 2) {
       REQUIRE(c["draws"].get<int>() == 3);
       // A draw with no width counts as infinitely wide: "inf" in the JSON.
-      auto width = [](const nlohmann::json& v) { return v.is_string() ? HUGE_VAL : v.get<double>(); };
+      auto width = [](const nlohmann::json& v) {
+        if (v.is_string()) {
+          CHECK(v.get<std::string>() == "inf");
+          return HUGE_VAL;
+        }
+        return v.get<double>();
+      };
       const double w = width(c["median_width"]);
       const double lo = width(c["width_10_90"][0]), hi = width(c["width_10_90"][1]);
       CHECK(w >= last);  // narrowest median first

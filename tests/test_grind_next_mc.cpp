@@ -185,7 +185,7 @@ TEST_CASE("grind next test by refits: a curved valley, where the linear width is
   const RefitWidth refit =
       refitted_width(fitted, real, drawn, candidate, number, std::sqrt(interval_variance(u)), 1);
   int missed = 0;
-  const std::vector<Ore> truths = posterior_truths(fitted, real, 2 * n, 2, missed);  // the first 24 as before
+  const std::vector<Ore> truths = posterior_truths(fitted, real, 2 * n, 2, missed);
   REQUIRE(truths.size() == static_cast<std::size_t>(2 * n));
   CHECK(missed == 0);
   const std::vector<double> real_widths = realised(fitted, real, truths, harder_spectrum(), {2, 4, 8, 16, 32});
@@ -212,7 +212,7 @@ TEST_CASE("grind next test by refits: the truths go past the region's edge as th
   // degrees of freedom (two held): past the edge (r > 1) with probability
   // P(χ²₂ > t²) = exp(−t²/2), about 13 % here. 200 truths: the count past
   // it within four binomial standard errors of 200 × that (a sampler cut
-  // at the edge, as before, gives none: 26 expected, 4 SE 19, it fails);
+  // at the edge gives none: 26 expected, 4 SE 19, it fails);
   // every held value within the ore file's range.
   const Ore truth = known_ore();
   Ore start = truth;
@@ -243,8 +243,8 @@ TEST_CASE("grind next test by refits: the truths go past the region's edge as th
 
 TEST_CASE("grind next test by refits: draws with no width rank a candidate last", "[grind][next]") {
   // B: 12 draws, 10 to 21 um. A: the same draws but its 4 widest failed
-  // (no fit, or an open interval). Over the converged draws alone (the
-  // old figure) A looks better (13.5 against 15.5); counting a failed draw
+  // (no fit, or an open interval). Over the converged draws alone
+  // A looks better (13.5 against 15.5); counting a failed draw
   // as infinitely wide, the medians tie (15.5) and A's wide share (4/12)
   // puts it after B. D: B's 4 narrowest failed: its median moves up
   // (19.5). C: 7 failed: its median is infinite, last of all.
@@ -259,7 +259,7 @@ TEST_CASE("grind next test by refits: draws with no width rank a candidate last"
                    rd = summarise_draws(d, four, 30),
                    rc = summarise_draws(c, std::vector<std::string>(7, "the fit failed"), 30);
   CHECK(ra.converged == 8);
-  CHECK(ra.mean < rb.mean);  // the old key ranked A first
+  CHECK(ra.mean < rb.mean);  // a ranking on that mean would put A first
   CHECK(ra.median == rb.median);
   CHECK(rb.median == Approx(15.5));
   CHECK(rd.median == Approx(19.5));

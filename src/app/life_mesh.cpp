@@ -152,8 +152,10 @@ std::vector<double> booked_volumes(const fs::path& run, const MillCase& c, int w
 // Where a worn mesh must stay: inside the shell of radius R and between
 // the end planes (within a micrometre per metre of them).
 mc::life::MeshBounds mesh_bounds(const MillCase& c, double R) {
+  // The planes a little outside the ends (a rounding of the mesh's z);
+  // a vertex at either end, within that and 2 µm, is on its plane.
   const double z_tol = 1e-6 * std::max(1.0, c.length);
-  return {R, -z_tol, c.length + z_tol};
+  return {R, -z_tol, c.length + z_tol, z_tol + 2e-6};
 }
 
 // The stage's mesh with its short edges collapsed at `share`, and its
@@ -162,7 +164,7 @@ mc::life::MeshBounds mesh_bounds(const MillCase& c, double R) {
 mc::life::Collapsed collapsed_mesh(const MillCase& c, const std::vector<Triangle>& tris, const std::vector<double>& volume,
                                    double share) {
   const mc::life::MeshBounds b = mesh_bounds(c, 0);
-  return mc::life::collapse_short_edges(tris, volume, b.z0, b.z1, share);
+  return mc::life::collapse_short_edges(tris, volume, b.z0, b.z1, share, b.on_end);
 }
 
 }  // namespace
@@ -368,7 +370,8 @@ void write_segment_table(const fs::path& out, const MillCase& c, const std::vect
         // the study collapsed any), corner for corner.
         const mc::life::Collapsed k = m.collapse_share > 0 ? collapsed_mesh(c, tris, volume, m.collapse_share)
                                                             : mc::life::Collapsed{tris, volume, 0};
-        if (k.triangles.size() != next.size())
+        if (k.triangles.size() != next.size() ||
+            std::abs(k.removed_m3 - m.collapse_m3) > 1e-9 * std::max(m.booked_m3, 1e-12) + 1e-15)
           throw std::invalid_argument(fmt::format("{}: {} triangles, where stage {}'s {} collapse to {}: not the mesh "
                                                   "this study wore",
                                                   (out / stages[i + 1].meshes[j].file).string(), next.size(), s.index,

@@ -88,10 +88,12 @@ void write_mesh_table(const std::filesystem::path& out, const MillCase& c, const
 // length cut into `segments` equal spans): its bars cut across at the
 // segment's middle (mean height and face angles over the bars, each with
 // its standard error from their spread), the shell's wear rate there (the
-// area-weighted mean of its elements whose middle lies in it, at the
-// study's mix and calibration: the shell itself moves by its mean), and
-// for each stage but the last the volume the segment's triangles booked,
-// the same spread by the smoothing, and the volume their move removed.
+// area-weighted mean of its elements, each element's area shared over the
+// spans it covers by the length in each, at the study's mix and
+// calibration: the shell itself moves by its mean), and for each stage but
+// the last the volume the segment's triangles booked, what the move was
+// asked to remove there (spread by the smoothing, less the collapse's
+// share: life/mesh_collapse.h), and the volume the move removed.
 void write_segment_table(const std::filesystem::path& out, const MillCase& c, const std::vector<Stage>& stages,
                          const MeshTableBasis& b, int segments);
 

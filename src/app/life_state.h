@@ -89,9 +89,10 @@ struct StageMesh {
   int walls_mesh = 0;  // its index in the case's [[walls.mesh]]
   std::string file;    // the STL the stage ran on, relative to the study's folder; "": the case's own
   // The wear carried to the next stage (none for the last): the volume its
-  // triangles booked, the volume the move removed, the depth scale that
-  // makes them equal, the largest vertex move, the vertices slid along
-  // the surface to keep the mesh valid (life/mesh_wear.h).
+  // triangles booked, the volume removed (the collapse's and the move's
+  // together: the booked), the move's depth scale, the largest vertex
+  // move, the vertices slid along the surface to keep the mesh valid
+  // (life/mesh_wear.h).
   double booked_m3 = 0, removed_m3 = 0, scale = 1, deepest_m = 0;
   int relaxed = 0, collapsed = 0;  // and the short edges collapsed first (life/mesh_collapse.h),
   double collapse_share = 0;       // those shorter than this share of the median edge (0: none)

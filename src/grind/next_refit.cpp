@@ -172,10 +172,10 @@ std::vector<RefitWidth> refitted_widths(const Ore& ore, const RealTests& real,
   auto draw = [&](std::size_t at) {
     const std::size_t m = at / nd, k = at % nd;
     SeededNormal noise(mix(seed, k));
-    std::vector<TestInMill> tests = real.tests;
-    TestInMill c = candidates[m];
-    c.test.noise_pp = real.tests.empty() ? 1.0 : real.tests.front().test.noise_pp;
-    try {  // the simulated test too: a truth where the candidate cannot be made is a failed draw
+    try {  // the copies and the simulated test too: a truth where the candidate cannot be made is a failed draw
+      std::vector<TestInMill> tests = real.tests;
+      TestInMill c = candidates[m];
+      c.test.noise_pp = real.tests.empty() ? 1.0 : real.tests.front().test.noise_pp;
       c.test = simulated_test(truths[k].ore, c, scatter_pp, noise);
       tests.push_back(c);
       BatchFit f = fit_batch_tests(ore, tests, real.names);

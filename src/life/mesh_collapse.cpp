@@ -35,7 +35,7 @@ double volume6(const std::vector<Vec3>& p, const std::vector<std::array<int, 3>>
 }  // namespace
 
 Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3, double z0,
-                               double z1, double share) {
+                               double z1, double share, double on_end_m) {
   if (volume_m3.size() != triangles.size())
     throw std::invalid_argument("collapse_short_edges: a volume per triangle is needed");
   WeldedMesh w = weld(triangles);
@@ -45,7 +45,7 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
   std::vector<char> alive(nt, 1);
   std::vector<double> volume = volume_m3;
   auto on_end = [&](int v) {
-    return z1 > z0 && (std::abs(p[v].z - z0) <= 2e-6 || std::abs(p[v].z - z1) <= 2e-6);
+    return z1 > z0 && (std::abs(p[v].z - z0) <= on_end_m || std::abs(p[v].z - z1) <= on_end_m);
   };
   auto area_vec = [&](const std::array<int, 3>& c) { return cross3(p[c[1]] - p[c[0]], p[c[2]] - p[c[0]]); };
   // The mesh as given: each triangle's normal, the vertices on an open
@@ -62,14 +62,12 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
       ++uses[{std::min(u, v), std::max(u, v)}];
     }
   }
-  // Open: on an open edge that does not lie in an end plane.
-  auto plane_of = [&](int v) {
-    if (!(z1 > z0)) return 0;
-    return std::abs(p[v].z - z0) <= 2e-6 ? 1 : std::abs(p[v].z - z1) <= 2e-6 ? 2 : 0;
-  };
+  // Open: on an open edge (the mesh's rim, wherever it lies): never moved,
+  // so that the volume between the mesh and the collapsed one is bounded
+  // by the same rim.
   std::vector<char> open(p.size(), 0), crease(p.size(), 0);
   for (const auto& [e, n] : uses)
-    if (n < 2 && !(plane_of(e.first) > 0 && plane_of(e.first) == plane_of(e.second))) open[e.first] = open[e.second] = 1;
+    if (n < 2) open[e.first] = open[e.second] = 1;
   const double cos_crease = std::cos(kCreaseDegrees * 3.14159265358979323846 / 180);
   for (std::size_t v = 0; v < p.size(); ++v)
     for (std::size_t a = 0; a < normals_at[v].size() && !crease[v]; ++a)
@@ -113,15 +111,18 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
     for (const auto& [len, e] : edges) {
       int a = e.first, b = e.second;
       if (locked[a] || locked[b]) continue;
-      // Where the point goes: an end plane's vertex, a vertex on an open
-      // edge, a crease's vertex keeps its place (a stays); two of a kind
-      // that cannot both keep theirs: not collapsed, but for two on one
-      // end plane or two on a crease, which meet half-way.
-      auto rank = [&](int v) { return on_end(v) ? 3 : open[v] ? 2 : crease[v] ? 1 : 0; };
-      if (rank(b) > rank(a)) std::swap(a, b);
-      if (rank(a) == 2 && rank(b) == 2) continue;
-      if (rank(a) == 3 && rank(b) == 3 && std::abs(p[a].z - p[b].z) > 4e-6) continue;
-      if (rank(a) == 3 && rank(b) == 2) continue;  // an end vertex and a rim's: both must stay
+      // Where the point goes: the rim's vertex, else an end plane's, else
+      // a crease's keeps its place (a stays). Of two alike: two of the
+      // rim stay apart (an edge across the rim); two of an end plane must
+      // be of the same one, and meet half-way unless one is on a crease
+      // (a bar's outline there), which keeps its place; two of a crease
+      // meet half-way (a corner's strip between two creases), as two
+      // plain vertices do.
+      auto rank = [&](int v) { return open[v] ? 3 : on_end(v) ? 2 : crease[v] ? 1 : 0; };
+      if (rank(b) > rank(a) || (rank(a) == 2 && rank(b) == 2 && crease[b] && !crease[a])) std::swap(a, b);
+      if (rank(a) == 3 && rank(b) == 3) continue;
+      if (rank(a) == 2 && rank(b) == 2 && std::abs(p[a].z - p[b].z) > 2 * on_end_m) continue;
+      const bool keep_a = rank(a) > rank(b) || (rank(a) == 2 && rank(b) == 2 && crease[a] && !crease[b]);
       // The triangles on the edge: two, for a closed surface.
       std::vector<int> on_edge;
       for (int t : star[a])
@@ -137,7 +138,7 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
       for (int v : na)
         if (v != a && v != b && nb.count(v)) ++common;
       if (common != 2) continue;
-      const Vec3 at = rank(a) > rank(b) ? p[a] : (p[a] + p[b]) * 0.5;
+      const Vec3 at = keep_a ? p[a] : (p[a] + p[b]) * 0.5;
       // No neighbour folds or shrinks to nothing.
       bool fine = true;
       for (int v : {a, b})
@@ -192,8 +193,9 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
   double booked = 0;
   for (double v : booked_m3) booked += v;
   for (const double share : kCollapseShares) {
+    if (share > 0 && !(booked > 0)) break;  // no wear, no collapse: the plain move's refusal stands
     FitWear f;
-    if (share > 0) f.collapsed = collapse_short_edges(triangles, booked_m3, bounds.z0, bounds.z1, share);
+    if (share > 0) f.collapsed = collapse_short_edges(triangles, booked_m3, bounds.z0, bounds.z1, share, bounds.on_end);
     else f.collapsed = {triangles, booked_m3, 0, 0.0};
     // What the collapse took (or gave back) counts against the stage's
     // wear: the move removes the rest, so that the two remove the booked.
@@ -211,7 +213,7 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
     try {
       f.wear = wear_mesh(f.collapsed.triangles, volume, bounds, 0, name);
     } catch (const MeshSpoiled&) {
-      if (last) throw;
+      if (last || !(booked > 0)) throw;
       continue;
     }
     f.share = share;

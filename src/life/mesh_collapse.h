@@ -6,14 +6,17 @@
 // each edge much shorter than the mesh's own (a share of its median edge)
 // is collapsed to a point: the two triangles on it go, their booked wear
 // goes to the triangles round the point (by area). The point is where an
-// end of the edge lies on an end plane, on an open edge of the mesh (a
-// scan's rim) or on a crease (a bar's edge), else half-way. An edge is
-// left where collapsing it would turn a neighbour's normal by more than
-// 60° from the mesh as given, join two sheets of the surface that only
-// touch (the link condition), leave no triangle round the point, or move
-// a rim's or an end plane's vertex. The volume the collapse takes from
+// end of the edge lies on the mesh's rim (an open edge: never moved), else
+// on an end plane, else on a crease (a bar's edge); two crease vertices
+// (a corner's strip) or two plain ones meet half-way, as two of one end
+// plane do unless one is on a crease there. An edge is left where it
+// joins two rim vertices or two end planes, where collapsing it would
+// turn a neighbour's normal by more than 60° from the mesh as given, join
+// two sheets of the surface that only touch (the link condition), or
+// leave no triangle round the point. The volume the collapse takes from
 // the solid is measured (the mesh's own enclosed volume, before and
-// after). No OpenCL: the unit tests reach it.
+// after: the rim stays, so it is the volume between the two). No OpenCL:
+// the unit tests reach it.
 #pragma once
 
 #include <string>
@@ -31,16 +34,16 @@ struct Collapsed {
   double removed_m3 = 0;            // the volume the collapse took from the solid the mesh bounds (< 0: gave)
 };
 
-// `z0`, `z1`: the mill's end planes (a vertex within 2 µm of one stays on
-// it); not held where z1 <= z0. `share`: an edge shorter than this share
+// `z0`, `z1`: the mill's end planes (a vertex within `on_end_m` of one
+// stays on it); not held where z1 <= z0. `share`: an edge shorter than this share
 // of the median edge length is collapsed.
 Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,
-                               double z0, double z1, double share = 0.25);
+                               double z0, double z1, double share = 0.25, double on_end_m = 2e-6);
 
 // The shares of the median edge below which edges are collapsed, tried in
 // turn until the move keeps the mesh one: none first (most stages need no
-// collapse), then a quarter. Past 0.55 the collapse coarsens a worn corner until the
-// bars' measures jump (docs/liner-life-mesh.md), so the study stops there.
+// collapse), then a quarter; no further than 0.55, where a 10 mm mesh's
+// corners are already coarser than the mesh was cut to.
 inline constexpr double kCollapseShares[] = {0, 0.25, 0.4, 0.55};
 
 // A stage's mesh worn by its booked volumes and kept fit to wear again:

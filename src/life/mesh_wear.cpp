@@ -136,7 +136,7 @@ std::vector<Vec3> relax_slides(const WeldedMesh& w, const std::vector<Vec3>& at,
   // but for one that lies in an end plane: its ends slide within it.
   auto end_plane = [&](int v) {
     if (!(bounds.z1 > bounds.z0)) return 0;
-    return std::abs(w.points[v].z - bounds.z0) <= 2e-6 ? 1 : std::abs(w.points[v].z - bounds.z1) <= 2e-6 ? 2 : 0;
+    return std::abs(w.points[v].z - bounds.z0) <= bounds.on_end ? 1 : std::abs(w.points[v].z - bounds.z1) <= bounds.on_end ? 2 : 0;
   };
   for (const auto& [e, uses] : edge_uses)
     if (uses < 2 && !(end_plane(e.first) > 0 && end_plane(e.first) == end_plane(e.second)))
@@ -151,7 +151,7 @@ std::vector<Vec3> relax_slides(const WeldedMesh& w, const std::vector<Vec3>& at,
       Vec3 d = c * (1.0 / static_cast<double>(next[i].size())) - q[i];
       d = d - normal[i] * normal[i].dot(d);
       if (bounds.z1 > bounds.z0 &&
-          (std::abs(w.points[i].z - bounds.z0) <= 2e-6 || std::abs(w.points[i].z - bounds.z1) <= 2e-6))
+          (std::abs(w.points[i].z - bounds.z0) <= bounds.on_end || std::abs(w.points[i].z - bounds.z1) <= bounds.on_end))
         d.z = 0;
       step[i] = d * 0.5;
     }
@@ -377,7 +377,8 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     // little after earlier wear) is dropped.
     if (bounds.z1 > bounds.z0)
       for (std::size_t i = 0; i < nv; ++i)
-        if (std::abs(w.points[i].z - bounds.z0) <= 2e-6 || std::abs(w.points[i].z - bounds.z1) <= 2e-6) move[i].z = 0;
+        if (std::abs(w.points[i].z - bounds.z0) <= bounds.on_end || std::abs(w.points[i].z - bounds.z1) <= bounds.on_end)
+          move[i].z = 0;
   }
   // Each vertex's slide along the surface (tangential relaxation, below):
   // none unless the move spoils a triangle.
@@ -407,11 +408,15 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     for (int it = 0; it < 16 && v1 < out.booked_m3; ++it) s0 = s1, v0 = v1, s1 *= 2, v1 = swept_volume(triangles, moved(s1));
     const double tol = 1e-12 * out.booked_m3;
     if (v0 <= out.booked_m3 && v1 >= out.booked_m3) {
+      // f0, f1 the residuals the steps use (Illinois halves one where the
+      // same end stays twice); the best point is chosen on true residuals.
       double f0 = v0 - out.booked_m3, f1 = v1 - out.booked_m3;
+      double best_s = std::abs(f0) < std::abs(f1) ? s0 : s1, best_f = std::min(std::abs(f0), std::abs(f1));
       int side = 0;
-      for (int it = 0; it < 100 && std::abs(f1) > tol && std::abs(f0) > tol; ++it) {
+      for (int it = 0; it < 100 && best_f > tol; ++it) {
         const double sm = f1 != f0 ? s1 - f1 * (s1 - s0) / (f1 - f0) : 0.5 * (s0 + s1);
         const double fm = swept_volume(triangles, moved(sm)) - out.booked_m3;
+        if (std::abs(fm) < best_f) best_f = std::abs(fm), best_s = sm;
         if ((fm < 0) == (f0 < 0)) {
           s0 = sm, f0 = fm;
           if (side == -1) f1 *= 0.5;
@@ -422,7 +427,7 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
           side = 1;
         }
       }
-      if (std::abs(f0) < std::abs(f1)) s1 = s0;
+      s1 = best_s;
       worn = moved(s1);
       v1 = swept_volume(triangles, worn);
     }
@@ -457,24 +462,27 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
   }
   out.scale = scale;
   for (std::size_t i = 0; i < nv; ++i) out.deepest_m = std::max(out.deepest_m, scale * move[i].norm());
-  // The worn mesh must be one.
+  // The worn mesh must be one: every triangle checked for a spoiled move
+  // first (which a coarser mesh may pass), then for the bounds.
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const auto& a = triangles[t].v;
     const auto& b = worn[t].v;
     const Vec3 na = area_vector(a[0], a[1], a[2]), nb = area_vector(b[0], b[1], b[2]);
+    const Vec3 at{(a[0].x + a[1].x + a[2].x) / 3, (a[0].y + a[1].y + a[2].y) / 3, (a[0].z + a[1].z + a[2].z) / 3};
     if (nb.dot(na) <= 0)
       throw MeshSpoiled(fmt::format(
           "{}: triangle {} (at x {:.4f}, y {:.4f}, z {:.4f} m): the wear turns it over (its vertices move past each "
           "other, {:.3g} mm deep at most{}); the wear is too deep for the mesh: more smoothing or shorter stages",
-          name, t + 1, (a[0].x + a[1].x + a[2].x) / 3, (a[0].y + a[1].y + a[2].y) / 3, (a[0].z + a[1].z + a[2].z) / 3,
-          out.deepest_m * 1000, out.relaxed > 0 ? ", with the mesh relaxed" : ""));
+          name, t + 1, at.x, at.y, at.z, out.deepest_m * 1000, out.relaxed > 0 ? ", with the mesh relaxed" : ""));
     if (nb.norm() < 1e-3 * na.norm())
       throw MeshSpoiled(fmt::format(
-          "{}: triangle {}: the wear shrinks it to under a thousandth of its area; more smoothing or shorter "
-          "stages",
-          name, t + 1));
+          "{}: triangle {} (at x {:.4f}, y {:.4f}, z {:.4f} m): the wear shrinks it to under a thousandth of its "
+          "area; more smoothing or shorter stages",
+          name, t + 1, at.x, at.y, at.z));
+  }
+  for (std::size_t t = 0; t < triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) {
-      const Vec3& p = b[k];
+      const Vec3& p = worn[t].v[k];
       if (bounds.shell_radius > 0 && std::hypot(p.x, p.y) > bounds.shell_radius + 1e-6)
         throw std::invalid_argument(fmt::format(
             "{}: triangle {}: the wear takes a vertex to radius {:.4f} m, beyond the shell ({:.4f} m): the liner is "
@@ -485,7 +493,6 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
             "{}: triangle {}: the wear takes a vertex to z = {:.4f} m, beyond the mill's ends ({:g} to {:g} m)", name,
             t + 1, p.z, bounds.z0, bounds.z1));
     }
-  }
   out.triangles = std::move(worn);
   return out;
 }

@@ -10,9 +10,10 @@
 // are noisy, passes of smoothing average each triangle's depth with its
 // neighbours' first (the booked volume kept by the scale). Where the move
 // would turn a triangle over or crush it (a worn corner past the first row
-// of vertices below it), the vertices of smooth patches slide along the
-// surface toward their neighbours' centroid (tangential relaxation; edges
-// and corners held) and the scale is found again. The worn mesh
+// of vertices below it), the vertices within three edges of it slide along
+// the surface toward their neighbours' centroid (tangential relaxation;
+// sharp edges and corners held, and the mesh's rim but where it lies in an
+// end plane) and the scale is found again. The worn mesh
 // is checked: no triangle turned over or shrunk to nothing, no vertex
 // beyond the shell or the mill's ends. No OpenCL: the unit tests reach it.
 #pragma once
@@ -32,6 +33,7 @@ namespace mc::life {
 struct MeshBounds {
   double shell_radius = 0;
   double z0 = 0, z1 = 0;
+  double on_end = 2e-6;  // a vertex this near z0 or z1 is on the end plane (stays on it)
 };
 
 // The refusal of a move that would spoil the mesh (turn a triangle over,
