@@ -137,6 +137,19 @@ TEST_CASE("short edges collapse with their wear kept, a plane's area kept and no
   CHECK(left == std::set<double>{0.0, 32e-3});
 }
 
+TEST_CASE("a closed part of four vertices is not collapsed into a two-sided sheet", "[life][mesh_wear][collapse]") {
+  // A tetrahedron with one edge 0.1 mm long, the others 10 mm: collapsing
+  // it would leave two triangles of the same corners, facing apart.
+  const Vec3 a{0, 0, 0}, b{0.1e-3, 0, 0}, c{0.05e-3, 10e-3, 0}, d{0.05e-3, 3e-3, 9e-3};
+  std::vector<Triangle> tet = {{{a, c, b}}, {{a, b, d}}, {{b, c, d}}, {{a, d, c}}};
+  double v6 = 0;
+  for (const Triangle& t : tet) v6 += t.v[0].dot(cross3(t.v[1], t.v[2]));
+  REQUIRE(v6 > 0);  // facing out
+  const life::Collapsed k = life::collapse_short_edges(tet, std::vector<double>(4, 1e-9), 0, 0, 0.5);
+  CHECK(k.edges == 0);
+  CHECK(k.triangles.size() == 4);
+}
+
 TEST_CASE("a bar whose worn corner drew a thin strip: turned over as it stands, kept by relaxation or by "
           "collapsing the strip", "[life][mesh_wear][collapse]") {
   const std::vector<Triangle> bar = worn_bar(0.8);

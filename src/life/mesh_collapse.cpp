@@ -158,6 +158,22 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
       for (int v : {a, b})
         for (int t : star[v]) others = others || (t != on_edge[0] && t != on_edge[1]);
       if (!fine || !others) continue;
+      // Nor two triangles of the same three corners after it (a closed
+      // part of four vertices would fold into a two-sided sheet).
+      {
+        std::set<std::array<int, 3>> corners;
+        bool twice = false;
+        for (int v : {a, b})
+          for (int t : star[v]) {
+            if (t == on_edge[0] || t == on_edge[1]) continue;
+            std::array<int, 3> c = tri[t];
+            for (int& x : c)
+              if (x == b) x = a;
+            std::sort(c.begin(), c.end());
+            twice = twice || !corners.insert(c).second;
+          }
+        if (twice) continue;
+      }
       // Collapse: b becomes a at the point; the edge's triangles go, their
       // wear shared by area over the triangles round the point.
       p[a] = at;
