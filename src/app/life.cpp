@@ -23,6 +23,7 @@
 #include "app/life_picture.h"
 #include "app/life_state.h"
 #include "app/prepare.h"
+#include "app/sweep_runs.h"
 #include "core/lifters.h"
 #include "core/liner_wear.h"
 #include "io/atomic_file.h"
@@ -380,17 +381,6 @@ void check_life(const LifeOptions& o, const Prepared& base) {
 
 namespace {
 
-// An empty folder, or a sweep's case folder before its study began: only
-// the log and exit status that sweep.sh writes (app/slurm.cpp).
-bool holds_nothing_but_a_sweep_log(const fs::path& out) {
-  std::error_code ec;
-  for (const fs::directory_entry& e : fs::directory_iterator(out, ec)) {
-    const std::string name = e.path().filename().string();
-    if (name != "run.log" && name != "exit_status" && name != "exit_status.tmp") return false;
-  }
-  return !ec;
-}
-
 // The mesh smoothing as resolved for the case (life/mesh_wear.h smooth_wear).
 life::MeshSmoothing smoothing_of(const LifeOptions& o, const Prepared& base) {
   life::MeshSmoothing smoothing;
@@ -445,7 +435,8 @@ int cmd_life(const LifeOptions& o) {
     st.stages = std::move(state.stages);
     std::printf("life            resuming %s at stage %d\n", out.string().c_str(), st.stages.back().index);
   } else {
-    if (fs::exists(out, ec) && !holds_nothing_but_a_sweep_log(out))
+    // Empty, or a sweep's case folder before its study began (its log).
+    if (fs::exists(out, ec) && !file_not_of_a_sweep(out).empty())
       throw std::invalid_argument("--out " + out.string() + ": exists and holds no life study; choose another folder");
     if (o.force) {
       for (int i = 0; fs::exists(stage_dir(out, i), ec); ++i) fs::remove_all(stage_dir(out, i), ec);

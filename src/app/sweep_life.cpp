@@ -28,13 +28,8 @@ std::string life_study_difference(const fs::path& case_dir, const nlohmann::json
   if (!in) {
     // No study yet: an empty folder, or one a sweep began (its log), and
     // nothing else.
-    std::error_code ec;
-    for (const fs::directory_entry& e : fs::directory_iterator(case_dir, ec)) {
-      const std::string name = e.path().filename().string();
-      if (name != "run.log" && name != "exit_status" && name != "exit_status.tmp")
-        return "it holds " + name + " and no life study (life.json): a run's folder, or another sweep's";
-    }
-    return "";
+    const std::string other = file_not_of_a_sweep(case_dir);
+    return other.empty() ? "" : "it holds " + other + " and no life study (life.json): a run's folder, or another sweep's";
   }
   const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   const std::string fault = io::json_text_fault(text);
@@ -100,20 +95,6 @@ std::vector<double> power_sem(const fs::path& folder) {
     out.push_back(cell.empty() || cell == "nan" ? NAN : t.number(r, c_sem));
   }
   return out;
-}
-
-// The study's life.json (an empty object where it does not read).
-nlohmann::json life_json(const fs::path& folder) {
-  std::ifstream in(folder / "life.json", std::ios::binary);
-  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (!in.eof() && !in) return nlohmann::json::object();
-  if (!io::json_text_fault(text).empty()) return nlohmann::json::object();
-  const nlohmann::json j = nlohmann::json::parse(text);
-  return j.is_object() ? j : nlohmann::json::object();
-}
-
-std::string stopped_text(const nlohmann::json& j) {
-  return j.contains("stopped") && j["stopped"].is_string() ? j["stopped"].get<std::string>() : "";
 }
 
 // The lifter profile the study follows, as `millcharge life` does: the
@@ -190,13 +171,13 @@ LifeSweep collect_life_table(const fs::path& sweep_dir, const nlohmann::json& ca
     if (fs::exists(folder / "life.csv", ec)) {
       try {
         const life::StudyPath p = life::read_study_path(folder, path.label, tallest_profile(folder));
-        const nlohmann::json state = life_json(folder);
+        const nlohmann::json state = life_study_state(folder);
         const std::vector<double> sem = power_sem(folder);
         const std::size_t last = p.hours.size() - 1;
         row["stages"] = static_cast<double>(last);
         row["hours.end"] = p.hours[last];
         row["wear_basis"] = p.basis;
-        row["stopped"] = stopped_text(state);
+        row["stopped"] = life_study_stopped(state);
         for (const Figure& f : kFigures) {
           row[std::string(f.column) + ".new"] = number(p.value[f.index][0]);
           row[std::string(f.column) + ".end"] = number(p.value[f.index][last]);

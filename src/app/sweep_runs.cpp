@@ -41,19 +41,28 @@ std::string last_log_line(const fs::path& log) {
   return last;
 }
 
-namespace {
-
-// Whether a life study's life.json says where it stopped (the study ended).
-bool life_study_ended(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) return false;
-  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (!io::json_text_fault(text).empty()) return false;
-  const nlohmann::json j = nlohmann::json::parse(text);
-  return j.is_object() && j.contains("stopped") && j["stopped"].is_string() && !j["stopped"].get<std::string>().empty();
+std::string file_not_of_a_sweep(const fs::path& dir) {
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) return "";
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name != "run.log" && name != "exit_status" && name != "exit_status.tmp") return name;
+  }
+  return ec ? "what cannot be listed (" + ec.message() + ")" : "";
 }
 
-}  // namespace
+nlohmann::json life_study_state(const fs::path& case_dir) {
+  std::ifstream in(case_dir / "life.json", std::ios::binary);
+  if (!in) return nlohmann::json::object();
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  if (!io::json_text_fault(text).empty()) return nlohmann::json::object();
+  nlohmann::json j = nlohmann::json::parse(text);
+  return j.is_object() ? j : nlohmann::json::object();
+}
+
+std::string life_study_stopped(const nlohmann::json& state) {
+  return state.contains("stopped") && state["stopped"].is_string() ? state["stopped"].get<std::string>() : "";
+}
 
 CaseState case_state(const fs::path& dir, bool life) {
   CaseState st;
@@ -65,7 +74,8 @@ CaseState case_state(const fs::path& dir, bool life) {
     if (in >> code) st.exit_status = code;
   }
   st.last_line = last_log_line(dir / "run.log");
-  if (life ? life_study_ended(dir / "life.json") : fs::exists(dir / "summary.json", ec)) st.status = CaseStatus::done;
+  if (life ? !life_study_stopped(life_study_state(dir)).empty() : fs::exists(dir / "summary.json", ec))
+    st.status = CaseStatus::done;
   else if (st.exit_status >= 128) st.status = CaseStatus::stopped;
   else if (st.exit_status >= 0) st.status = CaseStatus::failed;
   else st.status = CaseStatus::incomplete;

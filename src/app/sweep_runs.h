@@ -34,6 +34,18 @@ struct CaseState {
   std::string last_line;     // the last line of run.log the run wrote (its error, for a failed case)
 };
 
+// The first file in `dir` that sweep.sh did not write there (its log and
+// exit status, app/slurm.cpp); "" where there is none (or no folder): a
+// case folder before its run or study began. A folder that cannot be
+// listed holds what cannot be listed.
+std::string file_not_of_a_sweep(const std::filesystem::path& dir);
+
+// A life study's life.json (an empty object where there is none or it
+// does not read), and where it says the study stopped ("" while it goes
+// on).
+nlohmann::json life_study_state(const std::filesystem::path& case_dir);
+std::string life_study_stopped(const nlohmann::json& state);
+
 // A life study's case (a sweep of command = "life") is done when its
 // life.json says where the study stopped, and resumes from its life.json.
 CaseState case_state(const std::filesystem::path& case_dir, bool life = false);
