@@ -363,11 +363,14 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
   const real rho2 = p.x * p.x + p.y * p.y;
   const real margin = R(1e-4) * ri;
   const real r_clear = sp->shell_radius - ri - margin;
+  /* A worn plate's tangent plane is at most 45° off its own (core/scene.h
+   * validate): a ball touches it only within sqrt(2) ri of its plane. */
+  const real plate_reach = (sp->plate_nodes > 0 ? R(1.5) : R(1.0)) * ri + margin;
   const int any_old = wall_key[i] != MC_WALL_NONE;
   const int near_shell = sp->shell_radius > R(0.0) && (r_clear <= R(0.0) || rho2 > r_clear * r_clear);
   const int near_wall =
       any_old || near_shell ||
-      (sp->length > R(0.0) && (p.z < ri + margin || p.z > sp->length - ri - margin)) ||
+      (sp->length > R(0.0) && (p.z < plate_reach || p.z > sp->length - plate_reach)) ||
       (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach) || mesh_near(meshes, rho2, p.z);
   if (!near_wall) return;
   WallSlots ws;
@@ -390,13 +393,15 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
                    sums);
   }
   if (sp->length > R(0.0)) {
-    const real ov_low = ri - p.z;
+    /* A worn plate's dish is axisymmetric: the same in the lab frame. */
+    real3 n_low, n_high;
+    const real ov_low = plate_overlap(sp, 0, p, ri, &n_low);
     if (ov_low > R(0.0))
-      wall_contact(analytic_wall(MC_WALL_PLATE_LOW, books), make_real3(0, 0, 1), ov_low, p, vi, wi, ri, pw, mill, sp, lifters, law,
+      wall_contact(analytic_wall(MC_WALL_PLATE_LOW, books), n_low, ov_low, p, vi, wi, ri, pw, mill, sp, lifters, law,
                    &ws, books, sums);
-    const real ov_high = ri - (sp->length - p.z);
+    const real ov_high = plate_overlap(sp, 1, p, ri, &n_high);
     if (ov_high > R(0.0))
-      wall_contact(analytic_wall(MC_WALL_PLATE_HIGH, books), make_real3(0, 0, -1), ov_high, p, vi, wi, ri, pw, mill, sp, lifters,
+      wall_contact(analytic_wall(MC_WALL_PLATE_HIGH, books), n_high, ov_high, p, vi, wi, ri, pw, mill, sp, lifters,
                    law, &ws, books, sums);
   }
   if (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach) {

@@ -16,6 +16,9 @@
  * face leaves the shell, over its top, to where its trailing face enters it,
  * in equal lengths: where on the bar the wear falls (the life study). */
 #define MC_WEAR_STATIONS 32
+/* Rings of a worn end plate (src/core/plate_wear.h): its depth at each
+ * ring's centre, the rings of equal width from the axis to the shell. */
+#define MC_PLATE_NODES 16
 
 /* Keys of wall contacts in the history slots. */
 #define MC_WALL_NONE (-1)
@@ -174,6 +177,9 @@ typedef struct {
 typedef struct {
   real4 gravity;     /* xyz, m/s² */
   real4 grid_origin; /* xyz of the lower grid corner; w = cell size, m */
+  real plate_depth[2 * MC_PLATE_NODES]; /* worn end plates: each plate's
+                        (z = 0, then z = length) depth behind its plane at
+                        its rings' centres, m (walls.h plate_depth) */
   real dt;           /* s */
   real skin;         /* Verlet skin, m: pairs closer than r1+r2+skin are listed */
   real shell_radius; /* inside radius of the shell, m; <= 0: no shell */
@@ -205,7 +211,9 @@ typedef struct {
                         components of each body side by side; n_balls
                         when there are none */
   int n_bodies;
-  int pad1, pad2, pad3;
+  int plate_nodes;   /* rings of the worn plates' depths (0: flat plates);
+                        their width is shell_radius / plate_nodes */
+  int pad2, pad3;
 } SimParams;
 
 /* Whether the ball with this id is a component sphere of a rigid body. */

@@ -54,6 +54,45 @@ MC_FN real shell_overlap(real3 p, real r, real shell_radius, real3* normal) {
   return rho + r - shell_radius;
 }
 
+/* A worn end plate (plate 0 at z = 0, 1 at z = length) at distance rho
+ * from the axis: how far its surface lies behind the plate's plane, m, and
+ * the slope of that depth along rho. Linear between the depths at the
+ * rings' centres, flat inside the first and outside the last
+ * (src/core/plate_wear.h plate_surface_depth); 0 for flat plates. */
+MC_FN real plate_depth(MC_GLOBAL const SimParams* sp, int plate, real rho, real* slope) {
+  *slope = R(0.0);
+  const int n = sp->plate_nodes;
+  if (n <= 0) return R(0.0);
+  const int first = plate * MC_PLATE_NODES;
+  const real u = rho * (real)n / sp->shell_radius - R(0.5);
+  if (u <= R(0.0)) return sp->plate_depth[first];
+  if (u >= (real)(n - 1)) return sp->plate_depth[first + n - 1];
+  const int j = (int)floor(u);
+  const real d0 = sp->plate_depth[first + j], d1 = sp->plate_depth[first + j + 1];
+  *slope = (d1 - d0) * (real)n / sp->shell_radius;
+  return d0 + (u - (real)j) * (d1 - d0);
+}
+
+/* Overlap of a ball (centre p, radius r, mill frame) with end plate
+ * `plate`, worn or flat; `normal` points from the plate to the ball. A worn
+ * plate's surface is taken as its tangent plane below the ball: the depths
+ * change over a ring's width, many balls across. */
+MC_FN real plate_overlap(MC_GLOBAL const SimParams* sp, int plate, real3 p, real r, real3* normal) {
+  const real sign = plate == 0 ? R(1.0) : R(-1.0);
+  const real gap = plate == 0 ? p.z : sp->length - p.z; /* to the plate's plane */
+  if (sp->plate_nodes <= 0) {
+    *normal = make_real3(0, 0, sign);
+    return r - gap;
+  }
+  const real rho = sqrt(p.x * p.x + p.y * p.y);
+  real slope;
+  const real depth = plate_depth(sp, plate, rho, &slope);
+  const real inv_len = R(1.0) / sqrt(R(1.0) + slope * slope);
+  const real inv_rho = rho > R(0.0) ? R(1.0) / rho : R(0.0);
+  *normal = make_real3(slope * p.x * inv_rho * inv_len, slope * p.y * inv_rho * inv_len, sign * inv_len);
+  return r - (gap + depth) * inv_len;
+}
+
 /* Rotation about +z by angle (c = cos, s = sin). */
 MC_FN real3 rotate_z(real3 v, real c, real s) {
   return make_real3(c * v.x - s * v.y, s * v.x + c * v.y, v.z);

@@ -37,10 +37,10 @@ namespace mc {
 static_assert(sizeof(f32::real4) == 16 && alignof(f32::real4) == 16);
 static_assert(sizeof(f64::real4) == 32 && alignof(f64::real4) == 32);
 static_assert(sizeof(f32::PairParams) == 8 * 4 && sizeof(f64::PairParams) == 8 * 8);
-// Eleven reals and thirteen ints after the two 4-vectors; in double the
+// The plates' depths, eleven reals and thirteen ints after the two 4-vectors; in double the
 // struct ends padded to its 32-byte alignment (OpenCL C pads it the same way).
-static_assert(sizeof(f32::SimParams) == 2 * 16 + 11 * 4 + 13 * 4);
-static_assert(sizeof(f64::SimParams) == 2 * 32 + 11 * 8 + 13 * 4 + 20);
+static_assert(sizeof(f32::SimParams) == 2 * 16 + 2 * MC_PLATE_NODES * 4 + 11 * 4 + 13 * 4);
+static_assert(sizeof(f64::SimParams) == 2 * 32 + 2 * MC_PLATE_NODES * 8 + 11 * 8 + 13 * 4 + 20);
 static_assert(sizeof(f32::MeshTriangle) == 4 * 16 + 8 * 4 && sizeof(f64::MeshTriangle) == 4 * 32 + 8 * 4);
 static_assert(sizeof(f32::MeshGrid) == 16 + 4 * 4 + 8 * 4 && sizeof(f64::MeshGrid) == 32 + 4 * 8 + 8 * 4);
 static_assert(sizeof(f32::BookParams) == 5 * 4 + 10 * 4 && sizeof(f64::BookParams) == 5 * 8 + 10 * 4);

@@ -12,6 +12,7 @@
 #include "core/drum.h"
 #include "core/wall_mesh.h"
 #include "core/morrell.h"
+#include "core/plate_wear.h"
 
 namespace mc {
 
@@ -206,6 +207,7 @@ MillDerived derive(const MillCase& c) {
     for (const WallMesh& m : place_meshes(c))
       if (m.turning && m.part != MeshPart::ends) d.lifter_volume += m.volume;
   d.mill_volume = kPi * R * R * c.length - d.lifter_volume;
+  for (const auto& depth : c.plate_depth) d.mill_volume += plate_worn_volume(depth, R);  // worn plates' dishes
   // Cone heads add two frusta, from the shell to the trunnion.
   if (e.cones()) {
     const double rt = 0.5 * e.trunnion_diameter, h = cone_depth(e, R);
@@ -477,6 +479,7 @@ Scene build_walls(const MillCase& c, const MillDerived& d) {
   s.walls.lifters = lifter_rows(R, c.lifter_rows, c.lifter_pattern, s.walls.lifter_first_angle);
   s.walls.meshes = place_meshes(c);
   s.walls.end_plates = !c.ends.cones();
+  for (int p = 0; p < 2; ++p) s.walls.plate_depth[p] = c.plate_depth[p];
   s.liner = c.liner_grid;
   s.numerics.law = c.law;
   s.numerics.precision = c.precision;

@@ -1,6 +1,7 @@
 #include "core/scene.h"
 
 #include "core/lifters.h"
+#include "core/plate_wear.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -155,6 +156,11 @@ void validate(const Scene& scene) {
   if (g.axial_bins < 0 || g.axial_bins > 256) fail("liner.axial_bins must be in [0, 256] (0: auto)");
   if (g.plate_rings < 1 || g.plate_rings > 64) fail("liner.plate_rings must be in [1, 64]");
   if (g.plate_sectors < 0 || g.plate_sectors > 720) fail("liner.plate_sectors must be in [0, 720] (0: auto)");
+  if (scene.walls.plates_worn()) {
+    const std::string why = check_plate_depths(scene.walls.plate_depth, g.plate_rings, scene.walls.shell_radius,
+                                               scene.walls.has_end_plates() ? scene.walls.length : 0);
+    if (!why.empty()) fail("liner.plate_depth_mm" + why);
+  }
 }
 
 }  // namespace mc

@@ -1,5 +1,6 @@
 #include "io/case_file.h"
 #include "core/edit_distance.h"
+#include "core/plate_wear.h"
 
 #include <toml++/toml.h>
 
@@ -558,7 +559,7 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
   }
   if (const toml::table* lt = top.table("liner", false)) {
     Section s(r, *lt, "liner");
-    s.knows({"shell_bins", "smooth_shell_bins", "axial_bins", "plate_rings", "plate_sectors"});
+    s.knows({"shell_bins", "smooth_shell_bins", "axial_bins", "plate_rings", "plate_sectors", "plate_depth_mm"});
     LinerGrid& g = c.liner_grid;
     auto bins = [&](const char* key, int fallback, long lo, long hi) {
       const long v = s.integer(key, fallback);
@@ -572,6 +573,24 @@ MillCase read_document(const toml::table& root, Reader& r, const std::string& na
     g.axial_bins = bins("axial_bins", g.axial_bins, 0, 256);
     g.plate_rings = bins("plate_rings", g.plate_rings, 1, 64);
     g.plate_sectors = bins("plate_sectors", g.plate_sectors, 0, 720);
+    // Worn end plates: [[z = 0 plate's rings, from the axis out], [z = length plate's]], mm.
+    if (const toml::node* n = s.node("plate_depth_mm")) {
+      const char* shape = "must be two lists (the plate at z = 0, then at z = length) of one depth (mm) per ring";
+      const toml::array* a = n->as_array();
+      if (!a || a->size() != 2) r.fail("liner.plate_depth_mm", n, shape);
+      for (int p = 0; p < 2; ++p) {
+        const toml::array* row = (*a)[p].as_array();
+        if (!row) r.fail("liner.plate_depth_mm", n, shape);
+        for (const toml::node& v : *row) {
+          const std::optional<double> d = v.value<double>();
+          if (!d) r.fail("liner.plate_depth_mm", n, shape);
+          c.plate_depth[p].push_back(*d * 1e-3);
+        }
+      }
+      const double length = c.periodic || c.ends.cones() ? 0.0 : c.length;
+      const std::string why = check_plate_depths(c.plate_depth, g.plate_rings, 0.5 * c.diameter, length);
+      if (!why.empty()) r.fail("liner.plate_depth_mm", n, why.substr(why[0] == ':' ? 2 : 0));
+    }
   }
   {
     Section s(r, *top.table("charge", true), "charge");

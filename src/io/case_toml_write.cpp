@@ -63,11 +63,21 @@ std::string case_to_toml(const MillCase& c) {
     root.insert("walls", toml::table{{"mesh", meshes}});
   }
   const LinerGrid& g = c.liner_grid;
-  root.insert("liner", toml::table{{"shell_bins", g.shell_bins},
-                                   {"smooth_shell_bins", g.smooth_shell_bins},
-                                   {"axial_bins", g.axial_bins},
-                                   {"plate_rings", g.plate_rings},
-                                   {"plate_sectors", g.plate_sectors}});
+  toml::table liner{{"shell_bins", g.shell_bins},
+                    {"smooth_shell_bins", g.smooth_shell_bins},
+                    {"axial_bins", g.axial_bins},
+                    {"plate_rings", g.plate_rings},
+                    {"plate_sectors", g.plate_sectors}};
+  if (!c.plate_depth[0].empty() || !c.plate_depth[1].empty()) {
+    toml::array plates;
+    for (const auto& depth : c.plate_depth) {
+      toml::array row;
+      for (double d : depth) row.push_back(d * 1e3);
+      plates.push_back(row);
+    }
+    liner.insert("plate_depth_mm", plates);
+  }
+  root.insert("liner", liner);
   toml::array sizes;
   for (const SizeClass& s : c.sizes) {
     toml::table t{{"material", s.material}, {"fraction", s.fraction}};

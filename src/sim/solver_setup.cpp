@@ -350,6 +350,8 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   sp.period = Real(tp.period);
   sp.escape_z0 = Real(tp.escape_z0);
   sp.escape_z1 = Real(tp.escape_z1);
+  sp.plate_nodes = tp.plate_nodes;
+  for (int k = 0; k < 2 * MC_PLATE_NODES; ++k) sp.plate_depth[k] = Real(tp.plate_depth[k]);
   sp.n_balls = tp.n_balls;
   sp.n_materials = tp.n_materials;
   sp.n_lifters = tp.n_lifters;
@@ -388,9 +390,9 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
     hi.x = std::max(hi.x, w.shell_radius);
     hi.y = std::max(hi.y, w.shell_radius);
   }
-  if (w.length > 0) {
-    lo.z = std::min(lo.z, 0.0);
-    hi.z = std::max(hi.z, w.length);
+  if (w.length > 0) {  // and worn plates' dishes behind them
+    lo.z = std::min(lo.z, w.periodic ? 0.0 : tp.escape_z0);
+    hi.z = std::max(hi.z, w.periodic ? w.length : std::max(w.length, tp.escape_z1));
   }
   if (tp.period <= 0 && t.mesh_z1 >= t.mesh_z0) {  // the grid spans the meshes too (cone ends reach past the belly)
     lo.z = std::min(lo.z, t.mesh_z0);

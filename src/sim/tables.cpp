@@ -5,6 +5,7 @@
 
 #include "core/lifters.h"
 #include "core/liner.h"
+#include "core/plate_wear.h"
 
 namespace mc {
 namespace {
@@ -188,8 +189,20 @@ SceneTables scene_tables(const Scene& scene) {
   // bound the mill, or, closed by mesh ends (cone heads), the meshes' axial
   // extent. A slice has no ends.
   if (w.has_end_plates()) {
-    sp.escape_z0 = 0.0;
-    sp.escape_z1 = w.length;
+    // Worn plates lie behind their planes (core/plate_wear.h).
+    double deepest[2] = {0, 0};
+    if (w.plates_worn()) {
+      sp.plate_nodes = scene.liner.plate_rings;
+      for (int p = 0; p < 2; ++p) {
+        const std::vector<double> nodes = plate_surface_nodes(w.plate_depth[p]);
+        for (std::size_t j = 0; j < nodes.size(); ++j) {
+          sp.plate_depth[p * MC_PLATE_NODES + j] = nodes[j];
+          deepest[p] = std::max(deepest[p], nodes[j]);
+        }
+      }
+    }
+    sp.escape_z0 = -deepest[0];
+    sp.escape_z1 = w.length + deepest[1];
   } else if (!w.periodic && t.mesh_z1 >= t.mesh_z0) {
     sp.escape_z0 = t.mesh_z0;
     sp.escape_z1 = t.mesh_z1;
