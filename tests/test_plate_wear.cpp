@@ -83,13 +83,29 @@ TEST_CASE("a worn plate's rings hold the metal they lost", "[plates]") {
   CHECK(plate_worn_volume(depth, R) == Approx(v).epsilon(1e-6));
 
   // A deep ring between two unworn ones: the nodes beside it would stand
-  // proud of the plate; they are held at 0, and the deep ring keeps its mean.
+  // proud of the plate; they are held at 0, and the plate keeps the
+  // volume its rings lost, the deep ring most of its own.
   const std::vector<double> spike = {0, 0, 6e-3, 0};
   const std::vector<double> ns = plate_surface_nodes(spike);
   for (double x : ns) CHECK(x >= 0);
   CHECK(ns[1] == 0);
   CHECK(ns[3] == 0);
-  CHECK(ring_mean_numeric(ns, width, 2) == Approx(6e-3).epsilon(1e-6));
+  double lost = 0;
+  for (int j = 0; j < 4; ++j) lost += ring_mean_numeric(ns, width, j) * M_PI * width * width * (2 * j + 1);
+  CHECK(lost == Approx(plate_worn_volume(spike, R)).epsilon(1e-6));
+  CHECK(ring_mean_numeric(ns, width, 2) > 0.6 * 6e-3);
+  // The lab mill's first stage: an unworn centre beside worn rings; the
+  // held centre node costs each ring under 3 % of its depth.
+  const std::vector<double> lab = {0, 0.68e-3, 1.47e-3, 0.94e-3};
+  const std::vector<double> nl = plate_surface_nodes(lab);
+  CHECK(nl[0] == 0);
+  double lost_lab = 0;
+  for (int j = 0; j < 4; ++j) {
+    const double m = ring_mean_numeric(nl, width, j);
+    lost_lab += m * M_PI * width * width * (2 * j + 1);
+    if (j > 0) CHECK(m == Approx(lab[j]).epsilon(0.03));
+  }
+  CHECK(lost_lab == Approx(plate_worn_volume(lab, R)).epsilon(1e-6));
 }
 
 TEST_CASE("worn plate depths are refused by name where they cannot be", "[plates]") {

@@ -20,15 +20,19 @@
 #include "app/commands.h"
 #include "app/life_mesh.h"
 #include "app/life_options.h"
+#include "app/life_plates.h"
 #include "app/life_picture.h"
 #include "app/life_state.h"
 #include "app/prepare.h"
 #include "app/sweep_runs.h"
 #include "core/lifters.h"
+#include "core/liner.h"
 #include "core/liner_wear.h"
+#include "core/plate_wear.h"
 #include "io/atomic_file.h"
 #include "io/case_file.h"
 #include "io/csv_read.h"
+#include "io/json_read.h"
 #include "io/png_plot.h"
 #include "core/scene.h"
 
@@ -200,6 +204,7 @@ MillCase stage_case(const Prepared& base, const Stage& s, const fs::path& out,
     p.points = s.outlines[k];
     c.lifter_pattern[k] = p;
   }
+  if (!s.plate_depth_m[0].empty()) c.plate_depth = s.plate_depth_m;
   c.speed_rpm = base.d.speed_rpm;
   c.speed_fraction = 0;
   c.filling = s.filling;
@@ -344,6 +349,10 @@ void check_life(const LifeOptions& o, const Prepared& base) {
                                             base.d.largest_ball_diameter,
                                             static_cast<int>(std::floor(c.length / base.d.largest_ball_diameter))));
   life::check_worn_meshes(c, worn, o.axial_segments);
+  if (base.scene.walls.has_end_plates() && !o.hold_plates && c.liner_grid.plate_rings > kMaxWornPlateRings)
+    throw std::invalid_argument(fmt::format("liner.plate_rings = {}: a life study wears each end plate ring by ring, "
+                                            "at most {} rings; give fewer, or --hold-plates",
+                                            c.liner_grid.plate_rings, kMaxWornPlateRings));
   if (!worn.empty() && o.shell_wear_ratio != 1)
     throw std::invalid_argument(fmt::format("--shell-wear-ratio {:g}: walls.mesh[{}] is worn as a liner of its own; "
                                             "the ratio sets the shell plates' wear against the bars' of [lifters] only",
@@ -396,6 +405,7 @@ json life_request(const LifeOptions& o, const Prepared& base) {
   const life::MeshSmoothing smoothing = smoothing_of(o, base);
   if (!life::worn_meshes(base.c).empty())  // as resolved: a study resumes with the smoothing it began with
     request["mesh_smoothing_mm"] = smoothing.across_m * 1e3, request["mesh_smoothing_along_mm"] = smoothing.along_m * 1e3;
+  if (base.scene.walls.has_end_plates()) request["end_plates"] = o.hold_plates ? "held" : "worn";
   return request;
 }
 
@@ -409,7 +419,32 @@ int cmd_life(const LifeOptions& o) {
   const double shell_covered = life::shell_share_covered(c, worn);
   // How far a mesh liner's booked wear is spread (life/mesh_wear.h smooth_wear).
   const life::MeshSmoothing smoothing = smoothing_of(o, base);
-  const json request = life_request(o, base);
+  json request = life_request(o, base);
+  // Whether the end plates wear, and their rings and sectors as the books cut them.
+  bool plates = request.value("end_plates", "") == "worn";
+  std::error_code ec;
+  if (!o.force && fs::exists(out / "life.json", ec)) {
+    // A study begun before the plates wore holds them to its end; a study
+    // of other options is refused before its state is read for these.
+    json there;
+    try {
+      there = io::read_json_file(out / "life.json", "");
+    } catch (const std::exception&) {
+    }  // read_life_state names what is wrong with it
+    if (there.is_object() && there.contains("request") && there["request"].is_object()) {
+      if (plates && !there["request"].contains("end_plates")) {
+        plates = false;
+        request.erase("end_plates");
+      }
+      const std::string differs = life::request_difference(there["request"], request);
+      if (!differs.empty())
+        throw std::invalid_argument("--out " + out.string() + " holds a life study of another case or options (" +
+                                    (out / "life.json").string() + ": " + differs +
+                                    "); give the same to resume it, or --force to start again");
+    }
+  }
+  const LinerLayout plate_layout = liner_layout(base.scene);
+  const int plate_rings = plates ? plate_layout.plate_rings : 0, plate_sectors = plates ? plate_layout.plate_sectors : 0;
   Study st;
   st.wear_coefficient = base.scene.wall_material.wear_coefficient;
   st.impact_coefficient = base.scene.wall_material.impact_wear_coefficient;
@@ -419,14 +454,13 @@ int cmd_life(const LifeOptions& o) {
     if (measure_profile(profile_outline(c.lifter_pattern[k])).height >
         measure_profile(profile_outline(c.lifter_pattern[st.tallest])).height)
       st.tallest = static_cast<int>(k);
-  std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
     throw std::invalid_argument("--out " + out.string() + ": exists and is not a folder");
   if (fs::exists(out / "life.json", ec) && !o.force) {
     // The whole state is read and checked before anything is written: a
     // damaged one is refused and the study left as it is.
     life::LifeState state = life::read_life_state(
-        out / "life.json", {profiles, base.d.largest_ball_diameter, worn});
+        out / "life.json", {profiles, base.d.largest_ball_diameter, worn, plate_rings, plate_sectors});
     const std::string differs = life::request_difference(state.request, request);
     if (!differs.empty())
       throw std::invalid_argument("--out " + out.string() + " holds a life study of another case or options (" +
@@ -440,7 +474,9 @@ int cmd_life(const LifeOptions& o) {
       throw std::invalid_argument("--out " + out.string() + ": exists and holds no life study; choose another folder");
     if (o.force) {
       for (int i = 0; fs::exists(stage_dir(out, i), ec); ++i) fs::remove_all(stage_dir(out, i), ec);
-      for (const char* f : {"life.json", "life.csv", "life.png", "life.pvd", "life_meshes.csv", "life_segments.csv"}) fs::remove(out / f, ec);
+      for (const char* f : {"life.json", "life.csv", "life.png", "life.pvd", "life_meshes.csv", "life_segments.csv", "life_plates.csv",
+                            "life_plates.png"})
+        fs::remove(out / f, ec);
       fs::remove_all(out / "cases", ec);
     }
     Stage s0;
@@ -448,6 +484,9 @@ int cmd_life(const LifeOptions& o) {
     s0.filling = c.filling;
     for (std::size_t k = 0; k < profiles; ++k) s0.outlines.push_back(profile_outline(c.lifter_pattern[k]));
     for (int k : worn) s0.meshes.push_back({k, ""});
+    if (plates)  // from the case's own plates, worn or new
+      for (int p = 0; p < 2; ++p)
+        s0.plate_depth_m[p] = c.plate_depth[p].empty() ? std::vector<double>(plate_rings, 0.0) : c.plate_depth[p];
     st.stages.push_back(s0);
     // The state before the first run, so that a study killed in stage 0
     // resumes.
@@ -483,7 +522,7 @@ int cmd_life(const LifeOptions& o) {
         std::fflush(stdout);
         if (const int rc = cmd_run(ro); rc != 0) return rc;
       }
-      s.r = life::read_stage_result(dir, static_cast<int>(profiles), worn, st.density);
+      s.r = life::read_stage_result(dir, static_cast<int>(profiles), worn, st.density, plate_rings, plate_sectors);
       // The shell's depth over the area the mesh bars leave bare.
       if (shell_covered > 0) life::scale_shell_rates(s.r, 1 / (1 - shell_covered));
       s.ran = true;
@@ -497,6 +536,13 @@ int cmd_life(const LifeOptions& o) {
     if (o.axial_segments > 0)
       life::write_segment_table(out, c, st.stages, {st.factor, st.basis(), st.mix, st.density, smoothing},
                                 o.axial_segments);
+    const life::PlateTableBasis plate_basis{st.factor, st.mix, length, st.basis()};
+    if (plates) {
+      life::write_plate_table(out, st.stages, plate_basis);
+      io::draw_or_warn(out / "life_plates.png", [&] {
+        life::write_plate_picture(out / "life_plates.png", c.name, st.stages, plate_basis, st.relative());
+      });
+    }
     if (s.index == 0 && !o.quiet) print_new_liner(st);
     io::draw_or_warn(out / "life.png", [&] {
       life::write_life_picture(out / "life.png", c.name,
@@ -614,6 +660,21 @@ int cmd_life(const LifeOptions& o) {
                        "--stages) or a wider --mesh-smoothing",
                        e.what(), i, i));
     }
+    // The end plates by their rings' wear; a dish the kernels cannot take
+    // stops the study.
+    if (plates) {
+      const mc::life::PlateStep ps =
+          mc::life::wear_plates(s.plate_depth_m, mc::life::plate_rates(s.r.plates, st.mix.sliding, st.mix.impact, R),
+                                span, R);
+      const std::string why = check_plate_depths(ps.depth, plate_rings, 0.5 * next.diameter, length);
+      if (!why.empty())
+        stop(fmt::format("stage {}: the end plates worn that far are not a dish this model takes "
+                         "(liner.plate_depth_mm{}); the study stops at stage {} (life.csv holds stages 0 to {})",
+                         i + 1, why, i, i));
+      next.plate_depth_m = ps.depth;
+      s.plate_booked_m3 = ps.booked_m3;
+      s.plate_removed_m3 = ps.removed_m3;
+    }
     Stage probe = next;
     probe.filling = c.filling;
     try {
@@ -634,6 +695,16 @@ int cmd_life(const LifeOptions& o) {
                   "deepest %.3f mm): %s\n",
                   i, i + 1, m.walls_mesh, m.removed_m3 * 1e6, m.booked_m3 * 1e6, m.scale, m.deepest_m * 1000,
                   (out / next.meshes[&m - s.meshes.data()].file).string().c_str());
+    if (plates)
+      for (int p = 0; p < 2; ++p) {
+        double booked = 0, removed = 0, deepest = 0;
+        for (int j = 0; j < plate_rings; ++j)
+          booked += s.plate_booked_m3[p][j], removed += s.plate_removed_m3[p][j],
+              deepest = std::max(deepest, next.plate_depth_m[p][j]);
+        std::printf("life            stage %d -> %d: end plate at z = %g m worn %.4g cm3 (booked %.4g cm3), its "
+                    "deepest ring %.3f mm\n",
+                    i, i + 1, p == 0 ? 0.0 : length, removed * 1e6, booked * 1e6, deepest * 1000);
+      }
     st.stages.push_back(next);
     save(out, request, st, "");
   }

@@ -59,6 +59,8 @@ void add_life_options(CLI::App* life, LifeOptions& lo) {
                    "and of MM along the axis (default: four times --mesh-smoothing)")
       ->check(cli::between(0.1, 10000))
       ->type_name("MM");
+  life->add_flag("--hold-plates", lo.hold_plates,
+                 "the end plates stay as they are (by default they wear by their rings, as the shell and bars do)");
   life->add_flag("--force", lo.force, "start the study again in an --out that holds one");
   life->add_flag("--quiet", lo.quiet, "no progress lines from the stages' runs");
 }

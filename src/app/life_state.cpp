@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "app/life_plates.h"
 #include "app/prepare.h"
 #include "core/lifters.h"
 #include "io/atomic_file.h"
@@ -59,7 +60,9 @@ json stage_json(const Stage& s) {
     if (!r.halves.empty()) j["result"]["halves"] = {parts_json(r.halves[0]), parts_json(r.halves[1])};
     if (!s.meshes.empty())
       j["result"]["mesh_sliding_wear_m3_per_s"] = r.mesh_sliding_m3_s, j["result"]["mesh_strike_W"] = r.mesh_strike_W;
+    if (!r.plates.empty()) j["result"].update(plate_books_json(r.plates));
   }
+  if (!s.plate_depth_m[0].empty()) j["plate_depth_mm"] = plate_rows_json(s.plate_depth_m, 1e3);
   if (!s.meshes.empty()) {
     j["meshes"] = json::array();
     for (const StageMesh& m : s.meshes) {
@@ -74,6 +77,9 @@ json stage_json(const Stage& s) {
     j["wear"] = {{"span_case_hours", s.span_case_hours}, {"shell_depth_m", s.shell_depth_m},
                  {"booked_mm2", s.booked_mm2}, {"removed_mm2", s.removed_mm2}, {"scale", s.scale},
                  {"spread", s.spread}};
+  if (s.span_case_hours > 0 && !s.plate_booked_m3[0].empty())
+    j["wear"]["plate_booked_m3"] = plate_rows_json(s.plate_booked_m3),
+    j["wear"]["plate_removed_m3"] = plate_rows_json(s.plate_removed_m3);
   if (s.span_case_hours > 0 && !s.se_height_mm.empty())
     j["wear"]["step_se"] = {{"height_mm", s.se_height_mm},
                             {"leading_angle_deg", s.se_leading_deg},
@@ -211,6 +217,35 @@ Stage stage_of(const JsonAt& j, int i, const StateShape& shape, const Stage* bef
   s.ran = j["ran"].boolean();
   if (s.ran) s.r = result_of(j["result"], shape.profiles, shape.meshes.size());
   if (j.has("wear")) wear_of(j["wear"], shape.profiles, s);
+  // The end plates, where the study wears them; none where it holds them.
+  const int rings = shape.plate_rings;
+  for (const char* key : {"plate_depth_mm"})
+    if (rings == 0 && j.has(key)) j[key].fail("this study holds its end plates (it began without worn plates)");
+  if (rings > 0) {
+    s.plate_depth_m = plate_rows_of(j["plate_depth_mm"], rings, 1e-3);
+    if (s.ran)
+      s.r.plates = plate_books_of(j["result"]["plate_sliding_wear_m3_per_s"], j["result"]["plate_strike_W"], rings,
+                                  shape.plate_sectors);
+    if (j.has("wear")) {
+      s.plate_booked_m3 = plate_rows_of(j["wear"]["plate_booked_m3"], rings);
+      s.plate_removed_m3 = plate_rows_of(j["wear"]["plate_removed_m3"], rings);
+    }
+    // The depths add up: a stage starts where the one before it and its
+    // step end (the step's volume over the ring's area then).
+    if (before) {
+      if (before->plate_booked_m3[0].empty()) j["plate_depth_mm"].fail("the stage before has no step on the plates");
+      const double R = 0.5 * before->diameter;
+      for (int p = 0; p < 2; ++p)
+        for (int r = 0; r < rings; ++r) {
+          const double area = M_PI * R * R * ((r + 1.0) * (r + 1.0) - 1.0 * r * r) / (1.0 * rings * rings);
+          const double due = before->plate_depth_m[p][r] + before->plate_booked_m3[p][r] / area;
+          if (std::fabs(s.plate_depth_m[p][r] - due) > 1e-9 * std::max(1e-3, due))
+            j["plate_depth_mm"][p][r].fail(fmt::format(
+                "{:.9g} mm where {:.9g} is due (the stage before's depth and its step's volume over the ring)",
+                s.plate_depth_m[p][r] * 1e3, due * 1e3));
+        }
+    }
+  }
   if (!shape.meshes.empty() || j.has("meshes")) {
     const JsonAt m = j["meshes"];
     m.size(shape.meshes.size(), "worn meshes of the case ([[walls.mesh]] of part \"lifters\" or \"shell\" that turn)");
@@ -354,8 +389,10 @@ TriangleWear read_triangle_wear(const fs::path& wear_csv, int mesh, std::size_t 
   return w;
 }
 
-StageResult read_stage_result(const fs::path& dir, int profiles, const std::vector<int>& meshes, double density) {
+StageResult read_stage_result(const fs::path& dir, int profiles, const std::vector<int>& meshes, double density,
+                              int plate_rings, int plate_sectors) {
   StageResult r;
+  if (plate_rings > 0) r.plates = read_plate_books(dir / "wear.csv", plate_rings, plate_sectors);
   const fs::path sj = dir / "summary.json";
   const json doc = io::read_json_file(sj, "the stage's run wrote no summary");
   const JsonAt j(doc, sj.string());

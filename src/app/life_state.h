@@ -6,6 +6,7 @@
 // refused in one line naming the file, the stage and the key.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "core/vec.h"
+#include "life/plates.h"
 
 namespace mc::app::life {
 
@@ -45,6 +47,8 @@ struct StageResult {
   // at the case's coefficient (m³/s) and strike energy (J/s); part of
   // `parts`' liner figures.
   std::vector<double> mesh_sliding_m3_s, mesh_strike_W;
+  // What the end plates booked, where the study wears them (life/plates.h).
+  mc::life::PlateBooks plates;
 };
 
 // How a study mixes the two wears: volume = sliding · (Archard's volume at
@@ -116,6 +120,11 @@ struct Stage {
   // of the window's wear (height mm, leading and trailing face deg); empty
   // where the run has no halves.
   std::vector<double> se_height_mm, se_leading_deg, se_trailing_deg;
+  // Where the study wears the end plates: their depth per ring at the
+  // stage's start (m; z = 0, then z = length), and per ring what the step
+  // booked and the worn surface lost (m³, life/plates.h wear_plates).
+  std::array<std::vector<double>, 2> plate_depth_m;
+  std::array<std::vector<double>, 2> plate_booked_m3, plate_removed_m3;
 };
 
 // Each stage's standard errors of its bars' height (mm) and face angles
@@ -133,6 +142,7 @@ struct StateShape {
   std::size_t profiles = 0;
   double largest_ball_m = 0;
   std::vector<int> meshes;  // the worn meshes' indices in [[walls.mesh]]
+  int plate_rings = 0, plate_sectors = 0;  // the worn end plates' (0: the study holds them)
 };
 
 struct LifeState {
@@ -168,8 +178,9 @@ void save_life_state(const std::filesystem::path& out, const nlohmann::json& req
 // where the study wears meshes (their [[walls.mesh]] indices), what their
 // triangles booked in its wear.csv, added to the liner's parts.
 // (density: the liner's, kg/m³, for the meshes' sliding wear in kg/h).
+// Where it wears the end plates (rings > 0), what they booked too.
 StageResult read_stage_result(const std::filesystem::path& dir, int profiles, const std::vector<int>& meshes = {},
-                              double density = 0);
+                              double density = 0, int plate_rings = 0, int plate_sectors = 0);
 
 // What each triangle of mesh `mesh` ([[walls.mesh]] index) booked in a
 // run's wear.csv: sliding wear at the case's coefficient (m³/s) and strike

@@ -84,6 +84,17 @@ std::vector<double> plate_surface_nodes(const std::vector<double>& ring_depth) {
     if (!more) break;
   }
   for (double& v : x) v = std::max(v, 0.0);
+  // Where nodes are held, the rings beside them take metal their depths
+  // did not book: the free nodes are scaled so that the plate as a whole
+  // loses its rings' volume (ring j's area is (2j + 1) times the first's).
+  double want = 0, have = 0;
+  for (int j = 0; j < n; ++j) {
+    const double m = rows[j].mid * x[j] + (j > 0 ? rows[j].lo * x[j - 1] : 0) + (j + 1 < n ? rows[j].hi * x[j + 1] : 0);
+    want += (2 * j + 1) * ring_depth[j];
+    have += (2 * j + 1) * m;
+  }
+  if (have > 0 && std::count(held.begin(), held.end(), true) > 0)
+    for (double& v : x) v *= want / have;
   return x;
 }
 

@@ -22,10 +22,11 @@ inline constexpr int kMaxWornPlateRings = 16;
 
 // The node depths (m) whose surface gives each ring (of equal width from
 // the axis out) the mean depth `ring_depth` (m): the tridiagonal system of
-// the rings' means solved exactly; a node that would stand proud of the
-// plate's plane (a shallow ring beside deep ones) is held at 0 and the rest
-// solved again, so the rings' means then miss by what plate_ring_means
-// shows.
+// the rings' means solved exactly. A node that would stand proud of the
+// plate's plane (a shallow ring beside deep ones) is held at 0, the rest
+// solved again and scaled so that the plate loses its rings' volume in all:
+// each ring's mean then misses its depth by a little (plate_ring_means
+// shows how much), the plate's total does not.
 std::vector<double> plate_surface_nodes(const std::vector<double>& ring_depth);
 
 // The surface's depth (m) at rho (m) from the axis, nodes as above on rings
