@@ -120,10 +120,14 @@ TEST_CASE("worn plate depths are refused by name where they cannot be", "[plates
   neg[1][2] = -1e-4;
   CHECK(check_plate_depths(neg, 4, R, L).find("[1][2]: must be >= 0") != std::string::npos);
   auto steep = d;
-  steep[0] = {0, 0, 0.06, 0.06};  // a step well over the 37.5 mm rings' 45°, in a mill 0.4 m long
-  CHECK(check_plate_depths(steep, 4, R, 0.4).find("slope by more than 45") != std::string::npos);
+  steep[0] = {0, 0, 0.06, 0.06};  // a step well over the 37.5 mm rings' 45°
+  CHECK(check_plate_depths(steep, 4, R, L).find("slope by more than 45") != std::string::npos);
   steep[0] = {0, 0, 0.02, 0.02};  // a step of about 30 mm: under 45°
-  CHECK(check_plate_depths(steep, 4, R, 0.4).empty());
+  CHECK(check_plate_depths(steep, 4, R, L).empty());
+  auto deep = d;
+  deep[1] = {0.1, 0.1, 0.1, 0.1};  // as deep as the mill is long
+  CHECK(check_plate_depths(deep, 4, R, L).find("[1][0]: must be >= 0 and less than the mill's length") !=
+        std::string::npos);
 }
 
 TEST_CASE("the kernels' worn-plate contact is the distance to the dish", "[plates]") {

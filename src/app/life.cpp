@@ -432,7 +432,7 @@ int cmd_life(const LifeOptions& o) {
     } catch (const std::exception&) {
     }  // read_life_state names what is wrong with it
     if (there.is_object() && there.contains("request") && there["request"].is_object()) {
-      if (plates && !there["request"].contains("end_plates")) {
+      if (request.contains("end_plates") && !there["request"].contains("end_plates")) {
         plates = false;
         request.erase("end_plates");
       }

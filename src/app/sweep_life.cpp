@@ -37,7 +37,10 @@ std::string life_study_difference(const fs::path& case_dir, const nlohmann::json
   const nlohmann::json j = nlohmann::json::parse(text);
   if (!j.is_object() || !j.contains("request") || !j["request"].is_object())
     return "its life.json has no request (not a life study's)";
-  return life::request_difference(j["request"], request);
+  // A study begun before the end plates wore resumes with them held (cmd_life).
+  nlohmann::json asked = request;
+  if (asked.contains("end_plates") && !j["request"].contains("end_plates")) asked.erase("end_plates");
+  return life::request_difference(j["request"], asked);
 }
 
 Crossing hours_to_height(const std::vector<double>& hours, const std::vector<double>& height,

@@ -146,8 +146,8 @@ std::string check_plate_depths(const std::array<std::vector<double>, 2>& depth, 
       return m.str();
     }
     for (int j = 0; j < rings; ++j)
-      if (!(depth[p][j] >= 0 && depth[p][j] < 0.25 * length)) {
-        m << "[" << p << "][" << j << "]: must be >= 0 and less than a quarter of the mill's length (" << 250 * length
+      if (!(depth[p][j] >= 0 && depth[p][j] < length)) {
+        m << "[" << p << "][" << j << "]: must be >= 0 and less than the mill's length (" << 1000 * length
           << " mm; got " << depth[p][j] * 1000 << " mm)";
         return m.str();
       }

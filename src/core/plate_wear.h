@@ -43,7 +43,9 @@ double plate_worn_volume(const std::vector<double>& ring_depth, double R);
 // What is wrong with worn plates' depths (m, each plate's per ring) for
 // `rings` rings on plates of radius R in a mill of `length` (0: a mill
 // without flat end plates): "" when nothing, else the fault after the key,
-// as "[1][2]: must be >= 0 m (got -0.001)" or ": ...".
+// as "[1][2]: must be >= 0 ..." or ": ...". A depth must be less than
+// the mill's length, and the surface between two rings' centres slope by
+// at most 45° (the kernels take it as its tangent plane under a ball).
 std::string check_plate_depths(const std::array<std::vector<double>, 2>& depth, int rings, double R, double length);
 
 }  // namespace mc
