@@ -363,9 +363,9 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
   const real rho2 = p.x * p.x + p.y * p.y;
   const real margin = R(1e-4) * ri;
   const real r_clear = sp->shell_radius - ri - margin;
-  /* A worn plate's tangent plane is at most 45° off its own (core/scene.h
-   * validate): a ball touches it only within sqrt(2) ri of its plane. */
-  const real plate_reach = (sp->plate_nodes > 0 ? R(1.5) : R(1.0)) * ri + margin;
+  /* A worn plate's face lies behind its plane: a ball touches it only
+   * within its radius of the plane. */
+  const real plate_reach = ri + margin;
   const int any_old = wall_key[i] != MC_WALL_NONE;
   const int near_shell = sp->shell_radius > R(0.0) && (r_clear <= R(0.0) || rho2 > r_clear * r_clear);
   const int near_wall =

@@ -54,43 +54,80 @@ MC_FN real shell_overlap(real3 p, real r, real shell_radius, real3* normal) {
   return rho + r - shell_radius;
 }
 
-/* A worn end plate (plate 0 at z = 0, 1 at z = length) at distance rho
- * from the axis: how far its surface lies behind the plate's plane, m, and
- * the slope of that depth along rho. Linear between the depths at the
- * rings' centres, flat inside the first and outside the last
- * (src/core/plate_wear.h plate_surface_depth); 0 for flat plates. */
-MC_FN real plate_depth(MC_GLOBAL const SimParams* sp, int plate, real rho, real* slope) {
-  *slope = R(0.0);
-  const int n = sp->plate_nodes;
-  if (n <= 0) return R(0.0);
-  const int first = plate * MC_PLATE_NODES;
-  const real u = rho * (real)n / sp->shell_radius - R(0.5);
-  if (u <= R(0.0)) return sp->plate_depth[first];
-  if (u >= (real)(n - 1)) return sp->plate_depth[first + n - 1];
-  const int j = (int)floor(u);
-  const real d0 = sp->plate_depth[first + j], d1 = sp->plate_depth[first + j + 1];
-  *slope = (d1 - d0) * (real)n / sp->shell_radius;
-  return d0 + (u - (real)j) * (d1 - d0);
+/* The nearest point to (u, v) of the segment from (a0, b0) to (a1, b1), in
+ * a plate's (rho, height) plane: kept in *best (squared distance) and *cu,
+ * *cv where it is nearer than what *best holds. */
+MC_FN void plate_piece(real u, real v, real a0, real b0, real a1, real b1, real* best, real* cu, real* cv) {
+  const real du = a1 - a0, dv = b1 - b0;
+  const real len2 = du * du + dv * dv;
+  real t = len2 > R(0.0) ? ((u - a0) * du + (v - b0) * dv) / len2 : R(0.0);
+  t = fmin(fmax(t, R(0.0)), R(1.0));
+  const real qu = a0 + t * du, qv = b0 + t * dv;
+  const real d2 = (u - qu) * (u - qu) + (v - qv) * (v - qv);
+  if (d2 < *best) {
+    *best = d2;
+    *cu = qu;
+    *cv = qv;
+  }
+}
+
+/* The worn face's depth at rho (plate_overlap's dish; src/core/plate_wear.h
+ * plate_surface_depth): `first` its first depth, n rings of width w. */
+MC_FN real plate_depth_at(MC_GLOBAL const SimParams* sp, int first, int n, real w, real rho) {
+  int j = (int)floor(rho / w);
+  j = j < 0 ? 0 : j > n - 1 ? n - 1 : j;
+  const real f = rho / w - (real)j;
+  const real d = sp->plate_depth[first + j];
+  if (f < R(0.25) && j > 0) return sp->plate_depth[first + j - 1] + (f + R(0.25)) * R(2.0) * (d - sp->plate_depth[first + j - 1]);
+  if (f > R(0.75) && j < n - 1) return d + (f - R(0.75)) * R(2.0) * (sp->plate_depth[first + j + 1] - d);
+  return d;
 }
 
 /* Overlap of a ball (centre p, radius r, mill frame) with end plate
- * `plate`, worn or flat; `normal` points from the plate to the ball. A worn
- * plate's surface is taken as its tangent plane below the ball: the depths
- * change over a ring's width, many balls across. */
+ * `plate` (0 at z = 0, 1 at z = length), flat or worn; `normal` points from
+ * the plate to the ball. A worn plate (src/core/plate_wear.h) is a dish,
+ * the same all round: in the plane of rho (from the axis) and the height
+ * above the plate's plane towards the charge, its face is flat at each
+ * ring's depth across the ring's middle half and straight from one ring's
+ * depth to the next over the quarter-rings either side of their edge. The
+ * contact is with the face's nearest point: the pieces within a ball's
+ * radius of the centre are searched, so that the overlap runs on without a
+ * jump across the corners between pieces. */
 MC_FN real plate_overlap(MC_GLOBAL const SimParams* sp, int plate, real3 p, real r, real3* normal) {
   const real sign = plate == 0 ? R(1.0) : R(-1.0);
-  const real gap = plate == 0 ? p.z : sp->length - p.z; /* to the plate's plane */
-  if (sp->plate_nodes <= 0) {
+  const real gap = plate == 0 ? p.z : sp->length - p.z; /* above the plate's plane */
+  const int n = sp->plate_nodes;
+  if (n <= 0) {
     *normal = make_real3(0, 0, sign);
     return r - gap;
   }
   const real rho = sqrt(p.x * p.x + p.y * p.y);
-  real slope;
-  const real depth = plate_depth(sp, plate, rho, &slope);
-  const real inv_len = R(1.0) / sqrt(R(1.0) + slope * slope);
+  const real w = sp->shell_radius / (real)n, q = R(0.25) * w;
+  const int first = plate * MC_PLATE_NODES;
+  int j0 = (int)floor((rho - r) / w), j1 = (int)floor((rho + r) / w);
+  j0 = j0 < 0 ? 0 : j0 > n - 1 ? n - 1 : j0;
+  j1 = j1 < 0 ? 0 : j1 > n - 1 ? n - 1 : j1;
+  real best = R(1e30), cu = rho, cv = R(0.0);
+  for (int j = j0; j <= j1; ++j) {
+    const real d = sp->plate_depth[first + j];
+    const real a = j == 0 ? -w : (real)j * w + q;                    /* the flat middle, from */
+    const real b = j == n - 1 ? (real)(n + 1) * w : (real)(j + 1) * w - q; /* and to */
+    plate_piece(rho, gap, a, -d, b, -d, &best, &cu, &cv);
+    if (j + 1 < n) plate_piece(rho, gap, b, -d, b + R(2.0) * q, -sp->plate_depth[first + j + 1], &best, &cu, &cv);
+    if (j > 0) plate_piece(rho, gap, a - R(2.0) * q, -sp->plate_depth[first + j - 1], a, -d, &best, &cu, &cv);
+  }
+  real dist = sqrt(best);
+  real nu = dist > R(0.0) ? (rho - cu) / dist : R(0.0), nv = dist > R(0.0) ? (gap - cv) / dist : R(1.0);
+  /* A centre behind the face (deeper than the plate there): its overlap
+   * runs on past the radius, the normal into the charge. */
+  if (gap < -plate_depth_at(sp, first, n, w, rho)) {
+    dist = -dist;
+    nu = -nu;
+    nv = -nv;
+  }
   const real inv_rho = rho > R(0.0) ? R(1.0) / rho : R(0.0);
-  *normal = make_real3(slope * p.x * inv_rho * inv_len, slope * p.y * inv_rho * inv_len, sign * inv_len);
-  return r - (gap + depth) * inv_len;
+  *normal = make_real3(nu * p.x * inv_rho, nu * p.y * inv_rho, sign * nv);
+  return r - dist;
 }
 
 /* Rotation about +z by angle (c = cos, s = sin). */

@@ -37,6 +37,9 @@ TEST_CASE("a mesh liner wears by what its triangles booked, stage by stage", "[l
   std::string err;
   REQUIRE(life(study, &err) == 0);
   INFO(err);
+  // The bars stand on the end plates: the plates are held as they are.
+  CHECK(nlohmann::json::parse(read_text(a / "life.json"))["request"]["end_plates"] == "held");
+  CHECK(!fs::exists(a / "life_plates.csv"));
   const auto meshes = read_csv(a / "life_meshes.csv");
   const auto rows = read_csv(a / "life.csv");
   REQUIRE(meshes.size() == 3);

@@ -216,6 +216,14 @@ stages = 2
   CHECK(life_cli::num(rows[1], "power_W.end") == Approx(life_cli::num(end30, "power_W")).margin(1e-2));
   CHECK(life_cli::num(rows[0], "power_W.new") == Approx(life_cli::num(life_cli::read_csv(s10 / "life.csv")[0], "power_W")).margin(1e-2));
   CHECK(life_cli::num(rows[0], "hours_to_relining") == Approx(by_hand).epsilon(1e-6));
+  // The studies wear their end plates: the deepest ring at the last stage,
+  // by hand from the study's life_plates.csv.
+  double deepest = 0;
+  for (const auto& r : life_cli::read_csv(s10 / "life_plates.csv"))
+    if (life_cli::num(r, "stage") == 2) deepest = std::max(deepest, life_cli::num(r, "depth_mm"));
+  CHECK(deepest > 0.1);
+  CHECK(life_cli::num(rows[0], "plate_depth_mm.end") == Approx(deepest).margin(1e-4));
+  CHECK_THAT(col.out, Catch::Contains("plate_mm end"));
   CHECK(fs::exists(dir / "sweep.png"));
   const nlohmann::json j = nlohmann::json::parse(read_text(dir / "sweep.json"));
   CHECK(j["command"] == "life");

@@ -46,6 +46,7 @@ namespace {
 using life::kFormat;
 using life::Stage;
 using life::StageResult;
+using life::bar_length;
 
 // The request a study was started with: a study resumes only with the same.
 json request_of(const LifeOptions& o, const Prepared& p) {
@@ -73,7 +74,7 @@ json request_with_consumption(const LifeOptions& o, const Prepared& p) {
 // height above the shell (core/liner_wear.h hours_to_lose); negative when
 // that wear does not lower it.
 double span_for_loss(const Stage& s, int k, double length, double loss) {
-  const BarWearRates rates{s.r.station_m3_s[k], length, s.r.shell_mm_per_1000h * 1e-6};
+  const BarWearRates rates{s.r.station_m3_s[k], bar_length(s, length), s.r.shell_mm_per_1000h * 1e-6};
   return hours_to_lose(s.outlines[k], 0.5 * s.diameter, rates, loss * 1e-3);
 }
 
@@ -236,7 +237,7 @@ void write_table(const fs::path& out, const Study& st, double length) {
     for (std::size_t k = 0; k < s.outlines.size(); ++k) {
       const ProfileMeasures m = measure_profile(s.outlines[k]);
       const double top =  // mm per hour
-          top_wear_m_per_h(s.outlines[k], 0.5 * s.diameter, BarWearRates{s.r.station_m3_s[k], length}) * 1000;
+          top_wear_m_per_h(s.outlines[k], 0.5 * s.diameter, BarWearRates{s.r.station_m3_s[k], bar_length(s, length)}) * 1000;
       const bool carried = s.span_case_hours > 0;
       t += fmt::format(
           "{},{:.6g},{:.6g},{},{:.4f},{:.4f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f},{:.6f},{:.6g},{:.4g},{:.3f},{:.3f},{:.3f},"
@@ -315,6 +316,26 @@ void check_options(const LifeOptions& o) {
 
 }  // namespace
 
+namespace {
+
+// What stands on the end plates and so holds them as they are ("" when
+// nothing): end lifters, or a mesh (bars drawn to the ends) with a vertex
+// on an end plane. A plate worn under them would open a gap below them.
+std::string plates_held_by(const Prepared& base) {
+  const MillCase& c = base.c;
+  if (c.ends.lifter_rows > 0) return "end_lifters stand on them";
+  const Walls& w = base.scene.walls;
+  const double tol = 1e-6 * std::max(w.length, 1e-3);
+  for (std::size_t k = 0; k < w.meshes.size(); ++k)
+    for (const Triangle& t : w.meshes[k].triangles)
+      for (const Vec3& v : t.v)
+        if (std::fabs(v.z) < tol || std::fabs(v.z - w.length) < tol)
+          return (k < c.meshes.size() ? fmt::format("walls.mesh[{}]", k) : w.meshes[k].name) + " stands on them";
+  return "";
+}
+
+}  // namespace
+
 void check_life(const LifeOptions& o, const Prepared& base) {
   check_options(o);
   const MillCase& c = base.c;
@@ -349,7 +370,8 @@ void check_life(const LifeOptions& o, const Prepared& base) {
                                             base.d.largest_ball_diameter,
                                             static_cast<int>(std::floor(c.length / base.d.largest_ball_diameter))));
   life::check_worn_meshes(c, worn, o.axial_segments);
-  if (base.scene.walls.has_end_plates() && !o.hold_plates && c.liner_grid.plate_rings > kMaxWornPlateRings)
+  if (base.scene.walls.has_end_plates() && !o.hold_plates && plates_held_by(base).empty() &&
+      c.liner_grid.plate_rings > kMaxWornPlateRings)
     throw std::invalid_argument(fmt::format("liner.plate_rings = {}: a life study wears each end plate ring by ring, "
                                             "at most {} rings; give fewer, or --hold-plates",
                                             c.liner_grid.plate_rings, kMaxWornPlateRings));
@@ -400,12 +422,14 @@ life::MeshSmoothing smoothing_of(const LifeOptions& o, const Prepared& base) {
 
 }  // namespace
 
+
 json life_request(const LifeOptions& o, const Prepared& base) {
   json request = request_with_consumption(o, base);
   const life::MeshSmoothing smoothing = smoothing_of(o, base);
   if (!life::worn_meshes(base.c).empty())  // as resolved: a study resumes with the smoothing it began with
     request["mesh_smoothing_mm"] = smoothing.across_m * 1e3, request["mesh_smoothing_along_mm"] = smoothing.along_m * 1e3;
-  if (base.scene.walls.has_end_plates()) request["end_plates"] = o.hold_plates ? "held" : "worn";
+  if (base.scene.walls.has_end_plates())
+    request["end_plates"] = o.hold_plates || !plates_held_by(base).empty() ? "held" : "worn";
   return request;
 }
 
@@ -443,8 +467,14 @@ int cmd_life(const LifeOptions& o) {
                                     "); give the same to resume it, or --force to start again");
     }
   }
+  if (const std::string by = plates_held_by(base); !by.empty() && base.scene.walls.has_end_plates() && !o.quiet)
+    std::printf("life            the end plates stay as they are: %s\n", by.c_str());
   const LinerLayout plate_layout = liner_layout(base.scene);
   const int plate_rings = plates ? plate_layout.plate_rings : 0, plate_sectors = plates ? plate_layout.plate_sectors : 0;
+  std::array<std::vector<double>, 2> plate_start;  // from the case's own plates, worn or new
+  if (plates)
+    for (int p = 0; p < 2; ++p)
+      plate_start[p] = c.plate_depth[p].empty() ? std::vector<double>(plate_rings, 0.0) : c.plate_depth[p];
   Study st;
   st.wear_coefficient = base.scene.wall_material.wear_coefficient;
   st.impact_coefficient = base.scene.wall_material.impact_wear_coefficient;
@@ -460,7 +490,7 @@ int cmd_life(const LifeOptions& o) {
     // The whole state is read and checked before anything is written: a
     // damaged one is refused and the study left as it is.
     life::LifeState state = life::read_life_state(
-        out / "life.json", {profiles, base.d.largest_ball_diameter, worn, plate_rings, plate_sectors});
+        out / "life.json", {profiles, base.d.largest_ball_diameter, worn, plate_rings, plate_sectors, plate_start});
     const std::string differs = life::request_difference(state.request, request);
     if (!differs.empty())
       throw std::invalid_argument("--out " + out.string() + " holds a life study of another case or options (" +
@@ -484,9 +514,7 @@ int cmd_life(const LifeOptions& o) {
     s0.filling = c.filling;
     for (std::size_t k = 0; k < profiles; ++k) s0.outlines.push_back(profile_outline(c.lifter_pattern[k]));
     for (int k : worn) s0.meshes.push_back({k, ""});
-    if (plates)  // from the case's own plates, worn or new
-      for (int p = 0; p < 2; ++p)
-        s0.plate_depth_m[p] = c.plate_depth[p].empty() ? std::vector<double>(plate_rings, 0.0) : c.plate_depth[p];
+    if (plates) s0.plate_depth_m = plate_start;
     st.stages.push_back(s0);
     // The state before the first run, so that a study killed in stage 0
     // resumes.
@@ -607,7 +635,7 @@ int cmd_life(const LifeOptions& o) {
     for (std::size_t k = 0; k < s.outlines.size(); ++k) {
       // As the plan wore it (span_for_loss): the same rates, the same hours.
       const WornLifter w =
-          wear_for_hours(s.outlines[k], R, BarWearRates{s.r.station_m3_s[k], length, s.r.shell_mm_per_1000h * 1e-6}, span);
+          wear_for_hours(s.outlines[k], R, BarWearRates{s.r.station_m3_s[k], bar_length(s, length), s.r.shell_mm_per_1000h * 1e-6}, span);
       if (w.worn_away) {
         const std::string why = fmt::format(
             "lifters.profile[{}]: stage {} wears the lifter away within its {:.4g} h (it is {:.1f} mm high now); the "
@@ -626,7 +654,7 @@ int cmd_life(const LifeOptions& o) {
         ProfileMeasures m[2];
         for (int h = 0; h < 2; ++h) {
           const WornLifter wh = wear_for_hours(
-              s.outlines[k], R, BarWearRates{halves[h].station_m3_s[k], length, halves[h].shell_mm_per_1000h * 1e-6},
+              s.outlines[k], R, BarWearRates{halves[h].station_m3_s[k], bar_length(s, length), halves[h].shell_mm_per_1000h * 1e-6},
               span);
           if (wh.worn_away) m[h].height = m[h].leading_angle_deg = m[h].trailing_angle_deg = NAN;
           else m[h] = measure_profile(wh.outline);

@@ -1,6 +1,8 @@
 // life.png's panels (life_picture.h).
 #include "app/life_picture.h"
 
+#include "app/life_plates.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -230,7 +232,7 @@ std::vector<io::LinePlot> life_plots(const std::string& name, const std::vector<
   // (the bars' wear stations: none where the bars are a mesh)
   for (int k = 0; k < kinds && k < static_cast<int>(ran.front()->r.station_m3_s.size()); ++k)
     rate.series.push_back(series(named("lifter top", k), profile_colour(k, 0), [&axis, k](const Stage& s) {
-      const BarWearRates r{s.r.station_m3_s[k], axis.length};
+      const BarWearRates r{s.r.station_m3_s[k], bar_length(s, axis.length)};
       return top_wear_m_per_h(s.outlines[k], 0.5 * s.diameter, r) * 1e6 * axis.factor;
     }));
   rate.series.push_back(series("shell (mean)", 0x7f7f7f, [&axis](const Stage& s) {

@@ -56,6 +56,13 @@ PlateBooks read_plate_books(const fs::path& wear_csv, int rings, int sectors) {
   return b;
 }
 
+double bar_length(const Stage& s, double length) {
+  double l = length;
+  for (const auto& d : s.plate_depth_m)
+    if (!d.empty()) l += d.back();
+  return l;
+}
+
 json plate_books_json(const PlateBooks& b) {
   return {{"plate_sliding_wear_m3_per_s", b.sliding_m3_s}, {"plate_strike_W", b.strike_W}};
 }
@@ -101,7 +108,7 @@ json plate_rows_json(const std::array<std::vector<double>, 2>& v, double scale) 
 
 void write_plate_table(const fs::path& out, const std::vector<Stage>& stages, const PlateTableBasis& b) {
   std::string t =
-      "stage,hours,case_hours,plate,plate_z_m,ring,r_from_mm,r_to_mm,depth_mm,wear_mm_per_1000h,"
+      "stage,hours,case_hours,plate,plate_z_m,ring,r_from_mm,r_to_mm,depth_mm,mean_depth_mm,wear_mm_per_1000h,"
       "wear_mm_per_1000h_se,step_booked_cm3,step_removed_cm3,wear_basis\n";
   for (const Stage& s : stages) {
     if (!s.ran || s.plate_depth_m[0].empty()) break;
@@ -109,14 +116,18 @@ void write_plate_table(const fs::path& out, const std::vector<Stage>& stages, co
     const int rings = static_cast<int>(s.plate_depth_m[0].size());
     const mc::life::PlateRates rates = mc::life::plate_rates(s.r.plates, b.mix.sliding, b.mix.impact, R);
     const bool step = !s.plate_booked_m3[0].empty();
-    for (int p = 0; p < 2; ++p)
+    for (int p = 0; p < 2; ++p) {
+      const std::vector<double> mean = plate_ring_means(s.plate_depth_m[p], R / rings);
       for (int j = 0; j < rings; ++j)
-        t += fmt::format("{},{:.6g},{:.6g},{},{:g},{},{:.3f},{:.3f},{:.4f},{:.6g},{:.4g},{},{},{}\n", s.index,
+        t += fmt::format("{},{:.6g},{:.6g},{},{:g},{},{:.3f},{:.3f},{:.4f},{:.4f},{:.6g},{},{},{},{}\n", s.index,
                          s.case_hours / b.factor, s.case_hours, p, p == 0 ? 0.0 : b.length, j, 1e3 * R * j / rings,
-                         1e3 * R * (j + 1) / rings, s.plate_depth_m[p][j] * 1e3, rates.m_per_h[p][j] * 1e6 * b.factor,
-                         rates.se_m_per_h[p][j] * 1e6 * b.factor,
+                         1e3 * R * (j + 1) / rings, s.plate_depth_m[p][j] * 1e3, mean[j] * 1e3,
+                         rates.m_per_h[p][j] * 1e6 * b.factor,
+                         std::isfinite(rates.se_m_per_h[p][j]) ? fmt::format("{:.4g}", rates.se_m_per_h[p][j] * 1e6 * b.factor)
+                                                               : std::string(),
                          step ? fmt::format("{:.6g}", s.plate_booked_m3[p][j] * 1e6) : "",
                          step ? fmt::format("{:.6g}", s.plate_removed_m3[p][j] * 1e6) : "", b.basis);
+    }
   }
   io::write_file_atomic(out / "life_plates.csv", t);
 }
@@ -130,7 +141,7 @@ void write_plate_picture(const fs::path& file, const std::string& title, const s
     io::LinePlot& lp = plots[p];
     lp.title = fmt::format("{}: the end plate at z = {:g} m, its face as the stages ran on it", title,
                            p == 0 ? 0.0 : b.length);
-    lp.x_label = "distance from the axis, mm (dots: each ring's mean depth, at its centre)";
+    lp.x_label = "distance from the axis, mm (dots: each ring's mean depth, the metal it lost over its area)";
     lp.y_label = "face, mm behind the new plate";
     lp.y_cover_hi = 0;
     int n = 0;
@@ -138,19 +149,22 @@ void write_plate_picture(const fs::path& file, const std::string& title, const s
       if (!s.ran || s.plate_depth_m[p].empty()) break;
       const double R = 0.5 * s.diameter;
       const int rings = static_cast<int>(s.plate_depth_m[p].size());
-      // The face the kernels touch (core/plate_wear.h), flat at the axis and the shell.
-      const std::vector<double> nodes = plate_surface_nodes(s.plate_depth_m[p]);
+      // The face the kernels touch (core/plate_wear.h), by its corners.
+      const std::vector<double>& d = s.plate_depth_m[p];
+      const std::vector<double> mean = plate_ring_means(d, R / rings);
       io::PlotSeries face, means;
       face.label = fmt::format("{:.0f} h{}", s.case_hours / b.factor, relative ? " (relative)" : "");
       face.rgb = means.rgb = colours[n++ % 10];
-      face.x.push_back(0), face.y.push_back(-nodes.front() * 1e3);
+      face.x.push_back(0), face.y.push_back(-d.front() * 1e3);
       for (int j = 0; j < rings; ++j) {
-        face.x.push_back(1e3 * R * (j + 0.5) / rings), face.y.push_back(-nodes[j] * 1e3);
-        // The rings' means as dots: NaN between them breaks the line.
-        means.x.push_back(1e3 * R * (j + 0.5) / rings), means.y.push_back(-s.plate_depth_m[p][j] * 1e3);
+        const double w = R / rings;
+        if (j > 0) face.x.push_back(1e3 * w * (j + 0.25)), face.y.push_back(-d[j] * 1e3);
+        if (j + 1 < rings) face.x.push_back(1e3 * w * (j + 0.75)), face.y.push_back(-d[j] * 1e3);
+        // The rings' mean depths as dots: NaN between them breaks the line.
+        means.x.push_back(1e3 * w * (j + 0.5)), means.y.push_back(-mean[j] * 1e3);
         means.x.push_back(NAN), means.y.push_back(NAN);
       }
-      face.x.push_back(1e3 * R), face.y.push_back(-nodes.back() * 1e3);
+      face.x.push_back(1e3 * R), face.y.push_back(-d.back() * 1e3);
       means.markers = true;
       lp.series.push_back(face);
       lp.series.push_back(means);

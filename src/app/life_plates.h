@@ -31,6 +31,11 @@ mc::life::PlateBooks plate_books_of(const io::JsonAt& sliding, const io::JsonAt&
 std::array<std::vector<double>, 2> plate_rows_of(const io::JsonAt& a, int rings, double scale = 1);
 nlohmann::json plate_rows_json(const std::array<std::vector<double>, 2>& v, double scale = 1);
 
+// The bars' length in stage s (m): the mill's, and where the end plates
+// have worn, the plates' depth at the shell on either end, where the bars
+// and the shell reach into the dish (the runs book those contacts on them).
+double bar_length(const Stage& s, double length);
+
 // life_plates.csv: per stage, plate and ring its depth, its wear rate and
 // standard error at the study's mix, and what the stage's step booked and
 // removed (cm³). hours = case hours / factor; rates per those hours.

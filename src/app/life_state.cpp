@@ -219,10 +219,20 @@ Stage stage_of(const JsonAt& j, int i, const StateShape& shape, const Stage* bef
   if (j.has("wear")) wear_of(j["wear"], shape.profiles, s);
   // The end plates, where the study wears them; none where it holds them.
   const int rings = shape.plate_rings;
-  for (const char* key : {"plate_depth_mm"})
-    if (rings == 0 && j.has(key)) j[key].fail("this study holds its end plates (it began without worn plates)");
+  if (rings == 0) {
+    const char* held = "this study holds its end plates (it began without worn plates)";
+    if (j.has("plate_depth_mm")) j["plate_depth_mm"].fail(held);
+    if (s.ran && j["result"].has("plate_strike_W")) j["result"]["plate_strike_W"].fail(held);
+    if (j.has("wear") && j["wear"].has("plate_booked_m3")) j["wear"]["plate_booked_m3"].fail(held);
+  }
   if (rings > 0) {
     s.plate_depth_m = plate_rows_of(j["plate_depth_mm"], rings, 1e-3);
+    if (i == 0)  // the case's own plates, worn or new
+      for (int p = 0; p < 2; ++p)
+        for (int r = 0; r < rings; ++r)
+          if (std::fabs(s.plate_depth_m[p][r] - shape.plate_start[p][r]) > 1e-9 * std::max(1e-3, shape.plate_start[p][r]))
+            j["plate_depth_mm"][p][r].fail(fmt::format("{:.9g} mm where the case's plate is {:.9g} mm deep",
+                                                       s.plate_depth_m[p][r] * 1e3, shape.plate_start[p][r] * 1e3));
     if (s.ran)
       s.r.plates = plate_books_of(j["result"]["plate_sliding_wear_m3_per_s"], j["result"]["plate_strike_W"], rings,
                                   shape.plate_sectors);
@@ -230,20 +240,23 @@ Stage stage_of(const JsonAt& j, int i, const StateShape& shape, const Stage* bef
       s.plate_booked_m3 = plate_rows_of(j["wear"]["plate_booked_m3"], rings);
       s.plate_removed_m3 = plate_rows_of(j["wear"]["plate_removed_m3"], rings);
     }
-    // The depths add up: a stage starts where the one before it and its
-    // step end (the step's volume over the ring's area then).
+    // The depths add up: a stage starts where the one before it ended,
+    // never shallower, its face having lost the step's removed volume.
     if (before) {
       if (before->plate_booked_m3[0].empty()) j["plate_depth_mm"].fail("the stage before has no step on the plates");
-      const double R = 0.5 * before->diameter;
-      for (int p = 0; p < 2; ++p)
+      for (int p = 0; p < 2; ++p) {
+        const std::vector<double> removed =
+            mc::life::plate_removed(before->plate_depth_m[p], s.plate_depth_m[p], 0.5 * before->diameter);
         for (int r = 0; r < rings; ++r) {
-          const double area = M_PI * R * R * ((r + 1.0) * (r + 1.0) - 1.0 * r * r) / (1.0 * rings * rings);
-          const double due = before->plate_depth_m[p][r] + before->plate_booked_m3[p][r] / area;
-          if (std::fabs(s.plate_depth_m[p][r] - due) > 1e-9 * std::max(1e-3, due))
+          if (s.plate_depth_m[p][r] < before->plate_depth_m[p][r])
+            j["plate_depth_mm"][p][r].fail("shallower than the stage before's: a worn plate only deepens");
+          const double had = before->plate_removed_m3[p][r];
+          if (std::fabs(removed[r] - had) > 1e-6 * std::max(std::fabs(had), 1e-9))
             j["plate_depth_mm"][p][r].fail(fmt::format(
-                "{:.9g} mm where {:.9g} is due (the stage before's depth and its step's volume over the ring)",
-                s.plate_depth_m[p][r] * 1e3, due * 1e3));
+                "the face between it and the stage before's holds {:.9g} cm3 where the step removed {:.9g} cm3",
+                removed[r] * 1e6, had * 1e6));
         }
+      }
     }
   }
   if (!shape.meshes.empty() || j.has("meshes")) {

@@ -143,6 +143,7 @@ struct StateShape {
   double largest_ball_m = 0;
   std::vector<int> meshes;  // the worn meshes' indices in [[walls.mesh]]
   int plate_rings = 0, plate_sectors = 0;  // the worn end plates' (0: the study holds them)
+  std::array<std::vector<double>, 2> plate_start;  // their depths in the case (m), stage 0's
 };
 
 struct LifeState {

@@ -130,6 +130,22 @@ std::string with_se(const json& v, const json& se, int digits) {
   return fmt::format("{:.{}f} ± {:.{}f}", v.get<double>(), digits, se.get<double>(), digits);
 }
 
+// The deepest end-plate ring at the study's last stage (life_plates.csv),
+// mm; NaN where the study holds its plates.
+double deepest_plate_mm(const fs::path& folder) {
+  std::error_code ec;
+  if (!fs::exists(folder / "life_plates.csv", ec)) return NAN;
+  const io::CsvTable t = io::read_csv_strict(folder / "life_plates.csv");
+  const int c_stage = t.column("stage"), c_depth = t.column("depth_mm");
+  double last = -1, deepest = NAN;
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    const double stage = t.number(r, c_stage), d = t.number(r, c_depth);
+    if (stage > last) last = stage, deepest = d;
+    else if (stage == last) deepest = std::max(deepest, d);
+  }
+  return deepest;
+}
+
 const std::uint32_t kColours[] = {0x1f77b4, 0xd62728, 0x2ca02c, 0x9467bd, 0xff7f0e,
                                   0x8c564b, 0xe377c2, 0x17becf, 0xbcbd22, 0x7f7f7f};
 
@@ -155,7 +171,7 @@ LifeSweep collect_life_table(const fs::path& sweep_dir, const nlohmann::json& ca
     t.columns.push_back(std::string(f.column) + ".end");
     t.columns.push_back(std::string(f.column) + ".end_se");
   }
-  for (const char* c : {"relining_height_mm", "hours_to_relining", "hours_to_relining_se", "error"})
+  for (const char* c : {"plate_depth_mm.end", "relining_height_mm", "hours_to_relining", "hours_to_relining_se", "error"})
     t.columns.push_back(c);
 
   for (const auto& c : cases["cases"]) {
@@ -200,6 +216,7 @@ LifeSweep collect_life_table(const fs::path& sweep_dir, const nlohmann::json& ca
           row["hours_to_relining"] = number(x.hours);
           row["hours_to_relining_se"] = number(x.se);
         }
+        row["plate_depth_mm.end"] = number(deepest_plate_mm(folder));
         path.hours = p.hours, path.height = p.value[1], path.leading = p.value[0];
         path.power = p.value[5], path.impact = p.value[4];
       } catch (const std::invalid_argument& e) {
@@ -271,6 +288,9 @@ int collect_life_sweep(const fs::path& dir, const nlohmann::json& cases, double 
     rows[0].push_back(h);
   bool relative = false;
   for (const json& r : t.rows) relative = relative || (r["wear_basis"].is_string() && r["wear_basis"] == "relative");
+  bool plates = false;  // a study that wears its end plates: their deepest ring at its end
+  for (const json& r : t.rows) plates = plates || r["plate_depth_mm.end"].is_number();
+  if (plates) rows[0].push_back("plate_mm end");
   if (s.relining_mm > 0)
     rows[0].push_back(fmt::format("{}hours to {:g} mm", relative ? "relative " : "", s.relining_mm));
   rows[0].push_back("error");
@@ -286,6 +306,7 @@ int collect_life_sweep(const fs::path& dir, const nlohmann::json& cases, double 
     line.push_back(with_se(r["power_W.end"], r["power_W.end_se"], 0));
     line.push_back(with_se(r["impact_point_deg.new"], json(), 1));
     line.push_back(with_se(r["impact_point_deg.end"], json(), 1));
+    if (plates) line.push_back(r["plate_depth_mm.end"].is_number() ? value_text(r["plate_depth_mm.end"], "%.1f") : "-");
     if (s.relining_mm > 0)
       line.push_back(r["hours_to_relining"].is_number()
                          ? with_se(r["hours_to_relining"], r["hours_to_relining_se"], 0)

@@ -96,7 +96,11 @@ LinerLayout liner_layout(const Scene& scene) {
   L.plate_sectors = g.plate_sectors > 0 ? g.plate_sectors : nl > 0 ? nl : 12;
   const int A = L.axial_bins;
   const double len = w.length > 0 ? w.length : 0;
-  auto z_of = [&](int a) { return len * a / A; };
+  // Worn end plates lie behind their planes: the shell and the bars reach
+  // into the dish, and their end bins take its depth at the shell.
+  const bool dish = w.plates_worn() && w.has_end_plates();
+  const double dish0 = dish ? w.plate_depth[0].back() : 0, dish1 = dish ? w.plate_depth[1].back() : 0;
+  auto z_of = [&](int a) { return a == 0 ? -dish0 : a == A ? len + dish1 : len * a / A; };
 
   // Shell: gap by gap, bins over the bare arc, each in axial bins.
   const int gaps = nl > 0 ? nl : 1;

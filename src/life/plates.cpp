@@ -35,20 +35,29 @@ PlateRates plate_rates(const PlateBooks& b, double sliding, double impact, doubl
   return out;
 }
 
+std::vector<double> plate_removed(const std::vector<double>& before, const std::vector<double>& after, double R) {
+  const int rings = static_cast<int>(after.size());
+  const std::vector<double> m0 = plate_ring_means(before, R / rings), m1 = plate_ring_means(after, R / rings);
+  std::vector<double> out;
+  for (int j = 0; j < rings; ++j) out.push_back((m1[j] - m0[j]) * ring_area(j, rings, R));
+  return out;
+}
+
 PlateStep wear_plates(const std::array<std::vector<double>, 2>& depth, const PlateRates& rates, double hours,
                       double R) {
   PlateStep step;
   for (int p = 0; p < 2; ++p) {
     const int rings = static_cast<int>(rates.m_per_h[p].size());
     const std::vector<double> before = depth[p].empty() ? std::vector<double>(rings, 0.0) : depth[p];
-    step.depth[p] = before;
+    std::vector<double> booked(rings);
     for (int j = 0; j < rings; ++j) {
-      step.depth[p][j] += rates.m_per_h[p][j] * hours;
-      step.booked_m3[p].push_back(rates.m_per_h[p][j] * hours * ring_area(j, rings, R));
+      booked[j] = rates.m_per_h[p][j] * hours;
+      step.booked_m3[p].push_back(booked[j] * ring_area(j, rings, R));
     }
-    const std::vector<double> m0 = plate_ring_means(plate_surface_nodes(before), R / rings);
-    const std::vector<double> m1 = plate_ring_means(plate_surface_nodes(step.depth[p]), R / rings);
-    for (int j = 0; j < rings; ++j) step.removed_m3[p].push_back((m1[j] - m0[j]) * ring_area(j, rings, R));
+    const std::vector<double> inc = plate_increment(booked);
+    step.depth[p] = before;
+    for (int j = 0; j < rings; ++j) step.depth[p][j] += inc[j];
+    step.removed_m3[p] = plate_removed(before, step.depth[p], R);
   }
   return step;
 }

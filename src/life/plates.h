@@ -33,14 +33,18 @@ struct PlateRates {
 PlateRates plate_rates(const PlateBooks& b, double sliding, double impact, double R);
 
 // A stage's step on the plates: the ring depths after `hours` of `rates`
-// from `depth` (m; empty: as new), and per ring the volume the rates
-// booked (m³) and the volume the worn surface lost (the change of its rings' means, as the
-// kernels' surface has them, times the rings' areas): equal unless a node
-// was held at the plate's plane (core/plate_wear.h).
+// from `depth` (m; empty: as new), each ring moved by what it booked
+// (core/plate_wear.h plate_increment: never back), and per ring the volume
+// the rates booked (m³) and the volume the face lost (the change of the
+// ring's mean depth times its area): equal, except beside a ring whose
+// increment was held at 0.
 struct PlateStep {
   std::array<std::vector<double>, 2> depth, booked_m3, removed_m3;  // per plate, per ring
 };
 PlateStep wear_plates(const std::array<std::vector<double>, 2>& depth, const PlateRates& rates, double hours,
                       double R);
+
+// The face lost per ring (m³) between two states of one plate's depths.
+std::vector<double> plate_removed(const std::vector<double>& before, const std::vector<double>& after, double R);
 
 }  // namespace mc::life

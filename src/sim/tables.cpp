@@ -194,10 +194,13 @@ SceneTables scene_tables(const Scene& scene) {
     if (w.plates_worn()) {
       sp.plate_nodes = scene.liner.plate_rings;
       for (int p = 0; p < 2; ++p) {
-        const std::vector<double> nodes = plate_surface_nodes(w.plate_depth[p]);
-        for (std::size_t j = 0; j < nodes.size(); ++j) {
-          sp.plate_depth[p * MC_PLATE_NODES + j] = nodes[j];
-          deepest[p] = std::max(deepest[p], nodes[j]);
+        const std::vector<double>& depth = w.plate_depth[p];
+        if (depth.size() != static_cast<std::size_t>(sp.plate_nodes) || depth.size() > MC_PLATE_NODES)
+          throw std::invalid_argument("liner.plate_depth_mm: one depth per ring of liner.plate_rings (at most " +
+                                      std::to_string(MC_PLATE_NODES) + ") on each plate");
+        for (std::size_t j = 0; j < depth.size(); ++j) {
+          sp.plate_depth[p * MC_PLATE_NODES + j] = depth[j];
+          deepest[p] = std::max(deepest[p], depth[j]);
         }
       }
     }
