@@ -16,8 +16,8 @@
  * face leaves the shell, over its top, to where its trailing face enters it,
  * in equal lengths: where on the bar the wear falls (the life study). */
 #define MC_WEAR_STATIONS 32
-/* Rings of a worn end plate (src/core/plate_wear.h): its depth at each
- * ring's centre, the rings of equal width from the axis to the shell. */
+/* Rings of a worn end plate (src/core/plate_wear.h): one depth per ring,
+ * the rings of equal width from the axis to the shell. */
 #define MC_PLATE_NODES 16
 
 /* Keys of wall contacts in the history slots. */
@@ -179,7 +179,7 @@ typedef struct {
   real4 grid_origin; /* xyz of the lower grid corner; w = cell size, m */
   real plate_depth[2 * MC_PLATE_NODES]; /* worn end plates: each plate's
                         (z = 0, then z = length) depth behind its plane at
-                        its rings' centres, m (walls.h plate_depth) */
+                        its rings, m (walls.h plate_overlap) */
   real dt;           /* s */
   real skin;         /* Verlet skin, m: pairs closer than r1+r2+skin are listed */
   real shell_radius; /* inside radius of the shell, m; <= 0: no shell */

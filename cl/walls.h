@@ -97,7 +97,9 @@ MC_FN real plate_overlap(MC_GLOBAL const SimParams* sp, int plate, real3 p, real
   const real sign = plate == 0 ? R(1.0) : R(-1.0);
   const real gap = plate == 0 ? p.z : sp->length - p.z; /* above the plate's plane */
   const int n = sp->plate_nodes;
-  if (n <= 0) {
+  /* Every point of a worn face lies at or behind the plate's plane: a ball
+   * clear of the plane is clear of the face. */
+  if (n <= 0 || gap >= r) {
     *normal = make_real3(0, 0, sign);
     return r - gap;
   }

@@ -109,6 +109,31 @@ TEST_CASE("a worn plate's face, the metal its rings lost, and a step that never 
               "over\n",
               lost(zero, il, 0) * 1e3, lost(zero, il, 1) * 1e3, 100 * (got / want - 1));
   CHECK(got == Approx(want).epsilon(0.01));
+  // The complementarity conditions on hard bookings, 1 to 16 rings: every
+  // increment >= 0, every ring loses at least its booking, exactly where
+  // it moves (measured on the face by numeric integration).
+  std::uint32_t s2 = 777;
+  auto u2 = [&] { return (s2 = s2 * 1664525u + 1013904223u) / 4294967296.0; };
+  std::vector<std::vector<double>> cases = {{2.9e-4, 7e-5, 0, 0.303}, {0, 1e-3}, {1e-3}, {0, 0, 5e-3, 0, 0, 1e-4}};
+  for (int k = 0; k < 40; ++k) {
+    std::vector<double> b(1 + k % 16);
+    for (double& x : b) x = u2() < 0.4 ? 0.0 : std::pow(10.0, -6 + 3 * u2());
+    cases.push_back(b);
+  }
+  for (const std::vector<double>& b : cases) {
+    const int n = static_cast<int>(b.size());
+    const double w = R / n;
+    const std::vector<double> x = plate_increment(b), zero_n(n, 0.0);
+    double top = 0;
+    for (double v : b) top = std::max(top, v);
+    for (int j = 0; j < n; ++j) {
+      INFO(n << " rings, ring " << j << " booked " << b[j]);
+      CHECK(x[j] >= 0);
+      const double loss = ring_mean_numeric(x, w, j);
+      CHECK(loss >= b[j] - 1e-6 * top);
+      if (x[j] > 0) CHECK(loss == Approx(b[j]).margin(1e-6 * top));
+    }
+  }
   // Many steps of uneven bookings: the face never rises anywhere.
   std::vector<double> d(4, 0.0);
   std::uint32_t seed = 12345;
@@ -198,6 +223,30 @@ TEST_CASE("the kernels' worn-plate contact is the distance to the dish, corners 
     last = ov;
   }
   CHECK(jump < 2e-5);  // 1e-5 m apart, slopes under 1
+  // 1, 2 and 16 rings, and centres behind the face (deeper than the plate
+  // there): the overlap is the radius plus the distance back to the face.
+  for (int rings : {1, 2, 16}) {
+    Scene s2 = sc;
+    s2.liner.plate_rings = rings;
+    std::vector<double> d0(rings), d1(rings);
+    for (int j = 0; j < rings; ++j) d0[j] = 1e-3 * (1 + (j * 7) % 5), d1[j] = 1e-3 * (1 + (j * 3) % 4);
+    s2.walls.plate_depth = {d0, d1};
+    const SceneTables t2 = scene_tables(s2);
+    const double w2 = R / rings;
+    for (int plate = 0; plate < 2; ++plate)
+      for (double rho : {0.003, 0.5 * w2, 0.75 * w2 + 1e-4, 1.26 * w2, 0.11, 0.149})
+        for (double h : {0.003, -0.0005, -0.0045}) {
+          if (rho > R) continue;  // inside the shell only
+          const std::vector<double>& depth = plate == 0 ? d0 : d1;
+          const double face = -plate_surface_depth(depth, w2, rho);
+          f64::real3 n2;
+          const double ov = f64::plate_overlap(&t2.params, plate, f64::make_real3(0, rho, plate == 0 ? h : L - h), r, &n2);
+          const double dist = exact_distance(depth, w2, R, rho, h);
+          INFO(rings << " rings, plate " << plate << " rho " << rho << " height " << h);
+          CHECK(ov == Approx(h < face ? r + dist : r - dist).margin(3e-7));
+          CHECK((plate == 0 ? n2.z : -n2.z) > 0);
+        }
+  }
   // The plate at z = length, flat where it is 1 mm deep, faces back into the mill.
   f64::real3 n;
   const double ov = f64::plate_overlap(&sp, 1, f64::make_real3(0.005, 0, L - 0.005), r, &n);

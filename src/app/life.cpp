@@ -525,6 +525,12 @@ int cmd_life(const LifeOptions& o) {
   fs::create_directories(out / "cases", ec);
   if (ec) throw std::runtime_error("cannot create " + (out / "cases").string() + ": " + ec.message());
   const double length = c.length;
+  // The bars' length before the study wears the plates: the mill's, and
+  // where the case's plates are worn and held, their dish at the shell
+  // (a stage that wears them adds its own: life_plates.h bar_length).
+  double bars_length = length;
+  if (!plates && base.scene.walls.plates_worn() && base.scene.walls.has_end_plates())
+    bars_length += base.scene.walls.plate_depth[0].back() + base.scene.walls.plate_depth[1].back();
   const double V0 = base.d.mill_volume;
 
   for (;;) {
@@ -556,9 +562,9 @@ int cmd_life(const LifeOptions& o) {
       s.ran = true;
     }
     mix_stages(st, o);
-    calibrate(st, o, length);
+    calibrate(st, o, bars_length);
     save(out, request, st, "");
-    write_table(out, st, length);
+    write_table(out, st, bars_length);
     if (!worn.empty())
       life::write_mesh_table(out, c, st.stages, {st.factor, st.basis(), st.mix, st.density, smoothing});
     if (o.axial_segments > 0)
@@ -575,7 +581,7 @@ int cmd_life(const LifeOptions& o) {
     io::draw_or_warn(out / "life.png", [&] {
       life::write_life_picture(out / "life.png", c.name,
                                profiles == 0 && !worn.empty() ? life::stages_drawn(out, c, st.stages) : st.stages,
-                               {st.factor, st.relative(), length});
+                               {st.factor, st.relative(), bars_length});
     });
 
     // Stop, or plan the next stage's wear (in hours at the case's wear
@@ -605,7 +611,7 @@ int cmd_life(const LifeOptions& o) {
       // which this stage's wear lowers the bar by it.
       if (h_now <= o.until_height_mm + 0.05) stopped = fmt::format("the lifters are down to {:.1f} mm", h_now);
       else if (i >= 3 * o.stages) stopped = fmt::format("{} stages run; the lifters are still {:.1f} mm high", i, h_now);
-      else span = span_for_loss(s, st.tallest, length, (h_now - o.until_height_mm) / std::max(1, o.stages - i));
+      else span = span_for_loss(s, st.tallest, bars_length, (h_now - o.until_height_mm) / std::max(1, o.stages - i));
       if (stopped.empty() && !(span > 0))
         throw std::invalid_argument(fmt::format(
             "--until-height {:g}: the wear of stage {} ({}) does not lower the lifters (profile {}, {:.1f} mm high) by "
@@ -635,7 +641,7 @@ int cmd_life(const LifeOptions& o) {
     for (std::size_t k = 0; k < s.outlines.size(); ++k) {
       // As the plan wore it (span_for_loss): the same rates, the same hours.
       const WornLifter w =
-          wear_for_hours(s.outlines[k], R, BarWearRates{s.r.station_m3_s[k], bar_length(s, length), s.r.shell_mm_per_1000h * 1e-6}, span);
+          wear_for_hours(s.outlines[k], R, BarWearRates{s.r.station_m3_s[k], bar_length(s, bars_length), s.r.shell_mm_per_1000h * 1e-6}, span);
       if (w.worn_away) {
         const std::string why = fmt::format(
             "lifters.profile[{}]: stage {} wears the lifter away within its {:.4g} h (it is {:.1f} mm high now); the "
@@ -654,7 +660,7 @@ int cmd_life(const LifeOptions& o) {
         ProfileMeasures m[2];
         for (int h = 0; h < 2; ++h) {
           const WornLifter wh = wear_for_hours(
-              s.outlines[k], R, BarWearRates{halves[h].station_m3_s[k], bar_length(s, length), halves[h].shell_mm_per_1000h * 1e-6},
+              s.outlines[k], R, BarWearRates{halves[h].station_m3_s[k], bar_length(s, bars_length), halves[h].shell_mm_per_1000h * 1e-6},
               span);
           if (wh.worn_away) m[h].height = m[h].leading_angle_deg = m[h].trailing_angle_deg = NAN;
           else m[h] = measure_profile(wh.outline);

@@ -13,8 +13,9 @@ namespace mc::app::life {
 
 // What the hours axis of a study is: its stages, the factor between
 // calibrated and case hours (calibrated = case / factor), whether they are
-// relative (the default wear coefficient, not calibrated), the mill's length
-// (the stations' rates are over it).
+// relative (the default wear coefficient, not calibrated), the bars' length
+// (the stations' rates are over it: the mill's, and a worn case's held
+// dish at the shell; app/life_plates.h bar_length adds a worn stage's).
 struct LifeAxis {
   double factor = 1;
   bool relative = false;

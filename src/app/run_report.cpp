@@ -342,11 +342,15 @@ std::vector<std::string> write_run_results(const FinishedRun& r, const RunReport
     std::vector<std::vector<Vec2>> outlines;
     for (const LifterProfile& p : c.lifter_pattern) outlines.push_back(profile_outline(p));
     const double k_impact = r.scene.wall_material.impact_wear_coefficient;
+    // The bars reach into worn end plates' dish at the shell (core/liner.cpp).
+    double bars = c.length;
+    if (r.scene.walls.plates_worn() && r.scene.walls.has_end_plates())
+      bars += r.scene.walls.plate_depth[0].back() + r.scene.walls.plate_depth[1].back();
     std::vector<std::vector<LifterStation>> by_half;
     for (int h = 0; h < 2 && split; ++h)
-      by_half.push_back(lifter_stations(halves[h], half_s[h], outlines, 0.5 * c.diameter, c.length, k_impact));
+      by_half.push_back(lifter_stations(halves[h], half_s[h], outlines, 0.5 * c.diameter, bars, k_impact));
     io::write_lifter_wear_csv(out / "lifter_wear.csv",
-                              lifter_stations(r.s.books, s.window_s, outlines, 0.5 * c.diameter, c.length, k_impact),
+                              lifter_stations(r.s.books, s.window_s, outlines, 0.5 * c.diameter, bars, k_impact),
                               by_half);
   }
   io::write_file_atomic(out / "summary.json", j.dump(2) + "\n");

@@ -72,7 +72,8 @@ struct MillCase {
   // [liner]: how the liner is cut into elements for impact and wear sums
   LinerGrid liner_grid;
   // [liner] plate_depth_mm: worn end plates, each plate's (z = 0, then z =
-  // length) mean depth per ring, m (core/plate_wear.h); empty: flat.
+  // length) depth per ring, m (core/plate_wear.h: the face across the
+  // ring's middle half); empty: flat.
   std::array<std::vector<double>, 2> plate_depth;
   double lifter_first_angle_deg = 0;
   // [charge]

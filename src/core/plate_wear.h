@@ -32,11 +32,12 @@ std::vector<double> plate_ring_means(const std::vector<double>& depth, double wi
 double plate_worn_volume(const std::vector<double>& depth, double R);
 
 // How far each ring's depth moves (m, never back: each >= 0) for the rings
-// to lose `booked` (m over each ring's area) more: the tridiagonal system of
-// the rings' means solved for the increments, an increment that would be
-// negative (a ring that booked little beside one that booked much) held at
-// 0 and the rest solved again. Where none is held, each ring loses exactly
-// its booked depth; where one is, the ring beside it loses a little more.
+// to lose `booked` (m over each ring's area) more: each ring whose depth
+// moves loses exactly its booked depth; a ring that booked little beside
+// one that booked much, which would have to rise for that, stays where it
+// is and loses a little more than it booked, the neighbour's metal at their
+// edge (the rings' means as a complementarity problem: increments >= 0,
+// each ring losing at least its booking, exactly where it moves).
 std::vector<double> plate_increment(const std::vector<double>& booked);
 
 // What is wrong with worn plates' depths (m, each plate's per ring) for

@@ -146,8 +146,9 @@ struct Walls {
   double lifter_first_angle = 0.0;  // rad
   std::vector<WallMesh> meshes;      // in addition to the shell, plates and lifters
   // Worn end plates (core/plate_wear.h): each plate's (z = 0, then z =
-  // length) mean wear depth per ring, m, the rings of equal width from the
-  // axis to the shell as LinerGrid::plate_rings cuts them; empty: flat.
+  // length) depth per ring (its face across the ring's middle half), m, the
+  // rings of equal width from the axis to the shell as
+  // LinerGrid::plate_rings cuts them; empty: flat.
   std::array<std::vector<double>, 2> plate_depth;
   bool plates_worn() const { return !plate_depth[0].empty() || !plate_depth[1].empty(); }
 };

@@ -318,8 +318,12 @@ void write_liner_png(const std::filesystem::path& path, const std::string& title
     m->y_label = "axial position (m)";
     m->x_lo = nl > 0 ? -layout.lifter_trail_angle[0] * kDeg : 0;
     m->x_hi = m->x_lo + period * spacing;
+    // (the end bins reach into worn end plates' dish: core/liner.cpp)
     m->y_lo = 0;
     m->y_hi = layout.length > 0 ? layout.length : 1;
+    for (const LinerElement& e : layout.elements)
+      if (e.part == LinerPart::shell || e.part == LinerPart::lifter)
+        m->y_lo = std::min(m->y_lo, e.z0), m->y_hi = std::max(m->y_hi, e.z1);
   }
   // Cells by (row in the pattern, part, bin, axial): the mean over repeats.
   struct Cell {

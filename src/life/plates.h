@@ -36,8 +36,8 @@ PlateRates plate_rates(const PlateBooks& b, double sliding, double impact, doubl
 // from `depth` (m; empty: as new), each ring moved by what it booked
 // (core/plate_wear.h plate_increment: never back), and per ring the volume
 // the rates booked (m³) and the volume the face lost (the change of the
-// ring's mean depth times its area): equal, except beside a ring whose
-// increment was held at 0.
+// ring's mean depth times its area): equal, except in a ring held where it
+// was, which loses a little more.
 struct PlateStep {
   std::array<std::vector<double>, 2> depth, booked_m3, removed_m3;  // per plate, per ring
 };
