@@ -92,9 +92,15 @@ TEST_CASE("a life study of the lab mill removes what its runs booked and resumes
   // by its run's mean rate (summary.json) times those hours.
   {
     const nlohmann::json life_json = nlohmann::json::parse(read_text(a / "life.json"));
-    const double length = mc::io::read_case(a / "cases" / "stage-00.toml").length;
     for (int i = 0; i < 2; ++i) {
       INFO("stage " << i);
+      // The bars' length: the mill's, and the worn end plates' dish at the
+      // shell on either end, from the stage's own case.
+      const mc::MillCase sc = mc::io::read_case(a / "cases" / ("stage-0" + std::to_string(i) + ".toml"));
+      double length = sc.length;
+      for (const auto& d : sc.plate_depth)
+        if (!d.empty()) length += d.back();
+      if (i == 1) CHECK(length > sc.length + 1e-4);  // the plates have worn
       const nlohmann::json& w = life_json.at("stages").at(i).at("wear");
       const double booked = w.at("booked_mm2").at(0).get<double>(), removed = w.at("removed_mm2").at(0).get<double>();
       CHECK(std::fabs(removed - booked) <= 1e-6 * booked);

@@ -14,6 +14,9 @@
 #include <string>
 #include <vector>
 
+#include "app/commands.h"
+#include "app/life_options.h"
+#include "app/prepare.h"
 #include "core/plate_wear.h"
 #include "io/case_file.h"
 #include "life/plates.h"
@@ -185,4 +188,51 @@ TEST_CASE("a life study wears the lab mill's end plates by what its runs booked"
   CHECK(why.find("end_plates") != std::string::npos);
   fs::remove_all(a);
   fs::remove_all(held);
+}
+
+TEST_CASE("the plates wear at the study's mix and calibration, and end lifters hold them", "[life][plates][cli]") {
+  const fs::path a = scratch("plates-mix");
+  const std::string study = " --stages 1 --hours 3000 --impact-share 0.5 --calibrate-consumption 10" + kShort;
+  std::string err;
+  REQUIRE(life(study + " --out '" + a.string() + "'", &err) == 0);
+  INFO(err);
+  // The study's coefficients as life.json states them: the sliding wear
+  // booked at the case's coefficient times their ratio, and the strike
+  // energy times the impact coefficient, both on calibrated hours.
+  const nlohmann::json cal = nlohmann::json::parse(read_text(a / "life.json"))["calibration"];
+  const double ks = cal["wear_coefficient_m3_per_N_m"].get<double>() / cal["case_wear_coefficient_m3_per_N_m"].get<double>();
+  const double ki = cal["impact_wear_coefficient_m3_per_J"].get<double>();
+  CHECK(ki > 0);
+  CHECK(cal["factor"].get<double>() != Approx(1.0));
+  double vol[2][4] = {}, area[2][4] = {};
+  for (const auto& row : read_csv(a / "stage-00" / "wear.csv")) {
+    if (row.at("part") != "plate") continue;
+    const int p = static_cast<int>(num(row, "row")), j = static_cast<int>(num(row, "face_or_bin"));
+    const double ar = num(row, "area_m2");
+    vol[p][j] += ks * num(row, "sliding_wear_mm_per_1000h") * 1e-6 * ar + ki * num(row, "strike_W") * 3600;
+    area[p][j] += ar;
+  }
+  int checked = 0;
+  for (const auto& row : read_csv(a / "life_plates.csv"))
+    if (num(row, "stage") == 0) {
+      const int p = static_cast<int>(num(row, "plate")), j = static_cast<int>(num(row, "ring"));
+      INFO("plate " << p << " ring " << j);
+      CHECK(num(row, "wear_mm_per_1000h") == Approx(vol[p][j] / area[p][j] * 1e6).epsilon(1e-4).margin(1e-9));
+      CHECK(row.at("wear_basis") == "calibrated");
+      ++checked;
+    }
+  CHECK(checked == 8);
+  fs::remove_all(a);
+
+  // End lifters stand on the plates: a study holds them, and says why.
+  mc::app::LifeOptions o;
+  o.stages = 1;
+  o.hours = 1000;
+  o.c.overrides = {"end_lifters.rows=12", "end_lifters.height=0.02", "end_lifters.width=0.02"};
+  const mc::app::Prepared with = mc::app::prepare(o.c);
+  CHECK(mc::app::life_request(o, with)["end_plates"] == "held");
+  o.c.overrides.clear();
+  CHECK(mc::app::life_request(o, mc::app::prepare(o.c))["end_plates"] == "worn");
+  o.hold_plates = true;
+  CHECK(mc::app::life_request(o, mc::app::prepare(o.c))["end_plates"] == "held");
 }

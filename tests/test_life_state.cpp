@@ -40,7 +40,7 @@ namespace {
 // Two stages (the new liner and one worn) of 0.15 s turned each.
 const std::string kStudy =
     " --stages 1 --hours 2000 --quiet --set run.duration=0.15 --set run.settle=0.05 --set run.warmup=0.05"
-    " --set run.checkpoint_interval=0.05 --set run.snapshot_interval=0";
+    " --set run.checkpoint_interval=0.05 --set run.snapshot_interval=0 --hold-plates";  // the plates: test_life_plates
 
 fs::path scratch(const std::string& name) {
   const fs::path p = fs::temp_directory_path() / ("millcharge-life-state-" + std::to_string(::getpid()) + "-" + name);
