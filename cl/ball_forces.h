@@ -363,14 +363,12 @@ MC_FN void ball_walls(int i, real4 pi4, real4 vi, real4 wi, int mat_i, MC_GLOBAL
   const real rho2 = p.x * p.x + p.y * p.y;
   const real margin = R(1e-4) * ri;
   const real r_clear = sp->shell_radius - ri - margin;
-  /* A worn plate's face lies behind its plane: a ball touches it only
-   * within its radius of the plane. */
-  const real plate_reach = ri + margin;
   const int any_old = wall_key[i] != MC_WALL_NONE;
   const int near_shell = sp->shell_radius > R(0.0) && (r_clear <= R(0.0) || rho2 > r_clear * r_clear);
   const int near_wall =
       any_old || near_shell ||
-      (sp->length > R(0.0) && (p.z < plate_reach || p.z > sp->length - plate_reach)) ||
+      /* (a worn plate's face lies behind its plane: the same test holds) */
+      (sp->length > R(0.0) && (p.z < ri + margin || p.z > sp->length - ri - margin)) ||
       (nl > 0 && rho2 > sp->lifter_reach * sp->lifter_reach) || mesh_near(meshes, rho2, p.z);
   if (!near_wall) return;
   WallSlots ws;

@@ -456,10 +456,7 @@ int cmd_life(const LifeOptions& o) {
     } catch (const std::exception&) {
     }  // read_life_state names what is wrong with it
     if (there.is_object() && there.contains("request") && there["request"].is_object()) {
-      if (request.contains("end_plates") && !there["request"].contains("end_plates")) {
-        plates = false;
-        request.erase("end_plates");
-      }
+      if (life::begun_before_plates(there["request"], request)) plates = false;
       const std::string differs = life::request_difference(there["request"], request);
       if (!differs.empty())
         throw std::invalid_argument("--out " + out.string() + " holds a life study of another case or options (" +
@@ -489,13 +486,9 @@ int cmd_life(const LifeOptions& o) {
   if (fs::exists(out / "life.json", ec) && !o.force) {
     // The whole state is read and checked before anything is written: a
     // damaged one is refused and the study left as it is.
+    // (its request was compared with this one's above)
     life::LifeState state = life::read_life_state(
         out / "life.json", {profiles, base.d.largest_ball_diameter, worn, plate_rings, plate_sectors, plate_start});
-    const std::string differs = life::request_difference(state.request, request);
-    if (!differs.empty())
-      throw std::invalid_argument("--out " + out.string() + " holds a life study of another case or options (" +
-                                  (out / "life.json").string() + ": " + differs +
-                                  "); give the same to resume it, or --force to start again");
     st.stages = std::move(state.stages);
     std::printf("life            resuming %s at stage %d\n", out.string().c_str(), st.stages.back().index);
   } else {
@@ -528,9 +521,8 @@ int cmd_life(const LifeOptions& o) {
   // The bars' length before the study wears the plates: the mill's, and
   // where the case's plates are worn and held, their dish at the shell
   // (a stage that wears them adds its own: life_plates.h bar_length).
-  double bars_length = length;
-  if (!plates && base.scene.walls.plates_worn() && base.scene.walls.has_end_plates())
-    bars_length += base.scene.walls.plate_depth[0].back() + base.scene.walls.plate_depth[1].back();
+  const double bars_length =
+      length + (!plates && base.scene.walls.has_end_plates() ? plate_depth_at_shell(base.scene.walls.plate_depth) : 0.0);
   const double V0 = base.d.mill_volume;
 
   for (;;) {

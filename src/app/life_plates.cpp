@@ -56,12 +56,7 @@ PlateBooks read_plate_books(const fs::path& wear_csv, int rings, int sectors) {
   return b;
 }
 
-double bar_length(const Stage& s, double length) {
-  double l = length;
-  for (const auto& d : s.plate_depth_m)
-    if (!d.empty()) l += d.back();
-  return l;
-}
+double bar_length(const Stage& s, double length) { return length + plate_depth_at_shell(s.plate_depth_m); }
 
 json plate_books_json(const PlateBooks& b) {
   return {{"plate_sliding_wear_m3_per_s", b.sliding_m3_s}, {"plate_strike_W", b.strike_W}};

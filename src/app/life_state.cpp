@@ -353,6 +353,12 @@ std::string request_difference(const json& there, const json& asked) {
   return "the request differs";
 }
 
+bool begun_before_plates(const json& there, json& asked) {
+  if (!asked.contains("end_plates") || !there.is_object() || there.contains("end_plates")) return false;
+  asked.erase("end_plates");
+  return true;
+}
+
 void save_life_state(const fs::path& out, const json& request, const std::vector<Stage>& stages,
                      const Calibration& cal, const std::string& stopped) {
   json j;

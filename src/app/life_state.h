@@ -160,6 +160,11 @@ LifeState read_life_state(const std::filesystem::path& file, const StateShape& s
 // 2 there, 3 asked"); "" when they are the same.
 std::string request_difference(const nlohmann::json& there, const nlohmann::json& asked);
 
+// A study begun before the end plates wore (its request `there` without
+// end_plates) resumes with them held: `asked` then loses its end_plates,
+// and the answer is true.
+bool begun_before_plates(const nlohmann::json& there, nlohmann::json& asked);
+
 // How a study's hours were set: calibrated hours = case hours / factor.
 struct Calibration {
   double factor = 1;

@@ -12,6 +12,7 @@
 #include "app/prepare.h"
 #include "core/lifters.h"
 #include "core/liner_wear.h"
+#include "core/plate_wear.h"
 #include "core/version.h"
 #include "io/atomic_file.h"
 #include "io/energy_out.h"
@@ -343,9 +344,8 @@ std::vector<std::string> write_run_results(const FinishedRun& r, const RunReport
     for (const LifterProfile& p : c.lifter_pattern) outlines.push_back(profile_outline(p));
     const double k_impact = r.scene.wall_material.impact_wear_coefficient;
     // The bars reach into worn end plates' dish at the shell (core/liner.cpp).
-    double bars = c.length;
-    if (r.scene.walls.plates_worn() && r.scene.walls.has_end_plates())
-      bars += r.scene.walls.plate_depth[0].back() + r.scene.walls.plate_depth[1].back();
+    const double bars =
+        c.length + (r.scene.walls.has_end_plates() ? plate_depth_at_shell(r.scene.walls.plate_depth) : 0.0);
     std::vector<std::vector<LifterStation>> by_half;
     for (int h = 0; h < 2 && split; ++h)
       by_half.push_back(lifter_stations(halves[h], half_s[h], outlines, 0.5 * c.diameter, bars, k_impact));

@@ -37,9 +37,8 @@ std::string life_study_difference(const fs::path& case_dir, const nlohmann::json
   const nlohmann::json j = nlohmann::json::parse(text);
   if (!j.is_object() || !j.contains("request") || !j["request"].is_object())
     return "its life.json has no request (not a life study's)";
-  // A study begun before the end plates wore resumes with them held (cmd_life).
   nlohmann::json asked = request;
-  if (asked.contains("end_plates") && !j["request"].contains("end_plates")) asked.erase("end_plates");
+  life::begun_before_plates(j["request"], asked);  // it resumes with its plates held
   return life::request_difference(j["request"], asked);
 }
 

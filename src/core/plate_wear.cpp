@@ -48,25 +48,18 @@ std::vector<Row> mean_rows(int n) {
   return rows;
 }
 
-// The rows solved for x with the held entries 0 (Thomas algorithm); the
-// held rings' own means are not matched.
-std::vector<double> solve(const std::vector<Row>& rows, const std::vector<double>& t, const std::vector<bool>& held) {
+// The rows solved for x (Thomas algorithm).
+std::vector<double> solve(const std::vector<Row>& rows, const std::vector<double>& t) {
   const int n = static_cast<int>(t.size());
-  std::vector<double> a(n), b(n), c(n), d(n), x(n, 0.0);
-  for (int j = 0; j < n; ++j) {
-    a[j] = j > 0 && !held[j - 1] ? rows[j].lo : 0;
-    c[j] = j + 1 < n && !held[j + 1] ? rows[j].hi : 0;
-    b[j] = rows[j].mid;
-    d[j] = t[j];
-    if (held[j]) a[j] = 0, c[j] = 0, b[j] = 1, d[j] = 0;
-  }
+  std::vector<double> b(n), d(t), x(n);
+  for (int j = 0; j < n; ++j) b[j] = rows[j].mid;
   for (int j = 1; j < n; ++j) {
-    const double m = a[j] / b[j - 1];
-    b[j] -= m * c[j - 1];
+    const double m = rows[j].lo / b[j - 1];
+    b[j] -= m * rows[j - 1].hi;
     d[j] -= m * d[j - 1];
   }
   x[n - 1] = d[n - 1] / b[n - 1];
-  for (int j = n - 2; j >= 0; --j) x[j] = (d[j] - c[j] * x[j + 1]) / b[j];
+  for (int j = n - 2; j >= 0; --j) x[j] = (d[j] - rows[j].hi * x[j + 1]) / b[j];
   return x;
 }
 
@@ -122,7 +115,7 @@ std::vector<double> plate_increment(const std::vector<double>& booked) {
   // solution, and projected Gauss-Seidel reaches it (each sweep shrinks the
   // error by the rows' off-diagonal share over their diagonal, under 1/6).
   // It starts from the solve without holds, clamped.
-  std::vector<double> x = solve(rows, booked, std::vector<bool>(n, false));
+  std::vector<double> x = solve(rows, booked);
   for (double& v : x) v = std::max(v, 0.0);
   double scale = 0;
   for (double t : booked) scale = std::max(scale, std::fabs(t));
@@ -137,6 +130,13 @@ std::vector<double> plate_increment(const std::vector<double>& booked) {
     if (change <= 1e-15 * scale) break;
   }
   return x;
+}
+
+double plate_depth_at_shell(const std::array<std::vector<double>, 2>& depth) {
+  double d = 0;
+  for (const std::vector<double>& plate : depth)
+    if (!plate.empty()) d += plate.back();  // the last ring's face is flat out to the shell
+  return d;
 }
 
 std::string check_plate_depths(const std::array<std::vector<double>, 2>& depth, int rings, double R, double length) {

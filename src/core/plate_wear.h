@@ -40,6 +40,11 @@ double plate_worn_volume(const std::vector<double>& depth, double R);
 // each ring losing at least its booking, exactly where it moves).
 std::vector<double> plate_increment(const std::vector<double>& booked);
 
+// How far worn plates' faces lie behind their planes at the shell, both
+// ends together (m; 0 for flat plates): the shell and the bars reach that
+// much farther along the mill, into the dishes.
+double plate_depth_at_shell(const std::array<std::vector<double>, 2>& depth);
+
 // What is wrong with worn plates' depths (m, each plate's per ring) for
 // `rings` rings on plates of radius R in a mill of `length` (0: a mill
 // without flat end plates): "" when nothing, else the fault after the key,
