@@ -21,6 +21,7 @@
 #include "grind/bond.h"
 #include "grind/circuit.h"
 #include "grind/fit.h"
+#include "grind/sieve_errors.h"
 #include "grind/ore.h"
 #include "grind/pbm.h"
 #include "core/version.h"
@@ -617,6 +618,8 @@ void add_intervals(nlohmann::ordered_json& j, const GrindOptions& o, const Grind
 int cmd_grind(const GrindOptions& o) {
   if (!o.fit_tests.empty() || o.fit_wi_kWh_t > 0) return cmd_grind_fit(o);
   if (!o.fit_params.empty()) throw std::invalid_argument("--fit-params: names what --fit or --fit-wi fits; give one");
+  if (!o.sieve_errors.empty())
+    throw std::invalid_argument("--sieve-errors: says how --fit takes a batch test's sieve errors; give --fit");
   // The inputs, checked before anything is computed.
   const Ore ore = io::read_ore(o.ore);
   Ore bond_ore = ore;
@@ -674,10 +677,12 @@ int cmd_grind(const GrindOptions& o) {
                  o.ore.c_str());
   const GrindIntervals ci = grind_intervals(ore, numbers(o, made),
                                             [&](const Ore& moved) { return numbers(o, make(o, moved, run, lab, times, true)); });
-  // The fit's residuals correlated along the sieves: the intervals shown are likely too narrow; said once.
-  if (ci.given && !o.quiet && !correlated_residuals_note(ore.fitted_under.residual_lag1).empty())
-    std::fprintf(stderr, "millcharge: %s: %s\n", o.ore.c_str(),
-                 correlated_residuals_note(ore.fitted_under.residual_lag1).c_str());
+  // The fit's residuals correlated along the sieves and taken as
+  // independent: the intervals shown are likely too narrow; said once.
+  const std::string sieve_note =
+      sieve_errors_note(ore.fitted_under.residual_lag1, ore.fitted_under.sieve_error_rho, SieveErrors::independent);
+  if (ci.given && !o.quiet && !(ore.fitted_under.sieve_error_rho > 0) && !sieve_note.empty())
+    std::fprintf(stderr, "millcharge: %s: %s\n", o.ore.c_str(), sieve_note.c_str());
   if (!ci.stale.empty() && !o.quiet)
     std::fprintf(stderr,
                  "millcharge: note: %s: %s ([fitted] %s): the ore was changed after its fit, and "

@@ -28,6 +28,9 @@ struct GrindOptions {
   std::vector<std::string> fit_tests;   // --fit TEST.toml, once or more (fitted together)
   std::vector<std::string> fit_params;  // --fit-params NAME,... (default: the rate model's scale)
   double fit_wi_kWh_t = 0;              // --fit-wi: the measured work index to meet
+  // --sieve-errors auto|independent|correlated: how --fit takes the sieve
+  // errors (grind/sieve_errors.h); "" not given (auto).
+  std::string sieve_errors;
   // Scale-up: beside the spectrum model's products in this run, those of
   // the energy-specific rates the ore has in a laboratory run.
   std::string scale_from;               // --scale-from LAB_RUN

@@ -21,6 +21,7 @@
 #include "grind/circuit.h"
 #include "grind/fit.h"
 #include "grind/interval.h"
+#include "grind/sieve_errors.h"
 #include "grind/ore.h"
 #include "io/atomic_file.h"
 #include "io/batch_test_file.h"
@@ -53,6 +54,9 @@ void check_fit_options(const GrindOptions& o) {
     throw std::invalid_argument(what +
                                 ": fits the ore and writes it; grind the fitted ore in a second call (--time, "
                                 "--feed-rate, --target-p80, --classifier, --scale-from and --next-test belong there)");
+  if (o.fit_wi_kWh_t > 0 && !o.sieve_errors.empty())
+    throw std::invalid_argument("--sieve-errors: says how --fit takes a batch test's sieve errors; --fit-wi fits a "
+                                "work index, with no sieves");
   if (o.fit_wi_kWh_t > 0 && o.fit_params.size() > 1)
     throw std::invalid_argument("--fit-params: a work index is one number and fits one parameter, not " +
                                 std::to_string(o.fit_params.size()));
@@ -319,7 +323,10 @@ int fit_batch(const GrindOptions& o) {
       o.fit_params.empty() ? std::vector<std::string>{default_parameter(start.model)} : o.fit_params;
   std::vector<TestInMill> in_mills;
   for (const TestRun& t : tests) in_mills.push_back({t.file.test, t.run.spectrum, t.run.power_W, t.holdup_kg});
-  BatchFit fit = fit_batch_tests(start, in_mills, names);
+  const SieveErrors mode = parse_sieve_errors(o.sieve_errors.empty() ? "auto" : o.sieve_errors).value();
+  SieveErrorFit sf = fit_with_sieve_errors(start, in_mills, names, mode);
+  in_mills = sf.tests;  // with the sieve errors' rho: the covariance and every refit read them so
+  BatchFit& fit = sf.fit;
   const std::vector<double> weights = test_weights(in_mills);  // on the residuals: the squares count by their square
   std::string test_names, run_names;
   for (const TestRun& t : tests) {
@@ -328,7 +335,9 @@ int fit_batch(const GrindOptions& o) {
   }
   const io::Run& run = tests.front().run;
   fit.ore.fitted_under = record(run, test_names, run_names, names, fit.rms_pp);
-  fit.ore.fitted_under.residual_lag1 = fit.residual_r1;
+  // r1 of the residuals taken as independent (what says whether they correlate), and rho.
+  fit.ore.fitted_under.residual_lag1 = sf.r1_independent;
+  fit.ore.fitted_under.sieve_error_rho = sf.rho;
   // What the fit leaves open, kept with the ore for the intervals of its products.
   const auto t_cov = std::chrono::steady_clock::now();
   fit.ore.fitted_under.covariance = fit_covariance(fit, in_mills);
@@ -381,8 +390,15 @@ int fit_batch(const GrindOptions& o) {
   j["rms_residual_pp"] = fit.rms_pp;
   // Sieve errors correlated along the sieves leave the intervals too narrow
   // (docs/grinding-intervals.md, "Are the intervals right?").
-  j["residual_lag1"] = std::isfinite(fit.residual_r1) ? nlohmann::json(fit.residual_r1) : nlohmann::json();
-  j["residuals_correlated"] = fit.residual_r1 > kCorrelatedResiduals;
+  j["residual_lag1"] = std::isfinite(sf.r1_independent) ? nlohmann::json(sf.r1_independent) : nlohmann::json();
+  j["residuals_correlated"] = sf.r1_independent > kSwitchToCorrelated;
+  j["sieve_errors"] = {{"asked", sieve_errors_name(mode)},
+                       {"model", sf.correlated ? "correlated" : "independent"},
+                       {"rho", sf.rho},
+                       {"rounds", sf.rounds},
+                       {"residual_lag1_whitened", sf.correlated && std::isfinite(fit.residual_r1)
+                                                      ? nlohmann::json(whitened_lag1(fit, sf.rho))
+                                                      : nlohmann::json()}};
   double noise_pp = 0;
   for (const TestRun& t : tests) noise_pp = std::max(noise_pp, t.file.test.noise_pp);
   // With nothing free the residual says how far the ore as it stands is
@@ -447,10 +463,11 @@ int fit_batch(const GrindOptions& o) {
     std::printf("  rms residual %.4g pp; %d iterations, %d evaluations, %.2f s (%.2f s of it what the fit leaves "
                 "open: covariance, profiles)\n",
                 fit.rms_pp, fit.iterations, fit.evaluations, seconds, cov_seconds);
-    if (std::isfinite(fit.residual_r1))
-      std::printf("  residuals' lag-1 autocorrelation along the sieves r1 = %.3f\n", fit.residual_r1);
-    if (fit.free > 0 && !correlated_residuals_note(fit.residual_r1).empty())
-      std::printf("  %s\n", correlated_residuals_note(fit.residual_r1).c_str());
+    if (std::isfinite(sf.r1_independent))
+      std::printf("  residuals' lag-1 autocorrelation along the sieves r1 = %.3f%s\n", sf.r1_independent,
+                  sf.correlated ? " (fitted as independent)" : "");
+    if (fit.free > 0 && !sieve_errors_note(sf.r1_independent, sf.rho, mode).empty())
+      std::printf("  %s\n", sieve_errors_note(sf.r1_independent, sf.rho, mode).c_str());
     if (fit.rms_pp > 2 * noise_pp && fit.free > 0)
       std::printf("  note: the rms residual is above twice the test's noise_pp (%g pp): the model cannot reproduce "
                   "the test with these parameters free%s\n",

@@ -70,7 +70,7 @@ RealTests real_tests(const Ore& ore, std::string& why) {
       const io::Run run = io::read_run(runs[k], ore.model == RateModel::spectrum, ore.energy_basis);
       const double holdup = t.test.holdup_kg > 0 ? t.test.holdup_kg
                                                   : mill_holdup_kg(ore, run.porosity, run.filling, run.mill_volume);
-      r.tests.push_back({t.test, run.spectrum, run.power_W, holdup});
+      r.tests.push_back({t.test, run.spectrum, run.power_W, holdup, f.sieve_error_rho});
     }
     // The same tests as fitted, and in the same runs: the fitted ore's sum
     // of squares on them is the one its fit kept (ssr_held, with held
@@ -78,8 +78,10 @@ RealTests real_tests(const Ore& ore, std::string& why) {
     // its 10 digits. A test file edited or a run made again since would
     // give the refits other data than the ore's covariance describes.
     double ss_pp = 0, n = 0;  // each test alone: its residuals in pp as measured
-    for (const TestInMill& t : r.tests)
+    for (TestInMill t : r.tests) {
+      t.sieve_rho = 0;  // as measured
       for (double x : weighted_residuals(ore, {t})) ss_pp += x * x, ++n;
+    }
     const double ssr_kept = ore.fitted_under.covariance.ssr_fit, ssr_now = weighted_ssr(ore, r.tests);
     const double rms_kept = f.rms_residual_pp, rms_now = n > 0 ? std::sqrt(ss_pp / n) : 0;
     auto differs = [](double now, double kept) { return kept > 0 && !(std::fabs(now - kept) <= 1e-6 * kept + 1e-9); };
@@ -210,7 +212,8 @@ NextRanking rank_next(const NextPlan& plan, const Ore& ore, const NextTarget& ta
   std::vector<TestInMill> candidates;
   for (std::size_t m = 0; m < plan.runs.size(); ++m)
     for (const std::vector<double>& times : plan.times) {
-      const TestInMill c{candidate_test(ore, times), plan.read[m].spectrum, plan.read[m].power_W, plan.holdup_kg[m]};
+      const TestInMill c{candidate_test(ore, times), plan.read[m].spectrum, plan.read[m].power_W, plan.holdup_kg[m],
+                         ore.fitted_under.sieve_error_rho};
       const NextTestWidth w = expected_after(ore, u, s, c);
       NextRow row;
       row.run = plan.runs[m];

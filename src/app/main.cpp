@@ -235,6 +235,12 @@ int main(int argc, char** argv) {
                     "the ore parameters --fit or --fit-wi moves, comma-separated (default: the rate model's scale, "
                     "efficiency for the spectrum model)")
       ->type_name("NAME,...");
+  grind->add_option("--sieve-errors", go.sieve_errors,
+                    "with --fit: how the sieve errors are taken: auto (default: as independent, unless the residuals "
+                    "correlate along the sieves, then as correlated), independent, or correlated (from one sieve to "
+                    "the next, rho estimated)")
+      ->check(CLI::IsMember({"auto", "independent", "correlated"}))
+      ->type_name("MODEL");
   grind->add_option("--fit-wi", go.fit_wi_kWh_t,
                     "with --bond P1_UM: set one parameter so that Bond's test gives this measured work index (kWh/t)")
       ->check(mc::app::cli::positive("kWh/t"))

@@ -1,5 +1,6 @@
 // An ore fitted to a batch test, least squares, identification (fit.h).
 #include "grind/fit.h"
+#include "grind/sieve_errors.h"
 
 #include <fmt/format.h>
 #include "core/edit_distance.h"
@@ -486,24 +487,17 @@ double residual_lag1(const std::vector<double>& r, const std::vector<std::size_t
   return pairs > 0 && den > 0 ? num / den : kNaN;
 }
 
-std::string correlated_residuals_note(double r1) {
-  if (!(r1 > kCorrelatedResiduals)) return "";
-  return fmt::format(
-      "note: the fit's residuals are correlated along the sieves (lag-1 autocorrelation r1 = {:.2f}, above {:.1f}): "
-      "the sieve errors are likely not independent, and the 95 % intervals are then likely too narrow (about 70 % "
-      "coverage for such errors: docs/grinding-intervals.md#are-the-intervals-right)",
-      r1, kCorrelatedResiduals);
-}
-
 std::vector<double> weighted_residuals(const Ore& ore, const std::vector<TestInMill>& tests) {
   const std::vector<double> w = test_weights(tests);
   std::vector<double> r;
   for (std::size_t m = 0; m < tests.size(); ++m) {
     const TestInMill& tm = tests[m];
     const auto pred = batch_test_products(ore, tm.spectrum, tm.power_W, tm.holdup_kg, tm.test);
-    for (std::size_t k : informative_sieves(tm.test))
-      for (std::size_t t = 0; t < tm.test.times_min.size(); ++t)
-        r.push_back(w[m] * 100 * (pred[t][k] - tm.test.passing[t][k]));
+    const std::vector<std::size_t> used = informative_sieves(tm.test);
+    const std::size_t at = r.size();
+    for (std::size_t t = 0; t < tm.test.times_min.size(); ++t)
+      for (std::size_t k : used) r.push_back(w[m] * 100 * (pred[t][k] - tm.test.passing[t][k]));
+    whiten_rows(r.data() + at, tm.test.times_min.size(), used.size(), tm.sieve_rho);
   }
   return r;
 }
@@ -550,13 +544,16 @@ BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests,
   // The residuals of an ore against every test, in percentage points of
   // the first test's noise (each test's weighted by its noise); the
   // products by test.
-  auto residuals_of = [&](const Ore& o, std::vector<double>& r, std::vector<Matrix>* products) {
+  // Whitened by each test's sieve_rho unless `raw`.
+  auto residuals_of = [&](const Ore& o, std::vector<double>& r, std::vector<Matrix>* products, bool raw = false) {
     std::size_t i = 0;
     for (std::size_t m = 0; m < tests.size(); ++m) {
       const TestInMill& tm = tests[m];
       const auto pred = batch_test_products(o, tm.spectrum, tm.power_W, tm.holdup_kg, tm.test);
+      const std::size_t at = i;
       for (std::size_t t = 0; t < tm.test.times_min.size(); ++t)
         for (std::size_t k : used[m]) r[i++] = weight[m] * 100 * (pred[t][k] - tm.test.passing[t][k]);
+      if (!raw) whiten_rows(r.data() + at, tm.test.times_min.size(), used[m].size(), tm.sieve_rho);
       if (products) products->push_back(pred);
     }
   };
@@ -647,19 +644,19 @@ BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests,
     fit.condition = id.condition;
     // The residuals of the products as written, whatever is free (with
     // nothing free, those of the starting ore); by test too.
-    std::vector<double> r(n);
-    residuals_of(ore, r, &fit.predicted_by_test);
+    std::vector<double> r(n), w(n);
+    residuals_of(ore, r, &fit.predicted_by_test, true);
+    residuals_of(ore, w, nullptr);
     fit.predicted = fit.predicted_by_test.front();
-    // The sum of squares as weighted (what the fit minimised); the rms
-    // residuals in percentage points as measured.
-    fit.ssr = 0;
+    // The sum of squares as weighted and whitened (what the fit minimised);
+    // the rms residuals in percentage points as measured.
+    fit.ssr = sum_sq(w);
     double ssr_pp = 0;
     std::size_t i = 0;
     for (std::size_t m = 0; m < tests.size(); ++m) {
       double ssr_m = 0;
       const std::size_t nm = tests[m].test.times_min.size() * used[m].size();
       for (std::size_t j = 0; j < nm; ++j, ++i) ssr_m += r[i] * r[i];
-      fit.ssr += ssr_m;
       ssr_m /= weight[m] * weight[m];
       ssr_pp += ssr_m;
       fit.rms_by_test.push_back(nm ? std::sqrt(ssr_m / static_cast<double>(nm)) : 0.0);
@@ -669,6 +666,8 @@ BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests,
     for (std::size_t m = 0; m < tests.size(); ++m)
       rows.insert(rows.end(), tests[m].test.times_min.size(), used[m].size());
     fit.residual_r1 = residual_lag1(r, rows);
+    fit.raw_residuals = r;
+    fit.residual_rows = rows;
     // The covariance of those off their bounds, with the bound ones fixed.
     if (!inner.empty()) {
       Matrix Jin(lm.J.size(), std::vector<double>(inner.size()));
@@ -677,6 +676,17 @@ BatchFit fit_batch_tests(const Ore& start, const std::vector<TestInMill>& tests,
         for (std::size_t i = 0; i < lm.J.size(); ++i) Jin[i][a] = lm.J[i][inner[a]];
       }
       fit.covariance = covariance_matrix(Jin, lm.ssr);
+      // Unwhitened, test by test, time by time.
+      fit.raw_jacobian = Jin;
+      std::size_t at = 0;
+      for (std::size_t m = 0; m < tests.size(); ++m)
+        for (std::size_t t = 0; t < tests[m].test.times_min.size(); ++t, at += used[m].size())
+          for (std::size_t a = 0; a < inner.size(); ++a) {
+            std::vector<double> col(used[m].size());
+            for (std::size_t k = 0; k < col.size(); ++k) col[k] = Jin[at + k][a];
+            unwhiten_row(col.data(), col.size(), tests[m].sieve_rho);
+            for (std::size_t k = 0; k < col.size(); ++k) fit.raw_jacobian[at + k][a] = col[k];
+          }
     }
     fit.dof = static_cast<int>(n - inner.size());
     fit.s2 = fit.dof > 0 ? fit.ssr / fit.dof : kNaN;

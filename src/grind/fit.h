@@ -134,21 +134,24 @@ struct BatchFit {
   std::vector<std::vector<double>> covariance;
   double s2 = 0;                                // ssr / (data − free), pp² of the first test
   int dof = 0;
-  // The residuals' lag-1 autocorrelation along the sieves (residual_lag1):
-  // near 0 for independent sieve errors; well above for errors that move
-  // neighbouring sieves together, where the intervals come out too narrow.
+  // The raw residuals' lag-1 autocorrelation along the sieves
+  // (residual_lag1): near 0 for independent sieve errors; well above for
+  // errors that move neighbouring sieves together (sieve_errors.h).
   double residual_r1 = std::numeric_limits<double>::quiet_NaN();
+  // The weighted residuals before whitening (pp of the first test), row by
+  // row: each test's times in turn, each row a time's informative sieves,
+  // coarse to fine (what the sieve errors' ρ is estimated from).
+  std::vector<double> raw_residuals;
+  std::vector<std::size_t> residual_rows;
+  // Their Jacobian in the variables of `covariance_of`, [data][variable]
+  // (the restricted likelihood of the sieve errors' ρ reads it).
+  std::vector<std::vector<double>> raw_jacobian;
 };
 // The lag-1 autocorrelation of residuals along the sieves, pooled: rows
 // of `row_lengths` consecutive residuals (a test time's, its sieves coarse
 // to fine), r1 = Σ d_k d_{k+1} / Σ d_k² over every row's neighbours, d the
 // residual less the mean of all. NaN with no neighbours or no scatter.
 double residual_lag1(const std::vector<double>& residuals, const std::vector<std::size_t>& row_lengths);
-// Above this, the fit's residuals say the sieve errors are correlated and
-// the 95 % intervals likely too narrow (docs/grinding-intervals.md).
-constexpr double kCorrelatedResiduals = 0.3;
-// "" unless r1 > kCorrelatedResiduals: then the note to print, once.
-std::string correlated_residuals_note(double r1);
 // Fits the named parameters of `start` to the test through the mill's
 // spectrum and power, with the hold-up `holdup_kg`. An unidentified
 // parameter is held at its start and the rest fitted again, one at a time.
@@ -168,6 +171,10 @@ struct TestInMill {
   BatchTest test;
   std::vector<SpectrumBin> spectrum;
   double power_W = 0, holdup_kg = 0;
+  // The sieve errors' correlation from one sieve to the next along each
+  // time's readings (sieve_errors.h): 0, independent; else the residuals
+  // are whitened by it before they are squared.
+  double sieve_rho = 0;
 };
 // Each test's residuals count by 1/noise_pp²: a test sieved to 0.5 pp
 // counts four times one sieved to 1 pp. The weights are taken relative to
@@ -185,7 +192,9 @@ constexpr double kBoundWhisker = 1e-6;
 // 0 beside others.
 std::vector<double> test_weights(const std::vector<TestInMill>& tests);
 // The weighted residuals of the ore's products against the tests (pp of
-// the first test), over the sieves the fit reads, and their sum of squares.
+// the first test), over the sieves the fit reads, time by time, each
+// time's sieves whitened by the test's sieve_rho (what the fit minimises),
+// and their sum of squares.
 std::vector<double> weighted_residuals(const Ore& ore, const std::vector<TestInMill>& tests);
 double weighted_ssr(const Ore& ore, const std::vector<TestInMill>& tests);
 // The sieves of a test that carry information: not passing 1 in the feed

@@ -151,8 +151,17 @@ BatchTest simulated_test(const Ore& truth, const TestInMill& candidate, double s
   BatchTest t = candidate.test;
   t.passing = batch_test_products(truth, candidate.spectrum, candidate.power_W, candidate.holdup_kg, t);
   const std::vector<std::size_t> sieves = informative_sieves(t);
-  for (auto& row : t.passing)
-    for (std::size_t k : sieves) row[k] += scatter_pp / 100 * noise.next();
+  // Correlated along the sieves as the candidate's sieve_rho says (AR(1),
+  // each reading's scatter scatter_pp; sieve_errors.h); independent at 0.
+  const double rho = candidate.sieve_rho, keep = std::sqrt(1 - rho * rho);
+  for (auto& row : t.passing) {
+    double e = 0;
+    for (std::size_t j = 0; j < sieves.size(); ++j) {
+      const double xi = noise.next();
+      e = j == 0 ? xi : rho * e + keep * xi;
+      row[sieves[j]] += scatter_pp / 100 * e;
+    }
+  }
   return t;
 }
 
@@ -176,6 +185,7 @@ std::vector<RefitWidth> refitted_widths(const Ore& ore, const RealTests& real,
       std::vector<TestInMill> tests = real.tests;
       TestInMill c = candidates[m];
       c.test.noise_pp = real.tests.empty() ? 1.0 : real.tests.front().test.noise_pp;
+      if (!real.tests.empty()) c.sieve_rho = real.tests.front().sieve_rho;  // sieved as the fit took the tests
       c.test = simulated_test(truths[k].ore, c, scatter_pp, noise);
       tests.push_back(c);
       BatchFit f = fit_batch_tests(ore, tests, real.names);

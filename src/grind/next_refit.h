@@ -72,7 +72,8 @@ std::vector<std::string> held_without_edges(const Ore& ore);
 
 // The candidate's test made at `truth`: its sieves, feed and times, the
 // products the truth makes in its mill, each informative reading moved by
-// a normal deviate of scatter_pp (percentage points), not clipped.
+// a normal deviate of scatter_pp (percentage points), not clipped; along
+// each time's sieves correlated by the candidate's sieve_rho (AR(1)).
 BatchTest simulated_test(const Ore& truth, const TestInMill& candidate, double scatter_pp, SeededNormal& noise);
 
 // The refitted widths of one candidate over the truths. A draw whose fit

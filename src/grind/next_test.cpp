@@ -1,5 +1,6 @@
 // Which batch test to run next (next_test.h).
 #include "grind/next_test.h"
+#include "grind/sieve_errors.h"
 
 #include <algorithm>
 #include <cmath>
@@ -112,7 +113,9 @@ NextTestWidth expected_after(const Ore& ore, const FitCovariance& u, const Sensi
   for (const HeldParameter& h : u.held) ps.push_back(find_ore_parameter(h.name));
   Matrix Jc(r0.size(), std::vector<double>(nv));
   for (std::size_t v = 0; v < nv; ++v) {
-    const std::vector<double> col = column(*ps[v], at, c, sieves, r0);
+    std::vector<double> col = column(*ps[v], at, c, sieves, r0);
+    // Its readings' errors correlated along the sieves as the fit took them.
+    whiten_rows(col.data(), c.test.times_min.size(), sieves.size(), c.sieve_rho);
     for (std::size_t i = 0; i < r0.size(); ++i) Jc[i][v] = col[i];
   }
   // The current information: the tests' JᵀJ / s² on every variable, kept

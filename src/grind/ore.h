@@ -108,6 +108,10 @@ struct ContactRecord {
   // The fit's residuals' lag-1 autocorrelation along the sieves
   // (residual_lag1; fit.h): NaN where not kept.
   double residual_lag1 = std::numeric_limits<double>::quiet_NaN();
+  // The sieve errors' correlation from one sieve to the next the fit took
+  // (sieve_error_rho; sieve_errors.h): 0, independent. Its tests' refits
+  // (the intervals' held reach, the next test) whiten by it.
+  double sieve_error_rho = 0;
   FitCovariance covariance;  // a batch test's fit only
 };
 

@@ -19,6 +19,7 @@
 #include "grind/fit.h"
 #include "grind/interval.h"
 #include "grind/pbm.h"
+#include "grind/sieve_errors.h"
 #include "io/toml_names.h"
 
 namespace mc::io {
@@ -210,6 +211,7 @@ void read_covariance(const OreReader& r, const toml::table& ft, FitCovariance& u
 void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   r.knows(ft, "fitted.", {"contact_law", "restitution", "friction", "rolling_friction", "stiffness_N_m",
                           "youngs_modulus_Pa", "pairs", "test", "run", "parameters", "rms_residual_pp", "residual_lag1",
+                          "sieve_error_rho",
                           "energy_basis", "covariance_variables", "covariance_values", "covariance",
                           "residual_variance_pp2", "degrees_of_freedom", "held", "edge", "best", "information",
                           "ssr_held", "ssr_best", "ssr_limit", "tables_fnv1a"});
@@ -237,6 +239,7 @@ void read_fitted(const OreReader& r, const toml::table& ft, ContactRecord& c) {
   c.parameters = text("parameters");
   c.rms_residual_pp = r.number(ft, "fitted.", "rms_residual_pp", 0, kInf, ">= 0", 0.0);
   if (ft.get("residual_lag1")) c.residual_lag1 = r.number(ft, "fitted.", "residual_lag1", -1, 1, "within -1 .. 1");
+  c.sieve_error_rho = r.number(ft, "fitted.", "sieve_error_rho", 0, grind::kMaxSieveRho, "0 to 0.98", 0.0);
   read_covariance(r, ft, c.covariance);
 }
 
@@ -606,6 +609,7 @@ std::string ore_toml(const grind::Ore& o, const std::string& header) {
     if (!f.parameters.empty()) s += "parameters = " + quoted(f.parameters) + "\n";
     s += "rms_residual_pp = " + g(f.rms_residual_pp) + "\n";
     if (std::isfinite(f.residual_lag1)) s += "residual_lag1 = " + g(f.residual_lag1) + "\n";
+    if (f.sieve_error_rho > 0) s += "sieve_error_rho = " + g(f.sieve_error_rho) + "\n";
     s += covariance_toml(f.covariance);
   }
   return s;

@@ -1,0 +1,182 @@
+// Sieve errors correlated along a product's sieves: the whitening, ρ's
+// maximum likelihood and the fit that estimates it (sieve_errors.h).
+#include "grind/sieve_errors.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace mc::grind {
+
+namespace {
+
+// The restricted log-likelihood at ρ (sieve_rho_reml), less constants.
+double restricted_likelihood(const std::vector<double>& r, const std::vector<std::vector<double>>& J,
+                             const std::vector<std::size_t>& lengths, double rho) {
+  const std::size_t p = J.empty() ? 0 : J.front().size();
+  const double c = std::sqrt(1 - rho * rho);
+  std::vector<double> rw(r.size());
+  std::vector<std::vector<double>> Jw(J.size(), std::vector<double>(p));
+  std::size_t i = 0, rows = 0;
+  for (std::size_t len : lengths) {
+    for (std::size_t k = 0; k < len; ++k) {
+      const std::size_t at = i + k;
+      rw[at] = k == 0 ? c * r[at] : r[at] - rho * r[at - 1];
+      for (std::size_t a = 0; a < p; ++a) Jw[at][a] = k == 0 ? c * J[at][a] : J[at][a] - rho * J[at - 1][a];
+    }
+    rows += len > 0;
+    i += len;
+  }
+  const std::size_t n = i;
+  // S = |r|² − bᵀ A⁻¹ b with A = JᵀJ, b = Jᵀr, by Cholesky; ln det A on its diagonal.
+  std::vector<std::vector<double>> A(p, std::vector<double>(p, 0.0));
+  std::vector<double> b(p, 0.0);
+  double s = 0;
+  for (std::size_t m = 0; m < n; ++m) {
+    s += rw[m] * rw[m];
+    for (std::size_t a = 0; a < p; ++a) {
+      b[a] += Jw[m][a] * rw[m];
+      for (std::size_t q = 0; q <= a; ++q) A[a][q] += Jw[m][a] * Jw[m][q];
+    }
+  }
+  double log_det = 0;
+  for (std::size_t a = 0; a < p; ++a) {
+    for (std::size_t q = 0; q <= a; ++q) {
+      double v = A[a][q];
+      for (std::size_t k = 0; k < q; ++k) v -= A[a][k] * A[q][k];
+      if (q == a) {
+        if (!(v > 0)) return -std::numeric_limits<double>::infinity();
+        A[a][a] = std::sqrt(v);
+        log_det += 2 * std::log(A[a][a]);
+      } else {
+        A[a][q] = v / A[q][q];
+      }
+    }
+  }
+  for (std::size_t a = 0; a < p; ++a) {  // y = L⁻¹ b: S = |r|² − |y|²
+    double v = b[a];
+    for (std::size_t k = 0; k < a; ++k) v -= A[a][k] * b[k];
+    b[a] = v / A[a][a];
+    s -= b[a] * b[a];
+  }
+  if (!(s > 0) || n <= p) return -std::numeric_limits<double>::infinity();
+  return 0.5 * static_cast<double>(rows) * std::log(1 - rho * rho) -
+         0.5 * static_cast<double>(n - p) * std::log(s) - 0.5 * log_det;
+}
+
+}  // namespace
+
+void whiten_rows(double* r, std::size_t rows, std::size_t len, double rho) {
+  if (rho == 0 || len == 0) return;
+  if (!(rho > 0 && rho < 1)) throw std::invalid_argument("sieve_error_rho: must lie in [0, 1)");
+  const double scale = 1 / std::sqrt(1 - rho * rho);
+  for (std::size_t t = 0; t < rows; ++t) {
+    double* row = r + t * len;
+    // From the last back, so that each reads its unwhitened neighbour.
+    for (std::size_t k = len; k-- > 1;) row[k] = (row[k] - rho * row[k - 1]) * scale;
+  }
+}
+
+void unwhiten_row(double* r, std::size_t len, double rho) {
+  if (rho == 0) return;
+  const double c = std::sqrt(1 - rho * rho);
+  for (std::size_t k = 1; k < len; ++k) r[k] = r[k] * c + rho * r[k - 1];
+}
+
+double sieve_rho_reml(const std::vector<double>& r, const std::vector<std::vector<double>>& J,
+                      const std::vector<std::size_t>& lengths) {
+  std::size_t total = 0;
+  bool pairs = false;
+  for (std::size_t len : lengths) total += len, pairs = pairs || len >= 2;
+  if (!pairs || total > r.size() || (!J.empty() && J.size() != r.size())) return 0;
+  auto ell = [&](double rho) { return restricted_likelihood(r, J, lengths, rho); };
+  double best = 0, best_l = ell(0);
+  for (int k = 1; k <= static_cast<int>(kMaxSieveRho * 1000 + 0.5); ++k) {
+    const double l = ell(k * 1e-3);
+    if (l > best_l) best_l = l, best = k * 1e-3;
+  }
+  // Golden section within a grid step either side.
+  double a = std::max(0.0, best - 1e-3), b = std::min(kMaxSieveRho, best + 1e-3);
+  const double g = 0.5 * (std::sqrt(5.0) - 1);
+  double c = b - g * (b - a), d = a + g * (b - a);
+  double lc = ell(c), ld = ell(d);
+  for (int it = 0; it < 40; ++it) {
+    if (lc > ld) b = d, d = c, ld = lc, c = b - g * (b - a), lc = ell(c);
+    else a = c, c = d, lc = ld, d = a + g * (b - a), ld = ell(d);
+  }
+  const double x = 0.5 * (a + b);
+  const double found = ell(x) > best_l ? x : best;
+  // The estimate of an autoregression's ρ from a short series comes out
+  // low by about 2ρ/n (n readings; the same for rows pooled): undone.
+  return std::min(kMaxSieveRho, found * static_cast<double>(total) / static_cast<double>(total - 2));
+}
+
+double whitened_lag1(const BatchFit& f, double rho) {
+  std::vector<double> w = f.raw_residuals;
+  std::size_t i = 0;
+  for (std::size_t len : f.residual_rows) {
+    if (i + len > w.size()) return std::numeric_limits<double>::quiet_NaN();
+    whiten_rows(w.data() + i, 1, len, rho);
+    i += len;
+  }
+  return residual_lag1(w, f.residual_rows);
+}
+
+std::optional<SieveErrors> parse_sieve_errors(const std::string& s) {
+  if (s == "auto") return SieveErrors::automatic;
+  if (s == "independent") return SieveErrors::independent;
+  if (s == "correlated") return SieveErrors::correlated;
+  return std::nullopt;
+}
+
+const char* sieve_errors_name(SieveErrors e) {
+  return e == SieveErrors::automatic ? "auto" : e == SieveErrors::independent ? "independent" : "correlated";
+}
+
+SieveErrorFit fit_with_sieve_errors(const Ore& start, std::vector<TestInMill> tests,
+                                    const std::vector<std::string>& names, SieveErrors mode, int max_iterations) {
+  SieveErrorFit out;
+  for (TestInMill& t : tests) t.sieve_rho = 0;
+  out.fit = fit_batch_tests(start, tests, names, max_iterations);
+  out.r1_independent = out.fit.residual_r1;
+  const bool estimate = mode == SieveErrors::correlated ||
+                        (mode == SieveErrors::automatic && out.fit.free > 0 && out.r1_independent > kSwitchToCorrelated);
+  if (estimate) {
+    double rho = sieve_rho_reml(out.fit.raw_residuals, out.fit.raw_jacobian, out.fit.residual_rows);
+    for (int round = 0; round < 8; ++round) {
+      for (TestInMill& t : tests) t.sieve_rho = rho;
+      if (rho == 0 && round == 0) break;  // the likelihood's best is independence: that fit stands
+      out.fit = fit_batch_tests(start, tests, names, max_iterations);
+      ++out.rounds;
+      const double next = sieve_rho_reml(out.fit.raw_residuals, out.fit.raw_jacobian, out.fit.residual_rows);
+      if (std::fabs(next - rho) < 2e-3) break;
+      rho = next;
+    }
+    out.rho = tests.front().sieve_rho;
+    out.correlated = out.rho > 0;
+  }
+  out.tests = tests;
+  return out;
+}
+
+std::string sieve_errors_note(double r1, double rho, SieveErrors mode) {
+  if (rho > 0)
+    return fmt::format(
+        "the sieve errors were taken as correlated from one sieve to the next (rho = {:.2f}, estimated from the "
+        "residuals{}): the standard errors and intervals allow for it (docs/grinding-intervals.md#sieve-errors-"
+        "correlated-between-sieves)",
+        rho, std::isfinite(r1) ? fmt::format("; their lag-1 autocorrelation fitted as independent, r1 = {:.2f}", r1)
+                                : std::string());
+  if (mode == SieveErrors::independent && r1 > kSwitchToCorrelated)
+    return fmt::format(
+        "note: the fit's residuals are correlated along the sieves (lag-1 autocorrelation r1 = {:.2f}, above {:.2f}) "
+        "and the fit took them as independent: the 95 % intervals are then likely too narrow (fit with --sieve-errors "
+        "auto or correlated) "
+        "(docs/grinding-intervals.md#sieve-errors-correlated-between-sieves)",
+        r1, kSwitchToCorrelated);
+  return "";
+}
+
+}  // namespace mc::grind
