@@ -12,7 +12,7 @@
 //   millcharge grind RUN_DIR --ore ORE.toml [--time MIN,...] [--feed-rate T/H] [--target-p80 UM]
 //                    [--classifier D50C_UM [--sharpness A] [--bypass B]]
 //                    [--tanks N] [--bond P1_UM] [--scale-from LAB_RUN] [--out DIR] [--quiet]
-//   millcharge grind RUN_DIR --ore START.toml --fit TEST.toml [--fit-params NAME,...] [--out DIR]
+//   millcharge grind RUN_DIR --ore START.toml --fit TEST.toml [--fit-params NAME,...] [--sieve-errors MODEL] [--out DIR]
 //   millcharge grind RUN_DIR --ore START.toml --bond P1_UM --fit-wi WI [--fit-params NAME]
 //   millcharge sweep check FILE | run FILE --local [N]|--slurm|--print | collect DIR
 // Exit status: 0 done; 2 bad input (a message names the key; nothing written);

@@ -172,9 +172,8 @@ std::string sieve_errors_note(double r1, double rho, SieveErrors mode) {
   if (mode == SieveErrors::independent && r1 > kSwitchToCorrelated)
     return fmt::format(
         "note: the fit's residuals are correlated along the sieves (lag-1 autocorrelation r1 = {:.2f}, above {:.2f}) "
-        "and the fit took them as independent: the 95 % intervals are then likely too narrow (fit with --sieve-errors "
-        "auto or correlated) "
-        "(docs/grinding-intervals.md#sieve-errors-correlated-between-sieves)",
+        "and the fit took them as independent: the 95 % intervals are then likely too narrow; fit with --sieve-errors "
+        "auto or correlated (docs/grinding-intervals.md#sieve-errors-correlated-between-sieves)",
         r1, kSwitchToCorrelated);
   return "";
 }
