@@ -190,7 +190,7 @@ double quad(const std::vector<double>& g, const std::vector<std::vector<double>>
 }
 
 // The expected interval after a candidate, computed here from the
-// definitions (docs/grinding-intervals.md, "How it works"), not through
+// definitions (docs/grinding-next-test.md, "How the refits work"), not through
 // expected_after: the candidate's readings (pp) at its informative sieves
 // differenced by hand (central steps of 10⁻³ in each variable, every
 // variable a logarithm here), its information J_cᵀJ_c / s² with

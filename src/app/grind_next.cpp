@@ -302,10 +302,10 @@ void print_next(const NextRanking& r) {
     std::printf("  (median width: over %d simulated tests per candidate, each fitted with yours, a draw with no "
                 "width counted as infinitely wide; wide: the share of draws wider than the interval now or with no "
                 "width; mean (fin): over the draws with a width; seed %llu; linear width: at the fitted ore's best "
-                "point; docs/grinding-intervals.md; %.2f s, %.2f s of it refits)\n",
+                "point; docs/grinding-next-test.md; %.2f s, %.2f s of it refits)\n",
                 r.draws, static_cast<unsigned long long>(r.seed), r.seconds, r.refit_seconds);
   else
-    std::printf("  (linear, at the fitted ore's best point: docs/grinding-intervals.md; %.2f s)\n", r.seconds);
+    std::printf("  (linear, at the fitted ore's best point: docs/grinding-next-test.md; %.2f s)\n", r.seconds);
   for (const NextRow& w : r.rows)
     if (w.refitted && w.refit.converged < w.refit.draws)
       std::printf("  note: %s %s: %d of %d draws gave no width (%s%s)\n", w.run.c_str(), times_text(w.times).c_str(),
@@ -353,7 +353,7 @@ nlohmann::ordered_json next_json(const NextRanking& r) {
                 "taken as grind takes it; width_10_90 likewise; wide_share: the draws wider than the interval now "
                 "or with no width; mean_width_finite: the mean over the draws with a width; linear_width: the fit's "
                 "information plus the candidate's J^T J / s^2 at the fitted ore's best point "
-                "(docs/grinding-intervals.md)";
+                "(docs/grinding-next-test.md)";
   j["draws"] = r.draws;
   j["seed"] = r.seed;
   j["refitted"] = r.refitted;

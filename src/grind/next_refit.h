@@ -1,5 +1,4 @@
-// Which batch test to run next, by refits (docs/grinding-intervals.md,
-// "Which test to run next"): a preposterior Monte Carlo of the width a
+// Which batch test to run next, by refits (docs/grinding-next-test.md): a preposterior Monte Carlo of the width a
 // product's 95 % interval has once a candidate test is fitted with the
 // user's. Plausible truths are drawn from what the current tests leave
 // open (along the search's rays from the best point, through the 95 %

@@ -1,5 +1,4 @@
-// Which batch test to run next (docs/grinding-intervals.md, "Which test to
-// run next"): for a candidate test (a mill's run and grinding times, read
+// Which batch test to run next (docs/grinding-next-test.md): for a candidate test (a mill's run and grinding times, read
 // on the usual sieves), the 95 % interval a product of the fitted ore is
 // expected to have once that test is fitted with the others. Linear: the
 // current fit's information on its variables (free and held) plus the
