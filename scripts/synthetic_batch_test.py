@@ -7,9 +7,9 @@ wrote, picks SIEVES class tops from the feed's top down, adds uniform
 scatter of +-NOISE percentage points to every passing below the top sieve
 (the same scatter for the same --seed), and prints a batch test file. With
 --correlation RHO the scatter of each product moves together from one sieve
-to the next (e_k = RHO e_(k-1) + sqrt(1 - RHO^2) u_k, coarse to fine, each
-reading still +-NOISE uniform on average), as a sieve analysis whose
-sieves pass their errors on.
+to the next (e_k = RHO e_(k-1) + sqrt(1 - RHO^2) u_k, coarse to fine, u
+uniform in +-1, so that each reading keeps the variance of +-NOISE uniform
+scatter), as a sieve analysis whose sieves pass their errors on.
 It is a stand-in for a laboratory test, and says so in its title.
 
   python3 scripts/synthetic_batch_test.py RUN/grind/grind.csv --sieves 12 --noise 1 --holdup-kg 1.134 > test.toml
@@ -36,7 +36,7 @@ def main():
     ap.add_argument("--skip", type=int, default=1, help="class tops skipped below the top sieve (default 1)")
     ap.add_argument("--noise", type=float, default=0.0, help="uniform scatter, +- percentage points (default 0)")
     ap.add_argument("--correlation", type=float, default=0.0,
-                    help="the scatter's correlation from one sieve to the next, 0 to 0.99 (default 0)")
+                    help="the scatter's correlation from one sieve to the next, 0 to 0.98 (default 0)")
     ap.add_argument("--seed", type=int, default=88172645463325252)
     ap.add_argument("--title", default="")
     ap.add_argument("--holdup-kg", type=float, default=0.0, help="the ore in the test mill (kg); 0: left out")
@@ -54,8 +54,8 @@ def main():
     picked = [body[0]] + body[a.skip:a.skip + a.sieves]
     if len(picked) < a.sieves + 1:
         sys.exit(f"{a.grind_csv}: only {len(body)} class tops; ask for fewer --sieves")
-    if not 0 <= a.correlation <= 0.99:
-        sys.exit(f"--correlation {a.correlation:g}: must lie in 0 .. 0.99")
+    if not 0 <= a.correlation <= 0.98:
+        sys.exit(f"--correlation {a.correlation:g}: must lie in 0 .. 0.98")
     noise = xorshift(a.seed)
     rho = a.correlation
     carried = [0.0]

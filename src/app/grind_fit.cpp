@@ -388,14 +388,18 @@ int fit_batch(const GrindOptions& o) {
   for (const FittedParameter& p : fit.parameters) j["parameters"].push_back(parameter_json(p, cov));
   j["free_parameters"] = fit.free;
   j["rms_residual_pp"] = fit.rms_pp;
-  // Sieve errors correlated along the sieves leave the intervals too narrow
-  // (docs/grinding-intervals.md, "Are the intervals right?").
+  // Sieve errors correlated along the sieves, and how the fit took them
+  // (grind/sieve_errors.h; docs/grinding-intervals.md, "Sieve errors
+  // correlated between sieves").
   j["residual_lag1"] = std::isfinite(sf.r1_independent) ? nlohmann::json(sf.r1_independent) : nlohmann::json();
   j["residuals_correlated"] = sf.r1_independent > kSwitchToCorrelated;
   j["sieve_errors"] = {{"asked", sieve_errors_name(mode)},
                        {"model", sf.correlated ? "correlated" : "independent"},
                        {"rho", sf.rho},
                        {"rounds", sf.rounds},
+                       {"settled", sf.settled},
+                       {"at_cap", sf.at_cap},
+                       {"failed", sf.why_independent.empty() ? nlohmann::json() : nlohmann::json(sf.why_independent)},
                        {"residual_lag1_whitened", sf.correlated && std::isfinite(fit.residual_r1)
                                                       ? nlohmann::json(whitened_lag1(fit, sf.rho))
                                                       : nlohmann::json()}};
@@ -468,6 +472,7 @@ int fit_batch(const GrindOptions& o) {
                   sf.correlated ? " (fitted as independent)" : "");
     if (fit.free > 0 && !sieve_errors_note(sf.r1_independent, sf.rho, mode).empty())
       std::printf("  %s\n", sieve_errors_note(sf.r1_independent, sf.rho, mode).c_str());
+    for (const std::string& w : sieve_errors_warnings(sf)) std::printf("  %s\n", w.c_str());
     if (fit.rms_pp > 2 * noise_pp && fit.free > 0)
       std::printf("  note: the rms residual is above twice the test's noise_pp (%g pp): the model cannot reproduce "
                   "the test with these parameters free%s\n",

@@ -10,12 +10,14 @@
 
 namespace mc::grind {
 
-namespace {
-
 // The restricted log-likelihood at ρ (sieve_rho_reml), less constants.
-double restricted_likelihood(const std::vector<double>& r, const std::vector<std::vector<double>>& J,
-                             const std::vector<std::size_t>& lengths, double rho) {
+double sieve_rho_restricted_loglik(const std::vector<double>& r, const std::vector<std::vector<double>>& J,
+                                   const std::vector<std::size_t>& lengths, double rho) {
   const std::size_t p = J.empty() ? 0 : J.front().size();
+  std::size_t total = 0;
+  for (std::size_t len : lengths) total += len;
+  if (total > r.size() || (p > 0 && J.size() != r.size()) || !(rho >= 0 && rho < 1))
+    return -std::numeric_limits<double>::infinity();
   const double c = std::sqrt(1 - rho * rho);
   std::vector<double> rw(r.size());
   std::vector<std::vector<double>> Jw(J.size(), std::vector<double>(p));
@@ -66,8 +68,6 @@ double restricted_likelihood(const std::vector<double>& r, const std::vector<std
          0.5 * static_cast<double>(n - p) * std::log(s) - 0.5 * log_det;
 }
 
-}  // namespace
-
 void whiten_rows(double* r, std::size_t rows, std::size_t len, double rho) {
   if (rho == 0 || len == 0) return;
   if (!(rho > 0 && rho < 1)) throw std::invalid_argument("sieve_error_rho: must lie in [0, 1)");
@@ -87,11 +87,10 @@ void unwhiten_row(double* r, std::size_t len, double rho) {
 
 double sieve_rho_reml(const std::vector<double>& r, const std::vector<std::vector<double>>& J,
                       const std::vector<std::size_t>& lengths) {
-  std::size_t total = 0;
-  bool pairs = false;
-  for (std::size_t len : lengths) total += len, pairs = pairs || len >= 2;
-  if (!pairs || total > r.size() || (!J.empty() && J.size() != r.size())) return 0;
-  auto ell = [&](double rho) { return restricted_likelihood(r, J, lengths, rho); };
+  std::size_t total = 0, informative = 0;
+  for (std::size_t len : lengths) total += len, informative += len >= 2 ? len : 0;
+  if (informative < 3 || total > r.size() || (!J.empty() && J.size() != r.size())) return 0;
+  auto ell = [&](double rho) { return sieve_rho_restricted_loglik(r, J, lengths, rho); };
   double best = 0, best_l = ell(0);
   for (int k = 1; k <= static_cast<int>(kMaxSieveRho * 1000 + 0.5); ++k) {
     const double l = ell(k * 1e-3);
@@ -109,8 +108,10 @@ double sieve_rho_reml(const std::vector<double>& r, const std::vector<std::vecto
   const double x = 0.5 * (a + b);
   const double found = ell(x) > best_l ? x : best;
   // The estimate of an autoregression's ρ from a short series comes out
-  // low by about 2ρ/n (n readings; the same for rows pooled): undone.
-  return std::min(kMaxSieveRho, found * static_cast<double>(total) / static_cast<double>(total - 2));
+  // low by about 2ρ/n (n readings in rows of two or more; the same for
+  // rows pooled): undone.
+  const double n = static_cast<double>(informative);
+  return std::min(kMaxSieveRho, found * n / (n - 2));
 }
 
 double whitened_lag1(const BatchFit& f, double rho) {
@@ -144,20 +145,69 @@ SieveErrorFit fit_with_sieve_errors(const Ore& start, std::vector<TestInMill> te
   const bool estimate = mode == SieveErrors::correlated ||
                         (mode == SieveErrors::automatic && out.fit.free > 0 && out.r1_independent > kSwitchToCorrelated);
   if (estimate) {
+    const BatchFit independent = out.fit;
+    const std::vector<TestInMill> as_independent = tests;
+    // A round's fit from the start, as the fit at ρ = 0 was made; where it
+    // does not converge, from that fit's parameters; where neither does,
+    // the fit at ρ = 0 stands, and says why.
+    auto fit_at = [&](BatchFit& f) {
+      try {
+        f = fit_batch_tests(start, tests, names, max_iterations);
+        return true;
+      } catch (const std::invalid_argument&) {
+      }
+      try {
+        BatchFit warm = fit_batch_tests(out.fit.ore, tests, names, max_iterations);
+        for (std::size_t k = 0; k < warm.parameters.size() && k < independent.parameters.size(); ++k)
+          warm.parameters[k].start = independent.parameters[k].start;
+        f = warm;
+        return true;
+      } catch (const std::invalid_argument& e) {
+        out.why_independent = e.what();
+        return false;
+      }
+    };
     double rho = sieve_rho_reml(out.fit.raw_residuals, out.fit.raw_jacobian, out.fit.residual_rows);
-    for (int round = 0; round < 8; ++round) {
+    out.settled = rho == 0;
+    for (int round = 0; round < kSieveRhoRounds && rho > 0; ++round) {
       for (TestInMill& t : tests) t.sieve_rho = rho;
-      if (rho == 0 && round == 0) break;  // the likelihood's best is independence: that fit stands
-      out.fit = fit_batch_tests(start, tests, names, max_iterations);
+      BatchFit f;
+      if (!fit_at(f)) {
+        out.fit = independent;
+        tests = as_independent;
+        break;
+      }
+      out.fit = f;
       ++out.rounds;
       const double next = sieve_rho_reml(out.fit.raw_residuals, out.fit.raw_jacobian, out.fit.residual_rows);
-      if (std::fabs(next - rho) < 2e-3) break;
+      if (std::fabs(next - rho) < 2e-3) {
+        out.settled = true;
+        break;
+      }
       rho = next;
     }
     out.rho = tests.front().sieve_rho;
     out.correlated = out.rho > 0;
+    out.at_cap = out.rho >= kMaxSieveRho - 1e-9;
   }
   out.tests = tests;
+  return out;
+}
+
+std::vector<std::string> sieve_errors_warnings(const SieveErrorFit& f) {
+  std::vector<std::string> out;
+  if (!f.why_independent.empty())
+    out.push_back("note: the fit with the sieve errors correlated did not converge (" + f.why_independent +
+                  "); the fit with them independent stands, and its intervals are likely too narrow");
+  if (f.at_cap)
+    out.push_back(fmt::format(
+        "note: the sieve errors' rho came out on its cap, {:.2f}: the residuals move together more than a "
+        "correlation from sieve to sieve describes (a model that cannot follow the test, or errors that build up "
+        "along the sieves); the intervals allow for rho {:.2f} only",
+        kMaxSieveRho, kMaxSieveRho));
+  if (!f.settled)
+    out.push_back(fmt::format("note: the sieve errors' rho had not settled after {} rounds of refits (last {:.3f})",
+                              f.rounds, f.rho));
   return out;
 }
 
@@ -172,8 +222,8 @@ std::string sieve_errors_note(double r1, double rho, SieveErrors mode) {
   if (mode == SieveErrors::independent && r1 > kSwitchToCorrelated)
     return fmt::format(
         "note: the fit's residuals are correlated along the sieves (lag-1 autocorrelation r1 = {:.2f}, above {:.2f}) "
-        "and the fit took them as independent: the 95 % intervals are then likely too narrow; fit with --sieve-errors "
-        "auto or correlated (docs/grinding-intervals.md#sieve-errors-correlated-between-sieves)",
+        "and the ore was fitted with them taken as independent: the 95 % intervals are then likely too narrow; fit "
+        "again with --sieve-errors correlated (docs/grinding-intervals.md#sieve-errors-correlated-between-sieves)",
         r1, kSwitchToCorrelated);
   return "";
 }

@@ -41,13 +41,20 @@ void unwhiten_row(double* r, std::size_t len, double rho);
 // of squares of r_ρ + J_ρ δ over δ, n readings, R rows. The last term and
 // n − p in place of n take the fit's share of the residuals out of the
 // estimate: the plain likelihood (p = 0, no J) comes out low by about
-// 0.05 at ρ = 0.7 on 5 × 12 readings. Searched over [0, kMaxSieveRho] on a
+// 0.06 at ρ = 0.7 on 5 × 12 readings. Searched over [0, kMaxSieveRho] on a
 // grid of 0.001 and refined by golden section, then multiplied by
 // n / (n − 2): an autoregression's ρ estimated from n readings comes out
-// low by about 2ρ/n (tests/test_sieve_errors.cpp measures both). 0 where
-// no row has two readings.
+// low by about 2ρ/n, n the readings in rows of two or more
+// (tests/test_sieve_errors.cpp measures both). 0 with fewer than three
+// such readings.
 double sieve_rho_reml(const std::vector<double>& r, const std::vector<std::vector<double>>& J,
                       const std::vector<std::size_t>& row_lengths);
+// ℓ(ρ) above (less terms that do not depend on ρ); −∞ where it cannot be
+// taken (ρ outside [0, 1), J not of r's rows, no residual left).
+double sieve_rho_restricted_loglik(const std::vector<double>& r, const std::vector<std::vector<double>>& J,
+                                   const std::vector<std::size_t>& row_lengths, double rho);
+// Rounds of refits at a new ρ at most.
+constexpr int kSieveRhoRounds = 8;
 constexpr double kMaxSieveRho = 0.98;
 
 // How a fit takes the sieve errors: `automatic` fits them as independent
@@ -57,8 +64,8 @@ constexpr double kMaxSieveRho = 0.98;
 // For independent errors r1 is about −0.1 ± 0.13 on 5 × 12 readings, so
 // 0.15 (two of its scatter above) takes about 5 % of independent tests as
 // correlated, where ρ comes out small and the interval a little wider;
-// at 0.3 errors correlated by ρ = 0.4 went unseen in 45 % of tests, whose
-// intervals then covered 81 % (docs/grinding-intervals.md).
+// at 0.3 errors correlated by ρ = 0.4 went unseen in 45 % of tests, and
+// the intervals of all covered 0.90 against 0.94 (docs/grinding-intervals.md).
 constexpr double kSwitchToCorrelated = 0.15;
 enum class SieveErrors { automatic, independent, correlated };
 std::optional<SieveErrors> parse_sieve_errors(const std::string& s);
@@ -71,10 +78,16 @@ struct SieveErrorFit {
   double r1_independent = 0;      // the residuals' lag-1 autocorrelation of the fit at ρ = 0 (NaN: none)
   int rounds = 0;                 // fits at an estimated ρ
   bool correlated = false;        // the fit used the AR(1) model
+  bool settled = true;            // ρ moved by less than 0.002 in the last round (else kSieveRhoRounds ran out)
+  bool at_cap = false;            // ρ on kMaxSieveRho: errors (or misfit) AR(1) does not describe
+  std::string why_independent;    // a fit at ρ failed: the fit at ρ = 0 stands, and this is why
 };
 // Fits the tests (fit_batch_tests) under the error model `mode`. The
 // estimated ρ is one for every test (pooled). ρ stops when a round moves
-// it by less than 0.002 or after 8 rounds.
+// it by less than 0.002 or after kSieveRhoRounds rounds. Each round's fit
+// starts where the fit at ρ = 0 started; one that does not converge is
+// tried from that fit's parameters, and where that fails too the fit at
+// ρ = 0 stands (why_independent).
 SieveErrorFit fit_with_sieve_errors(const Ore& start, std::vector<TestInMill> tests,
                                     const std::vector<std::string>& names, SieveErrors mode,
                                     int max_iterations = 300);
@@ -85,5 +98,8 @@ double whitened_lag1(const BatchFit& fit, double rho);
 
 // The note the console prints once for a fit (empty: nothing to say).
 std::string sieve_errors_note(double r1_independent, double rho, SieveErrors mode);
+// The notes on how ρ's estimate ended (on its cap, not settled, a failed
+// round), each a line; empty where there is nothing to say.
+std::vector<std::string> sieve_errors_warnings(const SieveErrorFit& f);
 
 }  // namespace mc::grind
