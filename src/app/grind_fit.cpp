@@ -399,7 +399,7 @@ int fit_batch(const GrindOptions& o) {
                        {"rounds", sf.rounds},
                        {"settled", sf.settled},
                        {"at_cap", sf.at_cap},
-                       {"failed", sf.why_independent.empty() ? nlohmann::json() : nlohmann::json(sf.why_independent)},
+                       {"failed", sf.why_failed.empty() ? nlohmann::json() : nlohmann::json(sf.why_failed)},
                        {"residual_lag1_whitened", sf.correlated && std::isfinite(fit.residual_r1)
                                                       ? nlohmann::json(whitened_lag1(fit, sf.rho))
                                                       : nlohmann::json()}};

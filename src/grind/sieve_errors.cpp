@@ -14,6 +14,8 @@ namespace mc::grind {
 double sieve_rho_restricted_loglik(const std::vector<double>& r, const std::vector<std::vector<double>>& J,
                                    const std::vector<std::size_t>& lengths, double rho) {
   const std::size_t p = J.empty() ? 0 : J.front().size();
+  for (const auto& row : J)
+    if (row.size() != p) return -std::numeric_limits<double>::infinity();
   std::size_t total = 0;
   for (std::size_t len : lengths) total += len;
   if (total > r.size() || (p > 0 && J.size() != r.size()) || !(rho >= 0 && rho < 1))
@@ -157,29 +159,38 @@ SieveErrorFit fit_with_sieve_errors(const Ore& start, std::vector<TestInMill> te
       } catch (const std::invalid_argument&) {
       }
       try {
-        BatchFit warm = fit_batch_tests(out.fit.ore, tests, names, max_iterations);
+        BatchFit warm = fit_batch_tests(independent.ore, tests, names, max_iterations);
         for (std::size_t k = 0; k < warm.parameters.size() && k < independent.parameters.size(); ++k)
           warm.parameters[k].start = independent.parameters[k].start;
         f = warm;
         return true;
       } catch (const std::invalid_argument& e) {
-        out.why_independent = e.what();
+        out.why_failed = e.what();
         return false;
       }
     };
     double rho = sieve_rho_reml(out.fit.raw_residuals, out.fit.raw_jacobian, out.fit.residual_rows);
     out.settled = rho == 0;
     for (int round = 0; round < kSieveRhoRounds && rho > 0; ++round) {
+      const std::vector<TestInMill> before = tests;
       for (TestInMill& t : tests) t.sieve_rho = rho;
       BatchFit f;
       if (!fit_at(f)) {
-        out.fit = independent;
-        tests = as_independent;
+        // The last fit that converged stands: at ρ = 0 in the first round
+        // (then nothing is left to settle), else at the ρ before.
+        tests = before;
+        out.settled = round == 0;
         break;
       }
       out.fit = f;
       ++out.rounds;
       const double next = sieve_rho_reml(out.fit.raw_residuals, out.fit.raw_jacobian, out.fit.residual_rows);
+      if (next == 0) {  // the likelihood's best came back to independence
+        out.fit = independent;
+        tests = as_independent;
+        out.settled = true;
+        break;
+      }
       if (std::fabs(next - rho) < 2e-3) {
         out.settled = true;
         break;
@@ -196,9 +207,13 @@ SieveErrorFit fit_with_sieve_errors(const Ore& start, std::vector<TestInMill> te
 
 std::vector<std::string> sieve_errors_warnings(const SieveErrorFit& f) {
   std::vector<std::string> out;
-  if (!f.why_independent.empty())
-    out.push_back("note: the fit with the sieve errors correlated did not converge (" + f.why_independent +
-                  "); the fit with them independent stands, and its intervals are likely too narrow");
+  if (!f.why_failed.empty())
+    out.push_back(f.correlated
+                      ? fmt::format("note: a refit at a new rho of the sieve errors did not converge ({}); the fit at "
+                                    "rho {:.2f} stands",
+                                    f.why_failed, f.rho)
+                      : "note: the fit with the sieve errors correlated did not converge (" + f.why_failed +
+                            "); the fit with them independent stands, and its intervals are likely too narrow");
   if (f.at_cap)
     out.push_back(fmt::format(
         "note: the sieve errors' rho came out on its cap, {:.2f}: the residuals move together more than a "

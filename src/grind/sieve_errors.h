@@ -80,14 +80,16 @@ struct SieveErrorFit {
   bool correlated = false;        // the fit used the AR(1) model
   bool settled = true;            // ρ moved by less than 0.002 in the last round (else kSieveRhoRounds ran out)
   bool at_cap = false;            // ρ on kMaxSieveRho: errors (or misfit) AR(1) does not describe
-  std::string why_independent;    // a fit at ρ failed: the fit at ρ = 0 stands, and this is why
+  std::string why_failed;         // a fit at a new ρ failed: the last that converged stands, and this is why
 };
 // Fits the tests (fit_batch_tests) under the error model `mode`. The
 // estimated ρ is one for every test (pooled). ρ stops when a round moves
 // it by less than 0.002 or after kSieveRhoRounds rounds. Each round's fit
 // starts where the fit at ρ = 0 started; one that does not converge is
-// tried from that fit's parameters, and where that fails too the fit at
-// ρ = 0 stands (why_independent).
+// tried from that fit's parameters, and where that fails too the last fit
+// that converged stands (why_failed): the fit at ρ = 0 in the first round,
+// else the round before (not settled). A new ρ of 0 goes back to the fit
+// at ρ = 0.
 SieveErrorFit fit_with_sieve_errors(const Ore& start, std::vector<TestInMill> tests,
                                     const std::vector<std::string>& names, SieveErrors mode,
                                     int max_iterations = 300);
