@@ -22,6 +22,7 @@
 #include "grind/interval.h"
 #include "grind/sieve_errors.h"
 #include "grind_synthetic.h"
+#include "small_matrix.h"
 #include "io/batch_test_file.h"
 #include "io/ore_file.h"
 #include "io/run_folder.h"
@@ -31,6 +32,7 @@ namespace fs = std::filesystem;
 using mc::test::kHoldup_kg;
 using mc::test::known_ore;
 using mc::test::kPower_W;
+using mc::test::inverse;
 using mc::test::Scatter;
 using mc::test::synthetic_spectrum;
 using mc::test::synthetic_test;
@@ -48,28 +50,6 @@ struct Normal {
     return std::sqrt(-2 * std::log(std::max(a, 1e-300))) * std::cos(2 * M_PI * b);
   }
 };
-
-// Gauss–Jordan inverse with partial pivoting.
-Matrix inverse(Matrix a) {
-  const std::size_t n = a.size();
-  Matrix inv(n, std::vector<double>(n, 0.0));
-  for (std::size_t i = 0; i < n; ++i) inv[i][i] = 1;
-  for (std::size_t c = 0; c < n; ++c) {
-    std::size_t p = c;
-    for (std::size_t r = c + 1; r < n; ++r)
-      if (std::fabs(a[r][c]) > std::fabs(a[p][c])) p = r;
-    std::swap(a[c], a[p]);
-    std::swap(inv[c], inv[p]);
-    const double d = a[c][c];
-    for (std::size_t k = 0; k < n; ++k) a[c][k] /= d, inv[c][k] /= d;
-    for (std::size_t r = 0; r < n; ++r)
-      if (r != c) {
-        const double f = a[r][c];
-        for (std::size_t k = 0; k < n; ++k) a[r][k] -= f * a[c][k], inv[r][k] -= f * inv[c][k];
-      }
-  }
-  return inv;
-}
 
 // A 5 x 13 test of `truth` whose readings' errors follow the AR(1) model
 // along each time's sieves: normal, 1 pp each, neighbours correlated by rho.
