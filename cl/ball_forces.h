@@ -166,10 +166,11 @@ MC_FN void wall_contact(WallRef wr, real3 n, real overlap, real3 p, real4 vel, r
    * once a contact, also one that found the record pool full. */
   const real over = fmax(-v3_dot(g.v_rel, g.normal), R(0.0)) - wr.strike_k;
   const real strike = !matched && over > R(0.0) ? R(0.5) * g.m_eff * over * over : R(0.0);
-  liner_step(books, element, fresh, c, wr.wear_k, strike, wr.type != MC_WALL_TYPE_PLATE, atan2_fast(rc.y, rc.x));
+  liner_step(books, element, fresh, c, wr.wear_k, strike, wr.type != MC_WALL_TYPE_PLATE, atan2_fast(rc.y, rc.x),
+             axial_bin_of(books->bp, sp, rm.z));
   if (on_bar) { /* where on the bar: its wear station */
     const int k = wr.key - MC_WALL_LIFTER0;
-    liner_step(books, lifter_station(books->bp, &lifters[k], k, along), fresh, c, wr.wear_k, strike, 0, R(0.0));
+    liner_step(books, lifter_station(books->bp, &lifters[k], k, along), fresh, c, wr.wear_k, strike, 0, R(0.0), -1);
   }
 #endif
   if (ws->n_new < MC_MAX_WALL_CONTACTS) {

@@ -28,7 +28,8 @@ typedef struct {
                                     be packed */
   MC_GLOBAL uint* spectra;       /* (n_types + 1) × MC_SPECTRA_BINS × fields */
   MC_GLOBAL uint* liner;         /* n_elements × MC_LINER_FIELDS */
-  MC_GLOBAL uint* impact_profile; /* MC_IMPACT_BINS, energy_unit */
+  MC_GLOBAL uint* impact_profile; /* MC_IMPACT_BINS for the whole mill, then
+                                     MC_IMPACT_BINS for each axial bin; energy_unit */
   MC_GLOBAL const BookParams* bp;
   MC_GLOBAL int* status;
 } Books;
@@ -180,16 +181,22 @@ MC_FN void record_step(Books* b, int rec, int fresh, real vn, ContactOut c) {
  * its bare arc, each in axial bins; then each lifter row's leading face, top
  * and trailing face, in axial bins; then the end plates (z = 0, then
  * z = length) in rings and sectors. */
+/* The axial bin of the shell's and lifters' elements at z (m, mill frame). */
+MC_FN int axial_bin_of(MC_GLOBAL const BookParams* bp, MC_GLOBAL const SimParams* sp, real z) {
+  int axial = 0;
+  const real span = sp->length > R(0.0) ? sp->length : sp->period; /* a slice's elements span its period */
+  if (span > R(0.0)) {
+    axial = (int)floor(z / span * (real)bp->axial_bins);
+    axial = axial < 0 ? 0 : axial >= bp->axial_bins ? bp->axial_bins - 1 : axial;
+  }
+  return axial;
+}
+
 MC_FN int liner_element(MC_GLOBAL const BookParams* bp, MC_GLOBAL const SimParams* sp,
                         MC_GLOBAL const LifterPolygon* lifters, int key, real3 rc, real along) {
   const real two_pi = R(6.283185307179586);
   const int nl = sp->n_lifters;
-  int axial = 0;
-  const real span = sp->length > R(0.0) ? sp->length : sp->period; /* a slice's elements span its period */
-  if (span > R(0.0)) {
-    axial = (int)floor(rc.z / span * (real)bp->axial_bins);
-    axial = axial < 0 ? 0 : axial >= bp->axial_bins ? bp->axial_bins - 1 : axial;
-  }
+  const int axial = axial_bin_of(bp, sp, rc.z);
   real theta = atan2_fast(rc.y, rc.x);
   theta = theta < R(0.0) ? theta + two_pi : theta;
   if (key == MC_WALL_SHELL) {
@@ -261,9 +268,10 @@ MC_FN int lifter_station(MC_GLOBAL const BookParams* bp, MC_GLOBAL const LifterP
  * loss, its tangential loss, Archard's wear volume (coefficient wear_k) and
  * its strike energy (J, nonzero only at first touch: wall_contact); on the
  * shell and the lifters (`profile`) also the normal loss at its lab-frame
- * angle (`lab_angle`, rad). */
+ * angle (`lab_angle`, rad), for the whole mill and for its axial bin
+ * (`axial`, axial_bin_of). */
 MC_FN void liner_step(Books* b, int element, int fresh, ContactOut c, real wear_k, real strike, int profile,
-                      real lab_angle) {
+                      real lab_angle, int axial) {
 #if MC_ENERGY_BOOKS
   MC_GLOBAL const BookParams* bp = b->bp;
   MC_GLOBAL uint* cell = b->liner + 2 * MC_LINER_FIELDS * element;
@@ -279,7 +287,9 @@ MC_FN void liner_step(Books* b, int element, int fresh, ContactOut c, real wear_
     real a = lab_angle < R(0.0) ? lab_angle + two_pi : lab_angle;
     int bin = (int)floor(a / two_pi * (real)MC_IMPACT_BINS);
     bin = bin < 0 ? 0 : bin >= MC_IMPACT_BINS ? MC_IMPACT_BINS - 1 : bin;
-    add_u64(b->impact_profile + 2 * bin, fixed_of(c.loss_normal, inv_e));
+    const long q = fixed_of(c.loss_normal, inv_e);
+    add_u64(b->impact_profile + 2 * bin, q);
+    if (axial >= 0 && axial < bp->axial_bins) add_u64(b->impact_profile + 2 * ((1 + axial) * MC_IMPACT_BINS + bin), q);
   }
 #endif
 }

@@ -474,6 +474,44 @@ TEST_CASE("a state saved before the normal or the severity spectra loads: its sp
   }
 }
 
+TEST_CASE("a state saved before the impact profile was kept along the mill loads: the whole mill's kept, the bins' from zero",
+          "[checkpoint][books]") {
+  DrumSpec spec;
+  spec.n_balls = 200;
+  const Scene sc = make_drum(spec);
+  auto a = make_solver(test::context(), sc);
+  a->advance(6000);
+  const SolverState saved = a->save_state();
+  const BookSums before = a->read_books();
+  double whole = 0;
+  for (double v : before.impact_profile) whole += v;
+  REQUIRE(whole > 0);
+  REQUIRE(before.impact_axial_bins >= 1);
+  SolverState old = saved;
+  for (auto& [key, bytes] : old.arrays)
+    if (key == "impact_profile") bytes.resize(2 * MC_IMPACT_BINS * 4);  // the whole mill's block alone
+  auto b = make_solver(test::context(), sc);
+  b->restore_state(old);
+  const BookSums after = b->read_books();
+  CHECK(after.impact_profile == before.impact_profile);
+  double axial = 0;
+  for (double v : after.impact_profile_axial) axial += v;
+  CHECK(axial == 0);
+  // It runs on, and the bins book what lands from then on: their sum is
+  // the whole mill's gain.
+  b->advance(3000);
+  const BookSums later = b->read_books();
+  double gain = 0, bins = 0;
+  for (std::size_t d = 0; d < later.impact_profile.size(); ++d) gain += later.impact_profile[d] - after.impact_profile[d];
+  for (double v : later.impact_profile_axial) bins += v;
+  CHECK(gain > 0);
+  CHECK(bins == Approx(gain).epsilon(1e-9));
+  // Today's state round-trips every block.
+  auto c = make_solver(test::context(), sc);
+  c->restore_state(saved);
+  CHECK(c->read_books().impact_profile_axial == before.impact_profile_axial);
+}
+
 TEST_CASE("a finished run extended with --resume --duration equals an unbroken run row for row", "[checkpoint]") {
   // 0.1 s of turning, then extended to 0.2 s, against 0.2 s unbroken. The
   // window (from the warm-up, less than a revolution) is the one already

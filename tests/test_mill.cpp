@@ -4,6 +4,7 @@
 // slice, about 1,300 balls, to keep CI short). Labelled [mill].
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -100,4 +101,55 @@ TEST_CASE("lab mill: at 90 % of critical more impact power lands on bare liner a
     ++k;
   }
   CHECK(bare[1] > bare[0]);
+}
+
+TEST_CASE("lab mill: the impact profile along the mill sums to the whole mill's, each bin's impact point on the arc",
+          "[mill][liner]") {
+  // The liner's axial bins each keep the lab-frame impact power per degree
+  // (cl/books.h liner_step). Their sum is the whole mill's degree by degree
+  // (the same fixed-point counts, added twice); each bin's impact point
+  // lies on the arc the finder searches, and in this mill, symmetric about
+  // its middle, the two outer bins' points agree within 12 degrees and lie
+  // within 12 of the whole mill's.
+  const mc::checks::LabRun r = run_lab(0.8, 1.6, 0.5, 0.15);
+  REQUIRE(r.s.angles.found);
+  const mc::LinerLayout layout = mc::liner_layout(r.scene);
+  const mc::BookSums& b = r.s.books;
+  REQUIRE(layout.axial_bins >= 2);
+  REQUIRE(b.impact_axial_bins == layout.axial_bins);
+  const std::size_t nb = b.impact_profile.size();
+  REQUIRE(b.impact_profile_axial.size() == nb * static_cast<std::size_t>(layout.axial_bins));
+  double whole = 0, largest = 0;
+  for (double v : b.impact_profile) whole += v, largest = std::max(largest, v);
+  REQUIRE(whole > 0);
+  for (std::size_t d = 0; d < nb; ++d) {
+    double sum = 0;
+    for (int k = 0; k < layout.axial_bins; ++k) sum += b.impact_profile_axial[static_cast<std::size_t>(k) * nb + d];
+    INFO("degree " << d);
+    CHECK(sum == Approx(b.impact_profile[d]).margin(1e-9 * largest));
+  }
+  const mc::LinerReport lr = mc::liner_report(r.scene, layout, b, r.s.window_s, r.s.profile, r.s.angles);
+  REQUIRE(lr.impact_point_deg_by_axial.size() == static_cast<std::size_t>(layout.axial_bins));
+  double by_axial = 0;
+  for (double w : lr.impact_W_by_axial) by_axial += w;
+  double per_deg = 0;
+  for (double w : lr.impact_W_per_deg) per_deg += w;
+  CHECK(by_axial == Approx(per_deg).epsilon(1e-9));
+  auto on_arc = [&](double a) {  // from the shoulder counter-clockwise to 45 degrees past the toe
+    const double span = std::fmod(lr.toe_deg + 45 - lr.shoulder_deg + 720, 360.0);
+    return std::fmod(a - lr.shoulder_deg + 720, 360.0) <= span + 1e-9;
+  };
+  auto apart = [](double a, double c) { return std::fabs(std::remainder(a - c, 360.0)); };
+  std::printf("lab mill impact point %.1f deg; along the mill (%d bins):", lr.impact_point_deg, layout.axial_bins);
+  for (std::size_t k = 0; k < lr.impact_point_deg_by_axial.size(); ++k)
+    std::printf(" %.1f (%.2f W)", lr.impact_point_deg_by_axial[k], lr.impact_W_by_axial[k]);
+  std::printf("\n");
+  for (double a : lr.impact_point_deg_by_axial) {
+    REQUIRE(std::isfinite(a));
+    CHECK(on_arc(a));
+  }
+  const double first = lr.impact_point_deg_by_axial.front(), last = lr.impact_point_deg_by_axial.back();
+  CHECK(apart(first, last) < 12);
+  CHECK(apart(first, lr.impact_point_deg) < 12);
+  CHECK(apart(last, lr.impact_point_deg) < 12);
 }

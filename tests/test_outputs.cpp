@@ -124,6 +124,17 @@ TEST_CASE("run writes summary.json, timeseries.csv, snapshots with charge.pvd an
   }
   CHECK(ln["impact_power_W"].get<double>() > 0);
   CHECK(ln["wear_kg_per_h"].get<double>() > 0);
+  // Along the mill: the axial bins' spans tile the length, their impact
+  // power sums to the profile's.
+  const nlohmann::json& along = ln["impact_point_along"];
+  REQUIRE(along.size() >= 1);
+  double along_W = 0, profile_W = 0;
+  for (std::size_t k = 0; k < along.size(); ++k) {
+    CHECK(along[k]["z0_m"].get<double>() == Approx(k == 0 ? 0.0 : along[k - 1]["z1_m"].get<double>()));
+    along_W += along[k]["impact_power_W"].get<double>();
+  }
+  for (const auto& w : ln["impact_W_by_5deg"]) profile_W += w.get<double>();
+  CHECK(along_W == Approx(profile_W).epsilon(1e-9));
   CHECK(lines_of(out / "spectra.csv").size() == 1 + 4 * 122);
   CHECK(static_cast<long>(lines_of(out / "wear.csv").size()) == 1 + ln["elements"].get<long>());
   // The folder holds a run now: a second run there is refused unless forced.

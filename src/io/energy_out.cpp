@@ -172,6 +172,16 @@ nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& 
                                                            : nlohmann::json();
   j["bare_liner_impact_power_W"] = num(r.bare_liner_impact_W);
   j["bare_liner_impact_share"] = num(r.bare_liner_impact_share);
+  // Along the mill: each axial bin's span (m from z = 0), its impact power
+  // on the shell and lifters and its impact point.
+  nlohmann::json along = nlohmann::json::array();
+  const std::size_t na = r.impact_point_deg_by_axial.size();
+  for (std::size_t k = 0; k < na && k < r.impact_W_by_axial.size(); ++k)
+    along.push_back({{"z0_m", layout.length * static_cast<double>(k) / static_cast<double>(na)},
+                     {"z1_m", layout.length * static_cast<double>(k + 1) / static_cast<double>(na)},
+                     {"impact_power_W", num(r.impact_W_by_axial[k])},
+                     {"impact_point_deg", num(r.impact_point_deg_by_axial[k])}});
+  j["impact_point_along"] = along;
   // The lab frame's impact power on the shell and lifters in 5 degree bins
   // from 3 o'clock, counter-clockwise (W each).
   nlohmann::json prof = nlohmann::json::array();

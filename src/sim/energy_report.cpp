@@ -243,24 +243,43 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
     r.bare_liner_impact_W = r.bare_liner_impact_share = r.impact_point_deg = kNaN;
     return r;
   }
-  std::vector<double> bare(nb);
-  for (int b = 0; b < nb; ++b) {
-    bare[b] = r.impact_W_per_deg[b] * (1 - r.coverage[b]);
-    r.bare_liner_impact_W += bare[b];
-  }
-  r.bare_liner_impact_share = r.bare_liner_impact_W / total;
-  const double deg_per_bin = 360.0 / nb;
-  const int half = static_cast<int>(std::lround(4.0 / deg_per_bin));
-  double best = -1;
+  // Where impact power per degree `w_per_deg` peaks on bare liner, from the
+  // shoulder to 45 degrees past the toe; its bin in `at`.
+  auto impact_point = [&](const std::vector<double>& w_per_deg, int& at, double* bare_W) {
+    std::vector<double> bare(nb);
+    for (int b = 0; b < nb; ++b) {
+      bare[b] = w_per_deg[b] * (1 - r.coverage[b]);
+      if (bare_W) *bare_W += bare[b];
+    }
+    const double deg_per_bin = 360.0 / nb;
+    const int half = static_cast<int>(std::lround(4.0 / deg_per_bin));
+    double best = -1, point = kNaN;
+    at = 0;
+    for (int b = 0; b < nb; ++b) {
+      const double a = (b + 0.5) * deg_per_bin;
+      if (!on_arc(a, r.shoulder_deg, r.toe_deg + 45.0)) continue;
+      double sm = 0;
+      for (int d = -half; d <= half; ++d) sm += bare[((b + d) % nb + nb) % nb];
+      if (sm > best) best = sm, point = a, at = b;
+    }
+    return point;
+  };
   int at = 0;
-  for (int b = 0; b < nb; ++b) {
-    const double a = (b + 0.5) * deg_per_bin;
-    if (!on_arc(a, r.shoulder_deg, r.toe_deg + 45.0)) continue;
-    double sm = 0;
-    for (int d = -half; d <= half; ++d) sm += bare[((b + d) % nb + nb) % nb];
-    if (sm > best) best = sm, r.impact_point_deg = a, at = b;
-  }
+  r.impact_point_deg = impact_point(r.impact_W_per_deg, at, &r.bare_liner_impact_W);
+  r.bare_liner_impact_share = r.bare_liner_impact_W / total;
   r.impact_point_on_liner = r.coverage[at] < 0.5;
+  // Along the mill, bin by bin.
+  const int na = books.impact_axial_bins;
+  if (na > 0 && books.impact_profile_axial.size() == static_cast<std::size_t>(na) * nb) {
+    for (int k = 0; k < na; ++k) {
+      std::vector<double> per_deg(nb);
+      double sum = 0;
+      for (int b = 0; b < nb; ++b) sum += per_deg[b] = books.impact_profile_axial[static_cast<std::size_t>(k) * nb + b] / w;
+      int at_k = 0;
+      r.impact_W_by_axial.push_back(sum);
+      r.impact_point_deg_by_axial.push_back(sum > 0 ? impact_point(per_deg, at_k, nullptr) : kNaN);
+    }
+  }
   return r;
 }
 

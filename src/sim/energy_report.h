@@ -107,6 +107,13 @@ struct LinerReport {
   double bare_liner_impact_W = 0, bare_liner_impact_share = 0;
   double impact_point_deg = 0;
   bool impact_point_on_liner = false;  // before the toe: on bare liner above it
+  // The same along the mill: by the liner's axial bins (the layout's
+  // axial_bins, equal spans of the length or a slice's period), each bin's
+  // impact power on the shell and lifters (W) and its impact point, found as
+  // above from the bin's own impact power per degree with the whole mill's
+  // coverage, toe and shoulder. NaN where a bin booked no impact power;
+  // empty where the toe is not known or the books have no axial profile.
+  std::vector<double> impact_W_by_axial, impact_point_deg_by_axial;
 };
 
 // A lifter profile's wear stations (core/lifters.h kWearStations), from its

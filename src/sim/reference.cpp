@@ -143,7 +143,7 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
                       static_cast<std::size_t>(scene.walls.lifters.size()) * MC_WEAR_STATIONS) *
                      MC_LINER_FIELDS,
                  0u);
-  s.impact_profile.assign(2 * MC_IMPACT_BINS, 0u);
+  s.impact_profile.assign(2 * static_cast<std::size_t>(MC_IMPACT_BINS) * (1 + s.book_params.axial_bins), 0u);
   const SimParams& sp = s.sp;
 
   const std::vector<DeviceBall> balls = device_balls(scene);

@@ -64,6 +64,9 @@ struct BookSums {
   int n_stations = 0;
   std::vector<double> stations;
   std::vector<double> impact_profile;  // J on the shell and lifters per degree, lab frame
+  // The same by the liner's axial bins: [axial · MC_IMPACT_BINS + degree].
+  int impact_axial_bins = 0;
+  std::vector<double> impact_profile_axial;
   double at(int row, int bin, int field) const;
   double liner_at(int element, int field) const;
   // Closed collisions' losses in all rows (J).

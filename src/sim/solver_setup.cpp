@@ -333,7 +333,10 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
                                    "collision spectra");
   liner_ = Buffer<std::uint32_t>(ctx_, 2 * static_cast<std::size_t>(n_elements_ + n_stations_) * MC_LINER_FIELDS,
                                  "liner sums");
-  impact_profile_ = Buffer<std::uint32_t>(ctx_, 2 * MC_IMPACT_BINS, "impact profile");
+  impact_axial_bins_ = tb.axial_bins;  // the whole mill's profile, then one per axial bin
+  impact_profile_ = Buffer<std::uint32_t>(
+      ctx_, 2 * static_cast<std::size_t>(MC_IMPACT_BINS) * (1 + static_cast<std::size_t>(impact_axial_bins_)),
+      "impact profile");
   for (auto* b : {&spectra_, &liner_, &impact_profile_}) b->write_to_device();
 
   const f64::SimParams& tp = t.params;

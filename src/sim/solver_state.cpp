@@ -29,6 +29,21 @@ bool has_array(const SolverState& st, const char* name) {
 // mid-window from such a checkpoint books the strike energy (impact wear)
 // of the rest of its window only, over the whole window's seconds, and
 // has no halves (the checkpoint holds none).
+// A state saved before the impact profile was kept by axial bin holds the
+// whole mill's alone: read into the first block, the axial blocks zero
+// (their sums then begin at the resume). True where it was such a state.
+bool whole_mill_profile_only(const SolverState& st, compute::Buffer<std::uint32_t>& b) {
+  for (const auto& [key, bytes] : st.arrays) {
+    if (key != "impact_profile") continue;
+    if (bytes.size() != 2 * MC_IMPACT_BINS * sizeof(std::uint32_t) || b.size() == 2 * MC_IMPACT_BINS) return false;
+    std::fill(b.host.begin(), b.host.end(), 0u);
+    std::memcpy(b.host.data(), bytes.data(), bytes.size());
+    b.write_to_device();
+    return true;
+  }
+  return false;
+}
+
 bool widen_old(const SolverState& st, const char* name, compute::Buffer<std::uint32_t>& b, std::size_t fields,
                std::initializer_list<std::size_t> olds) {
   for (const auto& [key, bytes] : st.arrays) {
@@ -179,7 +194,7 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
     get_array(st, "rec_state", rec_state_, false);
     if (!widen_old(st, "spectra", spectra_, MC_SPECTRA_FIELDS, {6, 8})) get_array(st, "spectra", spectra_, false);
     if (!widen_old(st, "liner", liner_, MC_LINER_FIELDS, {4})) get_array(st, "liner", liner_, false);
-    get_array(st, "impact_profile", impact_profile_, false);
+    if (!whole_mill_profile_only(st, impact_profile_)) get_array(st, "impact_profile", impact_profile_, false);
   } else {
     restore_springs(st);
   }

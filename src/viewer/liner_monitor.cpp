@@ -50,6 +50,8 @@ void LinerMonitor::after_steps(Solver& solver, double time_s, bool turning, bool
       span += spans_[k];
       for (std::size_t q = 0; q < sum.liner.size(); ++q) sum.liner[q] += reads_[k].liner[q];
       for (std::size_t q = 0; q < sum.impact_profile.size(); ++q) sum.impact_profile[q] += reads_[k].impact_profile[q];
+      for (std::size_t q = 0; q < sum.impact_profile_axial.size() && q < reads_[k].impact_profile_axial.size(); ++q)
+        sum.impact_profile_axial[q] += reads_[k].impact_profile_axial[q];
     }
     return liner_report(scene_, layout_, sum, span, profile, angles);
   };
