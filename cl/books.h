@@ -181,10 +181,12 @@ MC_FN void record_step(Books* b, int rec, int fresh, real vn, ContactOut c) {
  * its bare arc, each in axial bins; then each lifter row's leading face, top
  * and trailing face, in axial bins; then the end plates (z = 0, then
  * z = length) in rings and sectors. */
-/* The axial bin of the shell's and lifters' elements at z (m, mill frame). */
+/* The axial bin of the shell's and lifters' elements at z (m, mill frame):
+ * equal spans of bp->axial_span (the liner layout's length: between flat
+ * end plates or cone heads, or a slice's period). */
 MC_FN int axial_bin_of(MC_GLOBAL const BookParams* bp, MC_GLOBAL const SimParams* sp, real z) {
   int axial = 0;
-  const real span = sp->length > R(0.0) ? sp->length : sp->period; /* a slice's elements span its period */
+  const real span = bp->axial_span > R(0.0) ? bp->axial_span : sp->length > R(0.0) ? sp->length : sp->period;
   if (span > R(0.0)) {
     axial = (int)floor(z / span * (real)bp->axial_bins);
     axial = axial < 0 ? 0 : axial >= bp->axial_bins ? bp->axial_bins - 1 : axial;

@@ -228,6 +228,8 @@ typedef struct {
   real plate_ring_width; /* m, radial width of the end plates' rings */
   real strike_speed;    /* m/s: the liner material's threshold K of the
                            strike energy (MC_LINER_STRIKE) */
+  real axial_span;      /* m the axial bins divide equally from z = 0: the
+                           mill's length (a slice's period) */
   int n_types;          /* pair types (the spectra's rows; one more row
                            holds the losses of contacts without a record) */
   int n_elements;       /* liner elements */

@@ -513,6 +513,15 @@ TEST_CASE("a lab mill with cone heads: the cones take collisions and the power b
     if (t.pair.size() > 5 && t.pair.compare(t.pair.size() - 5, 5, "-ends") == 0) ends_W += t.power_W;
   }
   CHECK(ends_W > 0.02 * sp.dissipation_W);
+  // Along the mill: the axial bins divide the length between the cones'
+  // bases (no end plates, so not the plates' spacing), each with its share.
+  const mc::LinerLayout layout = mc::liner_layout(r.scene);
+  const mc::LinerReport lr = mc::liner_report(r.scene, layout, r.s.books, r.s.window_s, r.s.profile, r.s.angles);
+  REQUIRE(lr.impact_W_by_axial.size() == static_cast<std::size_t>(layout.axial_bins));
+  REQUIRE(layout.axial_bins >= 2);
+  double along_W = 0;
+  for (double w : lr.impact_W_by_axial) along_W += w;
+  for (double w : lr.impact_W_by_axial) CHECK(w > 0.2 * along_W / layout.axial_bins);
 }
 
 TEST_CASE("a mesh with more triangles than the device can hold is refused with the count, status 2, no run folder",

@@ -13,6 +13,7 @@
 #include "core/mill_case.h"
 #include "core/morrell.h"
 #include "helpers.h"
+#include "core/layout.hpp"
 #include "sim/energy_report.h"
 
 namespace {
@@ -107,10 +108,13 @@ TEST_CASE("lab mill: the impact profile along the mill sums to the whole mill's,
           "[mill][liner]") {
   // The liner's axial bins each keep the lab-frame impact power per degree
   // (cl/books.h liner_step). Their sum is the whole mill's degree by degree
-  // (the same fixed-point counts, added twice); each bin's impact point
-  // lies on the arc the finder searches, and in this mill, symmetric about
-  // its middle, the two outer bins' points agree within 12 degrees and lie
-  // within 12 of the whole mill's.
+  // (the same fixed-point counts, added twice). Each bin's power is the
+  // impact power its shell and lifter elements booked in the mill frame
+  // (the same counts again, each element by its own axial bin): a contact
+  // put in the wrong bin fails it. Each bin's impact point lies on the arc
+  // the finder searches, and in this mill, symmetric about its middle, the
+  // outer bins' points lie within 20 degrees of each other and of the whole
+  // mill's (7 and 8 measured over 0.66 revolutions).
   const mc::checks::LabRun r = run_lab(0.8, 1.6, 0.5, 0.15);
   REQUIRE(r.s.angles.found);
   const mc::LinerLayout layout = mc::liner_layout(r.scene);
@@ -132,6 +136,17 @@ TEST_CASE("lab mill: the impact profile along the mill sums to the whole mill's,
   REQUIRE(lr.impact_point_deg_by_axial.size() == static_cast<std::size_t>(layout.axial_bins));
   double by_axial = 0;
   for (double w : lr.impact_W_by_axial) by_axial += w;
+  std::vector<double> by_elements(layout.axial_bins, 0.0);
+  for (int e = 0; e < layout.size(); ++e) {
+    const mc::LinerElement& el = layout.elements[e];
+    if (el.part == mc::LinerPart::shell || el.part == mc::LinerPart::lifter)
+      by_elements[el.axial] += b.liner_at(e, MC_LINER_NORMAL) / r.s.window_s;
+  }
+  for (int k = 0; k < layout.axial_bins; ++k) {
+    INFO("axial bin " << k);
+    CHECK(lr.impact_W_by_axial[k] > 0);
+    CHECK(lr.impact_W_by_axial[k] == Approx(by_elements[k]).epsilon(1e-9));
+  }
   double per_deg = 0;
   for (double w : lr.impact_W_per_deg) per_deg += w;
   CHECK(by_axial == Approx(per_deg).epsilon(1e-9));
@@ -149,7 +164,7 @@ TEST_CASE("lab mill: the impact profile along the mill sums to the whole mill's,
     CHECK(on_arc(a));
   }
   const double first = lr.impact_point_deg_by_axial.front(), last = lr.impact_point_deg_by_axial.back();
-  CHECK(apart(first, last) < 12);
-  CHECK(apart(first, lr.impact_point_deg) < 12);
-  CHECK(apart(last, lr.impact_point_deg) < 12);
+  CHECK(apart(first, last) < 20);
+  CHECK(apart(first, lr.impact_point_deg) < 20);
+  CHECK(apart(last, lr.impact_point_deg) < 20);
 }

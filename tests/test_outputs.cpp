@@ -128,6 +128,7 @@ TEST_CASE("run writes summary.json, timeseries.csv, snapshots with charge.pvd an
   // power sums to the profile's.
   const nlohmann::json& along = ln["impact_point_along"];
   REQUIRE(along.size() >= 1);
+  CHECK(along.back()["z1_m"].get<double>() == Approx(0.06));  // the mill's length, its plates new
   double along_W = 0, profile_W = 0;
   for (std::size_t k = 0; k < along.size(); ++k) {
     CHECK(along[k]["z0_m"].get<double>() == Approx(k == 0 ? 0.0 : along[k - 1]["z1_m"].get<double>()));

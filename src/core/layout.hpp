@@ -43,7 +43,7 @@ static_assert(sizeof(f32::SimParams) == 2 * 16 + 2 * MC_PLATE_NODES * 4 + 11 * 4
 static_assert(sizeof(f64::SimParams) == 2 * 32 + 2 * MC_PLATE_NODES * 8 + 11 * 8 + 13 * 4 + 20);
 static_assert(sizeof(f32::MeshTriangle) == 4 * 16 + 8 * 4 && sizeof(f64::MeshTriangle) == 4 * 32 + 8 * 4);
 static_assert(sizeof(f32::MeshGrid) == 16 + 4 * 4 + 8 * 4 && sizeof(f64::MeshGrid) == 32 + 4 * 8 + 8 * 4);
-static_assert(sizeof(f32::BookParams) == 5 * 4 + 10 * 4 && sizeof(f64::BookParams) == 5 * 8 + 10 * 4);
+static_assert(sizeof(f32::BookParams) == 6 * 4 + 10 * 4 && sizeof(f64::BookParams) == 6 * 8 + 10 * 4);
 static_assert(sizeof(f32::LifterPolygon) == MC_POLY_MAX_VERTS * 8 + 16 + 3 * 16 &&
               sizeof(f64::LifterPolygon) == MC_POLY_MAX_VERTS * 16 + 32 + 3 * 32);
 

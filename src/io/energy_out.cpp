@@ -172,13 +172,14 @@ nlohmann::ordered_json liner_json(const LinerLayout& layout, const LinerReport& 
                                                            : nlohmann::json();
   j["bare_liner_impact_power_W"] = num(r.bare_liner_impact_W);
   j["bare_liner_impact_share"] = num(r.bare_liner_impact_share);
-  // Along the mill: each axial bin's span (m from z = 0), its impact power
+  // Along the mill: each axial bin's span (m from z = 0: the shell's
+  // elements', whose end bins reach into worn end plates), its impact power
   // on the shell and lifters and its impact point.
   nlohmann::json along = nlohmann::json::array();
   const std::size_t na = r.impact_point_deg_by_axial.size();
-  for (std::size_t k = 0; k < na && k < r.impact_W_by_axial.size(); ++k)
-    along.push_back({{"z0_m", layout.length * static_cast<double>(k) / static_cast<double>(na)},
-                     {"z1_m", layout.length * static_cast<double>(k + 1) / static_cast<double>(na)},
+  for (std::size_t k = 0; k < na && k < r.impact_W_by_axial.size() && k < layout.elements.size(); ++k)
+    along.push_back({{"z0_m", layout.elements[k].z0},
+                     {"z1_m", layout.elements[k].z1},
                      {"impact_power_W", num(r.impact_W_by_axial[k])},
                      {"impact_point_deg", num(r.impact_point_deg_by_axial[k])}});
   j["impact_point_along"] = along;

@@ -245,7 +245,7 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
   }
   // Where impact power per degree `w_per_deg` peaks on bare liner, from the
   // shoulder to 45 degrees past the toe; its bin in `at`.
-  auto impact_point = [&](const std::vector<double>& w_per_deg, int& at, double* bare_W) {
+  auto impact_point = [&](const std::vector<double>& w_per_deg, int& at, double* bare_W, bool need_bare) {
     std::vector<double> bare(nb);
     for (int b = 0; b < nb; ++b) {
       bare[b] = w_per_deg[b] * (1 - r.coverage[b]);
@@ -262,10 +262,10 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
       for (int d = -half; d <= half; ++d) sm += bare[((b + d) % nb + nb) % nb];
       if (sm > best) best = sm, point = a, at = b;
     }
-    return point;
+    return need_bare && !(best > 0) ? kNaN : point;
   };
   int at = 0;
-  r.impact_point_deg = impact_point(r.impact_W_per_deg, at, &r.bare_liner_impact_W);
+  r.impact_point_deg = impact_point(r.impact_W_per_deg, at, &r.bare_liner_impact_W, false);
   r.bare_liner_impact_share = r.bare_liner_impact_W / total;
   r.impact_point_on_liner = r.coverage[at] < 0.5;
   // Along the mill, bin by bin.
@@ -277,7 +277,7 @@ LinerReport liner_report(const Scene& scene, const LinerLayout& layout, const Bo
       for (int b = 0; b < nb; ++b) sum += per_deg[b] = books.impact_profile_axial[static_cast<std::size_t>(k) * nb + b] / w;
       int at_k = 0;
       r.impact_W_by_axial.push_back(sum);
-      r.impact_point_deg_by_axial.push_back(sum > 0 ? impact_point(per_deg, at_k, nullptr) : kNaN);
+      r.impact_point_deg_by_axial.push_back(sum > 0 ? impact_point(per_deg, at_k, nullptr, true) : kNaN);
     }
   }
   return r;

@@ -111,8 +111,10 @@ struct LinerReport {
   // axial_bins, equal spans of the length or a slice's period), each bin's
   // impact power on the shell and lifters (W) and its impact point, found as
   // above from the bin's own impact power per degree with the whole mill's
-  // coverage, toe and shoulder. NaN where a bin booked no impact power;
-  // empty where the toe is not known or the books have no axial profile.
+  // coverage, toe and shoulder. NaN where a bin booked no impact power on
+  // bare liner along the arc; empty where the toe is not known or the books
+  // have no axial profile (a run resumed mid-window from a state saved
+  // before they were kept).
   std::vector<double> impact_W_by_axial, impact_point_deg_by_axial;
 };
 

@@ -90,7 +90,7 @@ BookSums SolverImpl<Real>::read_books() {
   for (std::size_t q = 0; q < out.stations.size(); ++q) out.stations[q] = liner_value(out.liner.size() + q);
   out.impact_profile.resize(MC_IMPACT_BINS);
   for (int b = 0; b < MC_IMPACT_BINS; ++b) out.impact_profile[b] = u64_at(impact_profile_.host, b) * energy_unit_;
-  out.impact_axial_bins = impact_axial_bins_;
+  out.impact_axial_bins = impact_axial_partial_ ? 0 : impact_axial_bins_;
   out.impact_profile_axial.resize(static_cast<std::size_t>(MC_IMPACT_BINS) * impact_axial_bins_);
   for (std::size_t q = 0; q < out.impact_profile_axial.size(); ++q)
     out.impact_profile_axial[q] = u64_at(impact_profile_.host, MC_IMPACT_BINS + q) * energy_unit_;
@@ -104,6 +104,7 @@ void SolverImpl<Real>::reset_books() {
     std::fill(b->host.begin(), b->host.end(), 0u);
     b->write_to_device();
   }
+  impact_axial_partial_ = false;  // every sum begins here
 }
 
 template <class Real>

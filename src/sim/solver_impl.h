@@ -201,6 +201,7 @@ class SolverImpl final : public Solver {
   Buffer<std::uint32_t> spectra_, liner_, impact_profile_;
   int n_types_ = 0, n_elements_ = 0, n_stations_ = 0;  // the liner's elements, then the lifters' wear stations
   int impact_axial_bins_ = 0;                          // the impact profile's axial blocks
+  bool impact_axial_partial_ = false;                  // resumed from a state without them: not reported
   double energy_unit_ = 0, wear_unit_ = 0;
   // Each ball's incoming slots (one per pair a lower ball lists with it, side
   // by side from in_start_[j] to in_start_[j + 1]) and the slot of each

@@ -314,6 +314,7 @@ void SolverImpl<Real>::setup_params(const Scene& scene) {
   bp.wear_k = Real(tb.wear_k);
   bp.plate_ring_width = Real(tb.plate_ring_width);
   bp.strike_speed = Real(tb.strike_speed);
+  bp.axial_span = Real(tb.axial_span);
   bp.n_types = tb.n_types;
   bp.n_elements = tb.n_elements;
   bp.shell_bins = tb.shell_bins;

@@ -35,7 +35,7 @@ bool has_array(const SolverState& st, const char* name) {
 bool whole_mill_profile_only(const SolverState& st, compute::Buffer<std::uint32_t>& b) {
   for (const auto& [key, bytes] : st.arrays) {
     if (key != "impact_profile") continue;
-    if (bytes.size() != 2 * MC_IMPACT_BINS * sizeof(std::uint32_t) || b.size() == 2 * MC_IMPACT_BINS) return false;
+    if (bytes.size() != 2 * MC_IMPACT_BINS * sizeof(std::uint32_t)) return false;
     std::fill(b.host.begin(), b.host.end(), 0u);
     std::memcpy(b.host.data(), bytes.data(), bytes.size());
     b.write_to_device();
@@ -194,7 +194,10 @@ void SolverImpl<Real>::restore_state(const SolverState& st) {
     get_array(st, "rec_state", rec_state_, false);
     if (!widen_old(st, "spectra", spectra_, MC_SPECTRA_FIELDS, {6, 8})) get_array(st, "spectra", spectra_, false);
     if (!widen_old(st, "liner", liner_, MC_LINER_FIELDS, {4})) get_array(st, "liner", liner_, false);
-    if (!whole_mill_profile_only(st, impact_profile_)) get_array(st, "impact_profile", impact_profile_, false);
+    // Resumed from such a state, the bins' sums begin mid-window: none are
+    // reported until the books start again (reset_books).
+    impact_axial_partial_ = whole_mill_profile_only(st, impact_profile_);
+    if (!impact_axial_partial_) get_array(st, "impact_profile", impact_profile_, false);
   } else {
     restore_springs(st);
   }

@@ -179,6 +179,7 @@ SceneTables scene_tables(const Scene& scene) {
   bp.n_elements = liner.size();
   bp.shell_bins = liner.shell_bins;
   bp.axial_bins = liner.axial_bins;
+  bp.axial_span = liner.length;
   bp.plate_rings = liner.plate_rings;
   bp.plate_sectors = liner.plate_sectors;
   bp.first_lifter_element = liner.first_lifter;
