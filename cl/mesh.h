@@ -15,7 +15,9 @@
  * kept; an edge contact is dropped when a triangle with a face contact has
  * that edge, or when another triangle already gave the same edge; a vertex
  * contact is dropped when a face contact's triangle or a kept edge has that
- * vertex, or another triangle already gave it. So a ball on the shared edge
+ * vertex, or another triangle already gave it; beyond Hu's rule, an edge or
+ * vertex contact whose point lies on or behind a face contact's plane is
+ * dropped (a ball pressed deep into a fine mesh). So a ball on the shared edge
  * or vertex of coplanar triangles feels one contact, and a ball in a
  * concave corner feels each face; contacts of one smooth patch whose normals
  * lie within 20° are one contact, the nearest. Triangles sharing an edge at less than
@@ -42,6 +44,9 @@ typedef struct {
 /* cos 20°: src/core/wall_mesh.h kSmoothDegrees, the angle below which two
  * triangles' normals make one smooth surface. */
 #define MC_MESH_SMOOTH_COS R(0.93969262078590838)
+/* How far in front of a face contact's plane (m) an edge or vertex still
+ * counts as on it (float rounding of coplanar triangles). */
+#define MC_MESH_BEHIND_TOL R(1e-6)
 #define MC_MESH_EDGE0 1
 #define MC_MESH_VERTEX0 4
 
@@ -83,6 +88,17 @@ typedef struct {
   real dist;    /* centre to the closest point, m */
   real3 normal; /* from the closest point to the centre, the set's frame */
 } MeshHit;
+
+/* Whether edge or vertex contact e lies on or behind the plane of face
+ * contact f: then it is inside that face's body, not a contact. A ball
+ * pressed deep into a finely meshed face reaches the edges and vertices of
+ * the triangles round the one it is over, whose normals lean away from the
+ * face's by more than a smooth surface's 20°; a ball on a flat plate feels
+ * its plane alone. The point's height over f's plane is
+ * dist_f − dist_e n_e·n_f. */
+MC_FN int mesh_behind(const MeshHit* f, const MeshHit* e) {
+  return f->dist - e->dist * dot(e->normal, f->normal) < MC_MESH_BEHIND_TOL;
+}
 
 /* Whether triangle t has feature f among its edges (0) or vertices (3). */
 MC_FN int triangle_has(MC_GLOBAL const MeshTriangle* t, int from, int f) {
@@ -127,6 +143,21 @@ MC_FN int mesh_candidates(const Meshes* m, int s, real3 q, real r, MeshHit* hits
       hit.normal = (R(1.0) / hit.dist) * d;
       hit.feature = tr->feat[region - 1];
     }
+    /* Listed once: another triangle's view of an edge or vertex already
+     * listed is the same contact (Hu's rule drops it), and an edge or vertex
+     * on or behind a face contact's plane is none (mesh_behind). A face
+     * contact strikes those listed before it. */
+    int skip = 0;
+    if (region != MC_MESH_FACE) {
+      for (int j = 0; j < nh && !skip; ++j)
+        skip = hits[j].region == MC_MESH_FACE ? mesh_behind(&hits[j], &hit) : hits[j].feature == hit.feature;
+    } else {
+      int kept = 0;
+      for (int j = 0; j < nh; ++j)
+        if (hits[j].region == MC_MESH_FACE || !mesh_behind(&hit, &hits[j])) hits[kept++] = hits[j];
+      nh = kept;
+    }
+    if (skip) continue;
     if (nh < MC_MESH_HITS) hits[nh++] = hit;
     else *overflow = 1;
   }

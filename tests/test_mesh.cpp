@@ -281,6 +281,58 @@ TEST_CASE("a ball on a shared edge or vertex feels one contact with the plate's 
   }
 }
 
+TEST_CASE("a ball pressed deep into a fine mesh feels its plane, not the triangles round it", "[mesh][physics]") {
+  // A plate of 5 mm irregular triangles and a 20 mm ball pressed 6 mm into
+  // it: the contact disc (14 mm across) covers the edges and vertices of
+  // the triangles round the one under the centre, whose normals lean away
+  // by up to 45°. They lie in the face's plane: one contact, k δ along +z.
+  const std::vector<Triangle> plate = irregular_plate(0.1, 40, 0.3, 11);
+  const double r = 0.02;
+  const double depths[] = {2e-4, 3e-3, 6e-3};
+  for (const double delta : depths) {
+    for (const Vec3 at : {Vec3{0.0013, -0.0021, 0}, Vec3{0.0251, 0.0377, 0}, Vec3{-0.04, 0.0125, 0}}) {
+      Scene s = plate_scene(ContactLaw::linear, &plate);
+      s.numerics.gravity = {0, 0, 0};
+      s.balls[0].position = {at.x, at.y, r - delta};
+      s.balls[0].velocity = {};
+      s.balls[0].omega = {};
+      const Vec3 f = force_on(s);
+      INFO("depth " << delta << " at " << at.x << ", " << at.y);
+      CHECK(wall_contacts(s) == 1.0);
+      CHECK(f.z == Approx(1e5 * delta).epsilon(1e-9));
+      CHECK(std::fabs(f.x) + std::fabs(f.y) < 1e-9 * f.z);
+    }
+  }
+  // A concave corner of 5 mm triangles, floor z = 0 and wall x = 0, the
+  // ball pressed 3 mm into the floor and 4 mm into the wall: the wall's
+  // faces stand in front of the floor's plane, so each face keeps its
+  // contact, k δ each, and the crease's edges and vertices add nothing.
+  std::vector<Triangle> corner;
+  for (int j = 0; j < 20; ++j) {
+    const double y0 = -0.05 + 0.005 * j, y1 = y0 + 0.005;
+    for (int i = 0; i < 10; ++i) {
+      const double a0 = 0.005 * i, a1 = a0 + 0.005;
+      corner.push_back({{Vec3{a0, y0, 0}, Vec3{a1, y0, 0}, Vec3{a1, y1, 0}}});
+      corner.push_back({{Vec3{a0, y0, 0}, Vec3{a1, y1, 0}, Vec3{a0, y1, 0}}});
+      corner.push_back({{Vec3{0, y0, a0}, Vec3{0, y1, a1}, Vec3{0, y0, a1}}});
+      corner.push_back({{Vec3{0, y0, a0}, Vec3{0, y1, a0}, Vec3{0, y1, a1}}});
+    }
+  }
+  for (const Triangle& t : corner) {
+    const Vec3 n = triangle_unit_normal(t);
+    REQUIRE(std::max(n.x, n.z) > 0.999);
+  }
+  Scene s = plate_scene(ContactLaw::linear, &corner);
+  s.numerics.gravity = {0, 0, 0};
+  s.balls[0].position = {r - 4e-3, 0.0012, r - 3e-3};
+  s.balls[0].velocity = {};
+  s.balls[0].omega = {};
+  const Vec3 f = force_on(s);
+  CHECK(wall_contacts(s) == 2.0);
+  CHECK(f.x == Approx(1e5 * 4e-3).epsilon(1e-9));
+  CHECK(f.z == Approx(1e5 * 3e-3).epsilon(1e-9));
+}
+
 TEST_CASE("a ball over a shallow dish where six triangles meet feels one contact, the nearest", "[mesh][physics]") {
   // Six triangles round the origin, each rising outward at 3° (a worn or
   // scanned surface, one smooth patch): a ball above the vertex is as near
