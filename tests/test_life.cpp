@@ -255,7 +255,20 @@ TEST_CASE("bad life study requests are refused by name, status 2 and nothing wri
        "walls.mesh[0].material = \"steel\": a life study wears its meshes at the liner's"},
       {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --mesh-smoothing 0",
        "--mesh-smoothing"},
-      {"--stages 2 --hours 10 --axial-segments 3", "--axial-segments 3: the bars of [lifters] wear alike along the mill"},
+      // Bars of [lifters] with --axial-segments wear as their mesh twin:
+      // what the twin cannot do.
+      {"--stages 2 --hours 10 --axial-segments 3 --set mill.ends=periodic",
+       "--axial-segments 3: the bars of [lifters] then wear as a mesh (their twin, triangle by triangle), and "
+       "mill.ends = \"periodic\" makes a slice"},
+      {"--stages 2 --calibrate-loss 5 --calibrate-hours 9 --axial-segments 3",
+       "--calibrate-loss: --axial-segments 3: the bars of [lifters] then wear as a mesh"},
+      {"--stages 2 --until-height 20 --axial-segments 3", "--until-height: --axial-segments 3"},
+      {"--stages 2 --hours 10 --axial-segments 3 --shell-wear-ratio 2", "--shell-wear-ratio 2: --axial-segments 3"},
+      {"--stages 2 --hours 10 --lifter-mesh 10", "--lifter-mesh: only with --axial-segments on a mill of [lifters]"},
+      {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --axial-segments 2 --lifter-mesh 10",
+       "--lifter-mesh: only with --axial-segments on a mill of [lifters]"},
+      {"--stages 2 --hours 10 --axial-segments 3 --lifter-mesh 60",
+       "--lifter-mesh 60: triangles up to 60 mm along the mill, longer than a segment (50 mm of --axial-segments 3)"},
       {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --axial-segments 7",
        "--axial-segments 7: segments of 0.02143 m, shorter than the largest ball (0.0254 m); give at most 5"},
       {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --axial-segments 0", "--axial-segments"},

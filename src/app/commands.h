@@ -73,6 +73,7 @@ struct LifeOptions {
   double impact_share = -1;     // --impact-share S: the share of the new liner's wear that impact does (< 0: the case's)
   double mesh_smoothing_mm = 0; // --mesh-smoothing MM: a mesh liner's wear averaged over MM across the axis (0: the largest ball's radius)
   int axial_segments = 0;       // --axial-segments N: a mesh liner measured in N spans along the mill (0: none)
+  double lifter_mesh_mm = 0;    // --lifter-mesh MM: with --axial-segments, the bars of [lifters] as a mesh of MM triangles (0: default)
   double mesh_smoothing_along_mm = 0;  // --mesh-smoothing-along MM: and along it (0: four times across)
   bool hold_plates = false;     // --hold-plates: the end plates stay as they are (they wear by default)
   bool force = false;           // --force: start again in an --out that holds another study

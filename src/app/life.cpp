@@ -30,6 +30,8 @@
 #include "core/liner_wear.h"
 #include "core/plate_wear.h"
 #include "io/atomic_file.h"
+#include "io/stl.h"
+#include "life/bar_twin.h"
 #include "io/case_file.h"
 #include "io/csv_read.h"
 #include "io/json_read.h"
@@ -356,13 +358,6 @@ void check_life(const LifeOptions& o, const Prepared& base) {
         "leans along the axis breaks the slice's repeat (its seams); wear the mesh in a whole mill (mill.ends = "
         "\"plates\"), or give the bars as [lifters] in the slice",
         worn.front()));
-  if (o.axial_segments > 0 && profiles > 0)
-    throw std::invalid_argument(fmt::format(
-        "--axial-segments {}: the bars of [lifters] wear alike along the mill (their stations are a row's mean); "
-        "give them as a mesh, which wears triangle by triangle: millcharge check CASE --write-lifters bars.stl "
-        "--lifter-mesh 5, then in the case lifters.rows = 0 and a [[walls.mesh]] file = \"bars.stl\" "
-        "(assets/cases/lab_stl.toml is the lab mill's)",
-        o.axial_segments));
   if (o.axial_segments > 0 && !(c.length / o.axial_segments >= base.d.largest_ball_diameter))
     throw std::invalid_argument(fmt::format("--axial-segments {}: segments of {:.4g} m, shorter than the largest ball "
                                             "({:.4g} m); give at most {}",
@@ -420,6 +415,51 @@ life::MeshSmoothing smoothing_of(const LifeOptions& o, const Prepared& base) {
   return smoothing;
 }
 
+// What a study whose bars of [lifters] wear as their mesh twin cannot do,
+// refused before the twin is made (the messages name the bars the user gave).
+void check_twin(const LifeOptions& o, const Prepared& base) {
+  const MillCase& c = base.c;
+  if (o.lifter_mesh_mm > 0 && !(o.axial_segments > 0 && c.lifter_rows > 0))
+    throw std::invalid_argument(
+        "--lifter-mesh: only with --axial-segments on a mill of [lifters] bars (whose twin it cuts); "
+        "a mesh liner's triangles are its own");
+  if (!(o.axial_segments > 0 && c.lifter_rows > 0)) return;
+  const std::string why = fmt::format("--axial-segments {}: the bars of [lifters] then wear as a mesh (their twin, "
+                                      "triangle by triangle)", o.axial_segments);
+  if (c.periodic)
+    throw std::invalid_argument(why + ", and mill.ends = \"periodic\" makes a slice that repeats along the mill: "
+                                      "its ends cannot wear otherwise than its middle; give the whole mill "
+                                      "(mill.ends = \"plates\")");
+  if (o.until_height_mm > 0 || o.calibrate_loss_mm > 0)
+    throw std::invalid_argument(std::string(o.until_height_mm > 0 ? "--until-height" : "--calibrate-loss") + ": " +
+                                why + ", whose height the study does not follow; give --hours, and calibrate by "
+                                "--calibrate-consumption or --calibrate-rate (or take the wear coefficient a study "
+                                "without segments calibrated on the height: its life.json)");
+  if (o.lifter_mesh_mm * 1e-3 > c.length / o.axial_segments * (1 + 1e-9))
+    throw std::invalid_argument(fmt::format(
+        "--lifter-mesh {:g}: triangles up to {:g} mm along the mill, longer than a segment ({:.4g} mm of "
+        "--axial-segments {}), so their wear cannot be told to one; give at most {:.4g}",
+        o.lifter_mesh_mm, o.lifter_mesh_mm, c.length / o.axial_segments * 1e3, o.axial_segments,
+        c.length / o.axial_segments * 1e3));
+  if (o.shell_wear_ratio != 1)
+    throw std::invalid_argument(fmt::format("--shell-wear-ratio {:g}: ", o.shell_wear_ratio) + why +
+                                " of the liner's steel, and the ratio sets the shell's wear against bars of "
+                                "[lifters] only");
+}
+
+// The study's case with its bars of [lifters] as a mesh, new-bars.stl in
+// the study's folder (written once the study's checks pass).
+Prepared with_twin(const LifeOptions& o, const Prepared& base, const fs::path& out, double* edge_m) {
+  *edge_m = o.lifter_mesh_mm > 0 ? o.lifter_mesh_mm * 1e-3
+                                 : mc::life::default_twin_edge(base.d.largest_ball_diameter, base.c.length, o.axial_segments);
+  Prepared t = base;
+  t.c = mc::life::with_bar_twin(base.c, mc::life::bar_twin_triangles(base.c, base.d, *edge_m),
+                            fs::absolute(out / "new-bars.stl").lexically_normal().string());
+  t.d = derive(t.c);
+  t.scene = build_scene(t.c, t.d);
+  return t;
+}
+
 }  // namespace
 
 
@@ -434,16 +474,22 @@ json life_request(const LifeOptions& o, const Prepared& base) {
 }
 
 int cmd_life(const LifeOptions& o) {
-  const Prepared base = prepare(o.c);
+  const Prepared given = prepare(o.c);
+  const fs::path out = o.out.empty() ? fs::path("runs") / (given.c.name + "-life") : fs::path(o.out);
+  check_twin(o, given);
+  // With --axial-segments, bars of [lifters] wear as their mesh twin.
+  double twin_edge_m = 0;
+  const bool twin = o.axial_segments > 0 && given.c.lifter_rows > 0;
+  const Prepared base = twin ? with_twin(o, given, out, &twin_edge_m) : given;
   check_life(o, base);
   const MillCase& c = base.c;
   const std::vector<int> worn = life::worn_meshes(c);
   const std::size_t profiles = c.lifter_rows > 0 ? c.lifter_pattern.size() : 0;
-  const fs::path out = o.out.empty() ? fs::path("runs") / (c.name + "-life") : fs::path(o.out);
   const double shell_covered = life::shell_share_covered(c, worn);
   // How far a mesh liner's booked wear is spread (life/mesh_wear.h smooth_wear).
   const life::MeshSmoothing smoothing = smoothing_of(o, base);
   json request = life_request(o, base);
+  if (twin) request["bars_as_mesh_mm"] = twin_edge_m * 1e3;
   // Whether the end plates wear, and their rings and sectors as the books cut them.
   bool plates = request.value("end_plates", "") == "worn";
   std::error_code ec;
@@ -517,6 +563,13 @@ int cmd_life(const LifeOptions& o) {
   }
   fs::create_directories(out / "cases", ec);
   if (ec) throw std::runtime_error("cannot create " + (out / "cases").string() + ": " + ec.message());
+  if (twin) {  // the same bytes on a resume
+    io::write_file_atomic(out / "new-bars.stl", io::stl_binary(c.meshes.back().triangles, c.name + " lifters, m"));
+    if (!o.quiet)
+      std::printf("life            the %d bars of [lifters] as a mesh of %s triangles at most %.4g mm across: %s\n",
+                  given.c.lifter_rows, thousands(static_cast<long>(c.meshes.back().triangles.size())).c_str(),
+                  twin_edge_m * 1e3, (out / "new-bars.stl").string().c_str());
+  }
   const double length = c.length;
   // The bars' length before the study wears the plates: the mill's, and
   // where the case's plates are worn and held, their dish at the shell

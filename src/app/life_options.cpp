@@ -52,9 +52,15 @@ void add_life_options(CLI::App* life, LifeOptions& lo) {
       ->check(cli::between(0.1, 1000))
       ->type_name("MM");
   life->add_option("--axial-segments", lo.axial_segments,
-                   "a mesh liner's bars and the shell measured in N equal spans along the mill: life_segments.csv")
+                   "the bars and the shell measured in N equal spans along the mill (bars of [lifters] worn as a mesh "
+                   "twin): life_segments.csv")
       ->check(cli::count(1, 32))
       ->type_name("N");
+  life->add_option("--lifter-mesh", lo.lifter_mesh_mm,
+                   "with --axial-segments on a mill of [lifters]: the bars worn as a mesh of triangles at most MM "
+                   "across (default: the largest ball's radius, at most half a segment)")
+      ->check(cli::between(0.5, 1000))
+      ->type_name("MM");
   life->add_option("--mesh-smoothing-along", lo.mesh_smoothing_along_mm,
                    "and of MM along the axis (default: four times --mesh-smoothing)")
       ->check(cli::between(0.1, 10000))
