@@ -16,8 +16,9 @@
  * that edge, or when another triangle already gave the same edge; a vertex
  * contact is dropped when a face contact's triangle or a kept edge has that
  * vertex, or another triangle already gave it; beyond Hu's rule, an edge or
- * vertex contact whose point lies on or behind a face contact's plane is
- * dropped (a ball pressed deep into a fine mesh). So a ball on the shared edge
+ * vertex contact of a face contact's smooth surface that lies within half
+ * its overlap of the face's plane is dropped (a ball pressed deep into a
+ * fine mesh: mesh_within). So a ball on the shared edge
  * or vertex of coplanar triangles feels one contact, and a ball in a
  * concave corner feels each face; contacts of one smooth patch whose normals
  * lie within 20° are one contact, the nearest. Triangles sharing an edge at less than
@@ -89,15 +90,39 @@ typedef struct {
   real3 normal; /* from the closest point to the centre, the set's frame */
 } MeshHit;
 
-/* Whether edge or vertex contact e lies on or behind the plane of face
- * contact f: then it is inside that face's body, not a contact. A ball
- * pressed deep into a finely meshed face reaches the edges and vertices of
- * the triangles round the one it is over, whose normals lean away from the
- * face's by more than a smooth surface's 20°; a ball on a flat plate feels
- * its plane alone. The point's height over f's plane is
- * dist_f − dist_e n_e·n_f. */
-MC_FN int mesh_behind(const MeshHit* f, const MeshHit* e) {
-  return f->dist - e->dist * dot(e->normal, f->normal) < MC_MESH_BEHIND_TOL;
+/* Whether edge or vertex contact e is part of face contact f's contact:
+ * of f's smooth surface, and within half f's overlap of f's plane (or
+ * behind it). A ball pressed deep into a finely meshed face reaches the
+ * edges and vertices of the triangles round the one it is over, whose
+ * normals lean away from the face's by more than a smooth surface's 20°;
+ * on a flat, gently curved or worn surface those lie about in the face's
+ * plane, and the ball feels the surface once. A concave corner's other
+ * face, or a fillet curving up round the ball, stands about a ball radius
+ * above the plane and stays a contact; so does any other surface's edge.
+ * e's point's height over f's plane is dist_f − dist_e n_e·n_f. */
+MC_FN int mesh_within(const Meshes* m, const MeshHit* f, const MeshHit* e, real r) {
+  if (m->feature[f->feature].x != m->feature[e->feature].x) return 0;
+  return f->dist - e->dist * dot(e->normal, f->normal) < R(0.5) * (r - f->dist) + MC_MESH_BEHIND_TOL;
+}
+
+/* One candidate into the list (mesh_candidates): an edge or vertex another
+ * triangle already listed is the same contact (Hu's rule drops it), and
+ * one within a face contact's (mesh_within) is none; a face contact strikes
+ * those listed before it. Returns 0 where the list is full. */
+MC_FN int mesh_list(const Meshes* m, MeshHit* hits, int* nh, const MeshHit* hit, real r) {
+  if (hit->region != MC_MESH_FACE) {
+    for (int j = 0; j < *nh; ++j)
+      if (hits[j].region == MC_MESH_FACE ? mesh_within(m, &hits[j], hit, r) : hits[j].feature == hit->feature)
+        return 1;
+  } else {
+    int kept = 0;
+    for (int j = 0; j < *nh; ++j)
+      if (hits[j].region == MC_MESH_FACE || !mesh_within(m, hit, &hits[j], r)) hits[kept++] = hits[j];
+    *nh = kept;
+  }
+  if (*nh >= MC_MESH_HITS) return 0;
+  hits[(*nh)++] = *hit;
+  return 1;
 }
 
 /* Whether triangle t has feature f among its edges (0) or vertices (3). */
@@ -118,49 +143,41 @@ MC_FN int mesh_candidates(const Meshes* m, int s, real3 q, real r, MeshHit* hits
   if (cx < 0 || cy < 0 || cz < 0 || cx >= g->nx || cy >= g->ny || cz >= g->nz) return 0;
   const int cell = g->first_cell + (cz * g->ny + cy) * g->nx + cx;
   const int b = m->cell_start[cell], e = m->cell_start[cell + 1];
-  int nh = 0;
-  for (int k = b; k < e; ++k) {
-    const int t = m->cell_tris[k];
-    MC_GLOBAL const MeshTriangle* tr = m->tris + t;
-    const real3 a = xyz_of(tr->a);
-    const real3 n = xyz_of(tr->n);
-    const real h = dot(q - a, n); /* height over the triangle's plane */
-    if (!(h > R(0.0) && h < r)) continue;
-    int region;
-    const real3 cp = triangle_closest(q, a, xyz_of(tr->b), xyz_of(tr->c), &region);
-    MeshHit hit;
-    hit.tri = t;
-    hit.region = region;
-    if (region == MC_MESH_FACE) {
-      hit.dist = h;
-      hit.normal = n;
-      hit.feature = t;
-    } else {
-      const real3 d = q - cp;
-      const real d2 = dot(d, d);
-      if (!(d2 < r * r)) continue;
-      hit.dist = sqrt(d2);
-      hit.normal = (R(1.0) / hit.dist) * d;
-      hit.feature = tr->feat[region - 1];
+  /* Faces and edges alike in one pass; where the list fills, the edges and
+   * vertices are gathered again once every face is in (a face strikes the
+   * edges round it, which may have filled the list before it came). */
+  int nh = 0, full = 0;
+  for (int pass = 0; pass < 2 && (pass == 0 || full); ++pass)
+    for (int k = b; k < e; ++k) {
+      const int t = m->cell_tris[k];
+      MC_GLOBAL const MeshTriangle* tr = m->tris + t;
+      const real3 a = xyz_of(tr->a);
+      const real3 n = xyz_of(tr->n);
+      const real h = dot(q - a, n); /* height over the triangle's plane */
+      if (!(h > R(0.0) && h < r)) continue;
+      int region;
+      const real3 cp = triangle_closest(q, a, xyz_of(tr->b), xyz_of(tr->c), &region);
+      if (pass == 1 && region == MC_MESH_FACE) continue;
+      MeshHit hit;
+      hit.tri = t;
+      hit.region = region;
+      if (region == MC_MESH_FACE) {
+        hit.dist = h;
+        hit.normal = n;
+        hit.feature = t;
+      } else {
+        const real3 d = q - cp;
+        const real d2 = dot(d, d);
+        if (!(d2 < r * r)) continue;
+        hit.dist = sqrt(d2);
+        hit.normal = (R(1.0) / hit.dist) * d;
+        hit.feature = tr->feat[region - 1];
+      }
+      if (!mesh_list(m, hits, &nh, &hit, r)) {
+        if (pass == 1 || region == MC_MESH_FACE) *overflow = 1;
+        else full = 1;
+      }
     }
-    /* Listed once: another triangle's view of an edge or vertex already
-     * listed is the same contact (Hu's rule drops it), and an edge or vertex
-     * on or behind a face contact's plane is none (mesh_behind). A face
-     * contact strikes those listed before it. */
-    int skip = 0;
-    if (region != MC_MESH_FACE) {
-      for (int j = 0; j < nh && !skip; ++j)
-        skip = hits[j].region == MC_MESH_FACE ? mesh_behind(&hits[j], &hit) : hits[j].feature == hit.feature;
-    } else {
-      int kept = 0;
-      for (int j = 0; j < nh; ++j)
-        if (hits[j].region == MC_MESH_FACE || !mesh_behind(&hit, &hits[j])) hits[kept++] = hits[j];
-      nh = kept;
-    }
-    if (skip) continue;
-    if (nh < MC_MESH_HITS) hits[nh++] = hit;
-    else *overflow = 1;
-  }
   return nh;
 }
 

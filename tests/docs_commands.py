@@ -52,6 +52,8 @@ EXPECTED_SKIPS = [
     ('docs/liner-life-mesh.md', 'runs/lab-mesh-life'),  # a mesh worn by a 0.2 s run's start-up turns over
                                                          # (tests/test_life_mesh.cpp runs a coarser one)
     ('docs/liner-life-mesh.md', 'runs/lab-mesh-compare'),  # compares that study
+    ('docs/liner-life-mesh.md', 'runs/lab-twin-life'),  # the bars' twin, worn as that mesh is
+    ('docs/liner-life-mesh.md', 'runs/sag-whole-life'),  # the whole SAG stand-in: an hour on 2 cores
     ('docs/reliability.md', '--resume runs/lab1'),    # after Ctrl-C
     ('docs/commands.md', '--resume runs/b'),          # after Ctrl-C, a crash or a time limit
 ]
@@ -205,7 +207,7 @@ class Runner:
                 return [self.binary, 'check'] + self.case_args(rest), None
             return [self.binary, 'run'] + rest + SHORT_RUN + ['--quiet'], None
         if sub == 'life':
-            if any(a.startswith('walls.mesh') for a in rest):
+            if any(a.startswith('walls.mesh') for a in rest) or '--axial-segments' in rest:
                 return None, 'a mesh liner wears by what a full run books (a short run\'s start-up turns it over)'
             # One stage of the page's length: its hours over its stages.
             stages, hours = option(rest, '--stages'), option(rest, '--hours')

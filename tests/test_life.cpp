@@ -265,6 +265,13 @@ TEST_CASE("bad life study requests are refused by name, status 2 and nothing wri
       {"--stages 2 --until-height 20 --axial-segments 3", "--until-height: --axial-segments 3"},
       {"--stages 2 --hours 10 --axial-segments 3 --shell-wear-ratio 2", "--shell-wear-ratio 2: --axial-segments 3"},
       {"--stages 2 --hours 10 --lifter-mesh 10", "--lifter-mesh: only with --axial-segments on a mill of [lifters]"},
+      {"--stages 2 --hours 10 --axial-segments 3 --set mill.ends=cones --set mill.cone_angle=20 "
+       "--set mill.trunnion_diameter=0.3",
+       "cut at the end planes; this mill's ends are cones (mill.ends = \"cones\"), not planes"},
+      {"--stages 2 --hours 10 --axial-segments 3 --set liner.plate_depth_mm=[[1,2,3,4],[1,2,3,4]]",
+       "this mill's end plates are worn ([liner] plate_depth_mm), and its bars reach into their dish"},
+      {"--stages 2 --hours 10 --axial-segments 3 --lifter-mesh 0.5 --set mill.length=4",
+       "--lifter-mesh 0.5: the bars' twin would have about 5e+07 triangles (at most 2e+07)"},
       {std::string(MC_ASSET_DIR) + "/cases/lab_stl.toml --stages 2 --hours 10 --axial-segments 2 --lifter-mesh 10",
        "--lifter-mesh: only with --axial-segments on a mill of [lifters]"},
       {"--stages 2 --hours 10 --axial-segments 3 --lifter-mesh 60",

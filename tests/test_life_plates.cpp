@@ -230,9 +230,9 @@ TEST_CASE("the plates wear at the study's mix and calibration, and end lifters h
   o.hours = 1000;
   o.c.overrides = {"end_lifters.rows=12", "end_lifters.height=0.02", "end_lifters.width=0.02"};
   const mc::app::Prepared with = mc::app::prepare(o.c);
-  CHECK(mc::app::life_request(o, with)["end_plates"] == "held");
+  CHECK(mc::app::life_request(o, with, 0)["end_plates"] == "held");
   o.c.overrides.clear();
-  CHECK(mc::app::life_request(o, mc::app::prepare(o.c))["end_plates"] == "worn");
+  CHECK(mc::app::life_request(o, mc::app::prepare(o.c), 0)["end_plates"] == "worn");
   o.hold_plates = true;
-  CHECK(mc::app::life_request(o, mc::app::prepare(o.c))["end_plates"] == "held");
+  CHECK(mc::app::life_request(o, mc::app::prepare(o.c), 0)["end_plates"] == "held");
 }

@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -40,6 +41,17 @@ TEST_CASE("the bars' mesh twin encloses the bars' volume and replaces [lifters]"
       area += 0.5 * (a.x * b.y - b.x * a.y);
     }
   CHECK(mc::closed_mesh_volume(twin) == Approx(area * c.length).epsilon(1e-5));
+  // And by the profile alone: each bar h (top + h tan θ) on the tangent
+  // at its foot (the case's derived lifter volume), less what lies beyond
+  // the shell (a³/3R, a the foot's half-width) and the sliver between the
+  // chord that closes the cut bar and the shell (2a³/3R), to order (a/R)².
+  const double a = 0.5 * c.lifter_pattern[0].top_width +
+                   c.lifter_pattern[0].height * std::tan(c.lifter_pattern[0].face_angle_deg * M_PI / 180);
+  const double cut = c.lifter_rows * c.length * a * a * a / (0.5 * c.diameter);
+  std::printf("twin %.9g m3, shoelace %.9g m3, profile %.9g m3 less %.4g m3 cut at the shell\n",
+              mc::closed_mesh_volume(twin), area * c.length, d.lifter_volume, cut);
+  CHECK(cut > 0.02 * d.lifter_volume);
+  CHECK(mc::closed_mesh_volume(twin) == Approx(d.lifter_volume - cut).epsilon(2e-3));
   // Every coordinate is a 32-bit float, as the STL holds it; no triangle
   // runs more than 10 mm along the mill.
   bool floats = true;
@@ -113,8 +125,12 @@ TEST_CASE("life --axial-segments on bars of [lifters] is the study of their STL,
     }
   CHECK(apart == 0);
   CHECK(moved > 1e-5);  // worn
-  // Resumed, it wears the same twin.
+  // Resumed, it wears the same twin and runs nothing again.
+  const std::string twin_bytes = read_text(a / "new-bars.stl"), table_a = read_text(a / "life_meshes.csv");
   REQUIRE(life(span + " --lifter-mesh 25 --out '" + a.string() + "'", &err) == 0);
+  CHECK(read_text(a / "new-bars.stl") == twin_bytes);
+  CHECK(read_text(a / "life_meshes.csv") == table_a);
+  CHECK_FALSE(fs::exists(a / "stage-02"));
   // Another triangle size is another study.
   CHECK(life(span + " --lifter-mesh 20 --out '" + a.string() + "'", &err) == 2);
   CHECK(err.find("bars_as_mesh_mm") != std::string::npos);

@@ -267,3 +267,47 @@ stages = 2
   CHECK_THAT(wrong.err, Catch::Contains("--relining-height: " + (work / "runs_sweep").string() + " is a sweep of runs"));
   fs::remove_all(work);
 }
+
+TEST_CASE("a sweep of life studies along the mill wears bars of [lifters] as their twin, and runs again as ended",
+          "[sweep][life][cli]") {
+  const fs::path work = life_cli::scratch("sweep-twin");
+  fs::create_directories(work);
+  const std::string head = R"(name = "twin"
+case = "lab.toml"
+command = "life"
+[set]
+mill.length = 0.06
+run.duration = 0.3
+run.settle = 0.05
+run.warmup = 0.1
+run.checkpoint_interval = 0.05
+run.snapshot_interval = 0
+[life]
+stages = 1
+hours = 4000
+axial-segments = 2
+)";
+  const fs::path dir = work / "out";
+  // What the twin cannot do, refused by the sweep's check as by life's.
+  const std::string axes = "[axes]\nlifters.profile.0.face_angle = [20]\n";
+  write_text(work / "bad.toml", head + "lifter-mesh = 40\n" + axes);
+  const Outcome bad = run_binary("sweep run '" + (work / "bad.toml").string() + "' --local --out '" + dir.string() + "'", work);
+  CHECK(bad.status == 2);
+  CHECK_THAT(bad.err, Catch::Contains("--lifter-mesh 40: triangles up to 40 mm along the mill, longer than a segment"));
+  CHECK(!fs::exists(dir));
+  write_text(work / "twin.toml", head + "lifter-mesh = 25\n" + axes);
+  const Outcome run = run_binary("sweep run '" + (work / "twin.toml").string() + "' --local --out '" + dir.string() + "'", work);
+  INFO(run.out << run.err);
+  REQUIRE(run.status == 0);
+  const fs::path study = dir / "cases";
+  bool twin = false;
+  for (const auto& e : fs::directory_iterator(study)) twin = twin || fs::exists(e.path() / "new-bars.stl");
+  CHECK(twin);
+  // The sweep's request is the study's (the twin's size and smoothing in
+  // both): run again, it is ended, not another study.
+  const Outcome again = run_binary("sweep run '" + (work / "twin.toml").string() + "' --local --out '" + dir.string() + "'", work);
+  INFO(again.out << again.err);
+  CHECK(again.status == 0);
+  CHECK_THAT(again.out, Catch::Contains("1 finished, 0 queued or running, 0 failed; 0 to run"));
+  fs::remove_all(work);
+}

@@ -417,6 +417,9 @@ life::MeshSmoothing smoothing_of(const LifeOptions& o, const Prepared& base) {
 
 // What a study whose bars of [lifters] wear as their mesh twin cannot do,
 // refused before the twin is made (the messages name the bars the user gave).
+// A twin of more triangles than this is refused before it is built.
+constexpr double kMaxTwinTriangles = 2e7;
+
 void check_twin(const LifeOptions& o, const Prepared& base) {
   const MillCase& c = base.c;
   if (o.lifter_mesh_mm > 0 && !(o.axial_segments > 0 && c.lifter_rows > 0))
@@ -435,6 +438,13 @@ void check_twin(const LifeOptions& o, const Prepared& base) {
                                 why + ", whose height the study does not follow; give --hours, and calibrate by "
                                 "--calibrate-consumption or --calibrate-rate (or take the wear coefficient a study "
                                 "without segments calibrated on the height: its life.json)");
+  if (c.ends.cones() || !c.plate_depth[0].empty() || !c.plate_depth[1].empty())
+    throw std::invalid_argument(
+        why + ", cut at the end planes; " +
+        (c.ends.cones() ? std::string("this mill's ends are cones (mill.ends = \"cones\"), not planes")
+                        : std::string("this mill's end plates are worn ([liner] plate_depth_mm), and its bars reach "
+                                      "into their dish")) +
+        "; give the bars as a mesh of your own ([[walls.mesh]], docs/liner-life-mesh.md)");
   if (o.lifter_mesh_mm * 1e-3 > c.length / o.axial_segments * (1 + 1e-9))
     throw std::invalid_argument(fmt::format(
         "--lifter-mesh {:g}: triangles up to {:g} mm along the mill, longer than a segment ({:.4g} mm of "
@@ -447,24 +457,34 @@ void check_twin(const LifeOptions& o, const Prepared& base) {
                                 "[lifters] only");
 }
 
-// The study's case with its bars of [lifters] as a mesh, new-bars.stl in
-// the study's folder (written once the study's checks pass).
-Prepared with_twin(const LifeOptions& o, const Prepared& base, const fs::path& out, double* edge_m) {
-  *edge_m = o.lifter_mesh_mm > 0 ? o.lifter_mesh_mm * 1e-3
-                                 : mc::life::default_twin_edge(base.d.largest_ball_diameter, base.c.length, o.axial_segments);
-  Prepared t = base;
-  t.c = mc::life::with_bar_twin(base.c, mc::life::bar_twin_triangles(base.c, base.d, *edge_m),
-                            fs::absolute(out / "new-bars.stl").lexically_normal().string());
+}  // namespace
+
+Prepared life_base(const LifeOptions& o, const Prepared& given, const fs::path& out, double* twin_edge_m) {
+  check_twin(o, given);
+  *twin_edge_m = 0;
+  if (!(o.axial_segments > 0 && given.c.lifter_rows > 0)) return given;
+  const double edge = o.lifter_mesh_mm > 0 ? o.lifter_mesh_mm * 1e-3
+                                           : mc::life::default_twin_edge(given.d.largest_ball_diameter,
+                                                                         given.c.length, o.axial_segments);
+  // Refused before it is built: a mesh past what a device could hold.
+  const double triangles = mc::life::twin_triangle_estimate(given.c, given.d, edge);
+  if (triangles > kMaxTwinTriangles)
+    throw std::invalid_argument(fmt::format(
+        "--lifter-mesh {:.4g}: the bars' twin would have about {:.3g} triangles (at most {:.0e}); give a coarser mesh",
+        edge * 1e3, triangles, kMaxTwinTriangles));
+  Prepared t = given;
+  t.c = mc::life::with_bar_twin(given.c, mc::life::bar_twin_triangles(given.c, given.d, edge),
+                                fs::absolute(out / "new-bars.stl").lexically_normal().string());
   t.d = derive(t.c);
   t.scene = build_scene(t.c, t.d);
+  *twin_edge_m = edge;
   return t;
 }
 
-}  // namespace
 
-
-json life_request(const LifeOptions& o, const Prepared& base) {
+json life_request(const LifeOptions& o, const Prepared& base, double twin_edge_m) {
   json request = request_with_consumption(o, base);
+  if (twin_edge_m > 0) request["bars_as_mesh_mm"] = twin_edge_m * 1e3;
   const life::MeshSmoothing smoothing = smoothing_of(o, base);
   if (!life::worn_meshes(base.c).empty())  // as resolved: a study resumes with the smoothing it began with
     request["mesh_smoothing_mm"] = smoothing.across_m * 1e3, request["mesh_smoothing_along_mm"] = smoothing.along_m * 1e3;
@@ -476,11 +496,10 @@ json life_request(const LifeOptions& o, const Prepared& base) {
 int cmd_life(const LifeOptions& o) {
   const Prepared given = prepare(o.c);
   const fs::path out = o.out.empty() ? fs::path("runs") / (given.c.name + "-life") : fs::path(o.out);
-  check_twin(o, given);
   // With --axial-segments, bars of [lifters] wear as their mesh twin.
   double twin_edge_m = 0;
-  const bool twin = o.axial_segments > 0 && given.c.lifter_rows > 0;
-  const Prepared base = twin ? with_twin(o, given, out, &twin_edge_m) : given;
+  const Prepared base = life_base(o, given, out, &twin_edge_m);
+  const bool twin = twin_edge_m > 0;
   check_life(o, base);
   const MillCase& c = base.c;
   const std::vector<int> worn = life::worn_meshes(c);
@@ -488,8 +507,7 @@ int cmd_life(const LifeOptions& o) {
   const double shell_covered = life::shell_share_covered(c, worn);
   // How far a mesh liner's booked wear is spread (life/mesh_wear.h smooth_wear).
   const life::MeshSmoothing smoothing = smoothing_of(o, base);
-  json request = life_request(o, base);
-  if (twin) request["bars_as_mesh_mm"] = twin_edge_m * 1e3;
+  json request = life_request(o, base, twin_edge_m);
   // Whether the end plates wear, and their rings and sectors as the books cut them.
   bool plates = request.value("end_plates", "") == "worn";
   std::error_code ec;
@@ -544,7 +562,7 @@ int cmd_life(const LifeOptions& o) {
     if (o.force) {
       for (int i = 0; fs::exists(stage_dir(out, i), ec); ++i) fs::remove_all(stage_dir(out, i), ec);
       for (const char* f : {"life.json", "life.csv", "life.png", "life.pvd", "life_meshes.csv", "life_segments.csv", "life_plates.csv",
-                            "life_plates.png"})
+                            "life_plates.png", "new-bars.stl"})
         fs::remove(out / f, ec);
       fs::remove_all(out / "cases", ec);
     }

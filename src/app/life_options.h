@@ -5,6 +5,7 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -36,8 +37,17 @@ LifeOptions life_options_from(const std::vector<std::string>& args);
 // naming the option or key.
 void check_life(const LifeOptions& o, const Prepared& base);
 
+// The case a study wears: the given one, or with --axial-segments on bars
+// of [lifters], the case with the bars as their mesh twin, whose file is
+// new-bars.stl in `out` (life/bar_twin.h; `twin_edge_m` its triangles'
+// size, else 0). What a twin cannot do is refused here, before it is made;
+// nothing is written.
+Prepared life_base(const LifeOptions& o, const Prepared& given, const std::filesystem::path& out,
+                   double* twin_edge_m);
+
 // The request a study records in life.json and resumes only with the same
-// (app/life.cpp); a sweep compares a case folder's study with it.
-nlohmann::json life_request(const LifeOptions& o, const Prepared& base);
+// (app/life.cpp), of the case life_base gave and its twin's size; a sweep
+// compares a case folder's study with it.
+nlohmann::json life_request(const LifeOptions& o, const Prepared& base, double twin_edge_m);
 
 }  // namespace mc::app

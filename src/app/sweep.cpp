@@ -119,10 +119,12 @@ CaseCheck check_case(const io::Sweep& s, const io::SweepCase& sc) {
       LifeOptions lo = life_options_from(sc.life_args);
       lo.c.case_path = s.base_case.string();
       lo.c.overrides = sc.overrides;
-      const Prepared p{s.base_case, c, d, build_scene(c, d)};
+      const Prepared given{s.base_case, c, d, build_scene(c, d)};
+      double twin_edge_m = 0;  // the twin's file is the study's; only its triangles count here
+      const Prepared p = life_base(lo, given, fs::path("cases") / sc.dir, &twin_edge_m);
       check_life(lo, p);
       r.runs = lo.stages + 1;
-      r.request = life_request(lo, p);
+      r.request = life_request(lo, p, twin_edge_m);
     }
   } catch (const std::invalid_argument& e) {
     r.error = e.what();

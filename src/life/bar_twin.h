@@ -25,6 +25,10 @@ double default_twin_edge(double largest_ball_diameter, double length, int segmen
 // coordinate rounded to a 32-bit float as a binary STL holds it.
 std::vector<Triangle> bar_twin_triangles(const MillCase& c, const MillDerived& d, double max_edge_m);
 
+// About how many triangles bar_twin_triangles makes at `max_edge_m`
+// (without making them): the faces' rows and columns, twice.
+double twin_triangle_estimate(const MillCase& c, const MillDerived& d, double max_edge_m);
+
 // Case c with its bars as that mesh: lifters.rows = 0 and one more
 // [[walls.mesh]] of part "lifters" turning with the mill, of the liner's
 // material, its file `file` (which the caller writes before a run reads
