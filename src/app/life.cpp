@@ -644,7 +644,9 @@ int cmd_life(const LifeOptions& o) {
     io::draw_or_warn(out / "life.png", [&] {
       life::write_life_picture(out / "life.png", c.name,
                                profiles == 0 && !worn.empty() ? life::stages_drawn(out, c, st.stages) : st.stages,
-                               {st.factor, st.relative(), bars_length});
+                               {st.factor, st.relative(), bars_length},
+                               o.axial_segments > 0 ? life::along_plots(c.name, out, st.relative())
+                                                    : std::vector<io::LinePlot>{});
     });
 
     // Stop, or plan the next stage's wear (in hours at the case's wear

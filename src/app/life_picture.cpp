@@ -8,10 +8,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 
 #include "core/lifters.h"
 #include "core/liner_wear.h"
 #include "core/scene.h"
+#include "io/csv_read.h"
+#include "io/json_read.h"
 
 namespace mc::app::life {
 
@@ -242,9 +245,93 @@ std::vector<io::LinePlot> life_plots(const std::string& name, const std::vector<
   return plots;
 }
 
+std::vector<io::LinePlot> along_plots(const std::string& name, const std::filesystem::path& out, bool relative) {
+  std::vector<io::LinePlot> plots;
+  const std::filesystem::path table = out / "life_segments.csv";
+  if (!std::filesystem::exists(table)) return plots;
+  const io::CsvTable t = io::read_csv_strict(table);
+  const int c_stage = t.column("stage"), c_hours = t.column("hours"), c_seg = t.column("segment");
+  const int c_z0 = t.column("z_from_m"), c_z1 = t.column("z_to_m");
+  auto num = [&](std::size_t r, int c) { return std::stod(t.rows[r][c]); };
+  int segments = 0, stages = 0;
+  for (std::size_t r = 0; r < t.rows.size(); ++r)
+    segments = std::max(segments, static_cast<int>(num(r, c_seg)) + 1),
+    stages = std::max(stages, static_cast<int>(num(r, c_stage)) + 1);
+  auto panel = [&](const std::string& title, const std::string& y_label) {
+    io::LinePlot p;
+    p.title = name + ": along the mill: " + title;
+    p.x_label = hours_label(relative);
+    p.y_label = y_label;
+    p.pad_x = true;
+    return p;
+  };
+  auto span_label = [](double z0, double z1) { return fmt::format("{:.2f}-{:.2f} m", z0, z1); };
+  // The bars per segment: a line each, blue at z = 0 to red at the far end.
+  auto per_segment = [&](const std::string& col) {
+    const int c = t.column(col), ce = t.column(col + "_se");
+    std::vector<io::PlotSeries> series(segments);
+    for (std::size_t r = 0; r < t.rows.size(); ++r) {
+      io::PlotSeries& s = series[static_cast<int>(num(r, c_seg))];
+      if (s.x.empty()) {
+        s.label = span_label(num(r, c_z0), num(r, c_z1));
+        s.rgb = ramp(segments > 1 ? num(r, c_seg) / (segments - 1) : 0.0);
+        s.markers = true;
+      }
+      const double v = num(r, c), e = 2 * num(r, ce);
+      s.x.push_back(num(r, c_hours)), s.y.push_back(v), s.band_lo.push_back(v - e), s.band_hi.push_back(v + e);
+    }
+    return series;
+  };
+  io::LinePlot face = panel("the lifters' leading face per segment (bands: \u00b1 2 standard errors of the bars)",
+                            "face angle from the radial line (deg)");
+  face.series = per_segment("leading_angle_deg");
+  at_least(face, 5);
+  io::LinePlot height = panel("the lifters' height per segment (bands: \u00b1 2 standard errors of the bars)",
+                              "height above the shell (mm)");
+  height.series = per_segment("height_mm");
+  height.y_cover_lo = 0;
+  plots.push_back(face);
+  plots.push_back(height);
+  // The impact point per axial bin of the liner, from each stage's run.
+  std::vector<double> hours(stages, NAN);
+  for (std::size_t r = 0; r < t.rows.size(); ++r) hours[static_cast<int>(num(r, c_stage))] = num(r, c_hours);
+  io::LinePlot impact = panel("the impact point per liner bin", "angle (deg, from 3 o'clock)");
+  double widest = 0, widest_at = 0;
+  for (int i = 0; i < stages; ++i) {
+    const std::filesystem::path summary = out / fmt::format("stage-{:02d}", i) / "summary.json";
+    if (!std::filesystem::exists(summary)) continue;
+    const nlohmann::json j = io::read_json_file(summary);
+    if (!j.contains("liner") || !j["liner"].contains("impact_point_along")) continue;
+    const nlohmann::json& along = j["liner"]["impact_point_along"];
+    if (impact.series.size() < along.size()) impact.series.resize(along.size());
+    double lo = INFINITY, hi = -INFINITY;
+    for (std::size_t b = 0; b < along.size(); ++b) {
+      io::PlotSeries& s = impact.series[b];
+      if (s.label.empty()) {
+        s.label = span_label(along[b].value("z0_m", 0.0), along[b].value("z1_m", 0.0));
+        s.rgb = ramp(along.size() > 1 ? static_cast<double>(b) / (along.size() - 1) : 0.0);
+        s.markers = true;
+      }
+      const nlohmann::json& v = along[b]["impact_point_deg"];
+      if (!v.is_number()) continue;  // a bin with no impact on bare liner
+      s.x.push_back(hours[i]), s.y.push_back(v.get<double>());
+      lo = std::min(lo, s.y.back()), hi = std::max(hi, s.y.back());
+    }
+    if (hi >= lo && hi - lo >= widest) widest = hi - lo, widest_at = hours[i];
+  }
+  if (!impact.series.empty()) {
+    impact.title += fmt::format(" (widest spread {:.1f} deg, at {:.0f} h)", widest, widest_at);
+    at_least(impact, 5);
+    plots.push_back(impact);
+  }
+  return plots;
+}
+
 void write_life_picture(const std::filesystem::path& file, const std::string& name, const std::vector<Stage>& stages,
-                        const LifeAxis& axis) {
-  io::write_line_plots_png(file, life_plots(name, stages, axis), 960, 380);
+                        const LifeAxis& axis, const std::vector<io::LinePlot>& extra) {
+  std::vector<io::LinePlot> plots = life_plots(name, stages, axis);
+  plots.insert(plots.end(), extra.begin(), extra.end());
+  io::write_line_plots_png(file, plots, 960, 380);
 }
 
 }  // namespace mc::app::life

@@ -36,8 +36,17 @@ inline constexpr int kProfilesDrawn = 9;
 // shell. Only the stages that ran are drawn.
 std::vector<io::LinePlot> life_plots(const std::string& name, const std::vector<Stage>& stages, const LifeAxis& axis);
 
-// The panels in one picture; throws where it cannot be written.
+// The panels along the mill of a study with --axial-segments, from its
+// life_segments.csv and its stages' summary.json in `out`: the bars'
+// leading face and height per segment (bands: ± 2 standard errors of the
+// bars' spread), and the impact point per axial bin of the liner
+// (liner.impact_point_along), its spread in the title. Empty where the
+// study has no segments; throws naming a file that cannot be read.
+std::vector<io::LinePlot> along_plots(const std::string& name, const std::filesystem::path& out, bool relative);
+
+// The panels in one picture (and `extra` under them); throws where it
+// cannot be written.
 void write_life_picture(const std::filesystem::path& file, const std::string& name, const std::vector<Stage>& stages,
-                        const LifeAxis& axis);
+                        const LifeAxis& axis, const std::vector<io::LinePlot>& extra = {});
 
 }  // namespace mc::app::life
