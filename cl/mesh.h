@@ -91,8 +91,8 @@ typedef struct {
 } MeshHit;
 
 /* Whether edge or vertex contact e is part of face contact f's contact:
- * of f's smooth surface, and within half f's overlap of f's plane (or
- * behind it). A ball pressed deep into a finely meshed face reaches the
+ * on or behind f's plane, or of f's smooth surface and within half f's
+ * overlap of the plane. A ball pressed deep into a finely meshed face reaches the
  * edges and vertices of the triangles round the one it is over, whose
  * normals lean away from the face's by more than a smooth surface's 20°;
  * on a flat, gently curved or worn surface those lie about in the face's
@@ -101,8 +101,14 @@ typedef struct {
  * above the plane and stays a contact; so does any other surface's edge.
  * e's point's height over f's plane is dist_f − dist_e n_e·n_f. */
 MC_FN int mesh_within(const Meshes* m, const MeshHit* f, const MeshHit* e, real r) {
-  if (m->feature[f->feature].x != m->feature[e->feature].x) return 0;
-  return f->dist - e->dist * dot(e->normal, f->normal) < R(0.5) * (r - f->dist) + MC_MESH_BEHIND_TOL;
+  const real height = f->dist - e->dist * dot(e->normal, f->normal);
+  if (height < MC_MESH_BEHIND_TOL) return 1; /* on the plane or behind it */
+  /* An edge or vertex where two smooth surfaces meet takes the surface of
+   * the triangle that listed it first: the surface of the triangle that
+   * gave this hit counts too. */
+  const int patch = m->feature[f->feature].x;
+  if (patch != m->feature[e->feature].x && patch != m->feature[e->tri].x) return 0;
+  return height < R(0.5) * (r - f->dist) + MC_MESH_BEHIND_TOL;
 }
 
 /* One candidate into the list (mesh_candidates): an edge or vertex another
@@ -143,12 +149,15 @@ MC_FN int mesh_candidates(const Meshes* m, int s, real3 q, real r, MeshHit* hits
   if (cx < 0 || cy < 0 || cz < 0 || cx >= g->nx || cy >= g->ny || cz >= g->nz) return 0;
   const int cell = g->first_cell + (cz * g->ny + cy) * g->nx + cx;
   const int b = m->cell_start[cell], e = m->cell_start[cell + 1];
-  /* Faces and edges alike in one pass; where the list fills, the edges and
-   * vertices are gathered again once every face is in (a face strikes the
-   * edges round it, which may have filled the list before it came). */
+  /* Faces and edges alike in one pass. Where the list fills (edges of a
+   * surface whose face is still to come), it is gathered again: the faces
+   * first, then the edges and vertices, which the faces strike as they
+   * come; only then is a full list an overflow. */
   int nh = 0, full = 0;
-  for (int pass = 0; pass < 2 && (pass == 0 || full); ++pass)
-    for (int k = b; k < e; ++k) {
+  for (int pass = 0; pass < 3; ++pass) {
+    if (pass > 0 && !full) break;
+    if (pass == 1) nh = 0;
+    for (int k = b; k < e && !(pass == 0 && full); ++k) {
       const int t = m->cell_tris[k];
       MC_GLOBAL const MeshTriangle* tr = m->tris + t;
       const real3 a = xyz_of(tr->a);
@@ -157,7 +166,7 @@ MC_FN int mesh_candidates(const Meshes* m, int s, real3 q, real r, MeshHit* hits
       if (!(h > R(0.0) && h < r)) continue;
       int region;
       const real3 cp = triangle_closest(q, a, xyz_of(tr->b), xyz_of(tr->c), &region);
-      if (pass == 1 && region == MC_MESH_FACE) continue;
+      if ((pass == 1 && region != MC_MESH_FACE) || (pass == 2 && region == MC_MESH_FACE)) continue;
       MeshHit hit;
       hit.tri = t;
       hit.region = region;
@@ -174,10 +183,11 @@ MC_FN int mesh_candidates(const Meshes* m, int s, real3 q, real r, MeshHit* hits
         hit.feature = tr->feat[region - 1];
       }
       if (!mesh_list(m, hits, &nh, &hit, r)) {
-        if (pass == 1 || region == MC_MESH_FACE) *overflow = 1;
-        else full = 1;
+        if (pass == 0) full = 1;
+        else *overflow = 1;
       }
     }
+  }
   return nh;
 }
 

@@ -5,6 +5,7 @@
 // with its lifters as an STL against the parametric lifters.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -330,22 +331,18 @@ TEST_CASE("a ball pressed deep into a fine mesh feels its plane, not the triangl
       if (fresh) it->second = u(rng);
       rough[t].v[k].z = it->second;
     }
-  for (const auto* mesh : {&trough, &rough}) {
-    Scene s = pressed(*mesh, {0.0013, -0.0021, 0}, 6e-3);
+  for (int run = 0; run < 4; ++run) {
+    const std::vector<Triangle>* mesh = run % 2 ? &rough : &trough;
+    const double delta = run < 2 ? 6e-3 : 2e-4;
+    Scene s = pressed(*mesh, {0.0013, -0.0021, 0}, delta);
     const Vec3 f = force_on(s);
-    // The face under the centre (its projection along z inside it, the
-    // surface being within a degree of flat): its plane's distance.
+    // The nearest point of the surface to the centre (the face under it,
+    // or on the rough plate at 0.2 mm a vertex that stands higher).
     const Vec3 q = s.balls[0].position;
     double nearest = 1;
-    for (const Triangle& t : *mesh) {
-      const Vec3 a = t.v[0], b = t.v[1], c = t.v[2];
-      const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-      const double l1 = ((q.x - a.x) * (c.y - a.y) - (c.x - a.x) * (q.y - a.y)) / det;
-      const double l2 = ((b.x - a.x) * (q.y - a.y) - (q.x - a.x) * (b.y - a.y)) / det;
-      if (l1 >= 0 && l2 >= 0 && l1 + l2 <= 1) nearest = (q - a).dot(triangle_unit_normal(t));
-    }
+    for (const Triangle& t : *mesh) nearest = std::min(nearest, (q - closest_on_triangle(t, q)).norm());
     REQUIRE(nearest < r);
-    INFO((mesh == &trough ? "trough" : "rough"));
+    INFO((mesh == &trough ? "trough" : "rough") << " " << delta);
     CHECK(wall_contacts(s) == 1.0);
     CHECK(f.norm() == Approx(1e5 * (r - nearest)).epsilon(1e-9));
     CHECK_NOTHROW(make_solver(context(), s)->advance(3));
@@ -371,6 +368,38 @@ TEST_CASE("a ball pressed deep into a fine mesh feels its plane, not the triangl
     CHECK(f.x == Approx(-1e5 * (r - d) * dx / d).epsilon(1e-9));
     CHECK(f.z == Approx(1e5 * delta + 1e5 * (r - d) * ez / d).epsilon(1e-9));
   }
+  // A bar's top of irregular 5 mm triangles (z = 0, x < 0) and its flank
+  // (x = 0, falling away), the flank's triangles listed first, so that the
+  // crease's edges and vertices take the flank's surface: a ball pressed
+  // 5 mm into the top near the crease feels the top alone, wherever it is.
+  {
+    std::vector<Triangle> bar;
+    for (int j = 0; j < 10; ++j)
+      for (int i = 0; i < 10; ++i) {
+        const double y0 = -0.025 + 0.005 * j, y1 = y0 + 0.005, z1 = -0.005 * i, z0 = z1 - 0.005;
+        bar.push_back({{Vec3{0, y0, z0}, Vec3{0, y1, z1}, Vec3{0, y0, z1}}});
+        bar.push_back({{Vec3{0, y0, z0}, Vec3{0, y1, z0}, Vec3{0, y1, z1}}});
+      }
+    const std::size_t flank = bar.size();
+    for (Triangle t : irregular_plate(0.025, 10, 0.3, 23)) {
+      for (Vec3& v : t.v) v.x -= 0.025;
+      bar.push_back(t);
+    }
+    for (std::size_t t = 0; t < bar.size(); ++t)
+      REQUIRE((t < flank ? triangle_unit_normal(bar[t]).x : triangle_unit_normal(bar[t]).z) > 0.999);
+    int placed = 0;
+    for (const double x : {-0.0005, -0.0015, -0.003, -0.0045})
+      for (const double y : {-0.0101, -0.0049, 0.0003, 0.0052, 0.0098}) {
+        Scene s = pressed(bar, {x, y, 0}, 5e-3);
+        const Vec3 f = force_on(s);
+        INFO("top pressed at " << x << ", " << y);
+        CHECK(wall_contacts(s) == 1.0);
+        CHECK(f.z == Approx(1e5 * 5e-3).epsilon(1e-9));
+        CHECK(std::fabs(f.x) + std::fabs(f.y) < 1e-9 * f.z);
+        ++placed;
+      }
+    CHECK(placed == 20);
+  }
   // A concave corner of 5 mm triangles, floor z = 0 and wall x = 0, the
   // ball pressed 3 mm into the floor and 4 mm into the wall: the wall's
   // faces stand in front of the floor's plane, so each face keeps its
@@ -390,15 +419,34 @@ TEST_CASE("a ball pressed deep into a fine mesh feels its plane, not the triangl
     const Vec3 n = triangle_unit_normal(t);
     REQUIRE(std::max(n.x, n.z) > 0.999);
   }
-  Scene s = plate_scene(ContactLaw::linear, &corner);
-  s.numerics.gravity = {0, 0, 0};
-  s.balls[0].position = {r - 4e-3, 0.0012, r - 3e-3};
-  s.balls[0].velocity = {};
-  s.balls[0].omega = {};
-  const Vec3 f = force_on(s);
-  CHECK(wall_contacts(s) == 2.0);
-  CHECK(f.x == Approx(1e5 * 4e-3).epsilon(1e-9));
-  CHECK(f.z == Approx(1e5 * 3e-3).epsilon(1e-9));
+  // Listed as built, and listed so that the floor's edges fill the list of
+  // candidates before the wall's face comes and the floor's own face comes
+  // last (the floor farthest from the ball first): that list is gathered
+  // again, faces first, and the run goes on.
+  const Vec3 centre{r - 4e-3, 0.0012, r - 6e-3};
+  std::vector<Triangle> floor_far_first, walls;
+  for (const Triangle& t : corner) (triangle_unit_normal(t).z > 0.5 ? floor_far_first : walls).push_back(t);
+  auto away = [&](const Triangle& t) {
+    const Vec3 m = (t.v[0] + t.v[1] + t.v[2]) * (1.0 / 3);
+    return std::hypot(m.x - centre.x, m.y - centre.y);
+  };
+  std::sort(floor_far_first.begin(), floor_far_first.end(),
+            [&](const Triangle& a, const Triangle& b) { return away(a) > away(b); });
+  std::vector<Triangle> late = floor_far_first;
+  late.insert(late.end() - 2, walls.begin(), walls.end());
+  for (const auto* mesh : {&corner, &late}) {
+    Scene s = plate_scene(ContactLaw::linear, mesh);
+    s.numerics.gravity = {0, 0, 0};
+    s.balls[0].position = centre;
+    s.balls[0].velocity = {};
+    s.balls[0].omega = {};
+    const Vec3 f = force_on(s);
+    INFO((mesh == &late ? "the floor's face last" : "as built"));
+    CHECK(wall_contacts(s) == 2.0);
+    CHECK(f.x == Approx(1e5 * 4e-3).epsilon(1e-9));
+    CHECK(f.z == Approx(1e5 * 6e-3).epsilon(1e-9));
+    CHECK_NOTHROW(make_solver(context(), s)->advance(3));
+  }
 }
 
 TEST_CASE("a ball over a shallow dish where six triangles meet feels one contact, the nearest", "[mesh][physics]") {

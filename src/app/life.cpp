@@ -415,10 +415,11 @@ life::MeshSmoothing smoothing_of(const LifeOptions& o, const Prepared& base) {
   return smoothing;
 }
 
-// What a study whose bars of [lifters] wear as their mesh twin cannot do,
-// refused before the twin is made (the messages name the bars the user gave).
 // A twin of more triangles than this is refused before it is built.
 constexpr double kMaxTwinTriangles = 2e7;
+
+// What a study whose bars of [lifters] wear as their mesh twin cannot do,
+// refused before the twin is made (the messages name the bars the user gave).
 
 void check_twin(const LifeOptions& o, const Prepared& base) {
   const MillCase& c = base.c;
@@ -470,8 +471,9 @@ Prepared life_base(const LifeOptions& o, const Prepared& given, const fs::path& 
   const double triangles = mc::life::twin_triangle_estimate(given.c, given.d, edge);
   if (triangles > kMaxTwinTriangles)
     throw std::invalid_argument(fmt::format(
-        "--lifter-mesh {:.4g}: the bars' twin would have about {:.3g} triangles (at most {:.0e}); give a coarser mesh",
-        edge * 1e3, triangles, kMaxTwinTriangles));
+        "--lifter-mesh {:.4g}{}: the bars' twin would have about {:.3g} triangles (at most {:.0e}); give a coarser "
+        "mesh",
+        edge * 1e3, o.lifter_mesh_mm > 0 ? "" : " (the default)", triangles, kMaxTwinTriangles));
   Prepared t = given;
   t.c = mc::life::with_bar_twin(given.c, mc::life::bar_twin_triangles(given.c, given.d, edge),
                                 fs::absolute(out / "new-bars.stl").lexically_normal().string());
