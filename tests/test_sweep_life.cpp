@@ -144,11 +144,12 @@ TEST_CASE("the hours to a relining height: linear between stages, the height's e
   CHECK(std::isnan(bare.se));
 }
 
-TEST_CASE("sweep run --local of life studies: each a study, collected against its own life.csv, a changed sweep "
-          "is refused", "[sweep][life][cli]") {
-  const fs::path work = life_cli::scratch("sweep");
-  fs::create_directories(work);
-  const std::string head = R"(name = "two_faces"
+namespace {
+
+// A sweep of life studies of a 60 mm slice of the lab mill in short runs,
+// up to its [life] table's first line.
+std::string short_lab_life(const std::string& name) {
+  return "name = \"" + name + R"("
 case = "lab.toml"
 command = "life"
 [set]
@@ -159,8 +160,16 @@ run.warmup = 0.1
 run.checkpoint_interval = 0.05
 run.snapshot_interval = 0
 [life]
-stages = 2
 )";
+}
+
+}  // namespace
+
+TEST_CASE("sweep run --local of life studies: each a study, collected against its own life.csv, a changed sweep "
+          "is refused", "[sweep][life][cli]") {
+  const fs::path work = life_cli::scratch("sweep");
+  fs::create_directories(work);
+  const std::string head = short_lab_life("two_faces") + "stages = 2\n";
   const std::string axes = "[axes]\nlifters.profile.0.face_angle = [10, 30]\n";
   write_text(work / "life.toml", head + "hours = 8000\n" + axes);
   const fs::path dir = work / "out";
@@ -272,21 +281,7 @@ TEST_CASE("a sweep of life studies along the mill wears bars of [lifters] as the
           "[sweep][life][cli]") {
   const fs::path work = life_cli::scratch("sweep-twin");
   fs::create_directories(work);
-  const std::string head = R"(name = "twin"
-case = "lab.toml"
-command = "life"
-[set]
-mill.length = 0.06
-run.duration = 0.3
-run.settle = 0.05
-run.warmup = 0.1
-run.checkpoint_interval = 0.05
-run.snapshot_interval = 0
-[life]
-stages = 1
-hours = 4000
-axial-segments = 2
-)";
+  const std::string head = short_lab_life("twin") + "stages = 1\nhours = 4000\naxial-segments = 2\n";
   const fs::path dir = work / "out";
   // What the twin cannot do, refused by the sweep's check as by life's.
   const std::string axes = "[axes]\nlifters.profile.0.face_angle = [20]\n";
