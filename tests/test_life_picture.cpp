@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <string>
 #include <vector>
@@ -195,4 +196,59 @@ TEST_CASE("life.png: a 1 % change of power fills a tenth of its panel, not all o
   REQUIRE(frame_bottom - frame_top > 200);
   CHECK(bottom - top < 0.09 * (frame_bottom - frame_top) + 8);
   CHECK(bottom - top > 0.04 * (frame_bottom - frame_top));  // and not flattened away
+}
+
+TEST_CASE("life.png along the mill: a line per worn mesh and segment, gaps for figures not measured, the widest "
+          "spread over stages with every bin", "[life][png]") {
+  const fs::path dir = fs::temp_directory_path() / ("millcharge-along-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // Two worn meshes of bars (0 and 2) and one without (1, a shell), two
+  // segments, stages 0 and 1; one standard error not measured (empty).
+  std::string csv =
+      "stage,hours,case_hours,mesh,segment,z_from_m,z_to_m,bars,height_mm,height_mm_se,leading_angle_deg,"
+      "leading_angle_deg_se,trailing_angle_deg,trailing_angle_deg_se,shell_wear_mm_per_1000h,booked_cm3,"
+      "smoothed_cm3,removed_cm3,wear_basis\n";
+  for (int stage = 0; stage < 2; ++stage)
+    for (int mesh = 0; mesh < 3; ++mesh)
+      for (int seg = 0; seg < 2; ++seg) {
+        const int bars = mesh == 1 ? 0 : 6;
+        const double face = 20 + 10 * stage + mesh + 0.5 * seg;
+        const std::string se = stage == 1 && mesh == 2 && seg == 1 ? "" : "0.25";
+        csv += std::to_string(stage) + "," + std::to_string(1000 * stage) + "," + std::to_string(1000 * stage) + "," +
+               std::to_string(mesh) + "," + std::to_string(seg) + "," + (seg ? "0.075,0.15," : "0,0.075,") +
+               std::to_string(bars) + ",25,0.1," + (bars ? std::to_string(face) : std::string()) + "," + se +
+               ",20,0.1,1,1,1,1,relative\n";
+      }
+  std::ofstream(dir / "life_segments.csv") << csv;
+  // The impact points: stage 0 two bins 5 deg apart; stage 1 one bin
+  // without a point (not counted for the spread, whatever its other bin);
+  // no summary for stage 2 or 3 (not run).
+  fs::create_directories(dir / "stage-00");
+  fs::create_directories(dir / "stage-01");
+  std::ofstream(dir / "stage-00" / "summary.json")
+      << R"({"liner": {"impact_point_along": [{"z0_m": 0, "z1_m": 0.075, "impact_point_deg": 230.5},
+                                             {"z0_m": 0.075, "z1_m": 0.15, "impact_point_deg": 235.5}]}})";
+  std::ofstream(dir / "stage-01" / "summary.json")
+      << R"({"liner": {"impact_point_along": [{"z0_m": 0, "z1_m": 0.075, "impact_point_deg": 221.5},
+                                             {"z0_m": 0.075, "z1_m": 0.15, "impact_point_deg": null}]}})";
+  const auto plots = mc::app::life::along_plots("fixture", dir, true);
+  REQUIRE(plots.size() == 3);
+  // Four lines: meshes 0 and 2, two segments each; the shell mesh left out.
+  REQUIRE(plots[0].series.size() == 4);
+  CHECK(plots[0].series[0].label == "mesh 0, 0 to 0.075 m");
+  CHECK(plots[0].series[3].label == "mesh 2, 0.075 to 0.15 m");
+  for (const auto& s : plots[0].series) REQUIRE(s.y.size() == 2);
+  CHECK(plots[0].series[2].y[1] == Approx(32));  // stage 1, mesh 2, segment 0: 20 + 10 + 2
+  CHECK(plots[0].series[2].band_hi[1] - plots[0].series[2].y[1] == Approx(0.5));
+  CHECK(std::isnan(plots[0].series[3].band_hi[1]));  // its standard error not measured
+  // The impact point: stage 1's second bin has none, so the widest spread
+  // is stage 0's, 5 deg (not stage 1's lone bin).
+  REQUIRE(plots[2].series.size() == 2);
+  CHECK(plots[2].series[1].y.size() == 1);
+  CHECK_THAT(plots[2].title, Catch::Contains("widest spread 5.0 deg, at 0 h, relative"));
+  // A summary without the bins (a run of an older build) is passed over.
+  std::ofstream(dir / "stage-01" / "summary.json") << R"({"liner": {}})";
+  CHECK(mc::app::life::along_plots("fixture", dir, false)[2].series[0].y.size() == 1);
+  fs::remove_all(dir);
 }

@@ -644,11 +644,18 @@ int cmd_life(const LifeOptions& o) {
     }
     if (s.index == 0 && !o.quiet) print_new_liner(st);
     io::draw_or_warn(out / "life.png", [&] {
+      // The panels along the mill apart: a fault in them costs only them.
+      std::vector<io::LinePlot> along;
+      if (o.axial_segments > 0) {
+        try {
+          along = life::along_plots(c.name, out, st.relative());
+        } catch (const std::exception& e) {
+          std::fprintf(stderr, "warning: life.png drawn without its panels along the mill: %s\n", e.what());
+        }
+      }
       life::write_life_picture(out / "life.png", c.name,
                                profiles == 0 && !worn.empty() ? life::stages_drawn(out, c, st.stages) : st.stages,
-                               {st.factor, st.relative(), bars_length},
-                               o.axial_segments > 0 ? life::along_plots(c.name, out, st.relative())
-                                                    : std::vector<io::LinePlot>{});
+                               {st.factor, st.relative(), bars_length}, along);
     });
 
     // Stop, or plan the next stage's wear (in hours at the case's wear

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
+#include <set>
 #include <nlohmann/json.hpp>
 
 #include "core/lifters.h"
@@ -250,13 +252,29 @@ std::vector<io::LinePlot> along_plots(const std::string& name, const std::filesy
   const std::filesystem::path table = out / "life_segments.csv";
   if (!std::filesystem::exists(table)) return plots;
   const io::CsvTable t = io::read_csv_strict(table);
-  const int c_stage = t.column("stage"), c_hours = t.column("hours"), c_seg = t.column("segment");
-  const int c_z0 = t.column("z_from_m"), c_z1 = t.column("z_to_m");
-  auto num = [&](std::size_t r, int c) { return std::stod(t.rows[r][c]); };
-  int segments = 0, stages = 0;
-  for (std::size_t r = 0; r < t.rows.size(); ++r)
-    segments = std::max(segments, static_cast<int>(num(r, c_seg)) + 1),
-    stages = std::max(stages, static_cast<int>(num(r, c_stage)) + 1);
+  const int c_stage = t.column("stage"), c_hours = t.column("hours"), c_mesh = t.column("mesh");
+  const int c_seg = t.column("segment"), c_bars = t.column("bars"), c_z0 = t.column("z_from_m"),
+            c_z1 = t.column("z_to_m");
+  // An empty field (a figure that could not be measured) is NaN, which
+  // breaks a line or a band.
+  auto num = [&](std::size_t r, int c) { return t.rows[r][c].empty() ? NAN : std::stod(t.rows[r][c]); };
+  auto span_label = [](double z0, double z1) { return fmt::format("{:.3g} to {:.3g} m", z0, z1); };
+  // The bars per (mesh, segment): a line each, blue at z = 0 to red at the
+  // far end; meshes without bars (a shell) left out.
+  struct Key {
+    int mesh, segment;
+    bool operator<(const Key& o) const { return mesh != o.mesh ? mesh < o.mesh : segment < o.segment; }
+  };
+  std::map<Key, std::size_t> first_row;
+  int segments = 0;
+  std::set<int> meshes;
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    if (!(num(r, c_bars) > 0)) continue;
+    const Key k{static_cast<int>(num(r, c_mesh)), static_cast<int>(num(r, c_seg))};
+    first_row.try_emplace(k, r);
+    meshes.insert(k.mesh);
+    segments = std::max(segments, k.segment + 1);
+  }
   auto panel = [&](const std::string& title, const std::string& y_label) {
     io::LinePlot p;
     p.title = name + ": along the mill: " + title;
@@ -265,62 +283,81 @@ std::vector<io::LinePlot> along_plots(const std::string& name, const std::filesy
     p.pad_x = true;
     return p;
   };
-  auto span_label = [](double z0, double z1) { return fmt::format("{:.2f}-{:.2f} m", z0, z1); };
-  // The bars per segment: a line each, blue at z = 0 to red at the far end.
   auto per_segment = [&](const std::string& col) {
     const int c = t.column(col), ce = t.column(col + "_se");
-    std::vector<io::PlotSeries> series(segments);
-    for (std::size_t r = 0; r < t.rows.size(); ++r) {
-      io::PlotSeries& s = series[static_cast<int>(num(r, c_seg))];
-      if (s.x.empty()) {
-        s.label = span_label(num(r, c_z0), num(r, c_z1));
-        s.rgb = ramp(segments > 1 ? num(r, c_seg) / (segments - 1) : 0.0);
-        s.markers = true;
+    std::vector<io::PlotSeries> series;
+    for (const auto& [k, r0] : first_row) {
+      io::PlotSeries s;
+      s.label = (meshes.size() > 1 ? fmt::format("mesh {}, ", k.mesh) : std::string()) +
+                span_label(num(r0, c_z0), num(r0, c_z1));
+      s.rgb = ramp(segments > 1 ? static_cast<double>(k.segment) / (segments - 1) : 0.0);
+      s.markers = true;
+      s.dashed = k.mesh != *meshes.begin();
+      for (std::size_t r = 0; r < t.rows.size(); ++r) {
+        if (static_cast<int>(num(r, c_mesh)) != k.mesh || static_cast<int>(num(r, c_seg)) != k.segment ||
+            !(num(r, c_bars) > 0))
+          continue;
+        const double v = num(r, c), e = 2 * num(r, ce);
+        s.x.push_back(num(r, c_hours)), s.y.push_back(v), s.band_lo.push_back(v - e), s.band_hi.push_back(v + e);
       }
-      const double v = num(r, c), e = 2 * num(r, ce);
-      s.x.push_back(num(r, c_hours)), s.y.push_back(v), s.band_lo.push_back(v - e), s.band_hi.push_back(v + e);
+      series.push_back(std::move(s));
     }
     return series;
   };
-  io::LinePlot face = panel("the lifters' leading face per segment (bands: \u00b1 2 standard errors of the bars)",
-                            "face angle from the radial line (deg)");
-  face.series = per_segment("leading_angle_deg");
-  at_least(face, 5);
-  io::LinePlot height = panel("the lifters' height per segment (bands: \u00b1 2 standard errors of the bars)",
-                              "height above the shell (mm)");
-  height.series = per_segment("height_mm");
-  height.y_cover_lo = 0;
-  plots.push_back(face);
-  plots.push_back(height);
-  // The impact point per axial bin of the liner, from each stage's run.
-  std::vector<double> hours(stages, NAN);
+  if (!first_row.empty()) {
+    io::LinePlot face = panel("the lifters' leading face per segment (bands: \u00b1 2 standard errors of the "
+                              "segment's mean bar)",
+                              "face angle from the radial line (deg)");
+    face.series = per_segment("leading_angle_deg");
+    at_least(face, 5);
+    io::LinePlot height = panel("the lifters' height per segment (bands: \u00b1 2 standard errors of the segment's "
+                                "mean bar)",
+                                "height above the shell (mm)");
+    height.series = per_segment("height_mm");
+    height.y_cover_lo = 0;
+    plots.push_back(face);
+    plots.push_back(height);
+  }
+  // The impact point per axial bin of the liner, from each stage's run;
+  // the widest spread over the stages where every bin has a point.
+  std::map<int, double> hours;
   for (std::size_t r = 0; r < t.rows.size(); ++r) hours[static_cast<int>(num(r, c_stage))] = num(r, c_hours);
   io::LinePlot impact = panel("the impact point per liner bin", "angle (deg, from 3 o'clock)");
-  double widest = 0, widest_at = 0;
-  for (int i = 0; i < stages; ++i) {
+  double widest = NAN, widest_at = NAN;
+  for (const auto& [i, h] : hours) {
     const std::filesystem::path summary = out / fmt::format("stage-{:02d}", i) / "summary.json";
     if (!std::filesystem::exists(summary)) continue;
     const nlohmann::json j = io::read_json_file(summary);
-    if (!j.contains("liner") || !j["liner"].contains("impact_point_along")) continue;
-    const nlohmann::json& along = j["liner"]["impact_point_along"];
+    const nlohmann::json liner = j.is_object() ? j.value("liner", nlohmann::json()) : nlohmann::json();
+    const nlohmann::json along = liner.is_object() ? liner.value("impact_point_along", nlohmann::json()) : nlohmann::json();
+    if (!along.is_array() || along.empty()) continue;
     if (impact.series.size() < along.size()) impact.series.resize(along.size());
     double lo = INFINITY, hi = -INFINITY;
+    bool every = true;
     for (std::size_t b = 0; b < along.size(); ++b) {
       io::PlotSeries& s = impact.series[b];
+      const nlohmann::json bin = along[b].is_object() ? along[b] : nlohmann::json::object();
       if (s.label.empty()) {
-        s.label = span_label(along[b].value("z0_m", 0.0), along[b].value("z1_m", 0.0));
+        const nlohmann::json z0 = bin.value("z0_m", nlohmann::json()), z1 = bin.value("z1_m", nlohmann::json());
+        s.label = z0.is_number() && z1.is_number() ? span_label(z0.get<double>(), z1.get<double>())
+                                                   : fmt::format("bin {}", b);
         s.rgb = ramp(along.size() > 1 ? static_cast<double>(b) / (along.size() - 1) : 0.0);
         s.markers = true;
       }
-      const nlohmann::json& v = along[b]["impact_point_deg"];
-      if (!v.is_number()) continue;  // a bin with no impact on bare liner
-      s.x.push_back(hours[i]), s.y.push_back(v.get<double>());
+      const nlohmann::json v = bin.value("impact_point_deg", nlohmann::json());
+      if (!v.is_number()) {  // a bin with no impact on bare liner
+        every = false;
+        continue;
+      }
+      s.x.push_back(h), s.y.push_back(v.get<double>());
       lo = std::min(lo, s.y.back()), hi = std::max(hi, s.y.back());
     }
-    if (hi >= lo && hi - lo >= widest) widest = hi - lo, widest_at = hours[i];
+    if (every && along.size() > 1 && !(hi - lo < widest)) widest = hi - lo, widest_at = h;
   }
   if (!impact.series.empty()) {
-    impact.title += fmt::format(" (widest spread {:.1f} deg, at {:.0f} h)", widest, widest_at);
+    if (std::isfinite(widest))
+      impact.title += fmt::format(" (widest spread {:.1f} deg, at {:.0f} h{})", widest, widest_at,
+                                  relative ? ", relative" : "");
     at_least(impact, 5);
     plots.push_back(impact);
   }

@@ -38,10 +38,12 @@ std::vector<io::LinePlot> life_plots(const std::string& name, const std::vector<
 
 // The panels along the mill of a study with --axial-segments, from its
 // life_segments.csv and its stages' summary.json in `out`: the bars'
-// leading face and height per segment (bands: ± 2 standard errors of the
-// bars' spread), and the impact point per axial bin of the liner
-// (liner.impact_point_along), its spread in the title. Empty where the
-// study has no segments; throws naming a file that cannot be read.
+// leading face and height per worn mesh and segment (bands: ± 2 standard
+// errors of the segment's mean bar; an empty figure breaks them), and the
+// impact point per axial bin of the liner (liner.impact_point_along), with
+// in the title the widest spread over the stages where every bin has a
+// point. Empty where the study has no segments; throws naming a file that
+// cannot be read.
 std::vector<io::LinePlot> along_plots(const std::string& name, const std::filesystem::path& out, bool relative);
 
 // The panels in one picture (and `extra` under them); throws where it
