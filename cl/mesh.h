@@ -16,9 +16,9 @@
  * that edge, or when another triangle already gave the same edge; a vertex
  * contact is dropped when a face contact's triangle or a kept edge has that
  * vertex, or another triangle already gave it; beyond Hu's rule, an edge or
- * vertex contact of a face contact's smooth surface that lies within half
- * its overlap of the face's plane is dropped (a ball pressed deep into a
- * fine mesh: mesh_within). So a ball on the shared edge
+ * vertex contact on or behind a face contact's plane, or of its smooth
+ * surface within half its overlap of the plane, is dropped (a ball pressed
+ * deep into a fine mesh: mesh_within). So a ball on the shared edge
  * or vertex of coplanar triangles feels one contact, and a ball in a
  * concave corner feels each face; contacts of one smooth patch whose normals
  * lie within 20° are one contact, the nearest. Triangles sharing an edge at less than

@@ -32,6 +32,7 @@
 #include "io/checkpoint.h"
 #include "io/energy_out.h"
 #include "io/png_plot.h"
+#include "life/bar_twin.h"
 #include "io/stl.h"
 #include "io/vtk.h"
 #include "sim/batch_means.h"
@@ -123,8 +124,7 @@ int cmd_check(const CaseOptions& o) {
     const Scene w = build_walls(c, d);
     if (w.walls.lifters.empty())
       throw std::invalid_argument("--write-lifters: the case has no lifter bars (lifters.rows = 0)");
-    const auto tris =
-        lifter_triangles(bars_on_shell(w.walls.lifters, w.walls.shell_radius), c.length, o.lifter_mesh_mm * 1e-3);
+    const auto tris = mc::life::bar_twin_triangles(c, d, o.lifter_mesh_mm * 1e-3);
     std::error_code ec;
     const std::filesystem::path parent = std::filesystem::path(o.write_lifters).parent_path();
     if (!parent.empty()) std::filesystem::create_directories(parent, ec);

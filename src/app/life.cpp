@@ -30,11 +30,11 @@
 #include "core/liner_wear.h"
 #include "core/plate_wear.h"
 #include "io/atomic_file.h"
-#include "io/stl.h"
-#include "life/bar_twin.h"
 #include "io/case_file.h"
 #include "io/csv_read.h"
 #include "io/json_read.h"
+#include "io/stl.h"
+#include "life/bar_twin.h"
 #include "io/png_plot.h"
 #include "core/scene.h"
 
@@ -420,7 +420,6 @@ constexpr double kMaxTwinTriangles = 2e7;
 
 // What a study whose bars of [lifters] wear as their mesh twin cannot do,
 // refused before the twin is made (the messages name the bars the user gave).
-
 void check_twin(const LifeOptions& o, const Prepared& base) {
   const MillCase& c = base.c;
   if (o.lifter_mesh_mm > 0 && !(o.axial_segments > 0 && c.lifter_rows > 0))
