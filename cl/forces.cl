@@ -28,13 +28,15 @@
 /* The mesh walls' arguments of both force kernels (mesh.h Meshes). */
 #define MC_MESH_ARGS                                                                                  \
   __global const MeshGrid *mesh_grid, __global const MeshTriangle *mesh_tris,                         \
-      __global const int2 *mesh_feature, __global const int *mesh_cell_start,                        \
+      __global const int2 *mesh_feature, __global const int *mesh_adj,                               \
+      __global const int *mesh_cell_start,                                                           \
       __global const int *mesh_cell_tris, __global const PairParams *mesh_pairs
 #define MC_MESHES_INIT(m)            \
   Meshes m;                          \
   m.grid = mesh_grid;                \
   m.tris = mesh_tris;                \
   m.feature = mesh_feature;          \
+  m.adj = mesh_adj;                  \
   m.cell_start = mesh_cell_start;    \
   m.cell_tris = mesh_cell_tris;      \
   m.pairs = mesh_pairs

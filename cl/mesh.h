@@ -9,19 +9,22 @@
  * the side its normal faces (the charge's side). Each candidate's closest
  * point is on its face, on one of its edges or on one of its vertices
  * (Ericson, Real-Time Collision Detection, 2005, §5.1.5), and that feature
- * names the contact. Of the candidates, those that are one contact of a
- * smooth surface seen from several triangles are dropped by the rule of Hu
- * et al. (2013, Int. J. Numer. Meth. Eng. 94:787): every face contact is
- * kept; an edge contact is dropped when a triangle with a face contact has
- * that edge, or when another triangle already gave the same edge; a vertex
- * contact is dropped when a face contact's triangle or a kept edge has that
- * vertex, or another triangle already gave it; beyond Hu's rule, an edge or
- * vertex contact on or behind a face contact's plane, or of its smooth
- * surface within half its overlap of the plane, is dropped (a ball pressed
- * deep into a fine mesh: mesh_within). So a ball on the shared edge
- * or vertex of coplanar triangles feels one contact, and a ball in a
- * concave corner feels each face; contacts of one smooth patch whose normals
- * lie within 20° are one contact, the nearest. Triangles sharing an edge at less than
+ * names the contact. An edge or vertex counts only where the ball's centre
+ * lies in its normal cone, leaning into none of the triangles round it
+ * (mesh_in_cone): elsewhere a triangle round it comes nearer. Of the
+ * candidates, those that are one contact of a smooth surface seen from
+ * several triangles are dropped by the rule of Hu et al. (2013, Int. J.
+ * Numer. Meth. Eng. 94:787): every face contact is kept; an edge contact is
+ * dropped when a triangle with a face contact has that edge, or when
+ * another triangle already gave the same edge; a vertex contact is dropped
+ * when a face contact's triangle or a kept edge has that vertex, or another
+ * triangle already gave it; beyond Hu's rule, an edge or vertex contact on
+ * or behind a face contact's plane, or of its smooth surface within half
+ * its overlap of the plane, is dropped (a ball pressed deep into a fine
+ * mesh: mesh_within). So a ball on the shared edge or vertex of coplanar
+ * triangles feels one contact, and a ball in a concave corner feels each
+ * face; contacts of one smooth patch whose normals lie within 20° are one
+ * contact, the nearest. Triangles sharing an edge at less than
  * kSmoothDegrees (src/core/wall_mesh.h) belong to one smooth patch; a
  * contact that moves from one feature to another of its patch keeps its
  * record (its tangential spring and its losses so far). */
@@ -33,6 +36,7 @@ typedef struct {
   MC_GLOBAL const MeshGrid* grid;       /* MC_MESH_SETS */
   MC_GLOBAL const MeshTriangle* tris;
   MC_GLOBAL const int2* feature;        /* per feature: smooth patch, wall type (MC_WALL_TYPE_*) */
+  MC_GLOBAL const int* adj;             /* feature f's triangles: adj[adj[f] .. adj[f + 1]) */
   MC_GLOBAL const int* cell_start;      /* per set: its cells' starts, n + 1 */
   MC_GLOBAL const int* cell_tris;       /* the triangles of the cells, ascending in each */
   MC_GLOBAL const PairParams* pairs;    /* ball material × mesh material, row tri.pair_row */
@@ -50,6 +54,10 @@ typedef struct {
 #define MC_MESH_BEHIND_TOL R(1e-6)
 #define MC_MESH_EDGE0 1
 #define MC_MESH_VERTEX0 4
+/* sin 0.06°: how far an edge or vertex contact's normal may lean into a
+ * triangle round it and still count (float rounding of the closest point
+ * and of welded vertices: mesh_in_cone). */
+#define MC_MESH_CONE_SIN R(1e-3)
 
 MC_FN real3 triangle_closest(real3 p, real3 a, real3 b, real3 c, int* region) {
   const real3 ab = b - a, ac = c - a, ap = p - a;
@@ -79,6 +87,39 @@ MC_FN real3 triangle_closest(real3 p, real3 a, real3 b, real3 c, int* region) {
   const real inv = R(1.0) / (va + vb + vc);
   *region = MC_MESH_FACE;
   return a + (vb * inv) * ab + (vc * inv) * ac;
+}
+
+/* Whether an edge or vertex contact of triangle tr (region, closest point
+ * cp, unit normal n from cp to the ball's centre) lies in the feature's
+ * normal cone: n leans into none of the triangles round the feature, so
+ * every other vertex x of theirs has (x − cp)·n ≤ 0 (within
+ * MC_MESH_CONE_SIN). Only then is the feature the nearest part of the
+ * surface near the ball, as on a convex edge or corner. Where n leans into
+ * a triangle, that triangle comes nearer the ball elsewhere and gives the
+ * contact itself (its face, or another edge or vertex), as on a flat or
+ * gently curved surface cut into triangles, where an edge across the
+ * surface is never the nearest point. The feature's own vertices are not
+ * tested: welded, they need not be the same to the bit. */
+MC_FN int mesh_in_cone(const Meshes* m, MC_GLOBAL const MeshTriangle* tr, int region, real3 cp, real3 n) {
+  const int f = tr->feat[region - 1];
+  int v0 = f, v1 = f;
+  if (region < MC_MESH_VERTEX0) {
+    const int e = region - MC_MESH_EDGE0;
+    v0 = tr->feat[3 + e];
+    v1 = tr->feat[3 + (e + 1) % 3];
+  }
+  const int b = m->adj[f], e = m->adj[f + 1];
+  for (int k = b; k < e; ++k) {
+    MC_GLOBAL const MeshTriangle* t = m->tris + m->adj[k];
+    for (int j = 0; j < 3; ++j) {
+      const int vf = t->feat[3 + j];
+      if (vf == v0 || vf == v1) continue;
+      const real3 w = xyz_of(j == 0 ? t->a : j == 1 ? t->b : t->c) - cp;
+      const real lean = dot(w, n);
+      if (lean > R(0.0) && lean * lean > MC_MESH_CONE_SIN * MC_MESH_CONE_SIN * dot(w, w)) return 0;
+    }
+  }
+  return 1;
 }
 
 /* A candidate contact of a ball with a triangle of one set. */
@@ -181,6 +222,7 @@ MC_FN int mesh_candidates(const Meshes* m, int s, real3 q, real r, MeshHit* hits
         hit.dist = sqrt(d2);
         hit.normal = (R(1.0) / hit.dist) * d;
         hit.feature = tr->feat[region - 1];
+        if (!mesh_in_cone(m, tr, region, cp, hit.normal)) continue;
       }
       if (!mesh_list(m, hits, &nh, &hit, r)) {
         if (pass == 0) full = 1;

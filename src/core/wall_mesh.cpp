@@ -151,6 +151,20 @@ MeshTopology mesh_topology(const std::vector<WallMesh>& meshes) {
   for (int v = 0; v < topo.n_vertices; ++v)
     topo.patch[topo.n_triangles + topo.n_edges + v] = patch_of_tri(vertex_first_tri[v]);
   topo.n_patches = static_cast<int>(patch_id.size());
+  // The triangles round each edge and vertex.
+  std::vector<std::vector<int>> vertex_tris(topo.n_vertices);
+  for (int k = 0; k < topo.n_triangles; ++k)
+    for (int c = 0; c < 3; ++c) {
+      std::vector<int>& v = vertex_tris[topo.vertices[k][c]];
+      if (v.empty() || v.back() != k) v.push_back(k);  // a degenerate triangle names a vertex twice
+    }
+  topo.adj_start.assign(static_cast<std::size_t>(topo.n_triangles) + 1, 0);
+  auto append = [&](const std::vector<int>& tris) {
+    topo.adj_tris.insert(topo.adj_tris.end(), tris.begin(), tris.end());
+    topo.adj_start.push_back(static_cast<int>(topo.adj_tris.size()));
+  };
+  for (const auto& tris : edge_tris) append(tris);
+  for (const auto& tris : vertex_tris) append(tris);
   return topo;
 }
 

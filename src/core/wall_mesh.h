@@ -34,11 +34,15 @@ std::vector<MeshTriangleRef> mesh_device_order(const std::vector<WallMesh>& mesh
 // Shared features of the meshes, in the device order: each triangle's edges
 // (ab, bc, ca) and vertices (a, b, c) as indices, vertices welded where
 // their coordinates are equal (within a mesh), and the smooth patch of each
-// feature (triangles, then edges, then vertices: cl/layout.h).
+// feature (triangles, then edges, then vertices: cl/layout.h), and the
+// triangles that share each edge and vertex (cl/mesh.h mesh_in_cone): those
+// of feature f are adj_tris[adj_start[f] .. adj_start[f + 1]), in device
+// order, none for a triangle.
 struct MeshTopology {
   int n_triangles = 0, n_edges = 0, n_vertices = 0;
   std::vector<std::array<int, 3>> edges, vertices;  // per triangle, feature-local
   std::vector<int> patch;                            // per feature
+  std::vector<int> adj_start, adj_tris;              // features + 1; the lists
   int n_patches = 0;
   int features() const { return n_triangles + n_edges + n_vertices; }
 };

@@ -21,6 +21,7 @@ struct ReferenceSolver::State {
   std::array<MeshGrid, MC_MESH_SETS> mesh_grid{};
   std::vector<MeshTriangle> mesh_tris;
   std::vector<int2> mesh_feature;
+  std::vector<int> mesh_adj;
   std::vector<int> mesh_cell_start, mesh_cell_tris;
   std::vector<PairParams> mesh_pairs;
   std::vector<real4> pos, vel, omega, force, torque, accum, pos_at_build;
@@ -107,6 +108,7 @@ struct ReferenceSolver::State {
     meshes.grid = mesh_grid.data();
     meshes.tris = mesh_tris.data();
     meshes.feature = mesh_feature.data();
+    meshes.adj = mesh_adj.data();
     meshes.cell_start = mesh_cell_start.data();
     meshes.cell_tris = mesh_cell_tris.data();
     meshes.pairs = mesh_pairs.data();
@@ -134,6 +136,7 @@ ReferenceSolver::ReferenceSolver(const Scene& scene) : s_(std::make_unique<State
   s.mesh_grid = tables.mesh_grid;
   s.mesh_tris = tables.mesh_tris;
   s.mesh_feature = tables.mesh_feature;
+  s.mesh_adj = tables.mesh_adj;
   s.mesh_pairs = tables.mesh_pairs;
   mesh_cells_host(tables, s.mesh_cell_start, s.mesh_cell_tris);
   if (s.mesh_cell_tris.empty()) s.mesh_cell_tris.push_back(0);

@@ -163,6 +163,7 @@ class SolverImpl final : public Solver {
   Buffer<typename L::MeshGrid> mesh_grid_;
   Buffer<typename L::MeshTriangle> mesh_tris_;
   Buffer<int2> mesh_feature_;
+  Buffer<int> mesh_adj_;  // tables.h mesh_adj
   Buffer<int> mesh_cell_start_, mesh_cell_tris_;
   Buffer<typename L::PairParams> mesh_pairs_;
   // ball state, in cell order after each rebuild

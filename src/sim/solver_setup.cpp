@@ -33,6 +33,7 @@ SolverImpl<Real>::SolverImpl(compute::Context& ctx, const Scene& scene)
       mesh_grid_(ctx, MC_MESH_SETS, "mesh grids"),
       mesh_tris_(ctx, 1, "mesh triangles"),
       mesh_feature_(ctx, 1, "mesh features"),
+      mesh_adj_(ctx, 1, "mesh feature triangles"),
       mesh_cell_start_(ctx, 2, "mesh cell starts"),
       mesh_cell_tris_(ctx, 1, "mesh cell triangles"),
       mesh_pairs_(ctx, 1, "mesh pairs"),
@@ -490,6 +491,9 @@ void SolverImpl<Real>::setup_meshes(const SceneTables& t) {
   mesh_feature_.resize(t.mesh_feature.size());
   for (std::size_t k = 0; k < t.mesh_feature.size(); ++k) mesh_feature_.host[k] = {t.mesh_feature[k].x, t.mesh_feature[k].y};
   mesh_feature_.write_to_device();
+  mesh_adj_.resize(t.mesh_adj.size());
+  std::copy(t.mesh_adj.begin(), t.mesh_adj.end(), mesh_adj_.host.begin());
+  mesh_adj_.write_to_device();
   upload_pairs(t.mesh_pairs, mesh_pairs_);
 
   const int n_cells = t.mesh_cells;
@@ -516,7 +520,7 @@ void SolverImpl<Real>::setup_meshes(const SceneTables& t) {
 template <class Real>
 std::size_t SolverImpl<Real>::device_bytes() const {
   std::size_t b = params_.bytes() + pairs_.bytes() + lifters_.bytes() + mesh_grid_.bytes() + mesh_tris_.bytes() +
-                  mesh_feature_.bytes() + mesh_cell_start_.bytes() + mesh_cell_tris_.bytes() + mesh_pairs_.bytes() + status_.bytes() + profile_.bytes() + counts_.bytes() +
+                  mesh_feature_.bytes() + mesh_adj_.bytes() + mesh_cell_start_.bytes() + mesh_cell_tris_.bytes() + mesh_pairs_.bytes() + status_.bytes() + profile_.bytes() + counts_.bytes() +
                   partial_.bytes() + scan_.bytes();
   for (const auto* x : {&pos_, &vel_, &omega_, &force_, &torque_, &accum_, &pos_at_build_, &comp_offset_, &body_pos_,
                         &body_vel_, &body_quat_, &body_angmom_, &body_inv_inertia_, &body_force_, &body_torque_})

@@ -76,7 +76,7 @@ void SolverImpl<Real>::forces(bool defer_reactions) {
             omega_, info_,
             neigh_start_, neigh_count_, neigh_index_, neigh_rec_, neigh_rev_, pair_out_, wall_key_, wall_rec_, force_,
             torque_, accum_, status_, records_, rec_state_, rec_capacity_, rec_mark_, spectra_, liner_,
-            impact_profile_, book_params_, mesh_grid_, mesh_tris_, mesh_feature_, mesh_cell_start_, mesh_cell_tris_,
+            impact_profile_, book_params_, mesh_grid_, mesh_tris_, mesh_feature_, mesh_adj_, mesh_cell_start_, mesh_cell_tris_,
             mesh_pairs_)
       .launch(n_, grouped_forces_ ? kForcesGroupWG : 0);
   if (defer_reactions && n_bodies_ == 0)

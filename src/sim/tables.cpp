@@ -63,6 +63,10 @@ void mesh_tables(const Scene& scene, const LinerLayout& liner, double r_max, Sce
     for (int v = 0; v < 3; ++v)
       t.mesh_feature[T + E + topo.vertices[k][v]] = {topo.patch[T + E + topo.vertices[k][v]], type};
   }
+  const int F = topo.features();
+  t.mesh_adj.assign(static_cast<std::size_t>(F) + 1, 0);
+  for (int f = 0; f <= F; ++f) t.mesh_adj[f] = F + 1 + topo.adj_start[f];
+  t.mesh_adj.insert(t.mesh_adj.end(), topo.adj_tris.begin(), topo.adj_tris.end());
   // The grids: reach the largest ball radius (and a little: rounding in
   // float must not drop a triangle that touches).
   const double reach = r_max * (1 + 1e-4) + 1e-6;

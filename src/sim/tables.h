@@ -26,6 +26,9 @@ struct SceneTables {
   // one entry each).
   std::vector<f64::MeshTriangle> mesh_tris;
   std::vector<f64::int2> mesh_feature;
+  // The triangles round each feature (cl/mesh.h Meshes.adj): features + 1
+  // starts, counted from the table's beginning, then the lists.
+  std::vector<int> mesh_adj;
   std::array<f64::MeshGrid, MC_MESH_SETS> mesh_grid{};
   std::vector<f64::PairParams> mesh_pairs;
   int mesh_cells = 0;  // both sets' cells
