@@ -54,10 +54,11 @@ typedef struct {
 #define MC_MESH_BEHIND_TOL R(1e-6)
 #define MC_MESH_EDGE0 1
 #define MC_MESH_VERTEX0 4
-/* sin 0.06°: how far an edge or vertex contact's normal may lean into a
- * triangle round it and still count (float rounding of the closest point
- * and of welded vertices: mesh_in_cone). */
+/* sin 0.06° and 2 µm: how far an edge or vertex contact's normal may lean
+ * into a triangle round it and still count (float rounding of the closest
+ * point at a mill's coordinates, and of welded vertices: mesh_in_cone). */
 #define MC_MESH_CONE_SIN R(1e-3)
+#define MC_MESH_CONE_ABS R(2e-6)
 
 MC_FN real3 triangle_closest(real3 p, real3 a, real3 b, real3 c, int* region) {
   const real3 ab = b - a, ac = c - a, ap = p - a;
@@ -90,17 +91,21 @@ MC_FN real3 triangle_closest(real3 p, real3 a, real3 b, real3 c, int* region) {
 }
 
 /* Whether an edge or vertex contact of triangle tr (region, closest point
- * cp, unit normal n from cp to the ball's centre) lies in the feature's
- * normal cone: n leans into none of the triangles round the feature, so
- * every other vertex x of theirs has (x − cp)·n ≤ 0 (within
- * MC_MESH_CONE_SIN). Only then is the feature the nearest part of the
- * surface near the ball, as on a convex edge or corner. Where n leans into
- * a triangle, that triangle comes nearer the ball elsewhere and gives the
- * contact itself (its face, or another edge or vertex), as on a flat or
- * gently curved surface cut into triangles, where an edge across the
- * surface is never the nearest point. The feature's own vertices are not
- * tested: welded, they need not be the same to the bit. */
-MC_FN int mesh_in_cone(const Meshes* m, MC_GLOBAL const MeshTriangle* tr, int region, real3 cp, real3 n) {
+ * cp, unit normal n from cp to the ball's centre q) lies in the feature's
+ * normal cone: n leans into none of the triangles round the feature that
+ * face the ball, so every other vertex x of theirs has (x − cp)·n ≤ 0
+ * (within MC_MESH_CONE_SIN |x − cp| + MC_MESH_CONE_ABS). Only then is the
+ * feature the nearest part of the surface near the ball, as on a convex
+ * edge or corner. Where n leans into a triangle, that triangle comes nearer
+ * the ball elsewhere and gives the contact itself (its face, or another
+ * edge or vertex), as on a flat or gently curved surface cut into
+ * triangles, where an edge across the surface is never the nearest point.
+ * A triangle the ball is behind gives no contact (mesh_candidates), so it
+ * does not count here either: a triangle of a scan turned the wrong way
+ * round must not leave a hole. The feature's own vertices are not tested:
+ * welded, they need not be the same to the bit. */
+MC_FN int mesh_in_cone(const Meshes* m, MC_GLOBAL const MeshTriangle* tr, int region, real3 q, real3 cp,
+                       real3 n) {
   const int f = tr->feat[region - 1];
   int v0 = f, v1 = f;
   if (region < MC_MESH_VERTEX0) {
@@ -111,12 +116,13 @@ MC_FN int mesh_in_cone(const Meshes* m, MC_GLOBAL const MeshTriangle* tr, int re
   const int b = m->adj[f], e = m->adj[f + 1];
   for (int k = b; k < e; ++k) {
     MC_GLOBAL const MeshTriangle* t = m->tris + m->adj[k];
+    if (!(dot(q - xyz_of(t->a), xyz_of(t->n)) > R(0.0))) continue;
     for (int j = 0; j < 3; ++j) {
       const int vf = t->feat[3 + j];
       if (vf == v0 || vf == v1) continue;
       const real3 w = xyz_of(j == 0 ? t->a : j == 1 ? t->b : t->c) - cp;
       const real lean = dot(w, n);
-      if (lean > R(0.0) && lean * lean > MC_MESH_CONE_SIN * MC_MESH_CONE_SIN * dot(w, w)) return 0;
+      if (lean > MC_MESH_CONE_ABS && lean > MC_MESH_CONE_SIN * sqrt(dot(w, w)) + MC_MESH_CONE_ABS) return 0;
     }
   }
   return 1;
@@ -130,6 +136,14 @@ typedef struct {
   real dist;    /* centre to the closest point, m */
   real3 normal; /* from the closest point to the centre, the set's frame */
 } MeshHit;
+
+/* Whether the list already holds edge or vertex feature f (another
+ * triangle gave it: the same contact). */
+MC_FN int mesh_listed(const MeshHit* hits, int nh, int f) {
+  for (int j = 0; j < nh; ++j)
+    if (hits[j].region != MC_MESH_FACE && hits[j].feature == f) return 1;
+  return 0;
+}
 
 /* Whether edge or vertex contact e is part of face contact f's contact:
  * on or behind f's plane, or of f's smooth surface and within half f's
@@ -222,7 +236,7 @@ MC_FN int mesh_candidates(const Meshes* m, int s, real3 q, real r, MeshHit* hits
         hit.dist = sqrt(d2);
         hit.normal = (R(1.0) / hit.dist) * d;
         hit.feature = tr->feat[region - 1];
-        if (!mesh_in_cone(m, tr, region, cp, hit.normal)) continue;
+        if (mesh_listed(hits, nh, hit.feature) || !mesh_in_cone(m, tr, region, q, cp, hit.normal)) continue;
       }
       if (!mesh_list(m, hits, &nh, &hit, r)) {
         if (pass == 0) full = 1;
@@ -266,12 +280,18 @@ MC_FN void mesh_keep(const Meshes* m, const MeshHit* hits, int nh, int* keep) {
    * other (a ball over a shallow dish of a worn or scanned surface sees a
    * face of each triangle round a vertex), the nearest is the contact.
    * Contacts of one patch at a larger angle (a ball in a fillet that
-   * curves round it) stay apart, as concave corners between patches do. */
+   * curves round it) stay apart, as concave corners between patches do.
+   * An edge or vertex counts with its own patch and with that of the
+   * triangle that gave it (the patch of a feature where two meet is its
+   * first triangle's: the edges round a triangle turned the wrong way
+   * round would take that triangle's). */
   for (int h = 0; h < nh; ++h) {
     if (!keep[h]) continue;
-    const int p = m->feature[hits[h].feature].x;
+    const int p = m->feature[hits[h].feature].x, pt = m->feature[hits[h].tri].x;
     for (int j = 0; j < nh; ++j) {
-      if (j == h || !keep[j] || m->feature[hits[j].feature].x != p) continue;
+      if (j == h || !keep[j]) continue;
+      const int q = m->feature[hits[j].feature].x, qt = m->feature[hits[j].tri].x;
+      if (q != p && q != pt && qt != p && qt != pt) continue;
       if (dot(hits[j].normal, hits[h].normal) < MC_MESH_SMOOTH_COS) continue;
       if (hits[j].dist < hits[h].dist || (hits[j].dist == hits[h].dist && j < h)) {
         keep[h] = 0;

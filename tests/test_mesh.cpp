@@ -21,6 +21,7 @@
 #include "core/mill_case.h"
 #include "core/wall_mesh.h"
 #include "helpers.h"
+#include "mesh_scene.h"
 #include "io/case_file.h"
 #include "io/stl.h"
 #include "sim/energy_report.h"
@@ -32,80 +33,6 @@
 using namespace mc;
 using namespace mc::test;
 namespace fs = std::filesystem;
-
-namespace {
-
-const Material kSteel{"steel", 7800, 2e11, 0.3};
-
-// A square plate [-h, h]² at z = 0 facing +z: an n × n grid of points, the
-// inner ones moved at random by up to `jitter` of the spacing, each square
-// cut along a random diagonal.
-std::vector<Triangle> irregular_plate(double h, int n, double jitter, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const double step = 2 * h / n;
-  std::vector<Vec3> p((n + 1) * (n + 1));
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) {
-      const bool inner = i > 0 && i < n && j > 0 && j < n;
-      p[j * (n + 1) + i] = {-h + i * step + (inner ? jitter * step * u(rng) : 0.0),
-                            -h + j * step + (inner ? jitter * step * u(rng) : 0.0), 0.0};
-    }
-  std::vector<Triangle> t;
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const Vec3 a = p[j * (n + 1) + i], b = p[j * (n + 1) + i + 1], c = p[(j + 1) * (n + 1) + i + 1],
-                 d = p[(j + 1) * (n + 1) + i];
-      if (u(rng) > 0) {
-        t.push_back({{a, b, c}});
-        t.push_back({{a, c, d}});
-      } else {
-        t.push_back({{a, b, d}});
-        t.push_back({{b, c, d}});
-      }
-    }
-  return t;
-}
-
-WallMesh mesh_of(std::vector<Triangle> t, const Scene& s) {
-  WallMesh m;
-  m.name = "plate";
-  m.triangles = std::move(t);
-  m.material = s.wall_material;
-  m.interactions = {s.interaction(0, s.wall_index())};
-  return m;
-}
-
-// One steel ball above a plate at z = 0 under gravity along −z: the
-// analytic end plate (walls.length > 0) or a mesh.
-Scene plate_scene(ContactLaw law, const std::vector<Triangle>* mesh) {
-  Interaction in;
-  in.restitution = 0.5;
-  in.mu_slide = 0.3;
-  in.mu_roll = 0.02;
-  in.kn = 1e5;
-  Scene s = bare_scene(kSteel, kSteel, in, law, Precision::double_);
-  s.numerics.gravity = {0, 0, -9.81};
-  s.numerics.dt = law == ContactLaw::linear ? 5e-5 : 2e-6;
-  if (mesh) s.walls.meshes = {mesh_of(*mesh, s)};
-  else s.walls.length = 50.0;  // the plate at z = 0; the other far away
-  Ball b;
-  b.radius = 0.02;
-  b.position = {0.013, -0.021, 0.06};
-  b.velocity = {0.8, 0.35, -0.9};
-  b.omega = {4.0, -3.0, 2.0};
-  s.balls = {b};
-  return s;
-}
-
-Vec3 force_on(const Scene& s) {
-  auto solver = make_solver(context(), s);
-  return solver->balls().at(0).force;
-}
-
-double wall_contacts(const Scene& s) { return make_solver(context(), s)->contact_stats().wall_contacts_per_ball; }
-
-}  // namespace
 
 TEST_CASE("closest point on a triangle: face, edges and vertices", "[mesh][geometry]") {
   using namespace mc::f64;
@@ -447,112 +374,6 @@ TEST_CASE("a ball pressed deep into a fine mesh feels its plane, not the triangl
     CHECK(f.z == Approx(1e5 * 6e-3).epsilon(1e-9));
     CHECK_NOTHROW(make_solver(context(), s)->advance(3));
   }
-}
-
-TEST_CASE("a ball pressed deep into a worn corner of fine strips feels its nearest point once", "[mesh][physics]") {
-  // A bar's corner worn round as the life study leaves it: the top (z = R,
-  // x < 0) turns through 22 strips of about 4° into the flank (x = R,
-  // z < 0), R = 150 mm, so the strips are 10–11 mm wide; the strips' angles
-  // differ from row to row of 50 mm along y, so the edges between the rows
-  // lean. A 125 mm ball (r = 62.5 mm) pressed 1 to 8 mm into it reaches
-  // edges and vertices whose directions to its centre lie 20–30° apart
-  // (more than a smooth surface's 20°); of them only the nearest has the
-  // centre in its normal cone. One contact: k (r − nearest) along the line
-  // from the nearest point to the centre. (Each row of strips as its two
-  // rows' convex hull: the chords of both in the order of their normals'
-  // angles.) Without the cone test, 59 of these checks fail: two to four
-  // contacts, and past four walls the run stops, as the whole SAG mill's
-  // worn twin did.
-  const double R = 0.15, r = 0.0625, k = 1e5;
-  const int rows = 6, strips = 22;
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> jitter(-1.5, 1.5);
-  std::vector<std::vector<Vec3>> ring(rows + 1);
-  for (int j = 0; j <= rows; ++j) {
-    const double y = -0.15 + 0.05 * j;
-    ring[j].push_back({-0.2, y, R});
-    for (int i = 0; i <= strips; ++i) {
-      const double phi = (90.0 * i / strips + (i > 0 && i < strips ? jitter(rng) : 0.0)) * M_PI / 180;
-      ring[j].push_back({R * std::sin(phi), y, R * std::cos(phi)});
-    }
-    ring[j].push_back({R, y, -0.2});
-  }
-  auto normal_angle = [](const Vec3& p, const Vec3& q) { return std::atan2(-(q.z - p.z), q.x - p.x); };
-  std::vector<Triangle> round;
-  for (int j = 0; j < rows; ++j) {
-    const std::vector<Vec3>&A = ring[j], &B = ring[j + 1];
-    std::size_t i = 0, m = 0;
-    while (i + 1 < A.size() || m + 1 < B.size()) {
-      const bool take_a = m + 1 >= B.size() ||
-                          (i + 1 < A.size() && normal_angle(A[i], A[i + 1]) <= normal_angle(B[m], B[m + 1]));
-      if (take_a) round.push_back({{A[i], A[i + 1], B[m]}}), ++i;
-      else round.push_back({{A[i], B[m + 1], B[m]}}), ++m;
-    }
-  }
-  // Facing out of the corner, and convex but for dents where the rows meet
-  // (a strip's chord, its sagitta R (1 − cos 2°) = 0.09 mm, against the next
-  // row's vertices between its ends): no vertex of a triangle that shares a
-  // vertex with t stands in front of t's plane by more than 0.5 mm.
-  double dent = 0;
-  auto shares = [](const Triangle& t, const Triangle& u) {
-    for (const Vec3& a : t.v)
-      for (const Vec3& b : u.v)
-        if ((a - b).norm() == 0) return true;
-    return false;
-  };
-  for (const Triangle& t : round) {
-    const Vec3 n = triangle_unit_normal(t);
-    REQUIRE(n.x + n.z > 0.99);
-    for (const Triangle& u : round)
-      if (shares(t, u))
-        for (const Vec3& v : u.v) dent = std::max(dent, (v - t.v[0]).dot(n));
-  }
-  REQUIRE(dent < 5e-4);
-  int placed = 0, on_edges = 0;
-  for (const double delta : {1e-3, 4e-3, 8e-3})
-    for (int a = 0; a <= 12; ++a)
-      for (const double y : {-0.1004, -0.0501, -0.0262, 0.0, 0.0013, 0.0497, 0.0731}) {
-        const double phi = (-4.0 + 8.1 * a) * M_PI / 180;
-        // The centre set so that its nearest point on the mesh is delta in.
-        Vec3 q{(R + r) * std::sin(phi), y, (R + r) * std::cos(phi)};
-        double nearest = 1;
-        Vec3 at;
-        int region = 0;
-        auto find = [&] {
-          nearest = 1;
-          for (const Triangle& t : round) {
-            const Vec3 c = closest_on_triangle(t, q);
-            if ((q - c).norm() < nearest) {
-              nearest = (q - c).norm(), at = c;
-              region = std::fabs((q - t.v[0]).dot(triangle_unit_normal(t)) - nearest) < 1e-12 ? 0 : 1;
-            }
-          }
-        };
-        find();
-        q = at + (q - at) * ((r - delta) / nearest);
-        find();
-        REQUIRE(nearest == Approx(r - delta).epsilon(1e-6));
-        on_edges += region;
-        Scene s = plate_scene(ContactLaw::linear, &round);
-        s.numerics.gravity = {0, 0, 0};
-        s.balls[0].radius = r;
-        s.balls[0].position = q;
-        s.balls[0].velocity = {};
-        s.balls[0].omega = {};
-        const Vec3 f = force_on(s);
-        const Vec3 expect = (q - at) * (k * (r - nearest) / nearest);
-        INFO("delta " << delta << " angle " << phi * 180 / M_PI << " y " << y);
-        CHECK(wall_contacts(s) == 1.0);
-        CHECK((f - expect).norm() < 1e-6 * expect.norm());
-        if (a % 4 == 0) {
-          CHECK_NOTHROW(make_solver(context(), s)->advance(2));
-          s.numerics.precision = Precision::single;
-          CHECK_NOTHROW(make_solver(context(), s)->advance(2));
-        }
-        ++placed;
-      }
-  CHECK(placed == 273);
-  CHECK(on_edges > 80);  // of 273, the nearest point on an edge or a vertex (96)
 }
 
 TEST_CASE("a ball over a shallow dish where six triangles meet feels one contact, the nearest", "[mesh][physics]") {
