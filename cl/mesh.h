@@ -11,9 +11,9 @@
  * (Ericson, Real-Time Collision Detection, 2005, §5.1.5), and that feature
  * names the contact. An edge or vertex counts only where the ball's centre
  * lies in its normal cone, leaning into none of the triangles round it
- * (mesh_in_cone): elsewhere a triangle round it comes nearer. Of the
- * candidates, those that are one contact of a smooth surface seen from
- * several triangles are dropped by the rule of Hu et al. (2013, Int. J.
+ * that face the ball (mesh_in_cone): elsewhere a triangle round it comes
+ * nearer. Of the candidates, those that are one contact of a smooth surface
+ * seen from several triangles are dropped by the rule of Hu et al. (2013, Int. J.
  * Numer. Meth. Eng. 94:787): every face contact is kept; an edge contact is
  * dropped when a triangle with a face contact has that edge, or when
  * another triangle already gave the same edge; a vertex contact is dropped

@@ -130,7 +130,7 @@ TEST_CASE("a ball pressed deep into a worn corner of fine strips feels its neare
   std::vector<Triangle> far = round;
   for (Triangle& t : far)
     for (Vec3& v : t.v) v = v + off;
-  int placed = 0, on_edges = 0;
+  int on_edges = 0;
   for (const double delta : {1e-3, 4e-3, 8e-3})
     for (int a = 0; a <= 12; ++a)
       for (const double y : {-0.1004, -0.0501, -0.0262, 0.0, 0.0013, 0.0497, 0.0731}) {
@@ -145,9 +145,7 @@ TEST_CASE("a ball pressed deep into a worn corner of fine strips feels its neare
         INFO("delta " << delta << " angle " << phi * 180 / M_PI << " y " << y);
         one_contact(round, q, r, Precision::double_, 1e-6);
         if (a % 3 == 0) one_contact(far, q + off, r, Precision::single, 3e-3);
-        ++placed;
       }
-  CHECK(placed == 273);
   CHECK(on_edges > 80);  // of 273, the nearest point on an edge or a vertex (96)
 }
 
@@ -155,7 +153,9 @@ TEST_CASE("a ball on a cube's vertex, edge or face feels one contact, along the 
           "[mesh][physics]") {
   // A closed 0.2 m cube, normals out; a 62.5 mm ball 3 mm into it over a
   // vertex (the contact along the diagonal), over an edge, and over the top
-  // face next to an edge, where the edge's own triangles list it too.
+  // face next to an edge, where the top's other triangle lists its diagonal
+  // too. A guard that the cone test keeps what Hu's rule alone already got
+  // right: one contact on a convex vertex, edge and face.
   const double h = 0.1, r = 0.0625, delta = 3e-3;
   const Vec3 p[8] = {{-h, -h, -h}, {h, -h, -h}, {h, h, -h}, {-h, h, -h},
                      {-h, -h, h},  {h, -h, h},  {h, h, h},  {-h, h, h}};
