@@ -5,6 +5,7 @@
 // move turns over as it stands and wears once its strip is collapsed.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <set>
@@ -258,4 +259,139 @@ TEST_CASE("a stage's mesh kept fit: no collapse where none is needed, the first 
   } catch (const std::invalid_argument& e) {
     CHECK_THAT(e.what(), Catch::Contains("beyond the mill's ends"));
   }
+}
+
+TEST_CASE("a collapse's own volume is booked where it was taken, and the move is asked the rest there",
+          "[life][mesh_wear][collapse]") {
+  const std::vector<Triangle> bar = closed_bar(2.5);
+  std::vector<double> volume;
+  for (std::size_t t = 0; t < bar.size(); ++t) {
+    const std::size_t segment = t / 12;
+    volume.push_back(area(bar[t]) * (t < 108 && segment >= 4 && segment <= 6 ? 6e-3 : 0.5e-3));
+  }
+  const double booked = std::accumulate(volume.begin(), volume.end(), 0.0);
+  const life::Collapsed c = life::collapse_short_edges(bar, volume, 0, 60e-3, 0.25);
+  REQUIRE(c.edges == 7);
+  REQUIRE(c.taken_m3.size() == c.triangles.size());
+  // The locals add up to the whole, measured independently as the closed
+  // bar's enclosed volume before and after.
+  const double whole = (volume6(bar) - volume6(c.triangles)) / 6;
+  REQUIRE(whole > 0.01 * 6e-3 * 2.5e-3 * 60e-3);
+  CHECK(std::accumulate(c.taken_m3.begin(), c.taken_m3.end(), 0.0) == Approx(whole).epsilon(1e-9));
+  // Taken only round the strip (the corner line at x 0.9, y 24.1 mm): no
+  // triangle whose corners all lie further than one 10 mm ring from it.
+  double near = 0;
+  for (std::size_t t = 0; t < c.triangles.size(); ++t) {
+    double closest = 1;
+    for (const Vec3& v : c.triangles[t].v) closest = std::min(closest, std::hypot(v.x - 0.9e-3, v.y - 24.1e-3));
+    if (closest > 11e-3) CHECK(c.taken_m3[t] == 0);
+    else near += c.taken_m3[t];
+  }
+  CHECK(near == Approx(whole).epsilon(1e-9));
+  // Unspread, the move is asked each triangle's booked less what the
+  // collapse took from it, and the whole the booked less the collapse's.
+  const std::vector<double> asked = life::asked_volumes(c, 0, 0);
+  double sum = 0;
+  for (std::size_t t = 0; t < asked.size(); ++t) {
+    sum += asked[t];
+    if (c.volume_m3[t] > c.taken_m3[t]) CHECK(asked[t] == Approx(c.volume_m3[t] - c.taken_m3[t]).epsilon(1e-9));
+  }
+  CHECK(sum == Approx(booked - whole).epsilon(1e-12));
+  // A collapse with nothing to take leaves the asked volumes as booked.
+  const life::Collapsed none{bar, volume, 0, 0.0, {}};
+  const std::vector<double> plain = life::asked_volumes(none, 0, 0);
+  for (std::size_t t = 0; t < bar.size(); ++t) CHECK(plain[t] == Approx(volume[t]).epsilon(1e-12));
+}
+
+TEST_CASE("a move removes what each stretch was asked, not only the whole: a worn corner and a worn top "
+          "side by side", "[life][mesh_wear][collapse]") {
+  // Two closed bars 100 mm apart, one mesh: the first worn 3 mm on its
+  // corner (convex: moving its faces by their depths removes less than
+  // depth times area), the second 1 mm on its top.
+  const std::vector<Triangle> a = closed_bar(2.5);
+  std::vector<Triangle> mesh = a;
+  for (Triangle t : a) {
+    for (Vec3& v : t.v) v.x += 0.1;
+    mesh.push_back(t);
+  }
+  const std::size_t n = a.size();
+  std::vector<double> volume(mesh.size(), 0.0);
+  for (std::size_t t = 0; t < n && t < 108; ++t) {
+    const std::size_t segment = t / 12;
+    if (segment >= 4 && segment <= 6) volume[t] = area(mesh[t]) * 3e-3;
+    if (segment >= 2 && segment <= 4) volume[n + t] = area(mesh[n + t]) * 1e-3;
+  }
+  double booked_a = 0, booked_b = 0;
+  for (std::size_t t = 0; t < n; ++t) booked_a += volume[t], booked_b += volume[n + t];
+  const life::MeshBounds bounds{0, -1e-6, 60e-3 + 1e-6};
+  // Each bar's volume lost, from its own closed surface before and after.
+  auto lost = [&](const std::vector<Triangle>& worn, std::size_t from) {
+    const std::vector<Triangle> b0(mesh.begin() + from, mesh.begin() + from + n);
+    const std::vector<Triangle> b1(worn.begin() + from, worn.begin() + from + n);
+    return (volume6(b0) - volume6(b1)) / 6;
+  };
+  // Spread 6 mm across, 20 mm along (within each bar: they are two parts).
+  const std::vector<double> asked = life::smooth_wear(mesh, volume, 6e-3, 20e-3);
+  // One depth scale for the whole: the whole is right, the bars are not.
+  const life::MeshWear global = life::wear_mesh(mesh, asked, bounds, 0, "bars");
+  REQUIRE(lost(global.triangles, 0) + lost(global.triangles, n) == Approx(booked_a + booked_b).epsilon(1e-6));
+  const double off = std::abs(lost(global.triangles, 0) / booked_a - 1);
+  INFO("one scale: the corner bar off by " << off);
+  REQUIRE(off > 0.01);
+  // Kept fit, corrected stretch by stretch: each bar loses what it booked.
+  const life::FitWear f = life::wear_kept_fit(mesh, volume, bounds, 6e-3, 20e-3, "bars");
+  INFO("passes " << f.local_passes << ", misfit " << f.local_misfit);
+  CHECK(f.share == 0);
+  CHECK(f.local_passes >= 1);
+  CHECK(f.local_misfit <= life::kLocalTolerance);
+  CHECK(lost(f.wear.triangles, 0) == Approx(booked_a).epsilon(0.003));
+  CHECK(lost(f.wear.triangles, n) == Approx(booked_b).epsilon(0.003));
+  CHECK(f.wear.removed_m3 == Approx(booked_a + booked_b).epsilon(1e-6));
+  // One bar alone is one stretch: its one scale is already right.
+  const std::vector<double> only_a(volume.begin(), volume.begin() + n);
+  const life::FitWear g = life::wear_kept_fit(a, only_a, bounds, 6e-3, 20e-3, "bar");
+  CHECK(g.local_passes == 0);
+  CHECK(g.local_misfit < 1e-6);
+}
+
+TEST_CASE("a bar worn on its corner in one half of the mill and on its top in the other: each half removes what "
+          "it was asked, given the segments", "[life][mesh_wear][collapse]") {
+  const std::vector<Triangle> bar = closed_bar(2.5);
+  // The profile's sheet: 9 segments of 6 rows of 10 mm along z, two
+  // triangles a quad; rows 0-2 (z < 30 mm) worn 3 mm on the corner,
+  // rows 3-5 1 mm on the top.
+  std::vector<double> volume(bar.size(), 0.0);
+  double booked[2] = {0, 0};
+  for (std::size_t t = 0; t < 108; ++t) {
+    const std::size_t segment = t / 12, row = (t % 12) / 2;
+    if (row < 3 && segment >= 4 && segment <= 6) volume[t] = area(bar[t]) * 3e-3;
+    if (row >= 3 && segment >= 2 && segment <= 4) volume[t] = area(bar[t]) * 1e-3;
+    booked[row < 3 ? 0 : 1] += volume[t];
+  }
+  const life::MeshBounds bounds{0, -1e-6, 60e-3 + 1e-6};
+  auto halves = [&](const life::FitWear& f) {
+    const std::vector<double> swept = life::swept_volumes(f.collapsed.triangles, f.wear.triangles);
+    std::array<double, 2> h{0, 0};
+    for (std::size_t t = 0; t < swept.size(); ++t) {
+      const auto& v = f.collapsed.triangles[t].v;
+      h[(v[0].z + v[1].z + v[2].z) / 3 < 30e-3 ? 0 : 1] += swept[t];
+    }
+    return h;
+  };
+  // Unspread (across 0: each triangle moves its own volume); as one
+  // stretch, the corner half is cut short.
+  const life::FitWear one = life::wear_kept_fit(bar, volume, bounds, 0, 0, "bar");
+  CHECK(one.local_passes == 0);
+  const std::array<double, 2> h1 = halves(one);
+  INFO("one stretch: " << h1[0] / booked[0] << ", " << h1[1] / booked[1]);
+  REQUIRE(std::abs(h1[0] / booked[0] - 1) > 0.01);
+  CHECK(h1[0] + h1[1] == Approx(booked[0] + booked[1]).epsilon(1e-6));
+  // In two segments, each half is its own stretch.
+  const life::FitWear two = life::wear_kept_fit(bar, volume, bounds, 0, 0, "bar", 2);
+  INFO("passes " << two.local_passes << ", misfit " << two.local_misfit);
+  CHECK(two.local_passes >= 1);
+  const std::array<double, 2> h2 = halves(two);
+  CHECK(h2[0] == Approx(booked[0]).epsilon(0.003));
+  CHECK(h2[1] == Approx(booked[1]).epsilon(0.003));
+  CHECK((volume6(bar) - volume6(two.wear.triangles)) / 6 == Approx(booked[0] + booked[1]).epsilon(1e-6));
 }

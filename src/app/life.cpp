@@ -761,7 +761,8 @@ int cmd_life(const LifeOptions& o) {
       throw std::invalid_argument(why);
     };
     try {
-      worn_now = life::wear_meshes(out, c, s, next, st.mix, span, 0.5 * next.diameter, smoothing);
+      worn_now = life::wear_meshes(out, c, s, next, st.mix, span, 0.5 * next.diameter, smoothing,
+                                     o.axial_segments);
     } catch (const std::invalid_argument& e) {
       stop(fmt::format("{}; the study stops at stage {} (life.csv holds stages 0 to {}); ask for shorter stages (more "
                        "--stages) or a wider --mesh-smoothing",
@@ -799,9 +800,10 @@ int cmd_life(const LifeOptions& o) {
                   i, i + 1, k, s.removed_mm2[k], s.booked_mm2[k], s.scale[k], s.spread[k], s.shell_depth_m * 1000);
     for (const life::StageMesh& m : s.meshes)
       std::printf("life            stage %d -> %d: walls.mesh[%d] worn %.4g cm3 (booked %.4g cm3, depth scale %.3f, "
-                  "deepest %.3f mm): %s\n",
+                  "deepest %.3f mm, each bar%s within %.2f %% of its share after %d correction%s): %s\n",
                   i, i + 1, m.walls_mesh, m.removed_m3 * 1e6, m.booked_m3 * 1e6, m.scale, m.deepest_m * 1000,
-                  (out / next.meshes[&m - s.meshes.data()].file).string().c_str());
+                  o.axial_segments > 1 ? " in each segment" : "", m.local_misfit * 100, m.local_passes,
+                  m.local_passes == 1 ? "" : "s", (out / next.meshes[&m - s.meshes.data()].file).string().c_str());
     if (plates)
       for (int p = 0; p < 2; ++p) {
         double booked = 0, removed = 0, deepest = 0;

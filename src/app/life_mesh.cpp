@@ -171,7 +171,7 @@ mc::life::Collapsed collapsed_mesh(const MillCase& c, const std::vector<Triangle
 
 std::vector<std::vector<Triangle>> wear_meshes(const fs::path& out, const MillCase& c, Stage& s, Stage& next,
                                                const WearMix& mix, double span_case_hours, double next_R,
-                                               const MeshSmoothing& smoothing) {
+                                               const MeshSmoothing& smoothing, int axial_segments) {
   next.meshes.clear();
   std::vector<std::vector<Triangle>> worn;
   const fs::path run = out / fmt::format("stage-{:02d}", s.index);
@@ -182,9 +182,11 @@ std::vector<std::vector<Triangle>> wear_meshes(const fs::path& out, const MillCa
     const std::string name = fmt::format("walls.mesh[{}] worn from stage {} to {}", m.walls_mesh, s.index, next.index);
     // Short edges collapsed first; where the move still spoils a triangle
     // (a worn corner's strip), longer ones, up to the last share.
-    const mc::life::FitWear f = mc::life::wear_kept_fit(placed, booked, bounds, smoothing.across_m, smoothing.along_m, name);
+    const mc::life::FitWear f = mc::life::wear_kept_fit(placed, booked, bounds, smoothing.across_m, smoothing.along_m, name,
+                                                                std::max(axial_segments, 1));
     const mc::life::MeshWear& w = f.wear;
     m.collapsed = f.collapsed.edges, m.collapse_share = f.share, m.collapse_m3 = f.collapsed.removed_m3;
+    m.local_passes = f.local_passes, m.local_misfit = f.local_misfit;
     // Booked by the stage; removed by the collapse and the move together.
     m.booked_m3 = 0;
     for (double v : booked) m.booked_m3 += v;
@@ -272,7 +274,7 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
       "mid_height_mm,mid_height_mm_se,mid_leading_angle_deg,mid_leading_angle_deg_se,mid_trailing_angle_deg,"
       "mid_trailing_angle_deg_se,ends_height_mm,ends_leading_angle_deg,ends_leading_angle_deg_se,"
       "ends_trailing_angle_deg,wear_kg_per_h,impact_wear_share,booked_cm3,removed_cm3,depth_scale,deepest_mm,"
-      "collapsed_edges,collapse_cm3,relaxed_vertices,smoothing_across_mm,smoothing_along_mm,wear_basis\n";
+      "collapsed_edges,collapse_cm3,relaxed_vertices,local_corrections,local_misfit,smoothing_across_mm,smoothing_along_mm,wear_basis\n";
   if (stages.empty()) return;
   const std::vector<std::vector<double>> angles = bar_angles(out, c, stages);
   for (const Stage& s : stages) {
@@ -297,7 +299,7 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
       const auto eh = mean_se(ends.height), el = mean_se(ends.leading_deg), et = mean_se(ends.trailing_deg);
       const double sliding = b.mix.sliding * s.r.mesh_sliding_m3_s.at(j), impact = b.mix.impact * s.r.mesh_strike_W.at(j);
       const bool carried = s.span_case_hours > 0;
-      t += fmt::format("{},{:.6g},{:.6g},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{},{},{},{},{},{},{},{:.4g},{:.4g},{}\n",
+      t += fmt::format("{},{:.6g},{:.6g},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{},{},{},{},{},{},{},{},{},{:.4g},{:.4g},{}\n",
                        s.index, s.case_hours / b.factor, s.case_hours, m.walls_mesh,
                        m.file.empty() ? c.meshes.at(m.walls_mesh).file : m.file, tris.size(), parts, opt(mh.first * 1000, 4),
                        opt(mh.second * 1000, 4), opt(ml.first, 3), opt(ml.second, 3), opt(mt.first, 3), opt(mt.second, 3),
@@ -310,6 +312,8 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
                        carried ? fmt::format("{:.4f}", m.deepest_m * 1000) : "",
                        carried ? fmt::format("{}", m.collapsed) : "",
                        carried ? fmt::format("{:.6g}", m.collapse_m3 * 1e6) : "", carried ? fmt::format("{}", m.relaxed) : "",
+                       carried ? fmt::format("{}", m.local_passes) : "",
+                       carried ? fmt::format("{:.4f}", m.local_misfit) : "",
                        b.smoothing.across_m * 1000,
                        b.smoothing.along_m * 1000, b.basis);
     }
@@ -369,7 +373,7 @@ void write_segment_table(const fs::path& out, const MillCase& c, const std::vect
         // The move was of the mesh with its short edges collapsed (where
         // the study collapsed any), corner for corner.
         const mc::life::Collapsed k = m.collapse_share > 0 ? collapsed_mesh(c, tris, volume, m.collapse_share)
-                                                            : mc::life::Collapsed{tris, volume, 0};
+                                                            : mc::life::Collapsed{tris, volume, 0, 0.0, {}};
         if (k.triangles.size() != next.size() ||
             std::abs(k.removed_m3 - m.collapse_m3) > 1e-9 * std::max(m.booked_m3, 1e-12) + 1e-15)
           throw std::invalid_argument(fmt::format("{}: {} triangles, where stage {}'s {} collapse to {}: not the mesh "
@@ -377,11 +381,8 @@ void write_segment_table(const fs::path& out, const MillCase& c, const std::vect
                                                   (out / stages[i + 1].meshes[j].file).string(), next.size(), s.index,
                                                   tris.size(), k.triangles.size()));
         const std::vector<double> swept = mc::life::swept_volumes(k.triangles, next);
-        std::vector<double> spread =
-            mc::life::smooth_wear(k.triangles, k.volume_m3, b.smoothing.across_m, b.smoothing.along_m);
-        // What the move was asked to remove: the booked less the collapse's own.
-        if (m.booked_m3 > 0)
-          for (double& v : spread) v *= (m.booked_m3 - m.collapse_m3) / m.booked_m3;
+        // What the move was asked to remove: the booked less the collapse's own, where it took it.
+        const std::vector<double> spread = mc::life::asked_volumes(k, b.smoothing.across_m, b.smoothing.along_m);
         for (std::size_t q = 0; q < k.triangles.size(); ++q) {
           const auto& v = k.triangles[q].v;
           const int g = segment_of((v[0].z + v[1].z + v[2].z) / 3);

@@ -58,13 +58,15 @@ void put_stage_meshes(MillCase& c, const std::filesystem::path& out, const Stage
 // next stage's case is known to be valid. `next_R`: the worn
 // shell's radius, which no vertex may pass. std::invalid_argument from
 // the mesh move (life/mesh_wear.h) naming walls.mesh[K] and the stage.
+// Each bar, in each of `axial_segments` spans of the mill where that is
+// more than 1, removes what it was asked (life/mesh_collapse.h wear_kept_fit).
 // How far the booked wear is spread before the mesh moves (m; life/mesh_wear.h smooth_wear).
 struct MeshSmoothing {
   double across_m = 0, along_m = 0;
 };
 std::vector<std::vector<Triangle>> wear_meshes(const std::filesystem::path& out, const MillCase& c, Stage& s,
                                                Stage& next, const WearMix& mix, double span_case_hours, double next_R,
-                                               const MeshSmoothing& smoothing);
+                                               const MeshSmoothing& smoothing, int axial_segments = 1);
 void write_stage_meshes(const std::filesystem::path& out, const Stage& next,
                         const std::vector<std::vector<Triangle>>& worn);
 

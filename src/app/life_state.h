@@ -101,6 +101,8 @@ struct StageMesh {
   int relaxed = 0, collapsed = 0;  // and the short edges collapsed first (life/mesh_collapse.h),
   double collapse_share = 0;       // those shorter than this share of the median edge (0: none)
   double collapse_m3 = 0;          // the volume the collapse took (the move removed booked less this)
+  int local_passes = 0;            // the move's local corrections (life/mesh_collapse.h wear_kept_fit)
+  double local_misfit = 0;         // and the largest |removed / asked − 1| of a stretch after them
 };
 
 struct Stage {

@@ -32,6 +32,9 @@ double volume6(const std::vector<Vec3>& p, const std::vector<std::array<int, 3>>
   return v;
 }
 
+// Six times the signed volume triangle c encloses with the origin.
+double tet6(const std::vector<Vec3>& p, const std::array<int, 3>& c) { return p[c[0]].dot(cross3(p[c[1]], p[c[2]])); }
+
 }  // namespace
 
 Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3, double z0,
@@ -43,7 +46,7 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
   std::vector<Vec3>& p = w.points;
   const std::size_t nt = tri.size();
   std::vector<char> alive(nt, 1);
-  std::vector<double> volume = volume_m3;
+  std::vector<double> volume = volume_m3, taken(nt, 0.0);
   auto on_end = [&](int v) {
     return z1 > z0 && (std::abs(p[v].z - z0) <= on_end_m || std::abs(p[v].z - z1) <= on_end_m);
   };
@@ -175,10 +178,18 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
         if (twice) continue;
       }
       // Collapse: b becomes a at the point; the edge's triangles go, their
-      // wear shared by area over the triangles round the point.
+      // wear and what earlier collapses took there shared by area over the
+      // triangles round the point, with what this one takes: the triangles
+      // round it enclose the rest of the solid the same before and after
+      // (their rim, the link, stays), so their six-volumes' difference is
+      // the collapse's own.
+      double before6 = 0;
+      for (int v : {a, b})
+        for (int t : star[v])
+          if (v == a || std::find(tri[t].begin(), tri[t].end(), a) == tri[t].end()) before6 += tet6(p, tri[t]);
       p[a] = at;
-      double gone = 0;
-      for (int t : on_edge) alive[t] = 0, gone += volume[t], volume[t] = 0;
+      double gone = 0, gone_taken = 0;
+      for (int t : on_edge) alive[t] = 0, gone += volume[t], volume[t] = 0, gone_taken += taken[t], taken[t] = 0;
       std::vector<int> round;
       for (int v : {a, b})
         for (int t : star[v])
@@ -186,9 +197,14 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
       for (int t : round)
         for (int& v : tri[t])
           if (v == b) v = a;
-      double area = 0;
-      for (int t : round) area += area_vec(tri[t]).norm();
-      for (int t : round) volume[t] += area > 0 ? gone * area_vec(tri[t]).norm() / area : gone / round.size();
+      double after6 = 0, area = 0;
+      for (int t : round) after6 += tet6(p, tri[t]), area += area_vec(tri[t]).norm();
+      const double own = (before6 - after6) / 6;
+      for (int t : round) {
+        const double w = area > 0 ? area_vec(tri[t]).norm() / area : 1.0 / round.size();
+        volume[t] += gone * w;
+        taken[t] += (gone_taken + own) * w;
+      }
       for (int v : na) locked[v] = 1;
       for (int v : nb) locked[v] = 1;
       ++done, ++out.edges;
@@ -200,22 +216,79 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
     if (!alive[t]) continue;
     out.triangles.push_back({{p[tri[t][0]], p[tri[t][1]], p[tri[t][2]]}});
     out.volume_m3.push_back(volume[t]);
+    if (out.edges > 0) out.taken_m3.push_back(taken[t]);
   }
   return out;
 }
 
+std::vector<double> asked_volumes(const Collapsed& c, double across, double along) {
+  double booked = 0;
+  for (double v : c.volume_m3) booked += v;
+  std::vector<double> v = c.volume_m3;
+  if (!c.taken_m3.empty()) {
+    if (c.taken_m3.size() != v.size()) throw std::invalid_argument("asked_volumes: a collapse's volume per triangle");
+    for (std::size_t t = 0; t < v.size(); ++t) v[t] -= c.taken_m3[t];
+  }
+  v = smooth_wear(c.triangles, v, across, along);
+  double sum = 0;
+  for (double& x : v) sum += x = std::max(x, 0.0);
+  const double left = booked - c.removed_m3;
+  if (sum > 0 && left > 0)
+    for (double& x : v) x *= left / sum;
+  return v;
+}
+
+namespace {
+
+// Each triangle's stretch: its part (bar), and where `segments` > 1, the
+// span of the mill between z0 and z1 its centroid lies in.
+std::vector<int> stretches(const std::vector<Triangle>& triangles, double z0, double z1, int segments) {
+  std::vector<int> out(triangles.size(), 0);
+  const std::vector<std::vector<int>> parts = connected_parts(triangles);
+  const int n = segments > 1 && z1 > z0 ? segments : 1;
+  for (std::size_t p = 0; p < parts.size(); ++p)
+    for (int t : parts[p]) {
+      const auto& v = triangles[t].v;
+      const double z = (v[0].z + v[1].z + v[2].z) / 3;
+      const int g = n > 1 ? std::clamp(static_cast<int>(std::floor((z - z0) / (z1 - z0) * n)), 0, n - 1) : 0;
+      out[t] = static_cast<int>(p) * n + g;
+    }
+  return out;
+}
+
+// The largest |removed / asked − 1| over the stretches asked at least a
+// fifth of the mean stretch's, and each stretch's ratio asked / removed.
+std::pair<double, std::vector<double>> stretch_misfit(const std::vector<int>& stretch, const std::vector<double>& asked,
+                                                      const std::vector<double>& swept) {
+  const int n = stretch.empty() ? 0 : *std::max_element(stretch.begin(), stretch.end()) + 1;
+  std::vector<double> a(n, 0.0), r(n, 0.0), ratio(n, 1.0);
+  for (std::size_t t = 0; t < stretch.size(); ++t) a[stretch[t]] += asked[t], r[stretch[t]] += swept[t];
+  double whole = 0;
+  int asked_any = 0;
+  for (int k = 0; k < n; ++k)
+    if (a[k] > 0) whole += a[k], ++asked_any;
+  double worst = 0;
+  for (int k = 0; k < n; ++k) {
+    if (a[k] > 0 && r[k] > 0) ratio[k] = std::clamp(a[k] / r[k], 0.5, 2.0);
+    if (a[k] > 0 && a[k] >= 0.2 * whole / asked_any) worst = std::max(worst, std::abs(r[k] / a[k] - 1));
+  }
+  return {worst, ratio};
+}
+
+}  // namespace
+
 FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<double>& booked_m3,
-                      const MeshBounds& bounds, double across, double along, const std::string& name) {
+                      const MeshBounds& bounds, double across, double along, const std::string& name, int segments) {
   double booked = 0;
   for (double v : booked_m3) booked += v;
   for (const double share : kCollapseShares) {
     if (share > 0 && !(booked > 0)) break;  // no wear, no collapse: the plain move's refusal stands
     FitWear f;
     if (share > 0) f.collapsed = collapse_short_edges(triangles, booked_m3, bounds.z0, bounds.z1, share, bounds.on_end);
-    else f.collapsed = {triangles, booked_m3, 0, 0.0};
+    else f.collapsed = {triangles, booked_m3, 0, 0.0, {}};
     // What the collapse took (or gave back) counts against the stage's
     // wear: the move removes the rest, so that the two remove the booked.
-    std::vector<double> volume = smooth_wear(f.collapsed.triangles, f.collapsed.volume_m3, across, along);
+    std::vector<double> volume = asked_volumes(f.collapsed, across, along);
     const double left = booked - f.collapsed.removed_m3;
     const bool last = share == kCollapseShares[std::size(kCollapseShares) - 1];
     if (booked > 0 && !(left > 0)) {
@@ -224,8 +297,6 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
                                  "shorter stages");
       continue;
     }
-    if (booked > 0)
-      for (double& v : volume) v *= left / booked;
     try {
       f.wear = wear_mesh(f.collapsed.triangles, volume, bounds, 0, name);
     } catch (const MeshSpoiled&) {
@@ -233,6 +304,27 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
       continue;
     }
     f.share = share;
+    if (!(booked > 0)) return f;
+    // Each stretch brought to what it was asked: its volumes scaled by its
+    // ratio, the whole kept (the move's scale), and moved again.
+    const std::vector<double> asked = volume;
+    const std::vector<int> stretch = stretches(f.collapsed.triangles, bounds.z0, bounds.z1, segments);
+    auto [misfit, ratio] = stretch_misfit(stretch, asked, swept_volumes(f.collapsed.triangles, f.wear.triangles));
+    while (misfit > kLocalTolerance && f.local_passes < kLocalPasses) {
+      double sum = 0;
+      for (std::size_t t = 0; t < volume.size(); ++t) sum += volume[t] *= ratio[stretch[t]];
+      for (double& v : volume) v *= left / sum;
+      MeshWear next;
+      try {
+        next = wear_mesh(f.collapsed.triangles, volume, bounds, 0, name);
+      } catch (const MeshSpoiled&) {
+        break;  // the last move that kept the mesh one stands
+      }
+      auto [m, r] = stretch_misfit(stretch, asked, swept_volumes(f.collapsed.triangles, next.triangles));
+      if (!(m < misfit)) break;
+      f.wear = std::move(next), misfit = m, ratio = std::move(r), ++f.local_passes;
+    }
+    f.local_misfit = misfit;
     return f;
   }
   throw std::logic_error("wear_kept_fit: no share");

@@ -32,7 +32,20 @@ struct Collapsed {
   std::vector<double> volume_m3;    // the booked volumes carried with them (the same sum)
   int edges = 0;                    // edges collapsed
   double removed_m3 = 0;            // the volume the collapse took from the solid the mesh bounds (< 0: gave)
+  // Where it took it: each collapse's own volume (the triangles round its
+  // point, before and after) shared by area over the triangles round the
+  // point, and carried as their booked wear is; one per triangle of
+  // `triangles`, summing to removed_m3. Empty where nothing was collapsed.
+  std::vector<double> taken_m3;
 };
+
+// The volumes a stage's move is asked to remove, triangle by triangle: the
+// booked wear carried through the collapse, less what the collapse itself
+// took there (taken_m3), spread by smooth_wear (across, along, m), any
+// triangle left below nothing set to nothing, and the whole brought to the
+// booked total less removed_m3, so that the collapse and the move together
+// remove what each stretch of the mesh booked.
+std::vector<double> asked_volumes(const Collapsed& c, double across, double along);
 
 // `z0`, `z1`: the mill's end planes (a vertex within `on_end_m` of one
 // stays on it); not held where z1 <= z0. `share`: an edge shorter than this share
@@ -53,12 +66,26 @@ inline constexpr double kCollapseShares[] = {0, 0.25, 0.4, 0.55};
 // mesh kept: the collapse and the move together remove the volume booked. The last share's
 // MeshSpoiled where none does; any other refusal (a vertex beyond the
 // shell or the ends) at once.
+// The move's one depth scale makes the whole volume right, but a convex
+// stretch (a worn corner) removes less per booked depth than a flat one:
+// so each stretch of the mesh (a connected part, a bar, and where
+// `segments` > 1 its span of the mill's length between bounds.z0 and z1,
+// by the triangles' centroids) has its volumes scaled by the ratio of what
+// it was asked to what it removed, and the mesh is moved again, until
+// every stretch asked at least a fifth of the mean stretch's removes what it
+// was asked within kLocalTolerance (at most kLocalPasses; a corrected
+// move that spoils the mesh, or is no better, is not taken).
+inline constexpr int kLocalPasses = 4;
+inline constexpr double kLocalTolerance = 0.002;
 struct FitWear {
   Collapsed collapsed;  // the mesh that was moved, and its booked volumes
   MeshWear wear;        // the move
   double share = 0;     // the share it was collapsed at
+  int local_passes = 0;      // local corrections taken
+  double local_misfit = 0;   // after them: the largest |removed / asked − 1| of a stretch
 };
 FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<double>& booked_m3,
-                      const MeshBounds& bounds, double across, double along, const std::string& name);
+                      const MeshBounds& bounds, double across, double along, const std::string& name,
+                      int segments = 1);
 
 }  // namespace mc::life
