@@ -297,6 +297,14 @@ TEST_CASE("a collapse's own volume is booked where it was taken, and the move is
     if (c.volume_m3[t] > c.taken_m3[t]) CHECK(asked[t] == Approx(c.volume_m3[t] - c.taken_m3[t]).epsilon(1e-9));
   }
   CHECK(sum == Approx(booked - whole).epsilon(1e-12));
+  // The same bar 5 m off the axis (a plant mill's liner): the same
+  // collapse, and each triangle takes the same volume.
+  std::vector<Triangle> far = bar;
+  for (Triangle& t : far)
+    for (Vec3& v : t.v) v.x += 5.0;
+  const life::Collapsed cf = life::collapse_short_edges(far, volume, 0, 60e-3, 0.25);
+  REQUIRE(cf.taken_m3.size() == c.taken_m3.size());
+  for (std::size_t t = 0; t < c.taken_m3.size(); ++t) CHECK(cf.taken_m3[t] == Approx(c.taken_m3[t]).margin(1e-6 * whole));
   // A collapse with nothing to take leaves the asked volumes as booked.
   const life::Collapsed none{bar, volume, 0, 0.0, {}};
   const std::vector<double> plain = life::asked_volumes(none, 0, 0);

@@ -12,6 +12,7 @@
 
 #include "core/drum.h"
 #include "core/layout.hpp"
+#include "core/liner.h"
 #include "core/mill_case.h"
 #include "core/plate_wear.h"
 #include "helpers.h"
@@ -346,4 +347,48 @@ TEST_CASE("worn plate depths in a case: read, written back, refused by name", "[
   CHECK(refused({"liner.plate_depth_mm=[1.0, 2.0]"}).find("liner.plate_depth_mm: must be two lists") != std::string::npos);
   CHECK(refused({key, "mill.ends=\"periodic\""}).find("flat end plates") != std::string::npos);
   CHECK(refused({"liner.plate_depth_mm=[[1, 1, 1, 1], [0, 0, -1, 0]]"}).find("[1][2]: must be >= 0") != std::string::npos);
+}
+
+TEST_CASE("liner.vtp draws a worn plate on its dish, bends included", "[plates][outputs]") {
+  DrumSpec spec;
+  spec.lifter_rows = 0;
+  spec.n_balls = 20;
+  Scene sc = make_drum(spec);
+  const double R = sc.walls.shell_radius, L = sc.walls.length, w = R / 2;
+  sc.liner.plate_rings = 2;
+  sc.liner.plate_sectors = 6;
+  // Feed plate 1 mm deep in its inner ring, 3 mm in its outer; the
+  // discharge plate 0 and 0.5 mm. The dish (by hand): each ring's own
+  // depth across its middle half, straight between the two over the
+  // quarter-rings either side of their edge at R/2.
+  sc.walls.plate_depth = {std::vector<double>{1e-3, 3e-3}, std::vector<double>{0, 0.5e-3}};
+  auto dish = [&](int plate, double rho) {
+    const double a = plate == 0 ? 1e-3 : 0.0, b = plate == 0 ? 3e-3 : 0.5e-3;
+    if (rho <= 0.75 * w) return a;
+    if (rho >= 1.25 * w) return b;
+    return a + (rho - 0.75 * w) / (0.5 * w) * (b - a);
+  };
+  const LinerLayout layout = liner_layout(sc);
+  int plates = 0, bends = 0;
+  for (const LinerElement& e : layout.elements) {
+    if (e.part != LinerPart::plate) continue;
+    ++plates;
+    INFO("plate " << e.row << ", ring " << e.bin);
+    for (const Vec3& p : e.outline) {
+      const double rho = std::hypot(p.x, p.y);
+      const double expected = e.row == 0 ? -dish(0, rho) : L + dish(1, rho);
+      CHECK(p.z == Approx(expected).margin(1e-12));
+      bends += std::abs(rho - 0.75 * w) < 1e-12 || std::abs(rho - 1.25 * w) < 1e-12;
+    }
+  }
+  CHECK(plates == 2 * 2 * 6);
+  // Each element has its ring's bend on both radial sides: 2 plates x 2
+  // rings x 6 sectors x 2 sides.
+  CHECK(bends == 48);
+  // The feed plate's edge at the shell lies 3 mm behind its plane, its
+  // centre 1 mm; new plates are drawn on their planes.
+  sc.walls.plate_depth = {};
+  for (const LinerElement& e : liner_layout(sc).elements)
+    if (e.part == LinerPart::plate)
+      for (const Vec3& p : e.outline) CHECK(p.z == (e.row == 0 ? 0.0 : L));
 }

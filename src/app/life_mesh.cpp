@@ -186,7 +186,7 @@ std::vector<std::vector<Triangle>> wear_meshes(const fs::path& out, const MillCa
                                                                 std::max(axial_segments, 1));
     const mc::life::MeshWear& w = f.wear;
     m.collapsed = f.collapsed.edges, m.collapse_share = f.share, m.collapse_m3 = f.collapsed.removed_m3;
-    m.local_passes = f.local_passes, m.local_misfit = f.local_misfit;
+    m.local_passes = f.local_passes, m.local_misfit = f.local_misfit, m.stretch_segments = std::max(axial_segments, 1);
     // Booked by the stage; removed by the collapse and the move together.
     m.booked_m3 = 0;
     for (double v : booked) m.booked_m3 += v;
@@ -312,8 +312,8 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
                        carried ? fmt::format("{:.4f}", m.deepest_m * 1000) : "",
                        carried ? fmt::format("{}", m.collapsed) : "",
                        carried ? fmt::format("{:.6g}", m.collapse_m3 * 1e6) : "", carried ? fmt::format("{}", m.relaxed) : "",
-                       carried ? fmt::format("{}", m.local_passes) : "",
-                       carried ? fmt::format("{:.4f}", m.local_misfit) : "",
+                       carried && m.local_passes >= 0 ? fmt::format("{}", m.local_passes) : "",
+                       carried && m.local_passes >= 0 ? fmt::format("{:.4f}", m.local_misfit) : "",
                        b.smoothing.across_m * 1000,
                        b.smoothing.along_m * 1000, b.basis);
     }

@@ -53,7 +53,7 @@ void add_life_options(CLI::App* life, LifeOptions& lo) {
       ->type_name("MM");
   life->add_option("--axial-segments", lo.axial_segments,
                    "the bars and the shell measured in N equal spans along the mill (bars of [lifters] worn as a mesh "
-                   "twin): life_segments.csv")
+                   "twin), and a mesh moved so that each bar removes its wear in each span: life_segments.csv")
       ->check(cli::count(1, 32))
       ->type_name("N");
   life->add_option("--lifter-mesh", lo.lifter_mesh_mm,

@@ -69,8 +69,10 @@ json stage_json(const Stage& s) {
       json x = {{"walls_mesh", m.walls_mesh}, {"file", m.file}};
       if (s.span_case_hours > 0)
         x["wear"] = {{"booked_m3", m.booked_m3}, {"removed_m3", m.removed_m3}, {"scale", m.scale},
-                     {"deepest_m", m.deepest_m}, {"relaxed_vertices", m.relaxed}, {"collapsed_edges", m.collapsed}, {"collapse_share", m.collapse_share}, {"collapse_m3", m.collapse_m3},
-                     {"local_passes", m.local_passes}, {"local_misfit", m.local_misfit}};
+                     {"deepest_m", m.deepest_m}, {"relaxed_vertices", m.relaxed}, {"collapsed_edges", m.collapsed}, {"collapse_share", m.collapse_share}, {"collapse_m3", m.collapse_m3}};
+      if (s.span_case_hours > 0 && m.local_passes >= 0)
+        x["wear"]["local_passes"] = m.local_passes, x["wear"]["local_misfit"] = m.local_misfit,
+        x["wear"]["stretch_segments"] = m.stretch_segments;
       j["meshes"].push_back(x);
     }
   }
@@ -284,6 +286,8 @@ Stage stage_of(const JsonAt& j, int i, const StateShape& shape, const Stage* bef
         if (w.has("collapse_m3")) x.collapse_m3 = w["collapse_m3"].number();
         if (w.has("local_passes")) x.local_passes = static_cast<int>(w["local_passes"].number_at_least(0));
         if (w.has("local_misfit")) x.local_misfit = w["local_misfit"].number_at_least(0);
+        if (w.has("stretch_segments"))
+          x.stretch_segments = static_cast<int>(w["stretch_segments"].number_at_least(1));
       }
       s.meshes.push_back(x);
     }

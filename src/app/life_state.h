@@ -101,8 +101,9 @@ struct StageMesh {
   int relaxed = 0, collapsed = 0;  // and the short edges collapsed first (life/mesh_collapse.h),
   double collapse_share = 0;       // those shorter than this share of the median edge (0: none)
   double collapse_m3 = 0;          // the volume the collapse took (the move removed booked less this)
-  int local_passes = 0;            // the move's local corrections (life/mesh_collapse.h wear_kept_fit)
-  double local_misfit = 0;         // and the largest |removed / asked − 1| of a stretch after them
+  int local_passes = -1;           // the move's local corrections (life/mesh_collapse.h wear_kept_fit; -1: not known,
+  double local_misfit = 0;         // a move of a study begun before), the largest |removed / asked − 1| of a stretch
+  int stretch_segments = 1;        // after them, and the spans along the mill its stretches were cut in
 };
 
 struct Stage {

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/lifters.h"
+#include "core/plate_wear.h"
 #include "core/wall_mesh.h"
 
 namespace mc {
@@ -202,10 +203,24 @@ LinerLayout liner_layout(const Scene& scene) {
         e.theta1 = 2 * kPi * (s + 1) / L.plate_sectors;
         e.z0 = e.z1 = plate == 0 ? 0.0 : len;
         e.area_m2 = 0.5 * (e.r1 * e.r1 - e.r0 * e.r0) * (e.theta1 - e.theta0);
-        for (int q = 0; q <= kArcSegments; ++q)
-          e.outline.push_back(on_circle(e.r1, e.theta0 + (e.theta1 - e.theta0) * q / kArcSegments, e.z0));
-        for (int q = kArcSegments; q >= 0; --q)
-          e.outline.push_back(on_circle(e.r0, e.theta0 + (e.theta1 - e.theta0) * q / kArcSegments, e.z0));
+        // Drawn on the plate's face: its plane, or a worn plate's dish
+        // (core/plate_wear.h), with the points where the dish bends along
+        // each radial side, so that the outline follows it.
+        const std::vector<double>& depth = w.plate_depth[plate];
+        const double dw = dish && !depth.empty() ? R / static_cast<double>(depth.size()) : 0;
+        auto at = [&](double rho, double th) {
+          Vec3 p = on_circle(rho, th, e.z0);
+          if (dw > 0) p.z += (plate == 0 ? -1 : 1) * plate_surface_depth(depth, dw, rho);
+          return p;
+        };
+        std::vector<double> bends;  // between r0 and r1, outward
+        for (std::size_t k = 1; dw > 0 && k < depth.size(); ++k)
+          for (double b : {(k - 0.25) * dw, (k + 0.25) * dw})
+            if (b > e.r0 && b < e.r1) bends.push_back(b);
+        for (int q = 0; q <= kArcSegments; ++q) e.outline.push_back(at(e.r1, e.theta0 + (e.theta1 - e.theta0) * q / kArcSegments));
+        for (auto b = bends.rbegin(); b != bends.rend(); ++b) e.outline.push_back(at(*b, e.theta1));
+        for (int q = kArcSegments; q >= 0; --q) e.outline.push_back(at(e.r0, e.theta0 + (e.theta1 - e.theta0) * q / kArcSegments));
+        for (double b : bends) e.outline.push_back(at(b, e.theta0));
         if (plate == 1) std::reverse(e.outline.begin(), e.outline.end());
         L.elements.push_back(e);
       }

@@ -32,8 +32,10 @@ double volume6(const std::vector<Vec3>& p, const std::vector<std::array<int, 3>>
   return v;
 }
 
-// Six times the signed volume triangle c encloses with the origin.
-double tet6(const std::vector<Vec3>& p, const std::array<int, 3>& c) { return p[c[0]].dot(cross3(p[c[1]], p[c[2]])); }
+// Six times the signed volume triangle c encloses with the point o.
+double tet6(const std::vector<Vec3>& p, const std::array<int, 3>& c, const Vec3& o) {
+  return (p[c[0]] - o).dot(cross3(p[c[1]] - o, p[c[2]] - o));
+}
 
 }  // namespace
 
@@ -183,10 +185,12 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
       // round it enclose the rest of the solid the same before and after
       // (their rim, the link, stays), so their six-volumes' difference is
       // the collapse's own.
+      // (Taken about the point itself: the difference does not depend on
+      // it, and a mill's coordinates of metres lose no digits.)
       double before6 = 0;
       for (int v : {a, b})
         for (int t : star[v])
-          if (v == a || std::find(tri[t].begin(), tri[t].end(), a) == tri[t].end()) before6 += tet6(p, tri[t]);
+          if (v == a || std::find(tri[t].begin(), tri[t].end(), a) == tri[t].end()) before6 += tet6(p, tri[t], at);
       p[a] = at;
       double gone = 0, gone_taken = 0;
       for (int t : on_edge) alive[t] = 0, gone += volume[t], volume[t] = 0, gone_taken += taken[t], taken[t] = 0;
@@ -198,7 +202,7 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
         for (int& v : tri[t])
           if (v == b) v = a;
       double after6 = 0, area = 0;
-      for (int t : round) after6 += tet6(p, tri[t]), area += area_vec(tri[t]).norm();
+      for (int t : round) after6 += tet6(p, tri[t], at), area += area_vec(tri[t]).norm();
       const double own = (before6 - after6) / 6;
       for (int t : round) {
         const double w = area > 0 ? area_vec(tri[t]).norm() / area : 1.0 / round.size();
@@ -256,10 +260,16 @@ std::vector<int> stretches(const std::vector<Triangle>& triangles, double z0, do
   return out;
 }
 
-// The largest |removed / asked − 1| over the stretches asked at least a
-// fifth of the mean stretch's, and each stretch's ratio asked / removed.
-std::pair<double, std::vector<double>> stretch_misfit(const std::vector<int>& stretch, const std::vector<double>& asked,
-                                                      const std::vector<double>& swept) {
+// How far the stretches are from what they were asked: the largest
+// |removed / asked − 1| over those asked at least a fifth of the mean
+// stretch's (of those asked any), the volume misplaced over all
+// (Σ |removed − asked| / Σ asked), and each stretch's ratio asked /
+// removed (within 1/2 to 2; 2 where it removed nothing).
+struct Misfit {
+  double worst = 0, misplaced = 0;
+  std::vector<double> ratio;
+};
+Misfit stretch_misfit(const std::vector<int>& stretch, const std::vector<double>& asked, const std::vector<double>& swept) {
   const int n = stretch.empty() ? 0 : *std::max_element(stretch.begin(), stretch.end()) + 1;
   std::vector<double> a(n, 0.0), r(n, 0.0), ratio(n, 1.0);
   for (std::size_t t = 0; t < stretch.size(); ++t) a[stretch[t]] += asked[t], r[stretch[t]] += swept[t];
@@ -267,12 +277,15 @@ std::pair<double, std::vector<double>> stretch_misfit(const std::vector<int>& st
   int asked_any = 0;
   for (int k = 0; k < n; ++k)
     if (a[k] > 0) whole += a[k], ++asked_any;
-  double worst = 0;
+  Misfit m;
   for (int k = 0; k < n; ++k) {
-    if (a[k] > 0 && r[k] > 0) ratio[k] = std::clamp(a[k] / r[k], 0.5, 2.0);
-    if (a[k] > 0 && a[k] >= 0.2 * whole / asked_any) worst = std::max(worst, std::abs(r[k] / a[k] - 1));
+    if (a[k] > 0) ratio[k] = r[k] > 0 ? std::clamp(a[k] / r[k], 0.5, 2.0) : 2.0;
+    if (a[k] > 0 && a[k] >= 0.2 * whole / asked_any) m.worst = std::max(m.worst, std::abs(r[k] / a[k] - 1));
+    m.misplaced += std::abs(r[k] - a[k]);
   }
-  return {worst, ratio};
+  m.misplaced = whole > 0 ? m.misplaced / whole : 0.0;
+  m.ratio = std::move(ratio);
+  return m;
 }
 
 }  // namespace
@@ -309,22 +322,24 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
     // ratio, the whole kept (the move's scale), and moved again.
     const std::vector<double> asked = volume;
     const std::vector<int> stretch = stretches(f.collapsed.triangles, bounds.z0, bounds.z1, segments);
-    auto [misfit, ratio] = stretch_misfit(stretch, asked, swept_volumes(f.collapsed.triangles, f.wear.triangles));
-    while (misfit > kLocalTolerance && f.local_passes < kLocalPasses) {
+    Misfit fit = stretch_misfit(stretch, asked, swept_volumes(f.collapsed.triangles, f.wear.triangles));
+    while (fit.worst > kLocalTolerance && f.local_passes < kLocalPasses) {
       double sum = 0;
-      for (std::size_t t = 0; t < volume.size(); ++t) sum += volume[t] *= ratio[stretch[t]];
+      for (std::size_t t = 0; t < volume.size(); ++t) sum += volume[t] *= fit.ratio[stretch[t]];
       for (double& v : volume) v *= left / sum;
       MeshWear next;
       try {
         next = wear_mesh(f.collapsed.triangles, volume, bounds, 0, name);
-      } catch (const MeshSpoiled&) {
-        break;  // the last move that kept the mesh one stands
+      } catch (const std::invalid_argument&) {
+        break;  // spoiled, or past the shell or the ends: the last move that passed stands
       }
-      auto [m, r] = stretch_misfit(stretch, asked, swept_volumes(f.collapsed.triangles, next.triangles));
-      if (!(m < misfit)) break;
-      f.wear = std::move(next), misfit = m, ratio = std::move(r), ++f.local_passes;
+      // Taken where it misplaces less volume over all (the worst stretch
+      // alone may be one that cannot move further).
+      Misfit m = stretch_misfit(stretch, asked, swept_volumes(f.collapsed.triangles, next.triangles));
+      if (!(m.misplaced < fit.misplaced)) break;
+      f.wear = std::move(next), fit = std::move(m), ++f.local_passes;
     }
-    f.local_misfit = misfit;
+    f.local_misfit = fit.worst;
     return f;
   }
   throw std::logic_error("wear_kept_fit: no share");

@@ -74,7 +74,8 @@ inline constexpr double kCollapseShares[] = {0, 0.25, 0.4, 0.55};
 // it was asked to what it removed, and the mesh is moved again, until
 // every stretch asked at least a fifth of the mean stretch's removes what it
 // was asked within kLocalTolerance (at most kLocalPasses; a corrected
-// move that spoils the mesh, or is no better, is not taken).
+// move that spoils the mesh or leaves the shell or the ends, or that
+// misplaces no less volume over all the stretches, is not taken).
 inline constexpr int kLocalPasses = 4;
 inline constexpr double kLocalTolerance = 0.002;
 struct FitWear {

@@ -217,7 +217,7 @@ std::vector<std::vector<int>> connected_parts(const std::vector<Triangle>& trian
 }
 
 std::vector<double> smooth_wear(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,
-                                double across, double along, bool within_face) {
+                                double across, double along) {
   const std::size_t nt = triangles.size();
   if (!(across > 0) || nt == 0) return volume_m3;
   if (!(along > 0)) along = across;
@@ -245,7 +245,7 @@ std::vector<double> smooth_wear(const std::vector<Triangle>& triangles, const st
   };
   std::map<Cell, std::vector<int>> cells;
   for (std::size_t t = 0; t < nt; ++t) cells[cell_of(centre[t])].push_back(static_cast<int>(t));
-  const double cos_limit = within_face ? std::cos(30.0 * 3.14159265358979323846 / 180) : -2.0;
+  const double cos_limit = std::cos(30.0 * 3.14159265358979323846 / 180);
   // Each triangle's volume shared out over the triangles around it (those
   // of its part within 30° of its normal), in proportion to their areas
   // times the Gaussian of the distance: every triangle's volume is kept,

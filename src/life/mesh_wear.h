@@ -87,9 +87,8 @@ std::vector<std::vector<int>> connected_parts(const std::vector<Triangle>& trian
 // volume is kept, so each part's and each face's sum is the one booked.
 // across <= 0: the volumes unchanged. A negative volume (a difference of
 // two) is spread alike; a non-finite one is left out.
-// within_face false: over every triangle of the part, whatever its normal.
 std::vector<double> smooth_wear(const std::vector<Triangle>& triangles, const std::vector<double>& volume_m3,
-                                double across, double along, bool within_face = true);
+                                double across, double along);
 
 // The mesh worn by `volume_m3` per triangle (>= 0, as many as triangles),
 // with `smoothing` passes over the depths. Throws std::invalid_argument
