@@ -71,8 +71,8 @@ json stage_json(const Stage& s) {
         x["wear"] = {{"booked_m3", m.booked_m3}, {"removed_m3", m.removed_m3}, {"scale", m.scale},
                      {"deepest_m", m.deepest_m}, {"relaxed_vertices", m.relaxed}, {"collapsed_edges", m.collapsed}, {"collapse_share", m.collapse_share}, {"collapse_m3", m.collapse_m3}};
       if (s.span_case_hours > 0 && m.local_passes >= 0)
-        x["wear"]["local_passes"] = m.local_passes, x["wear"]["local_misfit"] = m.local_misfit,
-        x["wear"]["stretch_segments"] = m.stretch_segments;
+        x["wear"]["local_passes"] = m.local_passes, x["wear"]["local_misfit"] = m.local_misfit;
+      if (s.span_case_hours > 0 && m.stretch_segments > 0) x["wear"]["stretch_segments"] = m.stretch_segments;
       j["meshes"].push_back(x);
     }
   }

@@ -103,7 +103,7 @@ struct StageMesh {
   double collapse_m3 = 0;          // the volume the collapse took (the move removed booked less this)
   int local_passes = -1;           // the move's local corrections (life/mesh_collapse.h wear_kept_fit; -1: not known,
   double local_misfit = 0;         // a move of a study begun before), the largest |removed / asked − 1| of a stretch
-  int stretch_segments = 1;        // after them, and the spans along the mill its stretches were cut in
+  int stretch_segments = 0;        // after them, and the spans along the mill its stretches were cut in (0: not known)
 };
 
 struct Stage {

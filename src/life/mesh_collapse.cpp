@@ -330,8 +330,10 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
       MeshWear next;
       try {
         next = wear_mesh(f.collapsed.triangles, volume, bounds, 0, name);
-      } catch (const std::invalid_argument&) {
-        break;  // spoiled, or past the shell or the ends: the last move that passed stands
+      } catch (const MeshSpoiled&) {
+        break;  // the last move that passed stands
+      } catch (const MeshOutside&) {
+        break;  // past the shell or the ends at the corrected depths: likewise
       }
       // Taken where it misplaces less volume over all (the worst stretch
       // alone may be one that cannot move further).

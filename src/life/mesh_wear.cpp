@@ -484,12 +484,12 @@ MeshWear wear_mesh(const std::vector<Triangle>& triangles, const std::vector<dou
     for (int k = 0; k < 3; ++k) {
       const Vec3& p = worn[t].v[k];
       if (bounds.shell_radius > 0 && std::hypot(p.x, p.y) > bounds.shell_radius + 1e-6)
-        throw std::invalid_argument(fmt::format(
+        throw MeshOutside(fmt::format(
             "{}: triangle {}: the wear takes a vertex to radius {:.4f} m, beyond the shell ({:.4f} m): the liner is "
             "worn through there",
             name, t + 1, std::hypot(p.x, p.y), bounds.shell_radius));
       if (bounds.z1 > bounds.z0 && (p.z < bounds.z0 - 1e-9 || p.z > bounds.z1 + 1e-9))
-        throw std::invalid_argument(fmt::format(
+        throw MeshOutside(fmt::format(
             "{}: triangle {}: the wear takes a vertex to z = {:.4f} m, beyond the mill's ends ({:g} to {:g} m)", name,
             t + 1, p.z, bounds.z0, bounds.z1));
     }

@@ -43,6 +43,10 @@ struct MeshBounds {
 struct MeshSpoiled : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
+// A move that takes a vertex beyond the shell or the mill's ends.
+struct MeshOutside : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
 
 struct MeshWear {
   std::vector<Triangle> triangles;  // the worn mesh, the same triangles in the same order

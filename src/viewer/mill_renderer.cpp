@@ -101,7 +101,12 @@ void MillRenderer::set_liner(const LinerLayout& layout) {
         static_cast<std::size_t>(el.bin) < mesh_hidden_[el.row].size() && mesh_hidden_[el.row][el.bin])
       continue;  // as set_walls leaves it out
     ColourMesh& m = el.part == LinerPart::shell ? liner_shell_ : el.still ? liner_still_ : liner_parts_;
-    const auto& o = el.outline;
+    // A worn plate's outline follows its dish (core/liner.cpp); the window
+    // draws the plates flat, so its colours lie on the plane, in front of
+    // the grey plate.
+    std::vector<Vec3> o = el.outline;
+    if (el.part == LinerPart::plate)
+      for (Vec3& p : o) p.z = el.z0;
     for (std::size_t k = 1; k + 1 < o.size(); ++k) {
       glm::vec3 a(o[0].x, o[0].y, o[0].z), b(o[k].x, o[k].y, o[k].z), c(o[k + 1].x, o[k + 1].y, o[k + 1].z);
       glm::vec3 n = glm::cross(b - a, c - a);
