@@ -182,11 +182,12 @@ std::vector<std::vector<Triangle>> wear_meshes(const fs::path& out, const MillCa
     const std::string name = fmt::format("walls.mesh[{}] worn from stage {} to {}", m.walls_mesh, s.index, next.index);
     // Short edges collapsed first; where the move still spoils a triangle
     // (a worn corner's strip), longer ones, up to the last share.
-    const mc::life::FitWear f = mc::life::wear_kept_fit(placed, booked, bounds, smoothing.across_m, smoothing.along_m, name,
-                                                                std::max(axial_segments, 1));
+    const int segments = std::max(axial_segments, 1);
+    const mc::life::FitWear f =
+        mc::life::wear_kept_fit(placed, booked, bounds, smoothing.across_m, smoothing.along_m, name, segments);
     const mc::life::MeshWear& w = f.wear;
     m.collapsed = f.collapsed.edges, m.collapse_share = f.share, m.collapse_m3 = f.collapsed.removed_m3;
-    m.local_passes = f.local_passes, m.local_misfit = f.local_misfit, m.stretch_segments = std::max(axial_segments, 1);
+    m.local_passes = f.local_passes, m.local_misfit = f.local_misfit, m.stretch_segments = segments;
     // Booked by the stage; removed by the collapse and the move together.
     m.booked_m3 = 0;
     for (double v : booked) m.booked_m3 += v;

@@ -184,9 +184,10 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
       // triangles round the point, with what this one takes: the triangles
       // round it enclose the rest of the solid the same before and after
       // (their rim, the link, stays), so their six-volumes' difference is
-      // the collapse's own.
-      // (Taken about the point itself: the difference does not depend on
-      // it, and a mill's coordinates of metres lose no digits.)
+      // the collapse's own. Taken about the point itself (a mill's
+      // coordinates of metres lose no digits), every triangle round it
+      // after the collapse has the point as a corner and encloses nothing
+      // with it: the collapse's own is the six-volume before, over six.
       double before6 = 0;
       for (int v : {a, b})
         for (int t : star[v])
@@ -201,9 +202,9 @@ Collapsed collapse_short_edges(const std::vector<Triangle>& triangles, const std
       for (int t : round)
         for (int& v : tri[t])
           if (v == b) v = a;
-      double after6 = 0, area = 0;
-      for (int t : round) after6 += tet6(p, tri[t], at), area += area_vec(tri[t]).norm();
-      const double own = (before6 - after6) / 6;
+      double area = 0;
+      for (int t : round) area += area_vec(tri[t]).norm();
+      const double own = before6 / 6;
       for (int t : round) {
         const double w = area > 0 ? area_vec(tri[t]).norm() / area : 1.0 / round.size();
         volume[t] += gone * w;
