@@ -151,6 +151,17 @@ TEST_CASE("a mesh liner wears by what its triangles booked, stage by stage", "[l
       CHECK(booked == Approx(num(meshes[i], "booked_cm3")).epsilon(1e-4));
       CHECK(smoothed == Approx(booked).epsilon(1e-4));
       CHECK(removed == Approx(num(meshes[i], "removed_cm3")).epsilon(1e-3));
+      // What the move recorded in life.json as it moved the mesh (one
+      // step, one span: the study ran without segments), against the
+      // table's working from the two stages' meshes.
+      const nlohmann::json w = nlohmann::json::parse(read_text(a / "life.json"))["stages"][i]["meshes"][0]["wear"];
+      CHECK(w.at("steps").get<int>() == 1);
+      CHECK(num(meshes[i], "move_steps") == 1);
+      REQUIRE(w.at("span_removed_m3").size() == 1);
+      CHECK(w["span_removed_m3"][0].get<double>() * 1e6 == Approx(removed).epsilon(1e-4));  // the STL is in floats
+      CHECK(w["span_asked_m3"][0].get<double>() * 1e6 == Approx(smoothed).epsilon(1e-6));
+      CHECK(w["span_removed_m3"][0].get<double>() + w.at("collapse_m3").get<double>() ==
+            Approx(w.at("booked_m3").get<double>()).epsilon(1e-6));
     }
   }
   // Three spans of 50 mm over the shell's two 75 mm elements along the

@@ -244,9 +244,9 @@ TEST_CASE("a stage's mesh kept fit: no collapse where none is needed, the first 
   CHECK(taken > 0.01 * booked);  // a chamfer's worth: not nothing
   CHECK(f.collapsed.removed_m3 == Approx(taken).epsilon(1e-9));
   CHECK((volume6(bar) - volume6(f.wear.triangles)) / 6 == Approx(booked).epsilon(1e-6));
-  // 30 mm off a 25 mm bar's corner: no share keeps it; the last share's
-  // refusal, a spoiled mesh, named.
-  volume = corner_wear(30e-3);
+  // 60 mm off a 25 mm bar's corner: no share keeps it, nor 8 steps; the
+  // last one's refusal, a spoiled mesh, named.
+  volume = corner_wear(60e-3);
   CHECK_THROWS_AS(life::wear_kept_fit(bar, volume, bounds, 0, 0, "bar"), life::MeshSpoiled);
   // A bar past the mill's end: refused as it is, not as a spoiled mesh.
   volume = corner_wear(2e-3);
@@ -402,4 +402,54 @@ TEST_CASE("a bar worn on its corner in one half of the mill and on its top in th
   CHECK(h2[0] == Approx(booked[0]).epsilon(0.003));
   CHECK(h2[1] == Approx(booked[1]).epsilon(0.003));
   CHECK((volume6(bar) - volume6(two.wear.triangles)) / 6 == Approx(booked[0] + booked[1]).epsilon(1e-6));
+}
+
+TEST_CASE("a corner worn too deep for one move is worn in steps, each collapsed and moved on the last one's "
+          "mesh: the solid loses what was booked, span by span", "[life][mesh_wear][collapse]") {
+  const std::vector<Triangle> bar = closed_bar(2.5);
+  // 15 mm off the corner of a 25 mm bar (the strip and the rows of the top
+  // and the face beside it): rows 0-2 (z < 30 mm) and rows 3-5 alike.
+  std::vector<double> volume(bar.size(), 0.0);
+  double booked = 0;
+  for (std::size_t t = 0; t < 108; ++t) {
+    const std::size_t segment = t / 12;
+    if (segment >= 4 && segment <= 6) volume[t] = area(bar[t]) * 15e-3;
+    booked += volume[t];
+  }
+  const life::MeshBounds bounds{0, -1e-6, 60e-3 + 1e-6};
+  // In one move no share keeps the mesh one.
+  CHECK_THROWS_AS(life::wear_kept_fit(bar, volume, bounds, 0, 0, "bar", 2, 1), life::MeshSpoiled);
+  const life::FitWear f = life::wear_kept_fit(bar, volume, bounds, 0, 0, "bar", 2);
+  INFO("steps " << f.steps << ", edges " << f.edges << ", collapse " << f.collapse_m3 / booked << ", passes "
+                 << f.local_passes << ", misfit " << f.local_misfit);
+  CHECK(f.steps > 1);
+  CHECK(f.edges > 0);
+  // The closed solid's volume lost, against what the steps recorded.
+  CHECK((volume6(bar) - volume6(f.wear.triangles)) / 6 == Approx(booked).epsilon(1e-6));
+  CHECK(f.removed_m3 == Approx(booked).epsilon(1e-6));
+  REQUIRE(f.span_asked_m3.size() == 2);
+  REQUIRE(f.span_removed_m3.size() == 2);
+  CHECK(f.span_removed_m3[0] + f.span_removed_m3[1] + f.collapse_m3 == Approx(booked).epsilon(1e-6));
+  // The halves booked alike and were asked alike; each removed its ask.
+  CHECK(f.span_asked_m3[0] == Approx(f.span_asked_m3[1]).epsilon(0.02));
+  for (int g = 0; g < 2; ++g) CHECK(f.span_removed_m3[g] == Approx(f.span_asked_m3[g]).epsilon(0.003));
+  // The mesh is one (no triangle turned over against the new bar's, none
+  // crushed), and the worn bar lies within the new one: its rear face,
+  // base and ends where they were, its worn face at most 0.5 mm outside
+  // (a relaxed vertex slid within the mean plane round it), the corner
+  // cut back at least 5 mm along its diagonal.
+  double least_x = 1, least_y = 1, most_x = -1, corner = 1;
+  for (const Triangle& t : f.wear.triangles) {
+    CHECK(area(t) > 1e-10);
+    for (const Vec3& v : t.v) {
+      least_x = std::min(least_x, v.x), least_y = std::min(least_y, v.y), most_x = std::max(most_x, v.x);
+      CHECK(v.z >= -1e-9);
+      CHECK(v.z <= 60e-3 + 1e-9);
+      corner = std::min(corner, (std::hypot(v.x, 25e-3 - v.y)));  // nearest to the sharp corner's place
+    }
+  }
+  CHECK(least_x > -0.5e-3);
+  CHECK(least_y > -1e-6);
+  CHECK(most_x == Approx(30e-3).margin(1e-9));
+  CHECK(corner > 5e-3);
 }

@@ -571,7 +571,11 @@ int cmd_life(const LifeOptions& o) {
     s0.diameter = c.diameter;
     s0.filling = c.filling;
     for (std::size_t k = 0; k < profiles; ++k) s0.outlines.push_back(profile_outline(c.lifter_pattern[k]));
-    for (int k : worn) s0.meshes.push_back({k, ""});
+    for (int k : worn) {
+      life::StageMesh m;
+      m.walls_mesh = k;
+      s0.meshes.push_back(m);
+    }
     if (plates) s0.plate_depth_m = plate_start;
     st.stages.push_back(s0);
     // The state before the first run, so that a study killed in stage 0
@@ -799,9 +803,10 @@ int cmd_life(const LifeOptions& o) {
                   "smoothed %dx), shell %.3f mm\n",
                   i, i + 1, k, s.removed_mm2[k], s.booked_mm2[k], s.scale[k], s.spread[k], s.shell_depth_m * 1000);
     for (const life::StageMesh& m : s.meshes)
-      std::printf("life            stage %d -> %d: walls.mesh[%d] worn %.4g cm3 (booked %.4g cm3, depth scale %.3f, "
+      std::printf("life            stage %d -> %d: walls.mesh[%d] worn %.4g cm3 (booked %.4g cm3%s, depth scale %.3f, "
                   "deepest %.3f mm, each bar%s within %.2f %% of its share after %d correction%s): %s\n",
-                  i, i + 1, m.walls_mesh, m.removed_m3 * 1e6, m.booked_m3 * 1e6, m.scale, m.deepest_m * 1000,
+                  i, i + 1, m.walls_mesh, m.removed_m3 * 1e6, m.booked_m3 * 1e6,
+                  m.steps > 1 ? fmt::format(", moved in {} steps", m.steps).c_str() : "", m.scale, m.deepest_m * 1000,
                   o.axial_segments > 1 ? " in each segment" : "", m.local_misfit * 100, m.local_passes,
                   m.local_passes == 1 ? "" : "s", (out / next.meshes[&m - s.meshes.data()].file).string().c_str());
     if (plates)

@@ -186,15 +186,16 @@ std::vector<std::vector<Triangle>> wear_meshes(const fs::path& out, const MillCa
     const mc::life::FitWear f =
         mc::life::wear_kept_fit(placed, booked, bounds, smoothing.across_m, smoothing.along_m, name, segments);
     const mc::life::MeshWear& w = f.wear;
-    m.collapsed = f.collapsed.edges, m.collapse_share = f.share, m.collapse_m3 = f.collapsed.removed_m3;
+    m.collapsed = f.edges, m.collapse_share = f.share, m.collapse_m3 = f.collapse_m3;
     m.local_passes = f.local_passes, m.local_misfit = f.local_misfit, m.stretch_segments = segments;
-    // Booked by the stage; removed by the collapse and the move together.
+    m.steps = f.steps, m.span_asked_m3 = f.span_asked_m3, m.span_removed_m3 = f.span_removed_m3;
+    // Booked by the stage; removed by the collapses and the moves together.
     m.booked_m3 = 0;
     for (double v : booked) m.booked_m3 += v;
-    m.removed_m3 = w.removed_m3 + f.collapsed.removed_m3;
+    m.removed_m3 = f.removed_m3;
     m.scale = w.scale;
-    m.deepest_m = w.deepest_m;
-    m.relaxed = w.relaxed;
+    m.deepest_m = f.deepest_m;
+    m.relaxed = f.relaxed;
     StageMesh n;
     n.walls_mesh = m.walls_mesh;
     n.file = fmt::format("stage-{:02d}/{}", next.index, mesh_file_name(c, m.walls_mesh));
@@ -275,7 +276,7 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
       "mid_height_mm,mid_height_mm_se,mid_leading_angle_deg,mid_leading_angle_deg_se,mid_trailing_angle_deg,"
       "mid_trailing_angle_deg_se,ends_height_mm,ends_leading_angle_deg,ends_leading_angle_deg_se,"
       "ends_trailing_angle_deg,wear_kg_per_h,impact_wear_share,booked_cm3,removed_cm3,depth_scale,deepest_mm,"
-      "collapsed_edges,collapse_cm3,relaxed_vertices,local_corrections,local_misfit,smoothing_across_mm,smoothing_along_mm,wear_basis\n";
+      "collapsed_edges,collapse_cm3,relaxed_vertices,local_corrections,local_misfit,move_steps,smoothing_across_mm,smoothing_along_mm,wear_basis\n";
   if (stages.empty()) return;
   const std::vector<std::vector<double>> angles = bar_angles(out, c, stages);
   for (const Stage& s : stages) {
@@ -300,7 +301,7 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
       const auto eh = mean_se(ends.height), el = mean_se(ends.leading_deg), et = mean_se(ends.trailing_deg);
       const double sliding = b.mix.sliding * s.r.mesh_sliding_m3_s.at(j), impact = b.mix.impact * s.r.mesh_strike_W.at(j);
       const bool carried = s.span_case_hours > 0;
-      t += fmt::format("{},{:.6g},{:.6g},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{},{},{},{},{},{},{},{},{},{:.4g},{:.4g},{}\n",
+      t += fmt::format("{},{:.6g},{:.6g},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.6g},{:.4f},{},{},{},{},{},{},{},{},{},{},{:.4g},{:.4g},{}\n",
                        s.index, s.case_hours / b.factor, s.case_hours, m.walls_mesh,
                        m.file.empty() ? c.meshes.at(m.walls_mesh).file : m.file, tris.size(), parts, opt(mh.first * 1000, 4),
                        opt(mh.second * 1000, 4), opt(ml.first, 3), opt(ml.second, 3), opt(mt.first, 3), opt(mt.second, 3),
@@ -315,7 +316,7 @@ void write_mesh_table(const fs::path& out, const MillCase& c, const std::vector<
                        carried ? fmt::format("{:.6g}", m.collapse_m3 * 1e6) : "", carried ? fmt::format("{}", m.relaxed) : "",
                        carried && m.local_passes >= 0 ? fmt::format("{}", m.local_passes) : "",
                        carried && m.local_passes >= 0 ? fmt::format("{:.4f}", m.local_misfit) : "",
-                       b.smoothing.across_m * 1000,
+                       carried && m.steps > 0 ? fmt::format("{}", m.steps) : "", b.smoothing.across_m * 1000,
                        b.smoothing.along_m * 1000, b.basis);
     }
   }
@@ -371,23 +372,30 @@ void write_segment_table(const fs::path& out, const MillCase& c, const std::vect
         const std::vector<double> volume = booked_volumes(run, c, m.walls_mesh, tris, b.mix, s.span_case_hours);
         for (std::size_t q = 0; q < tris.size(); ++q)
           booked[segment_of((tris[q].v[0].z + tris[q].v[1].z + tris[q].v[2].z) / 3)] += volume[q];
-        // The move was of the mesh with its short edges collapsed (where
-        // the study collapsed any), corner for corner.
-        const mc::life::Collapsed k = m.collapse_share > 0 ? collapsed_mesh(c, tris, volume, m.collapse_share)
-                                                            : mc::life::Collapsed{tris, volume, 0, 0.0, {}};
-        if (k.triangles.size() != next.size() ||
-            std::abs(k.removed_m3 - m.collapse_m3) > 1e-9 * std::max(m.booked_m3, 1e-12) + 1e-15)
-          throw std::invalid_argument(fmt::format("{}: {} triangles, where stage {}'s {} collapse to {}: not the mesh "
-                                                  "this study wore",
-                                                  (out / stages[i + 1].meshes[j].file).string(), next.size(), s.index,
-                                                  tris.size(), k.triangles.size()));
-        const std::vector<double> swept = mc::life::swept_volumes(k.triangles, next);
-        // What the move was asked to remove: the booked less the collapse's own, where it took it.
-        const std::vector<double> spread = mc::life::asked_volumes(k, b.smoothing.across_m, b.smoothing.along_m);
-        for (std::size_t q = 0; q < k.triangles.size(); ++q) {
-          const auto& v = k.triangles[q].v;
-          const int g = segment_of((v[0].z + v[1].z + v[2].z) / 3);
-          smoothed[g] += spread[q], removed[g] += swept[q];
+        // What the move was asked and removed, as it recorded them by span
+        // (a move in steps collapsed the mesh before each: the stage's mesh
+        // and the next are not corner for corner).
+        if (m.steps > 0 && m.span_asked_m3.size() == static_cast<std::size_t>(segments)) {
+          smoothed = m.span_asked_m3, removed = m.span_removed_m3;
+        } else {
+          // The move was of the mesh with its short edges collapsed (where
+          // the study collapsed any), corner for corner.
+          const mc::life::Collapsed k = m.collapse_share > 0 ? collapsed_mesh(c, tris, volume, m.collapse_share)
+                                                              : mc::life::Collapsed{tris, volume, 0, 0.0, {}};
+          if (k.triangles.size() != next.size() ||
+              std::abs(k.removed_m3 - m.collapse_m3) > 1e-9 * std::max(m.booked_m3, 1e-12) + 1e-15)
+            throw std::invalid_argument(fmt::format("{}: {} triangles, where stage {}'s {} collapse to {}: not the mesh "
+                                                    "this study wore",
+                                                    (out / stages[i + 1].meshes[j].file).string(), next.size(), s.index,
+                                                    tris.size(), k.triangles.size()));
+          const std::vector<double> swept = mc::life::swept_volumes(k.triangles, next);
+          // What the move was asked to remove: the booked less the collapse's own, where it took it.
+          const std::vector<double> spread = mc::life::asked_volumes(k, b.smoothing.across_m, b.smoothing.along_m);
+          for (std::size_t q = 0; q < k.triangles.size(); ++q) {
+            const auto& v = k.triangles[q].v;
+            const int g = segment_of((v[0].z + v[1].z + v[2].z) / 3);
+            smoothed[g] += spread[q], removed[g] += swept[q];
+          }
         }
       }
       for (int g = 0; g < segments; ++g) {

@@ -73,6 +73,9 @@ json stage_json(const Stage& s) {
       if (s.span_case_hours > 0 && m.local_passes >= 0)
         x["wear"]["local_passes"] = m.local_passes, x["wear"]["local_misfit"] = m.local_misfit;
       if (s.span_case_hours > 0 && m.stretch_segments > 0) x["wear"]["stretch_segments"] = m.stretch_segments;
+      if (s.span_case_hours > 0 && m.steps > 0)
+        x["wear"]["steps"] = m.steps, x["wear"]["span_asked_m3"] = m.span_asked_m3,
+        x["wear"]["span_removed_m3"] = m.span_removed_m3;
       j["meshes"].push_back(x);
     }
   }
@@ -288,6 +291,12 @@ Stage stage_of(const JsonAt& j, int i, const StateShape& shape, const Stage* bef
         if (w.has("local_misfit")) x.local_misfit = w["local_misfit"].number_at_least(0);
         if (w.has("stretch_segments"))
           x.stretch_segments = static_cast<int>(w["stretch_segments"].number_at_least(1));
+        if (w.has("steps")) {
+          x.steps = static_cast<int>(w["steps"].number_at_least(1));
+          const std::size_t spans = static_cast<std::size_t>(std::max(x.stretch_segments, 1));
+          x.span_asked_m3 = w["span_asked_m3"].numbers(spans, "stretch segments");
+          x.span_removed_m3 = w["span_removed_m3"].numbers(spans, "stretch segments");
+        }
       }
       s.meshes.push_back(x);
     }

@@ -104,6 +104,12 @@ struct StageMesh {
   int local_passes = -1;           // the move's local corrections (life/mesh_collapse.h wear_kept_fit; -1: not known,
   double local_misfit = 0;         // a move of a study begun before), the largest |removed / asked − 1| of a stretch
   int stretch_segments = 0;        // after them, and the spans along the mill its stretches were cut in (0: not known)
+  // The steps the wear was moved in (0: not known, a move of a study begun
+  // before; more than 1 where one move would spoil the mesh), and per span
+  // of stretch_segments what the moves were asked and swept (m³; empty
+  // where not known: the segment table works them out from the meshes).
+  int steps = 0;
+  std::vector<double> span_asked_m3, span_removed_m3;
 };
 
 struct Stage {

@@ -245,19 +245,21 @@ std::vector<double> asked_volumes(const Collapsed& c, double across, double alon
 
 namespace {
 
+// Each triangle's span of the mill (z0 to z1 in `segments`), by its centroid.
+int span_of(const Triangle& t, const MeshBounds& b, int segments) {
+  if (segments <= 1 || !(b.z1 > b.z0)) return 0;
+  const double z = (t.v[0].z + t.v[1].z + t.v[2].z) / 3;
+  return std::clamp(static_cast<int>(std::floor((z - b.z0) / (b.z1 - b.z0) * segments)), 0, segments - 1);
+}
+
 // Each triangle's stretch: its part (bar), and where `segments` > 1, the
 // span of the mill between z0 and z1 its centroid lies in.
-std::vector<int> stretches(const std::vector<Triangle>& triangles, double z0, double z1, int segments) {
+std::vector<int> stretches(const std::vector<Triangle>& triangles, const MeshBounds& b, int segments) {
   std::vector<int> out(triangles.size(), 0);
   const std::vector<std::vector<int>> parts = connected_parts(triangles);
-  const int n = segments > 1 && z1 > z0 ? segments : 1;
+  const int n = segments > 1 && b.z1 > b.z0 ? segments : 1;
   for (std::size_t p = 0; p < parts.size(); ++p)
-    for (int t : parts[p]) {
-      const auto& v = triangles[t].v;
-      const double z = (v[0].z + v[1].z + v[2].z) / 3;
-      const int g = n > 1 ? std::clamp(static_cast<int>(std::floor((z - z0) / (z1 - z0) * n)), 0, n - 1) : 0;
-      out[t] = static_cast<int>(p) * n + g;
-    }
+    for (int t : parts[p]) out[t] = static_cast<int>(p) * n + span_of(triangles[t], b, n);
   return out;
 }
 
@@ -289,10 +291,9 @@ Misfit stretch_misfit(const std::vector<int>& stretch, const std::vector<double>
   return m;
 }
 
-}  // namespace
-
-FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<double>& booked_m3,
-                      const MeshBounds& bounds, double across, double along, const std::string& name, int segments) {
+// One move of the whole booked wear (wear_kept_fit, one step).
+FitWear fit_once(const std::vector<Triangle>& triangles, const std::vector<double>& booked_m3, const MeshBounds& bounds,
+                 double across, double along, const std::string& name, int segments) {
   double booked = 0;
   for (double v : booked_m3) booked += v;
   for (const double share : kCollapseShares) {
@@ -322,7 +323,7 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
     // Each stretch brought to what it was asked: its volumes scaled by its
     // ratio, the whole kept (the move's scale), and moved again.
     const std::vector<double> asked = volume;
-    const std::vector<int> stretch = stretches(f.collapsed.triangles, bounds.z0, bounds.z1, segments);
+    const std::vector<int> stretch = stretches(f.collapsed.triangles, bounds, segments);
     Misfit fit = stretch_misfit(stretch, asked, swept_volumes(f.collapsed.triangles, f.wear.triangles));
     while (fit.worst > kLocalTolerance && f.local_passes < kLocalPasses) {
       double sum = 0;
@@ -346,6 +347,67 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
     return f;
   }
   throw std::logic_error("wear_kept_fit: no share");
+}
+
+}  // namespace
+
+FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<double>& booked_m3,
+                      const MeshBounds& bounds, double across, double along, const std::string& name, int segments,
+                      int most_steps) {
+  const int spans = std::max(segments, 1);
+  for (const int steps : kMoveSteps) {
+    const bool last = steps >= most_steps || steps == kMoveSteps[std::size(kMoveSteps) - 1];
+    FitWear whole;
+    whole.steps = steps;
+    whole.span_asked_m3.assign(spans, 0.0), whole.span_removed_m3.assign(spans, 0.0);
+    std::vector<Triangle> mesh = triangles;
+    std::vector<double> rest = booked_m3;  // the wear still to move, carried through each step's collapse
+    try {
+      for (int i = 0; i < steps; ++i) {
+        // An equal share of what is left: the rest carried as the step's own is.
+        const double part = 1.0 / (steps - i);
+        std::vector<double> volume = rest;
+        for (double& v : volume) v *= part;
+        FitWear f = fit_once(mesh, volume, bounds, across, along, name, segments);
+        // What this step asked the move (the booked less the collapse's own) and what it removed, by span.
+        const std::vector<double> asked = asked_volumes(f.collapsed, across, along);
+        const std::vector<double> swept = swept_volumes(f.collapsed.triangles, f.wear.triangles);
+        for (std::size_t t = 0; t < f.collapsed.triangles.size(); ++t) {
+          const int g = span_of(f.collapsed.triangles[t], bounds, spans);
+          whole.span_asked_m3[g] += asked[t], whole.span_removed_m3[g] += swept[t];
+        }
+        whole.edges += f.collapsed.edges;
+        whole.collapse_m3 += f.collapsed.removed_m3;
+        whole.removed_m3 += f.collapsed.removed_m3 + f.wear.removed_m3;
+        whole.deepest_m += f.wear.deepest_m;
+        whole.relaxed += f.wear.relaxed;
+        whole.local_passes += f.local_passes;
+        whole.local_misfit = std::max(whole.local_misfit, f.local_misfit);
+        rest = f.collapsed.volume_m3;
+        for (double& v : rest) v *= static_cast<double>(steps - i - 1);
+        // What a stretch fell short of (or beyond) its ask, carried to the
+        // steps left: its rest scaled to take it (never below nothing).
+        if (i + 1 < steps) {
+          const std::vector<int> stretch = stretches(f.collapsed.triangles, bounds, segments);
+          const int n = stretch.empty() ? 0 : *std::max_element(stretch.begin(), stretch.end()) + 1;
+          std::vector<double> short_of(n, 0.0), left(n, 0.0);
+          for (std::size_t t = 0; t < stretch.size(); ++t)
+            short_of[stretch[t]] += asked[t] - swept[t], left[stretch[t]] += rest[t];
+          for (std::size_t t = 0; t < stretch.size(); ++t)
+            if (left[stretch[t]] > 0) rest[t] *= std::max(0.0, 1 + short_of[stretch[t]] / left[stretch[t]]);
+        }
+        mesh = f.wear.triangles;
+        if (i == 0) whole.collapsed = std::move(f.collapsed), whole.share = f.share;
+        whole.wear = std::move(f.wear);
+      }
+    } catch (const MeshSpoiled&) {
+      if (last) throw;
+      continue;  // in more, shorter steps
+    }
+    whole.wear.triangles = std::move(mesh);
+    return whole;
+  }
+  throw std::logic_error("wear_kept_fit: no steps");
 }
 
 }  // namespace mc::life

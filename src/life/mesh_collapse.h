@@ -76,17 +76,36 @@ inline constexpr double kCollapseShares[] = {0, 0.25, 0.4, 0.55};
 // was asked within kLocalTolerance (at most kLocalPasses; a corrected
 // move that spoils the mesh or leaves the shell or the ends, or that
 // misplaces no less volume over all the stretches, is not taken).
+// Where no share keeps the mesh one (a corner worn deep in one stage:
+// its rounded strip shrinks to nothing as it moves in, as any convex
+// corner of a solid worn back does), the stage's wear is moved in
+// kMoveSteps equal steps, each collapsed and moved as above on the mesh
+// the one before left (its normals and short edges found again): each
+// step asked an equal share of what is left, carried through the
+// collapses.
 inline constexpr int kLocalPasses = 4;
 inline constexpr double kLocalTolerance = 0.002;
+inline constexpr int kMoveSteps[] = {1, 2, 4, 8};
 struct FitWear {
-  Collapsed collapsed;  // the mesh that was moved, and its booked volumes
-  MeshWear wear;        // the move
-  double share = 0;     // the share it was collapsed at
-  int local_passes = 0;      // local corrections taken
-  double local_misfit = 0;   // after them: the largest |removed / asked − 1| of a stretch
+  Collapsed collapsed;  // the first step's collapsed mesh (the stage's, as it was moved), its booked volumes
+  MeshWear wear;        // the last step's move; its triangles: the worn mesh
+  double share = 0;     // the share the first step was collapsed at
+  int local_passes = 0;      // local corrections taken (all steps)
+  double local_misfit = 0;   // after them: the largest |removed / asked − 1| of a stretch (of any step)
+  int steps = 1;             // the steps the wear was moved in
+  int edges = 0;             // edges collapsed (all steps)
+  double collapse_m3 = 0;    // the volume the collapses took
+  double removed_m3 = 0;     // the volume the collapses and moves removed (the booked)
+  double deepest_m = 0;      // the steps' largest vertex moves, added: at most this deep
+  int relaxed = 0;           // vertices slid along the surface (all steps)
+  // Per span of the mill (`segments` between bounds.z0 and z1, by the
+  // triangles' centroids; one where segments <= 1): what the moves were
+  // asked (the booked less the collapses' own, spread) and what they swept.
+  std::vector<double> span_asked_m3, span_removed_m3;
 };
+// `most_steps`: no more steps than this (1: one move, refused where it spoils the mesh).
 FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<double>& booked_m3,
                       const MeshBounds& bounds, double across, double along, const std::string& name,
-                      int segments = 1);
+                      int segments = 1, int most_steps = 8);
 
 }  // namespace mc::life
