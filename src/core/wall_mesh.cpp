@@ -436,6 +436,34 @@ void check_meshes(const Walls& w) {
               "such as lifter bars extruded over the slice");
       }
     }
+    // A liner (bars, a shell's plates, a scan) faces the charge, and so
+    // the axis, where it comes nearest it: the triangles round its
+    // innermost vertex, their areas' normals summed, point toward the
+    // axis. An STL wound inside out points them at the shell: every
+    // triangle would be touched from behind (no contact: a hole) and a
+    // life study would wear it outward.
+    if (m.part == MeshPart::ends) continue;
+    const Vec3* inner = nullptr;
+    for (const Triangle& t : m.triangles)
+      for (const Vec3& v : t.v)
+        if (!inner || std::hypot(v.x, v.y) < std::hypot(inner->x, inner->y)) inner = &v;
+    const double rho = std::hypot(inner->x, inner->y);
+    if (!(rho > 1e-9)) continue;
+    Vec3 n{};
+    for (const Triangle& t : m.triangles)
+      for (const Vec3& v : t.v)
+        if (v.x == inner->x && v.y == inner->y && v.z == inner->z) n = n + cross(t.v[1] - t.v[0], t.v[2] - t.v[0]);
+    const double toward_axis = -(n.x * inner->x + n.y * inner->y) / rho;
+    if (!(toward_axis > 0)) {
+      char buf[400];
+      std::snprintf(buf, sizeof buf,
+                    ": its triangles face away from the axis where the mesh comes nearest it (x %.4g, y %.4g, "
+                    "z %.4g m, %.4g m from the axis): the file is wound inside out for a liner, whose charge "
+                    "side faces the axis (a triangle is touched only from the side its normal faces); turn it "
+                    "round with its flip key",
+                    inner->x, inner->y, inner->z, rho);
+      throw std::invalid_argument(m.name + buf);
+    }
   }
 }
 
