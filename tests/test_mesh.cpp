@@ -656,7 +656,8 @@ TEST_CASE("a mesh with more triangles than the device can hold is refused with t
   fs::remove_all(work);
 }
 
-TEST_CASE("a liner mesh wound inside out is refused by name; cone heads are not held to it", "[mesh][geometry]") {
+TEST_CASE("a liner mesh, or a part of one, wound inside out is refused by name; cone heads are not held to it",
+          "[mesh][geometry]") {
   // The lab mill's bars as a closed mesh (faces out of each bar), and a
   // scanned shell as an open sheet 5 mm inside the shell facing the axis.
   const double R = 0.45, L = 0.15;
@@ -700,4 +701,36 @@ TEST_CASE("a liner mesh wound inside out is refused by name; cone heads are not 
     // axis as much as across it) it is not checked.
     CHECK_NOTHROW(check_meshes(walls(turned(t), MeshPart::ends)));
   }
+  // One bar of twelve turned round (bodies exported one by one): each
+  // connected part is checked, and the message says it is one part.
+  std::vector<Triangle> one = lifter_triangles(bars, L);
+  REQUIRE(one.size() == 12 * 12);
+  for (std::size_t k = 5 * 12; k < 6 * 12; ++k) std::swap(one[k].v[1], one[k].v[2]);
+  CHECK_THROWS_WITH(check_meshes(walls(one, MeshPart::lifters)),
+                    Catch::Contains("where 1 of its 12 parts come nearest it") &&
+                        Catch::Contains("export those parts the other way round"));
+  // A part reaching to within a thousandth of the shell's radius of the
+  // axis (a trunnion's plate) has no direction to the axis there: either
+  // way round it passes.
+  const std::vector<Triangle> near_axis = {{{Vec3{0.0002, 0, 0.05}, Vec3{0.1, -0.05, 0.05}, Vec3{0.1, 0.05, 0.05}}}};
+  CHECK_NOTHROW(check_meshes(walls(near_axis, MeshPart::lifters)));
+  CHECK_NOTHROW(check_meshes(walls(turned(near_axis), MeshPart::lifters)));
+  // From a case: the lab mill's STL bars given flip = true are refused,
+  // status 2, naming the key and the flip; nothing written.
+  const fs::path work = fs::temp_directory_path() / "mc-inside-out", out = work / "run", err = work / "err.txt";
+  fs::remove_all(work);
+  fs::create_directories(work);
+  const std::string cmd = std::string(MC_BINARY) + " run '" + std::string(MC_ASSET_DIR) +
+                          "/cases/lab_stl.toml' --set walls.mesh.0.flip=true --quiet --out '" + out.string() +
+                          "' > /dev/null 2> '" + err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  const std::string message = read_text(err);
+  INFO(message);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 2);
+  CHECK_THAT(message, Catch::Contains("walls.mesh[0]") && Catch::Contains("wound inside out") &&
+                          Catch::Contains("toggle the mesh's flip key"));
+  CHECK(std::count(message.begin(), message.end(), '\n') == 1);
+  CHECK_FALSE(fs::exists(out));
+  fs::remove_all(work);
 }

@@ -804,9 +804,10 @@ int cmd_life(const LifeOptions& o) {
                   i, i + 1, k, s.removed_mm2[k], s.booked_mm2[k], s.scale[k], s.spread[k], s.shell_depth_m * 1000);
     for (const life::StageMesh& m : s.meshes)
       std::printf("life            stage %d -> %d: walls.mesh[%d] worn %.4g cm3 (booked %.4g cm3%s, depth scale %.3f, "
-                  "deepest %.3f mm, each bar%s within %.2f %% of its share after %d correction%s): %s\n",
+                  "deepest %s%.3f mm, each bar%s within %.2f %% of its share after %d correction%s): %s\n",
                   i, i + 1, m.walls_mesh, m.removed_m3 * 1e6, m.booked_m3 * 1e6,
-                  m.steps > 1 ? fmt::format(", moved in {} steps", m.steps).c_str() : "", m.scale, m.deepest_m * 1000,
+                  m.steps > 1 ? fmt::format(", moved in {} steps", m.steps).c_str() : "", m.scale,
+                  m.steps > 1 ? "at most " : "", m.deepest_m * 1000,
                   o.axial_segments > 1 ? " in each segment" : "", m.local_misfit * 100, m.local_passes,
                   m.local_passes == 1 ? "" : "s", (out / next.meshes[&m - s.meshes.data()].file).string().c_str());
     if (plates)

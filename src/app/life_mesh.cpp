@@ -367,6 +367,7 @@ void write_segment_table(const fs::path& out, const MillCase& c, const std::vect
       // The step's volumes per segment: booked by the triangles, removed by their move.
       std::vector<double> booked(segments, 0.0), smoothed(segments, 0.0), removed(segments, 0.0);
       const bool carried = s.span_case_hours > 0 && i + 1 < stages.size() && j < stages[i + 1].meshes.size();
+      bool moved = carried;  // what the move was asked and removed by segment is known
       if (carried) {
         const std::vector<Triangle> next = stage_mesh_triangles(out, c, stages[i + 1].meshes[j]);
         const std::vector<double> volume = booked_volumes(run, c, m.walls_mesh, tris, b.mix, s.span_case_hours);
@@ -375,8 +376,14 @@ void write_segment_table(const fs::path& out, const MillCase& c, const std::vect
         // What the move was asked and removed, as it recorded them by span
         // (a move in steps collapsed the mesh before each: the stage's mesh
         // and the next are not corner for corner).
-        if (m.steps > 0 && m.span_asked_m3.size() == static_cast<std::size_t>(segments)) {
-          smoothed = m.span_asked_m3, removed = m.span_removed_m3;
+        const std::size_t recorded = m.span_asked_m3.size();
+        if (m.steps > 0 && recorded > 0 && recorded % static_cast<std::size_t>(segments) == 0) {
+          for (std::size_t k = 0; k < recorded; ++k) {
+            const std::size_t g = k / (recorded / static_cast<std::size_t>(segments));
+            smoothed[g] += m.span_asked_m3[k], removed[g] += m.span_removed_m3[k];
+          }
+        } else if (m.steps > 1) {
+          moved = false;  // recorded in spans these do not add up to, and not corner for corner
         } else {
           // The move was of the mesh with its short edges collapsed (where
           // the study collapsed any), corner for corner.
@@ -409,8 +416,8 @@ void write_segment_table(const fs::path& out, const MillCase& c, const std::vect
                          opt(l.second, 3), opt(tr.first, 3), opt(tr.second, 3),
                          shell_area[g] > 0 ? fmt::format("{:.6g}", shell_rate[g] / shell_area[g] * b.factor) : "",
                          carried ? fmt::format("{:.6g}", booked[g] * 1e6) : "",
-                         carried ? fmt::format("{:.6g}", smoothed[g] * 1e6) : "",
-                         carried ? fmt::format("{:.6g}", removed[g] * 1e6) : "", b.basis);
+                         moved ? fmt::format("{:.6g}", smoothed[g] * 1e6) : "",
+                         moved ? fmt::format("{:.6g}", removed[g] * 1e6) : "", b.basis);
       }
     }
   }

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <iterator>
 #include <stdexcept>
 
 #include "app/life_plates.h"
@@ -12,6 +13,7 @@
 #include "io/atomic_file.h"
 #include "io/csv_read.h"
 #include "io/json_read.h"
+#include "life/mesh_collapse.h"
 
 namespace mc::app::life {
 
@@ -292,7 +294,11 @@ Stage stage_of(const JsonAt& j, int i, const StateShape& shape, const Stage* bef
         if (w.has("stretch_segments"))
           x.stretch_segments = static_cast<int>(w["stretch_segments"].number_at_least(1));
         if (w.has("steps")) {
-          x.steps = static_cast<int>(w["steps"].number_at_least(1));
+          const long steps = w["steps"].whole();
+          if (std::find(std::begin(mc::life::kMoveSteps), std::end(mc::life::kMoveSteps), steps) ==
+              std::end(mc::life::kMoveSteps))
+            w["steps"].fail(fmt::format("{}: a move is made in 1, 2, 4 or 8 steps", steps));
+          x.steps = static_cast<int>(steps);
           const std::size_t spans = static_cast<std::size_t>(std::max(x.stretch_segments, 1));
           x.span_asked_m3 = w["span_asked_m3"].numbers(spans, "stretch segments");
           x.span_removed_m3 = w["span_removed_m3"].numbers(spans, "stretch segments");

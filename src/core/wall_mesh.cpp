@@ -1,6 +1,7 @@
 #include "core/wall_mesh.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -437,31 +438,67 @@ void check_meshes(const Walls& w) {
       }
     }
     // A liner (bars, a shell's plates, a scan) faces the charge, and so
-    // the axis, where it comes nearest it: the triangles round its
-    // innermost vertex, their areas' normals summed, point toward the
-    // axis. An STL wound inside out points them at the shell: every
-    // triangle would be touched from behind (no contact: a hole) and a
-    // life study would wear it outward.
+    // the axis, where it comes nearest it: in each connected part (a bar,
+    // a plate, a scan), the triangles round its innermost vertex, their
+    // area vectors summed, point toward the axis. A part wound inside out
+    // points them at the shell: every triangle of it would be touched from
+    // behind (no contact: a hole) and a life study would wear it outward.
+    // A part whose innermost vertex is within a thousandth of the shell's
+    // radius of the axis has no direction to the axis there: not checked.
     if (m.part == MeshPart::ends) continue;
-    const Vec3* inner = nullptr;
-    for (const Triangle& t : m.triangles)
-      for (const Vec3& v : t.v)
-        if (!inner || std::hypot(v.x, v.y) < std::hypot(inner->x, inner->y)) inner = &v;
-    const double rho = std::hypot(inner->x, inner->y);
-    if (!(rho > 1e-9)) continue;
-    Vec3 n{};
-    for (const Triangle& t : m.triangles)
-      for (const Vec3& v : t.v)
-        if (v.x == inner->x && v.y == inner->y && v.z == inner->z) n = n + cross(t.v[1] - t.v[0], t.v[2] - t.v[0]);
-    const double toward_axis = -(n.x * inner->x + n.y * inner->y) / rho;
-    if (!(toward_axis > 0)) {
-      char buf[400];
+    std::map<std::tuple<double, double, double>, int> index;
+    std::vector<const Vec3*> at;
+    std::vector<std::array<int, 3>> corner(m.triangles.size());
+    for (std::size_t k = 0; k < m.triangles.size(); ++k)
+      for (int j = 0; j < 3; ++j) {
+        const Vec3& v = m.triangles[k].v[j];
+        const auto [it, fresh] = index.emplace(std::make_tuple(v.x, v.y, v.z), static_cast<int>(at.size()));
+        if (fresh) at.push_back(&v);
+        corner[k][j] = it->second;
+      }
+    UnionFind parts(static_cast<int>(at.size()));
+    for (const auto& c : corner) parts.join(c[0], c[1]), parts.join(c[0], c[2]);
+    std::map<int, int> inner;  // part: its innermost vertex
+    for (int v = 0; v < static_cast<int>(at.size()); ++v) {
+      const auto [it, fresh] = inner.emplace(parts.find(v), v);
+      if (!fresh && std::hypot(at[v]->x, at[v]->y) < std::hypot(at[it->second]->x, at[it->second]->y)) it->second = v;
+    }
+    std::map<int, Vec3> round;  // innermost vertex: the area vectors round it
+    for (const auto& [part, v] : inner) round[v] = Vec3{};
+    for (std::size_t k = 0; k < m.triangles.size(); ++k)
+      for (int j = 0; j < 3; ++j) {
+        const auto it = round.find(corner[k][j]);
+        if (it != round.end()) {
+          const Triangle& t = m.triangles[k];
+          it->second = it->second + cross(t.v[1] - t.v[0], t.v[2] - t.v[0]);
+        }
+      }
+    const Vec3* first = nullptr;  // the innermost vertex of the first part wound inside out
+    std::size_t turned = 0, checked = 0;
+    for (const auto& [v, n] : round) {
+      const Vec3& p = *at[v];
+      const double rho = std::hypot(p.x, p.y);
+      if (!(rho > 1e-3 * w.shell_radius) || !(rho > 0)) continue;
+      ++checked;
+      if (!(-(n.x * p.x + n.y * p.y) / rho > 0)) {
+        ++turned;
+        if (!first) first = &p;
+      }
+    }
+    if (turned > 0) {
+      const std::string which = turned == checked && checked == round.size()
+                                    ? std::string("the mesh comes")
+                                    : std::to_string(turned) + " of its " + std::to_string(round.size()) +
+                                          " parts come";
+      char buf[480];
       std::snprintf(buf, sizeof buf,
-                    ": its triangles face away from the axis where the mesh comes nearest it (x %.4g, y %.4g, "
-                    "z %.4g m, %.4g m from the axis): the file is wound inside out for a liner, whose charge "
-                    "side faces the axis (a triangle is touched only from the side its normal faces); turn it "
-                    "round with its flip key",
-                    inner->x, inner->y, inner->z, rho);
+                    ": its triangles face away from the axis where %s nearest it (x %.4g, y %.4g, z %.4g m, "
+                    "%.4g m from the axis): wound inside out for a liner, whose charge side faces the axis (a "
+                    "triangle is touched only from the side its normal faces); %s",
+                    which.c_str(), first->x, first->y, first->z, std::hypot(first->x, first->y),
+                    turned == checked ? "toggle the mesh's flip key (it turns every triangle of the file)"
+                                      : "export those parts the other way round (the mesh's flip key turns every "
+                                        "triangle of the file)");
       throw std::invalid_argument(m.name + buf);
     }
   }

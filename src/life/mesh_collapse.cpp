@@ -293,7 +293,7 @@ Misfit stretch_misfit(const std::vector<int>& stretch, const std::vector<double>
 
 // One move of the whole booked wear (wear_kept_fit, one step).
 FitWear fit_once(const std::vector<Triangle>& triangles, const std::vector<double>& booked_m3, const MeshBounds& bounds,
-                 double across, double along, const std::string& name, int segments) {
+                 double across, double along, const std::string& name, int segments, bool a_step) {
   double booked = 0;
   for (double v : booked_m3) booked += v;
   for (const double share : kCollapseShares) {
@@ -308,8 +308,9 @@ FitWear fit_once(const std::vector<Triangle>& triangles, const std::vector<doubl
     const bool last = share == kCollapseShares[std::size(kCollapseShares) - 1];
     if (booked > 0 && !(left > 0)) {
       if (last)
-        throw MeshSpoiled(name + ": collapsing its short edges takes more than the stage's wear; more smoothing or "
-                                 "shorter stages");
+        throw MeshSpoiled(name + ": collapsing its short edges takes more than the " +
+                          (a_step ? std::string("step's share of the stage's wear; more smoothing")
+                                  : std::string("stage's wear; more smoothing or shorter stages")));
       continue;
     }
     try {
@@ -355,6 +356,8 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
                       const MeshBounds& bounds, double across, double along, const std::string& name, int segments,
                       int most_steps) {
   const int spans = std::max(segments, 1);
+  double booked = 0;
+  for (double v : booked_m3) booked += v;
   for (const int steps : kMoveSteps) {
     const bool last = steps >= most_steps || steps == kMoveSteps[std::size(kMoveSteps) - 1];
     FitWear whole;
@@ -368,7 +371,7 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
         const double part = 1.0 / (steps - i);
         std::vector<double> volume = rest;
         for (double& v : volume) v *= part;
-        FitWear f = fit_once(mesh, volume, bounds, across, along, name, segments);
+        FitWear f = fit_once(mesh, volume, bounds, across, along, name, segments, steps > 1);
         // What this step asked the move (the booked less the collapse's own) and what it removed, by span.
         const std::vector<double> asked = asked_volumes(f.collapsed, across, along);
         const std::vector<double> swept = swept_volumes(f.collapsed.triangles, f.wear.triangles);
@@ -379,6 +382,7 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
         whole.edges += f.collapsed.edges;
         whole.collapse_m3 += f.collapsed.removed_m3;
         whole.removed_m3 += f.collapsed.removed_m3 + f.wear.removed_m3;
+        whole.wear.booked_m3 += f.wear.booked_m3, whole.wear.removed_m3 += f.wear.removed_m3;
         whole.deepest_m += f.wear.deepest_m;
         whole.relaxed += f.wear.relaxed;
         whole.local_passes += f.local_passes;
@@ -386,23 +390,39 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
         rest = f.collapsed.volume_m3;
         for (double& v : rest) v *= static_cast<double>(steps - i - 1);
         // What a stretch fell short of (or beyond) its ask, carried to the
-        // steps left: its rest scaled to take it (never below nothing).
+        // steps left: its rest scaled to take it (never below nothing),
+        // and the whole rest brought to what the stage has still to
+        // remove (a stretch with nothing left to carry it on, or one
+        // clipped at nothing, changes the others' share, not the total).
+        // What a span's rest gained is asked of it again: it counts once.
         if (i + 1 < steps) {
+          const std::vector<double> before = rest;
           const std::vector<int> stretch = stretches(f.collapsed.triangles, bounds, segments);
           const int n = stretch.empty() ? 0 : *std::max_element(stretch.begin(), stretch.end()) + 1;
           std::vector<double> short_of(n, 0.0), left(n, 0.0);
           for (std::size_t t = 0; t < stretch.size(); ++t)
             short_of[stretch[t]] += asked[t] - swept[t], left[stretch[t]] += rest[t];
-          for (std::size_t t = 0; t < stretch.size(); ++t)
+          double sum = 0;
+          for (std::size_t t = 0; t < stretch.size(); ++t) {
             if (left[stretch[t]] > 0) rest[t] *= std::max(0.0, 1 + short_of[stretch[t]] / left[stretch[t]]);
+            sum += rest[t];
+          }
+          const double still = booked - whole.removed_m3;
+          for (double& v : rest) v = sum > 0 && still > 0 ? v * still / sum : 0.0;
+          for (std::size_t t = 0; t < rest.size(); ++t)
+            whole.span_asked_m3[span_of(f.collapsed.triangles[t], bounds, spans)] -= rest[t] - before[t];
         }
         mesh = f.wear.triangles;
+        const double step_booked = whole.wear.booked_m3, step_removed = whole.wear.removed_m3;
         if (i == 0) whole.collapsed = std::move(f.collapsed), whole.share = f.share;
         whole.wear = std::move(f.wear);
+        whole.wear.booked_m3 = step_booked, whole.wear.removed_m3 = step_removed;  // the steps' together
       }
-    } catch (const MeshSpoiled&) {
-      if (last) throw;
-      continue;  // in more, shorter steps
+    } catch (const MeshSpoiled& e) {
+      if (!last) continue;  // in more, shorter steps
+      if (steps == 1) throw;
+      throw MeshSpoiled(std::string(e.what()) + " (the stage's wear moved in " + std::to_string(steps) +
+                        " steps)");
     }
     whole.wear.triangles = std::move(mesh);
     return whole;

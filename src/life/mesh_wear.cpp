@@ -289,6 +289,9 @@ std::vector<double> swept_volumes(const std::vector<Triangle>& before, const std
   // triangle (facing out of the solid, as it faced the charge), the new
   // one reversed, and the three sides, each a quad cut in two. Summed by
   // the divergence theorem; the sides of neighbours cancel.
+  if (after.size() != before.size())
+    throw std::invalid_argument(fmt::format("swept_volumes: {} triangles moved to {}: not the same mesh corner for corner",
+                                            before.size(), after.size()));
   std::vector<double> out(before.size());
   for (std::size_t i = 0; i < before.size(); ++i) {
     double v6 = 0;
