@@ -258,7 +258,11 @@ std::vector<io::LinePlot> along_plots(const std::string& name, const std::filesy
   // An empty field (a figure that could not be measured) is NaN, which
   // breaks a line or a band.
   auto num = [&](std::size_t r, int c) { return t.rows[r][c].empty() ? NAN : std::stod(t.rows[r][c]); };
-  auto span_label = [](double z0, double z1) { return fmt::format("{:.3g} to {:.3g} m", z0, z1); };
+  // (a bin's end at -0 or a rounding below zero is printed 0)
+  auto span_label = [](double z0, double z1) {
+    auto tidy = [](double z) { return std::abs(z) < 1e-9 ? 0.0 : z; };
+    return fmt::format("{:.3g} to {:.3g} m", tidy(z0), tidy(z1));
+  };
   // The bars per (mesh, segment): a line each, blue at z = 0 to red at the
   // far end; meshes without bars (a shell) left out.
   struct Key {
