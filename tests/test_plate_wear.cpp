@@ -392,3 +392,43 @@ TEST_CASE("liner.vtp draws a worn plate on its dish, bends included", "[plates][
     if (e.part == LinerPart::plate)
       for (const Vec3& p : e.outline) CHECK(p.z == (e.row == 0 ? 0.0 : L));
 }
+
+TEST_CASE("the window's plate face follows the dish: every vertex at its depth, facing the mill, covering the disc",
+          "[plates][outputs]") {
+  // Three rings of 0.1 m: 4, 1 and 6 mm deep. The dish (by hand): each
+  // ring's depth across its middle half, straight between neighbours over
+  // the quarter-rings either side of their edges at 0.1 and 0.2 m.
+  const double R = 0.3, w = 0.1;
+  const std::vector<double> depth = {4e-3, 1e-3, 6e-3};
+  auto dish = [&](double rho) {
+    if (rho <= 0.075) return 4e-3;
+    if (rho < 0.125) return 4e-3 + (rho - 0.075) / (0.5 * w) * (1e-3 - 4e-3);
+    if (rho <= 0.175) return 1e-3;
+    if (rho < 0.225) return 1e-3 + (rho - 0.175) / (0.5 * w) * (6e-3 - 1e-3);
+    return 6e-3;
+  };
+  const int segments = 60;
+  const std::vector<Triangle> face = plate_face_triangles(depth, R, segments);
+  // Rings between 0, the four bends and R: a triangle at the axis and two
+  // per sector in each of the other four.
+  REQUIRE(face.size() == static_cast<std::size_t>(segments * (1 + 2 * 4)));
+  double area = 0;
+  int bends = 0;
+  for (const Triangle& t : face) {
+    const Vec3 e1 = t.v[1] - t.v[0], e2 = t.v[2] - t.v[0];
+    const double nz = e1.x * e2.y - e1.y * e2.x;  // twice the area projected on the plate's plane, + facing +z
+    CHECK(nz > 0);
+    area += 0.5 * nz;
+    for (const Vec3& p : t.v) {
+      const double rho = std::hypot(p.x, p.y);
+      CHECK(p.z == Approx(-dish(rho)).margin(1e-12));
+      for (double b : {0.075, 0.125, 0.175, 0.225}) bends += std::abs(rho - b) < 1e-12;
+    }
+  }
+  // The regular 60-gon of radius R, covered once.
+  CHECK(area == Approx(0.5 * segments * R * R * std::sin(2 * M_PI / segments)).epsilon(1e-12));
+  CHECK(bends > 0);
+  // A new plate: its plane.
+  for (const Triangle& t : plate_face_triangles({}, R, segments))
+    for (const Vec3& p : t.v) CHECK(p.z == 0.0);
+}

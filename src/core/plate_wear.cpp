@@ -85,6 +85,26 @@ double plate_surface_depth(const std::vector<double>& depth, double width, doubl
   return depth[j];
 }
 
+std::vector<Triangle> plate_face_triangles(const std::vector<double>& depth, double R, int segments) {
+  const std::size_t n = depth.size();
+  const double width = n > 0 ? R / static_cast<double>(n) : R;
+  std::vector<double> radii = {0.0};
+  for (std::size_t k = 1; k < n; ++k) radii.push_back((k - 0.25) * width), radii.push_back((k + 0.25) * width);
+  radii.push_back(R);
+  auto at = [&](double r, int k) {
+    const double a = 2 * 3.14159265358979323846 * k / segments;
+    return Vec3{r * std::cos(a), r * std::sin(a), -plate_surface_depth(depth, width, r)};
+  };
+  std::vector<Triangle> out;
+  for (int k = 0; k < segments; ++k)
+    for (std::size_t i = 0; i + 1 < radii.size(); ++i) {
+      const Vec3 p00 = at(radii[i], k), p01 = at(radii[i], k + 1), p10 = at(radii[i + 1], k), p11 = at(radii[i + 1], k + 1);
+      if (i == 0) out.push_back({{p00, p10, p11}});  // at the axis: one triangle
+      else out.push_back({{p00, p10, p11}}), out.push_back({{p00, p11, p01}});
+    }
+  return out;
+}
+
 std::vector<double> plate_ring_means(const std::vector<double>& depth, double /*width*/) {
   const int n = static_cast<int>(depth.size());
   const std::vector<Row> rows = mean_rows(n);

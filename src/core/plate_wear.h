@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "core/vec.h"
+
 namespace mc {
 
 // Rings a worn plate may have (cl/layout.h MC_PLATE_NODES).
@@ -22,6 +24,12 @@ inline constexpr int kMaxWornPlateRings = 16;
 // The face's depth (m) at rho (m) from the axis, its rings' depths `depth`
 // (m) on rings of `width` (m); and its slope d depth / d rho.
 double plate_surface_depth(const std::vector<double>& depth, double width, double rho, double* slope = nullptr);
+
+// A plate's face for drawing: the plate at z = 0 facing +z, its face at
+// z = -depth(rho) (rings of R / depth.size(); empty: flat), as triangles
+// in rings between the radii where it bends (the ramps' ends) and
+// `segments` sectors round, each counter-clockwise seen from +z.
+std::vector<Triangle> plate_face_triangles(const std::vector<double>& depth, double R, int segments);
 
 // Each ring's area-weighted mean depth of that face (closed form): the
 // metal the ring has lost over its area. A ring beside a deeper one loses a

@@ -5,6 +5,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "core/plate_wear.h"
+
 namespace mc::viewer {
 
 namespace {
@@ -101,12 +103,9 @@ void MillRenderer::set_liner(const LinerLayout& layout) {
         static_cast<std::size_t>(el.bin) < mesh_hidden_[el.row].size() && mesh_hidden_[el.row][el.bin])
       continue;  // as set_walls leaves it out
     ColourMesh& m = el.part == LinerPart::shell ? liner_shell_ : el.still ? liner_still_ : liner_parts_;
-    // A worn plate's outline follows its dish (core/liner.cpp); the window
-    // draws the plates flat, so its colours lie on the plane, in front of
-    // the grey plate.
-    std::vector<Vec3> o = el.outline;
-    if (el.part == LinerPart::plate)
-      for (Vec3& p : o) p.z = el.z0;
+    // A worn plate's outline follows its dish (core/liner.cpp), as the
+    // grey plate behind it does (set_walls).
+    const std::vector<Vec3>& o = el.outline;
     for (std::size_t k = 1; k + 1 < o.size(); ++k) {
       glm::vec3 a(o[0].x, o[0].y, o[0].z), b(o[k].x, o[k].y, o[k].z), c(o[k + 1].x, o[k + 1].y, o[k + 1].z);
       glm::vec3 n = glm::cross(b - a, c - a);
@@ -156,13 +155,15 @@ void MillRenderer::set_walls(const Walls& w) {
   shell_.upload(shell);
 
   // Back end plate just behind z = 0, facing +z (behind the lifters' end
-  // caps, which would fight it for depth at z = 0).
+  // caps, which would fight it for depth at z = 0); a worn one on its dish
+  // (core/plate_wear.h), just behind the liner's colours drawn on it.
   const float behind = -0.004f * R;
   std::vector<Vertex> plate;
   const glm::vec3 up_z{0, 0, 1};
-  for (int k = 0; k < kSegments; ++k) {
-    const float a0 = 2 * kPi * k / kSegments, a1 = 2 * kPi * (k + 1) / kSegments;
-    plate.insert(plate.end(), {{glm::vec3(0, 0, behind), up_z}, {at(R, a0, behind), up_z}, {at(R, a1, behind), up_z}});
+  for (const Triangle& t : plate_face_triangles(w.plate_depth[0], w.shell_radius, kSegments)) {
+    const glm::vec3 a(t.v[0].x, t.v[0].y, t.v[0].z), b(t.v[1].x, t.v[1].y, t.v[1].z), c(t.v[2].x, t.v[2].y, t.v[2].z);
+    const glm::vec3 n = glm::normalize(glm::cross(b - a, c - a)), shift(0, 0, behind);
+    plate.insert(plate.end(), {{a + shift, n}, {b + shift, n}, {c + shift, n}});
   }
   plate_.upload(plate);
 
