@@ -715,6 +715,11 @@ TEST_CASE("a liner mesh, or a part of one, wound inside out is refused by name; 
   const std::vector<Triangle> near_axis = {{{Vec3{0.0002, 0, 0.05}, Vec3{0.1, -0.05, 0.05}, Vec3{0.1, 0.05, 0.05}}}};
   CHECK_NOTHROW(check_meshes(walls(near_axis, MeshPart::lifters)));
   CHECK_NOTHROW(check_meshes(walls(turned(near_axis), MeshPart::lifters)));
+  // A lone triangle (a file whose triangles share no corner, refused by a
+  // life study on its own grounds) has no surface round its corner: it
+  // passes either way round.
+  CHECK_NOTHROW(check_meshes(walls({sheet[0]}, MeshPart::shell)));
+  CHECK_NOTHROW(check_meshes(walls(turned({sheet[0]}), MeshPart::shell)));
   // From a case: the lab mill's STL bars given flip = true are refused,
   // status 2, naming the key and the flip; nothing written.
   const fs::path work = fs::temp_directory_path() / "mc-inside-out", out = work / "run", err = work / "err.txt";

@@ -444,7 +444,9 @@ void check_meshes(const Walls& w) {
     // points them at the shell: every triangle of it would be touched from
     // behind (no contact: a hole) and a life study would wear it outward.
     // A part whose innermost vertex is within a thousandth of the shell's
-    // radius of the axis has no direction to the axis there: not checked.
+    // radius of the axis has no direction to the axis there, and one whose
+    // innermost vertex is a corner of one triangle only has no surface
+    // round it: not checked.
     if (m.part == MeshPart::ends) continue;
     std::map<std::tuple<double, double, double>, int> index;
     std::vector<const Vec3*> at;
@@ -464,6 +466,7 @@ void check_meshes(const Walls& w) {
       if (!fresh && std::hypot(at[v]->x, at[v]->y) < std::hypot(at[it->second]->x, at[it->second]->y)) it->second = v;
     }
     std::map<int, Vec3> round;  // innermost vertex: the area vectors round it
+    std::map<int, int> star;    // and how many triangles have it
     for (const auto& [part, v] : inner) round[v] = Vec3{};
     for (std::size_t k = 0; k < m.triangles.size(); ++k)
       for (int j = 0; j < 3; ++j) {
@@ -471,6 +474,7 @@ void check_meshes(const Walls& w) {
         if (it != round.end()) {
           const Triangle& t = m.triangles[k];
           it->second = it->second + cross(t.v[1] - t.v[0], t.v[2] - t.v[0]);
+          ++star[corner[k][j]];
         }
       }
     const Vec3* first = nullptr;  // the innermost vertex of the first part wound inside out
@@ -478,7 +482,9 @@ void check_meshes(const Walls& w) {
     for (const auto& [v, n] : round) {
       const Vec3& p = *at[v];
       const double rho = std::hypot(p.x, p.y);
-      if (!(rho > 1e-3 * w.shell_radius) || !(rho > 0)) continue;
+      // A lone triangle (a file whose triangles share no corner) has no
+      // surface round its corner to tell a side from: not checked.
+      if (!(rho > 1e-3 * w.shell_radius) || !(rho > 0) || star[v] < 2) continue;
       ++checked;
       if (!(-(n.x * p.x + n.y * p.y) / rho > 0)) {
         ++turned;
