@@ -656,7 +656,7 @@ TEST_CASE("a mesh with more triangles than the device can hold is refused with t
   fs::remove_all(work);
 }
 
-TEST_CASE("a liner mesh, or a part of one, wound inside out is refused by name; cone heads are not held to it",
+TEST_CASE("a liner mesh, or a part of one, wound inside out is refused by name, and cone heads are not held to it",
           "[mesh][geometry]") {
   // The lab mill's bars as a closed mesh (faces out of each bar), and a
   // scanned shell as an open sheet 5 mm inside the shell facing the axis.
