@@ -186,6 +186,41 @@ TEST_CASE("a mesh liner wears by what its triangles booked, stage by stage", "[l
     CHECK(num(thirds[1], "shell_wear_mm_per_1000h") ==
           Approx(0.5 * (rate[0] / area[0] + rate[1] / area[1])).epsilon(1e-4));
   }
+  // A move made in steps tables what it recorded by span: added up where
+  // the table's segments divide the recorded spans, blank where they do
+  // not. (Stage 0's move, recorded as two steps over two spans.)
+  {
+    const std::string kept = read_text(a / "life.json");
+    auto write_text = [](const fs::path& p, const std::string& t) { std::ofstream(p, std::ios::binary) << t; };
+    nlohmann::json st = nlohmann::json::parse(kept);
+    nlohmann::json& w = st["stages"][0]["meshes"][0]["wear"];
+    w["steps"] = 2, w["stretch_segments"] = 2;
+    w["span_asked_m3"] = {1e-6, 2e-6}, w["span_removed_m3"] = {3e-6, 4e-6};
+    write_text(a / "life.json", st.dump(1));
+    REQUIRE(life(study + " --axial-segments 2", &err) == 0);
+    const auto two = read_csv(a / "life_segments.csv");
+    REQUIRE(two.size() == 6);
+    CHECK(num(two[0], "smoothed_cm3") == Approx(1.0));
+    CHECK(num(two[1], "smoothed_cm3") == Approx(2.0));
+    CHECK(num(two[0], "removed_cm3") == Approx(3.0));
+    CHECK(num(two[1], "removed_cm3") == Approx(4.0));
+    CHECK(two[0].at("booked_cm3") != "");
+    REQUIRE(life(study + " --axial-segments 3", &err) == 0);
+    const auto three = read_csv(a / "life_segments.csv");
+    REQUIRE(three.size() == 9);
+    for (int g = 0; g < 3; ++g) {
+      CHECK(three[g].at("smoothed_cm3").empty());
+      CHECK(three[g].at("removed_cm3").empty());
+      CHECK_FALSE(three[g].at("booked_cm3").empty());
+    }
+    CHECK_FALSE(three[3].at("removed_cm3").empty());  // stage 1's one-step move, worked out from its meshes
+    // Not a number of steps a move is made in: refused by name.
+    w["steps"] = 3;
+    write_text(a / "life.json", st.dump(1));
+    CHECK(life(study + " --axial-segments 2", &err) == 2);
+    CHECK(err.find("steps: 3: a move is made in 1, 2, 4 or 8 steps") != std::string::npos);
+    write_text(a / "life.json", kept);
+  }
   // life-compare reads the bars of a mesh study from life_meshes.csv, the
   // rest from life.csv.
   const std::string cmp = std::string(MC_BINARY) + " life-compare '" + a.string() + "' --at 2000,3000 --quiet --out '" +

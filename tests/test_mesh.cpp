@@ -707,14 +707,34 @@ TEST_CASE("a liner mesh, or a part of one, wound inside out is refused by name, 
   REQUIRE(one.size() == 12 * 12);
   for (std::size_t k = 5 * 12; k < 6 * 12; ++k) std::swap(one[k].v[1], one[k].v[2]);
   CHECK_THROWS_WITH(check_meshes(walls(one, MeshPart::lifters)),
-                    Catch::Contains("where 1 of its 12 parts come nearest it") &&
+                    Catch::Contains("where 1 of its 12 parts comes nearest it") &&
                         Catch::Contains("export those parts the other way round"));
   // A part reaching to within a thousandth of the shell's radius of the
   // axis (a trunnion's plate) has no direction to the axis there: either
   // way round it passes.
-  const std::vector<Triangle> near_axis = {{{Vec3{0.0002, 0, 0.05}, Vec3{0.1, -0.05, 0.05}, Vec3{0.1, 0.05, 0.05}}}};
-  CHECK_NOTHROW(check_meshes(walls(near_axis, MeshPart::lifters)));
-  CHECK_NOTHROW(check_meshes(walls(turned(near_axis), MeshPart::lifters)));
+  // (A fan of two triangles 0.2 mm from it, facing the axis as a bar's
+  // top would, turned: refused 1 mm out.)
+  auto fan = [](double x0) {
+    return std::vector<Triangle>{{{Vec3{x0, 0, 0.05}, Vec3{0.1, 0, 0.1}, Vec3{0.1, 0.05, 0.05}}},
+                                 {{Vec3{x0, 0, 0.05}, Vec3{0.1, 0.05, 0.05}, Vec3{0.1, 0, 0.0}}}};
+  };
+  CHECK_NOTHROW(check_meshes(walls(fan(0.0002), MeshPart::lifters)));
+  CHECK_NOTHROW(check_meshes(walls(turned(fan(0.0002)), MeshPart::lifters)));
+  const std::vector<Triangle> out_fan = fan(0.001);
+  for (const Triangle& t : out_fan) REQUIRE(triangle_unit_normal(t).x < 0);  // toward the axis, as given
+  CHECK_NOTHROW(check_meshes(walls(out_fan, MeshPart::lifters)));
+  CHECK_THROWS_WITH(check_meshes(walls(turned(out_fan), MeshPart::lifters)), Catch::Contains("wound inside out"));
+  // An open sheet whose innermost vertex is a corner of one triangle (a
+  // scan's arc, nearer the axis at one end), turned: refused.
+  std::vector<Triangle> arc;
+  for (int k = 0; k < 8; ++k) {
+    const double a0 = 0.1 * k, a1 = 0.1 * (k + 1), r0 = R - 0.005 - 0.001 * k, r1 = R - 0.006 - 0.001 * k;
+    const Vec3 p0{r0 * std::cos(a0), r0 * std::sin(a0), 0}, p1{r1 * std::cos(a1), r1 * std::sin(a1), 0};
+    arc.push_back({{p0, p1 + Vec3{0, 0, L}, p1}});
+    arc.push_back({{p0, p0 + Vec3{0, 0, L}, p1 + Vec3{0, 0, L}}});
+  }
+  CHECK_NOTHROW(check_meshes(walls(arc, MeshPart::shell)));
+  CHECK_THROWS_WITH(check_meshes(walls(turned(arc), MeshPart::shell)), Catch::Contains("wound inside out"));
   // A lone triangle (a file whose triangles share no corner, refused by a
   // life study on its own grounds) has no surface round its corner: it
   // passes either way round.

@@ -493,7 +493,9 @@ TEST_CASE("a corner worn deep in one half of the mill and hardly in the other: t
     CHECK((volume6(bar) - volume6(f.wear.triangles)) / 6 == Approx(booked).epsilon(1e-6));
     CHECK(f.removed_m3 == Approx(booked).epsilon(1e-6));
     CHECK(f.span_removed_m3[0] + f.span_removed_m3[1] + f.collapse_m3 == Approx(booked).epsilon(1e-6));
-    // What was asked of the halves, counted once: with the collapses', the booked.
+    // What was asked of the halves, with the collapses', is the booked (each
+    // step's scale makes its own whole; a shortfall counted twice shows in
+    // the halves below, not here).
     CHECK(f.span_asked_m3[0] + f.span_asked_m3[1] + f.collapse_m3 == Approx(booked).epsilon(1e-6));
     // Each half its own ask where the wear steps down by a fifteenth
     // between them. (Where it drops to nothing, the row of vertices on the

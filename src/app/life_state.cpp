@@ -291,8 +291,11 @@ Stage stage_of(const JsonAt& j, int i, const StateShape& shape, const Stage* bef
         if (w.has("collapse_m3")) x.collapse_m3 = w["collapse_m3"].number();
         if (w.has("local_passes")) x.local_passes = static_cast<int>(w["local_passes"].number_at_least(0));
         if (w.has("local_misfit")) x.local_misfit = w["local_misfit"].number_at_least(0);
-        if (w.has("stretch_segments"))
-          x.stretch_segments = static_cast<int>(w["stretch_segments"].number_at_least(1));
+        if (w.has("stretch_segments")) {
+          const long n = w["stretch_segments"].whole();
+          if (n < 1 || n > 32) w["stretch_segments"].fail(fmt::format("{}: spans are 1 to 32", n));
+          x.stretch_segments = static_cast<int>(n);
+        }
         if (w.has("steps")) {
           const long steps = w["steps"].whole();
           if (std::find(std::begin(mc::life::kMoveSteps), std::end(mc::life::kMoveSteps), steps) ==

@@ -390,6 +390,13 @@ std::vector<Triangle> end_lifter_triangles(const EndsSpec& e, double R, double L
   return out;
 }
 
+namespace {
+// "N of its M parts".
+std::string fmt_count(std::size_t n, std::size_t of) {
+  return std::to_string(n) + " of its " + std::to_string(of) + " parts";
+}
+}  // namespace
+
 void check_meshes(const Walls& w) {
   const double r_tol = w.shell_radius * 1e-3;
   const double z_tol = std::max(1e-6, w.length * 1e-6);
@@ -466,42 +473,47 @@ void check_meshes(const Walls& w) {
       if (!fresh && std::hypot(at[v]->x, at[v]->y) < std::hypot(at[it->second]->x, at[it->second]->y)) it->second = v;
     }
     std::map<int, Vec3> round;  // innermost vertex: the area vectors round it
-    std::map<int, int> star;    // and how many triangles have it
+    std::map<int, int> size;    // part: its triangles
     for (const auto& [part, v] : inner) round[v] = Vec3{};
-    for (std::size_t k = 0; k < m.triangles.size(); ++k)
+    for (std::size_t k = 0; k < m.triangles.size(); ++k) {
+      ++size[parts.find(corner[k][0])];
       for (int j = 0; j < 3; ++j) {
         const auto it = round.find(corner[k][j]);
         if (it != round.end()) {
           const Triangle& t = m.triangles[k];
           it->second = it->second + cross(t.v[1] - t.v[0], t.v[2] - t.v[0]);
-          ++star[corner[k][j]];
         }
       }
-    const Vec3* first = nullptr;  // the innermost vertex of the first part wound inside out
+    }
+    const Vec3* nearest = nullptr;  // the innermost vertex of the part wound inside out that comes nearest
     std::size_t turned = 0, checked = 0;
     for (const auto& [v, n] : round) {
       const Vec3& p = *at[v];
       const double rho = std::hypot(p.x, p.y);
       // A lone triangle (a file whose triangles share no corner) has no
       // surface round its corner to tell a side from: not checked.
-      if (!(rho > 1e-3 * w.shell_radius) || !(rho > 0) || star[v] < 2) continue;
+      if (!(rho > 1e-3 * w.shell_radius) || !(rho > 0) || size[parts.find(v)] < 2) continue;
       ++checked;
       if (!(-(n.x * p.x + n.y * p.y) / rho > 0)) {
         ++turned;
-        if (!first) first = &p;
+        if (!nearest || rho < std::hypot(nearest->x, nearest->y)) nearest = &p;
       }
     }
     if (turned > 0) {
-      const std::string which = turned == checked && checked == round.size()
-                                    ? std::string("the mesh comes")
-                                    : std::to_string(turned) + " of its " + std::to_string(round.size()) +
-                                          " parts come";
-      char buf[480];
+      const Vec3* first = nearest;
+      const std::size_t skipped = round.size() - checked;
+      const std::string which =
+          turned == checked && skipped == 0
+              ? std::string("the mesh comes")
+              : fmt_count(turned, round.size()) + (turned == 1 ? " comes" : " come");
+      const std::string unchecked =
+          skipped > 0 ? "; " + std::to_string(skipped) + " not checked (lone triangles, or at the axis)" : std::string();
+      char buf[640];
       std::snprintf(buf, sizeof buf,
                     ": its triangles face away from the axis where %s nearest it (x %.4g, y %.4g, z %.4g m, "
                     "%.4g m from the axis): wound inside out for a liner, whose charge side faces the axis (a "
-                    "triangle is touched only from the side its normal faces); %s",
-                    which.c_str(), first->x, first->y, first->z, std::hypot(first->x, first->y),
+                    "triangle is touched only from the side its normal faces)%s; %s",
+                    which.c_str(), first->x, first->y, first->z, std::hypot(first->x, first->y), unchecked.c_str(),
                     turned == checked ? "toggle the mesh's flip key (it turns every triangle of the file)"
                                       : "export those parts the other way round (the mesh's flip key turns every "
                                         "triangle of the file)");

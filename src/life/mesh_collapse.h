@@ -82,13 +82,15 @@ inline constexpr double kCollapseShares[] = {0, 0.25, 0.4, 0.55};
 // kMoveSteps equal steps, each collapsed and moved as above on the mesh
 // the one before left (its normals and short edges found again): each
 // step asked an equal share of what is left, carried through the
-// collapses.
+// collapses; a stretch's shortfall in one step is added to its share of
+// the steps left, and the rest then brought to what the stage has still to
+// remove.
 inline constexpr int kLocalPasses = 4;
 inline constexpr double kLocalTolerance = 0.002;
 inline constexpr int kMoveSteps[] = {1, 2, 4, 8};
 struct FitWear {
   Collapsed collapsed;  // the first step's collapsed mesh (the stage's, as it was moved), its booked volumes
-  MeshWear wear;        // the last step's move; its triangles: the worn mesh
+  MeshWear wear;        // the last step's move (its triangles: the worn mesh), its booked and removed the steps' own
   double share = 0;     // the share the first step was collapsed at
   int local_passes = 0;      // local corrections taken (all steps)
   double local_misfit = 0;   // after them: the largest |removed / asked − 1| of a stretch (of any step)
