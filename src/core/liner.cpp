@@ -214,8 +214,8 @@ LinerLayout liner_layout(const Scene& scene) {
           return p;
         };
         std::vector<double> bends;  // between r0 and r1, outward
-        for (std::size_t k = 1; dw > 0 && k < depth.size(); ++k)
-          for (double b : {(k - 0.25) * dw, (k + 0.25) * dw})
+        if (dw > 0)
+          for (double b : plate_bend_radii(depth.size(), dw))
             if (b > e.r0 && b < e.r1) bends.push_back(b);
         for (int q = 0; q <= kArcSegments; ++q) e.outline.push_back(at(e.r1, e.theta0 + (e.theta1 - e.theta0) * q / kArcSegments));
         for (auto b = bends.rbegin(); b != bends.rend(); ++b) e.outline.push_back(at(*b, e.theta1));

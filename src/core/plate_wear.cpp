@@ -85,11 +85,17 @@ double plate_surface_depth(const std::vector<double>& depth, double width, doubl
   return depth[j];
 }
 
+std::vector<double> plate_bend_radii(std::size_t rings, double width) {
+  std::vector<double> out;
+  for (std::size_t k = 1; k < rings; ++k) out.push_back((k - 0.25) * width), out.push_back((k + 0.25) * width);
+  return out;
+}
+
 std::vector<Triangle> plate_face_triangles(const std::vector<double>& depth, double R, int segments) {
   const std::size_t n = depth.size();
   const double width = n > 0 ? R / static_cast<double>(n) : R;
   std::vector<double> radii = {0.0};
-  for (std::size_t k = 1; k < n; ++k) radii.push_back((k - 0.25) * width), radii.push_back((k + 0.25) * width);
+  for (double b : plate_bend_radii(n, width)) radii.push_back(b);
   radii.push_back(R);
   auto at = [&](double r, int k) {
     const double a = 2 * 3.14159265358979323846 * k / segments;

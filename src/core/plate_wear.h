@@ -25,6 +25,10 @@ inline constexpr int kMaxWornPlateRings = 16;
 // (m) on rings of `width` (m); and its slope d depth / d rho.
 double plate_surface_depth(const std::vector<double>& depth, double width, double rho, double* slope = nullptr);
 
+// The radii where a dish of `rings` rings of `width` (m) bends: the ends of
+// the ramps across each edge between two rings ((k ∓ 1/4) width), outward.
+std::vector<double> plate_bend_radii(std::size_t rings, double width);
+
 // A plate's face for drawing: the plate at z = 0 facing +z, its face at
 // z = -depth(rho) (rings of R / depth.size(); empty: flat), as triangles
 // in rings between the radii where it bends (the ramps' ends) and

@@ -390,13 +390,6 @@ std::vector<Triangle> end_lifter_triangles(const EndsSpec& e, double R, double L
   return out;
 }
 
-namespace {
-// "N of its M parts".
-std::string fmt_count(std::size_t n, std::size_t of) {
-  return std::to_string(n) + " of its " + std::to_string(of) + " parts";
-}
-}  // namespace
-
 void check_meshes(const Walls& w) {
   const double r_tol = w.shell_radius * 1e-3;
   const double z_tol = std::max(1e-6, w.length * 1e-6);
@@ -500,12 +493,11 @@ void check_meshes(const Walls& w) {
       }
     }
     if (turned > 0) {
-      const Vec3* first = nearest;
       const std::size_t skipped = round.size() - checked;
-      const std::string which =
-          turned == checked && skipped == 0
-              ? std::string("the mesh comes")
-              : fmt_count(turned, round.size()) + (turned == 1 ? " comes" : " come");
+      const std::string which = turned == checked && skipped == 0
+                                    ? std::string("the mesh comes")
+                                    : std::to_string(turned) + " of its " + std::to_string(round.size()) +
+                                          (turned == 1 ? " parts comes" : " parts come");
       const std::string unchecked =
           skipped > 0 ? "; " + std::to_string(skipped) + " not checked (lone triangles, or at the axis)" : std::string();
       char buf[640];
@@ -513,7 +505,8 @@ void check_meshes(const Walls& w) {
                     ": its triangles face away from the axis where %s nearest it (x %.4g, y %.4g, z %.4g m, "
                     "%.4g m from the axis): wound inside out for a liner, whose charge side faces the axis (a "
                     "triangle is touched only from the side its normal faces)%s; %s",
-                    which.c_str(), first->x, first->y, first->z, std::hypot(first->x, first->y), unchecked.c_str(),
+                    which.c_str(), nearest->x, nearest->y, nearest->z, std::hypot(nearest->x, nearest->y),
+                    unchecked.c_str(),
                     turned == checked ? "toggle the mesh's flip key (it turns every triangle of the file)"
                                       : "export those parts the other way round (the mesh's flip key turns every "
                                         "triangle of the file)");

@@ -363,15 +363,16 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
     FitWear whole;
     whole.steps = steps;
     whole.span_asked_m3.assign(spans, 0.0), whole.span_removed_m3.assign(spans, 0.0);
-    std::vector<Triangle> mesh = triangles;
     std::vector<double> rest = booked_m3;  // the wear still to move, carried through each step's collapse
     try {
       for (int i = 0; i < steps; ++i) {
-        // An equal share of what is left: the rest carried as the step's own is.
+        // An equal share of what is left: the rest carried as the step's own
+        // is; on the mesh the step before left.
         const double part = 1.0 / (steps - i);
         std::vector<double> volume = rest;
         for (double& v : volume) v *= part;
-        FitWear f = fit_once(mesh, volume, bounds, across, along, name, segments, steps > 1);
+        FitWear f = fit_once(i == 0 ? triangles : whole.wear.triangles, volume, bounds, across, along, name, segments,
+                             steps > 1);
         // What this step asked the move (the booked less the collapse's own) and what it removed, by span.
         const std::vector<double> asked = asked_volumes(f.collapsed, across, along);
         const std::vector<double> swept = swept_volumes(f.collapsed.triangles, f.wear.triangles);
@@ -382,7 +383,6 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
         whole.edges += f.collapsed.edges;
         whole.collapse_m3 += f.collapsed.removed_m3;
         whole.removed_m3 += f.collapsed.removed_m3 + f.wear.removed_m3;
-        whole.wear.booked_m3 += f.wear.booked_m3, whole.wear.removed_m3 += f.wear.removed_m3;
         whole.deepest_m += f.wear.deepest_m;
         whole.relaxed += f.wear.relaxed;
         whole.local_passes += f.local_passes;
@@ -412,11 +412,8 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
           for (std::size_t t = 0; t < rest.size(); ++t)
             whole.span_asked_m3[span_of(f.collapsed.triangles[t], bounds, spans)] -= rest[t] - before[t];
         }
-        mesh = f.wear.triangles;
-        const double step_booked = whole.wear.booked_m3, step_removed = whole.wear.removed_m3;
         if (i == 0) whole.collapsed = std::move(f.collapsed), whole.share = f.share;
         whole.wear = std::move(f.wear);
-        whole.wear.booked_m3 = step_booked, whole.wear.removed_m3 = step_removed;  // the steps' together
       }
     } catch (const MeshSpoiled& e) {
       if (!last) continue;  // in more, shorter steps
@@ -424,7 +421,6 @@ FitWear wear_kept_fit(const std::vector<Triangle>& triangles, const std::vector<
       throw MeshSpoiled(std::string(e.what()) + " (the stage's wear moved in " + std::to_string(steps) +
                         " steps)");
     }
-    whole.wear.triangles = std::move(mesh);
     return whole;
   }
   throw std::logic_error("wear_kept_fit: no steps");

@@ -90,7 +90,7 @@ inline constexpr double kLocalTolerance = 0.002;
 inline constexpr int kMoveSteps[] = {1, 2, 4, 8};
 struct FitWear {
   Collapsed collapsed;  // the first step's collapsed mesh (the stage's, as it was moved), its booked volumes
-  MeshWear wear;        // the last step's move (its triangles: the worn mesh), its booked and removed the steps' own
+  MeshWear wear;        // the last step's move; its triangles: the worn mesh
   double share = 0;     // the share the first step was collapsed at
   int local_passes = 0;      // local corrections taken (all steps)
   double local_misfit = 0;   // after them: the largest |removed / asked − 1| of a stretch (of any step)
